@@ -1,0 +1,1 @@
+"""Orchestration of rfidnav: scenarios, process runner, MCAP recorder and player, metrics, reports, experiments, CLI."""

@@ -1,0 +1,184 @@
+"""Set up the workspace's Python environment: ``./rfidnav setup``, run implicitly by every verb.
+
+Standard library only: it runs with the system Python 3.11 before ``.venv`` exists. Each step is
+skipped when the hash of its inputs matches the stamp it left last time, so with nothing changed the
+whole set-up takes well under a second; a changed interface file rebuilds rfidnav_msgs, a changed
+requirements file reinstalls the pins, a changed package manifest reinstalls the packages.
+
+Steps: (1) create ``.venv``; (2) install ``requirements.txt`` under ``constraints.txt`` (ROS 2 Jazzy
+wheels from PyPI and everything else, transitive pins included); (3) build and install the
+``rfidnav_msgs`` interface package with CMake into the venv; (4) install the ament_python packages
+in editable mode.
+"""
+
+from __future__ import annotations
+
+import argparse
+import hashlib
+import os
+import subprocess
+import sys
+import sysconfig
+from pathlib import Path
+
+PYTHON_PACKAGES = ("rfidnav_common", "rfidnav_sim", "rfidnav_control", "rfidnav_bringup")
+INTERFACE_PACKAGE = "rfidnav_msgs"
+
+
+class SetupStepFailed(Exception):
+    """A set-up step failed; the message says which and what to do."""
+
+
+def venv_paths(workspace: Path) -> tuple[Path, Path]:
+    venv = workspace / ".venv"
+    return venv, venv / "bin" / "python"
+
+
+def build_environment(venv: Path) -> dict[str, str]:
+    """The environment the ROS 2 wheels and CMake need to find what is installed in the venv."""
+    env = dict(os.environ)
+    env["VIRTUAL_ENV"] = str(venv)
+    env["PATH"] = f"{venv / 'bin'}{os.pathsep}{env.get('PATH', '')}"
+    for var in ("CMAKE_PREFIX_PATH", "AMENT_PREFIX_PATH"):
+        env[var] = str(venv)
+    return env
+
+
+def digest(paths: list[Path]) -> str:
+    sha = hashlib.sha256()
+    for path in sorted(paths):
+        sha.update(str(path).encode())
+        sha.update(path.read_bytes())
+    return sha.hexdigest()
+
+
+def files_under(root: Path, skip_dirs: tuple[str, ...] = ("__pycache__", "build")) -> list[Path]:
+    return [
+        p for p in root.rglob("*")
+        if p.is_file() and not any(part in skip_dirs or part.endswith(".egg-info") for part in p.parts)
+    ]
+
+
+class Stamps:
+    """Remembers the input hash of each step that succeeded."""
+
+    def __init__(self, venv: Path) -> None:
+        self.directory = venv / ".rfidnav-stamps"
+
+    def matches(self, step: str, value: str) -> bool:
+        path = self.directory / step
+        return path.is_file() and path.read_text() == value
+
+    def record(self, step: str, value: str) -> None:
+        self.directory.mkdir(parents=True, exist_ok=True)
+        (self.directory / step).write_text(value)
+
+
+def run_step(step: str, command: list[str], env: dict[str, str], log: Path, advice: str,
+             cwd: Path | None = None) -> None:
+    log.parent.mkdir(parents=True, exist_ok=True)
+    with log.open("a") as handle:
+        handle.write(f"\n$ {' '.join(command)}\n")
+        handle.flush()
+        result = subprocess.run(command, env=env, cwd=cwd, stdout=handle, stderr=subprocess.STDOUT, check=False)
+    if result.returncode != 0:
+        tail = "\n".join(log.read_text(errors="replace").splitlines()[-15:])
+        raise SetupStepFailed(f"set-up step '{step}' failed (exit {result.returncode}); {advice}\n"
+                              f"last lines of {log}:\n{tail}")
+
+
+def ensure_venv(workspace: Path, say) -> None:
+    venv, python = venv_paths(workspace)
+    if python.exists():
+        return
+    if sys.version_info[:2] != (3, 11):
+        raise SetupStepFailed(f"set-up step 'venv' needs Python 3.11, this is {sys.version.split()[0]}; "
+                              "run with python3.11 or set RFIDNAV_PYTHON")
+    say("creating .venv (Python 3.11)")
+    run_step("venv", [sys.executable, "-m", "venv", str(venv)], dict(os.environ), workspace / "build" / "setup.log",
+             "check that the python3.11 venv module is installed (Debian: python3.11-venv)")
+
+
+def ensure_requirements(workspace: Path, stamps: Stamps, env: dict[str, str], say) -> None:
+    _, python = venv_paths(workspace)
+    inputs = [workspace / "requirements.txt", workspace / "constraints.txt"]
+    value = digest(inputs)
+    if stamps.matches("requirements", value):
+        return
+    say("installing pinned requirements (ROS 2 Jazzy wheels, numpy, scipy, scikit-fuzzy, rosbags, mcap, ...)")
+    log = workspace / "build" / "setup.log"
+    advice = "check that PyPI is reachable and requirements.txt/constraints.txt pin versions that exist"
+    run_step("requirements", [str(python), "-m", "pip", "install", "--quiet", "--disable-pip-version-check",
+                              "-r", str(inputs[0]), "-c", str(inputs[1])], env, log, advice)
+    stamps.record("requirements", value)
+
+
+def ensure_interfaces(workspace: Path, stamps: Stamps, env: dict[str, str], say) -> None:
+    venv, python = venv_paths(workspace)
+    source = workspace / INTERFACE_PACKAGE
+    value = digest(files_under(source))
+    if stamps.matches("interfaces", value):
+        return
+    say(f"building {INTERFACE_PACKAGE} with CMake (about 30 s)")
+    build = workspace / "build" / INTERFACE_PACKAGE
+    build.mkdir(parents=True, exist_ok=True)
+    log = workspace / "build" / f"{INTERFACE_PACKAGE}.log"
+    log.write_text("")
+    advice = ("check that gcc/g++ and CMake are installed and that the .msg/.action files parse; "
+              f"the full log is {log}")
+    run_step("interfaces: cmake configure",
+             ["cmake", str(source), f"-DCMAKE_INSTALL_PREFIX={venv}", f"-DPython3_EXECUTABLE={python}",
+              "-DCMAKE_BUILD_TYPE=Release", "-DBUILD_TESTING=OFF"], env, log, advice, cwd=build)
+    run_step("interfaces: build", ["cmake", "--build", ".", "--parallel", str(os.cpu_count() or 2)],
+             env, log, advice, cwd=build)
+    run_step("interfaces: install", ["cmake", "--install", "."], env, log, advice, cwd=build)
+    stamps.record("interfaces", value)
+
+
+def ensure_packages(workspace: Path, stamps: Stamps, env: dict[str, str], say) -> None:
+    _, python = venv_paths(workspace)
+    manifests = [workspace / pkg / name for pkg in PYTHON_PACKAGES for name in ("setup.py", "setup.cfg", "package.xml")]
+    value = digest([m for m in manifests if m.exists()])
+    if stamps.matches("packages", value):
+        return
+    say("installing the rfidnav Python packages (editable)")
+    command = [str(python), "-m", "pip", "install", "--quiet", "--disable-pip-version-check", "--no-deps",
+               "--no-build-isolation"]
+    for pkg in PYTHON_PACKAGES:
+        command += ["-e", str(workspace / pkg)]
+    run_step("packages", command, env, workspace / "build" / "setup.log",
+             "check each package's setup.py and package.xml")
+    stamps.record("packages", value)
+
+
+def set_up(workspace: Path, quiet: bool = False) -> None:
+    def say(text: str) -> None:
+        if not quiet:
+            print(f"rfidnav setup: {text}", file=sys.stderr, flush=True)
+
+    ensure_venv(workspace, say)
+    venv, _ = venv_paths(workspace)
+    env = build_environment(venv)
+    stamps = Stamps(venv)
+    ensure_requirements(workspace, stamps, env, say)
+    ensure_interfaces(workspace, stamps, env, say)
+    ensure_packages(workspace, stamps, env, say)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("workspace", type=Path)
+    parser.add_argument("--verb", default="setup", help="the verb being run (setup prints what it did)")
+    args = parser.parse_args(argv)
+    try:
+        set_up(args.workspace.resolve())
+    except SetupStepFailed as error:
+        print(f"rfidnav: {error}", file=sys.stderr)
+        return 1
+    if args.verb == "setup":
+        print(f"rfidnav setup: ready ({args.workspace.resolve() / '.venv'}, Python {sysconfig.get_python_version()})")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,1 @@
+"""Shared pieces of rfidnav: configuration validation, geometry, seeding, node entry points."""

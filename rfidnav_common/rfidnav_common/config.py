@@ -1,0 +1,225 @@
+"""Typed, validated access to YAML configuration (scenarios, worlds, maps, parameter files).
+
+Every problem is one :class:`ConfigError` naming the file and the dotted field, raised before anything
+starts: ``config/worlds/hallway.yaml: tags[2].position: expected 3 numbers, got 2``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import typing
+from pathlib import Path
+from typing import Any, Iterable, Mapping
+
+import yaml
+
+from rfidnav_common.errors import ConfigError
+
+_MISSING: Any = object()
+
+
+def load_yaml_file(path: Path) -> Any:
+    """Parse a YAML file; a missing file or a syntax error is a ConfigError naming the file (and line)."""
+    source = str(path)
+    try:
+        text = Path(path).read_text()
+    except FileNotFoundError:
+        raise ConfigError(source, "", "file not found") from None
+    except OSError as error:
+        raise ConfigError(source, "", f"cannot read: {error.strerror}") from None
+    try:
+        return yaml.safe_load(text)
+    except yaml.YAMLError as error:
+        mark = getattr(error, "problem_mark", None)
+        where = f"line {mark.line + 1}, column {mark.column + 1}: " if mark else ""
+        problem = getattr(error, "problem", None) or str(error)
+        raise ConfigError(source, "", f"not valid YAML: {where}{problem}") from None
+
+
+class Section:
+    """A mapping from a configuration file with typed getters that report file and field on error."""
+
+    def __init__(self, data: Any, source: str, prefix: str = "") -> None:
+        if not isinstance(data, Mapping):
+            raise ConfigError(source, prefix, f"expected a mapping, got {type_name(data)}")
+        self.data = data
+        self.source = source
+        self.prefix = prefix
+
+    @classmethod
+    def from_file(cls, path: Path) -> "Section":
+        data = load_yaml_file(path)
+        if data is None:
+            raise ConfigError(str(path), "", "file is empty")
+        return cls(data, str(path))
+
+    def field(self, key: str | int) -> str:
+        if isinstance(key, int):
+            return f"{self.prefix}[{key}]"
+        return f"{self.prefix}.{key}" if self.prefix else key
+
+    def error(self, key: str | int, problem: str) -> ConfigError:
+        return ConfigError(self.source, self.field(key), problem)
+
+    def has(self, key: str) -> bool:
+        return key in self.data
+
+    def keys(self) -> list[str]:
+        return list(self.data.keys())
+
+    def raw(self, key: str, default: Any = _MISSING) -> Any:
+        if key not in self.data:
+            if default is _MISSING:
+                raise self.error(key, "missing required field")
+            return default
+        return self.data[key]
+
+    def reject_unknown(self, allowed: Iterable[str]) -> None:
+        allowed = set(allowed)
+        for key in self.data:
+            if key not in allowed:
+                raise self.error(str(key), f"unknown field (expected one of: {', '.join(sorted(allowed))})")
+
+    def number(self, key: str, default: Any = _MISSING, *, minimum: float | None = None,
+               maximum: float | None = None, positive: bool = False) -> float:
+        value = self.raw(key, default)
+        return check_number(value, self.source, self.field(key), minimum=minimum, maximum=maximum, positive=positive)
+
+    def integer(self, key: str, default: Any = _MISSING, *, minimum: int | None = None) -> int:
+        value = self.raw(key, default)
+        if isinstance(value, bool) or not isinstance(value, int):
+            raise self.error(key, f"expected an integer, got {type_name(value)}")
+        if minimum is not None and value < minimum:
+            raise self.error(key, f"must be at least {minimum}, got {value}")
+        return value
+
+    def string(self, key: str, default: Any = _MISSING, *, choices: Iterable[str] | None = None) -> str:
+        value = self.raw(key, default)
+        if not isinstance(value, str) or not value:
+            raise self.error(key, f"expected a non-empty string, got {type_name(value)}")
+        if choices is not None and value not in set(choices):
+            raise self.error(key, f"'{value}' is not one of: {', '.join(sorted(choices))}")
+        return value
+
+    def boolean(self, key: str, default: Any = _MISSING) -> bool:
+        value = self.raw(key, default)
+        if not isinstance(value, bool):
+            raise self.error(key, f"expected true or false, got {type_name(value)}")
+        return value
+
+    def section(self, key: str, default: Any = _MISSING) -> "Section":
+        return Section(self.raw(key, default), self.source, self.field(key))
+
+    def sections(self, key: str, default: Any = _MISSING) -> list["Section"]:
+        items = self.raw(key, default)
+        if not isinstance(items, list):
+            raise self.error(key, f"expected a list, got {type_name(items)}")
+        return [Section(item, self.source, f"{self.field(key)}[{index}]") for index, item in enumerate(items)]
+
+    def numbers(self, key: str, default: Any = _MISSING, *, length: int | None = None) -> list[float]:
+        items = self.raw(key, default)
+        if not isinstance(items, list):
+            raise self.error(key, f"expected a list of numbers, got {type_name(items)}")
+        if length is not None and len(items) != length:
+            raise self.error(key, f"expected {length} numbers, got {len(items)}")
+        return [check_number(item, self.source, f"{self.field(key)}[{i}]") for i, item in enumerate(items)]
+
+    def strings(self, key: str, default: Any = _MISSING, *, unique: bool = False) -> list[str]:
+        items = self.raw(key, default)
+        if not isinstance(items, list):
+            raise self.error(key, f"expected a list of strings, got {type_name(items)}")
+        seen: set[str] = set()
+        for index, item in enumerate(items):
+            if not isinstance(item, str) or not item:
+                raise ConfigError(self.source, f"{self.field(key)}[{index}]",
+                                  f"expected a non-empty string, got {type_name(item)}")
+            if unique and item in seen:
+                raise ConfigError(self.source, f"{self.field(key)}[{index}]", f"duplicate '{item}'")
+            seen.add(item)
+        return list(items)
+
+
+def check_number(value: Any, source: str, field: str, *, minimum: float | None = None,
+                 maximum: float | None = None, positive: bool = False) -> float:
+    """A finite float, or a ConfigError naming source and field."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise ConfigError(source, field, f"expected a number, got {type_name(value)}")
+    number = float(value)
+    if not math.isfinite(number):
+        raise ConfigError(source, field, f"expected a finite number, got {value}")
+    if positive and number <= 0.0:
+        raise ConfigError(source, field, f"must be positive, got {number:g}")
+    if minimum is not None and number < minimum:
+        raise ConfigError(source, field, f"must be at least {minimum:g}, got {number:g}")
+    if maximum is not None and number > maximum:
+        raise ConfigError(source, field, f"must be at most {maximum:g}, got {number:g}")
+    return number
+
+
+def type_name(value: Any) -> str:
+    if value is None:
+        return "nothing"
+    if isinstance(value, bool):
+        return f"boolean {value}"
+    if isinstance(value, (int, float)):
+        return f"number {value}"
+    if isinstance(value, str):
+        return f"string '{value}'" if value else "an empty string"
+    if isinstance(value, list):
+        return "a list"
+    if isinstance(value, Mapping):
+        return "a mapping"
+    return type(value).__name__
+
+
+def parameters_from_mapping(cls: type, data: Any, source: str, prefix: str = "") -> Any:
+    """Build the parameter dataclass ``cls`` from ``data``, checking every field's type.
+
+    Fields may be float, int, bool, str, list[float] or list[str] (the ROS 2 parameter types);
+    missing fields take the dataclass default; unknown fields and NaN/Inf are errors.
+    """
+    hints = typing.get_type_hints(cls)
+    section = Section(data if data is not None else {}, source, prefix)
+    section.reject_unknown(hints)
+    values: dict[str, Any] = {}
+    for field in dataclasses.fields(cls):
+        if field.name not in section.data:
+            continue
+        kind = hints[field.name]
+        if kind is float:
+            values[field.name] = section.number(field.name)
+        elif kind is bool:
+            values[field.name] = section.boolean(field.name)
+        elif kind is int:
+            values[field.name] = section.integer(field.name)
+        elif kind is str:
+            values[field.name] = section.string(field.name)
+        elif kind == list[float]:
+            values[field.name] = section.numbers(field.name)
+        elif kind == list[str]:
+            values[field.name] = section.strings(field.name)
+        else:
+            raise TypeError(f"{cls.__name__}.{field.name}: unsupported parameter type {kind}")
+    instance = cls(**values)
+    validate = getattr(instance, "validate", None)
+    if validate is not None:
+        try:
+            validate()
+        except ValueError as error:
+            raise ConfigError(source, prefix, str(error)) from None
+    return instance
+
+
+def node_parameters_from_file(cls: type, path: Path, node_name: str) -> Any:
+    """Validate a ROS 2 parameter file (``node_name: ros__parameters: {...}``) against ``cls``."""
+    document = Section.from_file(path)
+    node_section = document.section(node_name) if document.has(node_name) else None
+    if node_section is None:
+        wildcard = [key for key in document.keys() if key in ("/**", "**")]
+        if not wildcard:
+            raise ConfigError(str(path), node_name, "no parameters for this node (expected a top-level "
+                              f"'{node_name}:' with 'ros__parameters:')")
+        node_section = document.section(wildcard[0])
+    return parameters_from_mapping(cls, node_section.raw("ros__parameters"), str(path),
+                                   node_section.field("ros__parameters"))

@@ -1,0 +1,1 @@
+"""Controllers of rfidnav: the phase-difference fuzzy heading controller (paper 001)."""

@@ -1,0 +1,21 @@
+from setuptools import find_packages, setup
+
+package_name = "rfidnav_control"
+
+setup(
+    name=package_name,
+    version="0.1.0",
+    packages=find_packages(exclude=["test"]),
+    data_files=[
+        ("share/ament_index/resource_index/packages", ["resource/" + package_name]),
+        ("share/" + package_name, ["package.xml"]),
+    ],
+    install_requires=["setuptools"],
+    zip_safe=True,
+    maintainer="rfidnav developers",
+    description="Controllers of rfidnav: the phase-difference fuzzy heading controller (paper 001).",
+    license="Apache-2.0",
+    entry_points={"console_scripts": [
+        "heading_controller = rfidnav_control.heading_controller_node:main",
+    ]},
+)

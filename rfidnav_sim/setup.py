@@ -1,0 +1,22 @@
+from setuptools import find_packages, setup
+
+package_name = "rfidnav_sim"
+
+setup(
+    name=package_name,
+    version="0.1.0",
+    packages=find_packages(exclude=["test"]),
+    data_files=[
+        ("share/ament_index/resource_index/packages", ["resource/" + package_name]),
+        ("share/" + package_name, ["package.xml"]),
+    ],
+    install_requires=["setuptools"],
+    zip_safe=True,
+    maintainer="rfidnav developers",
+    description="Simulator nodes of rfidnav: differential-drive robot base and UHF RFID reader with per-antenna phase.",
+    license="Apache-2.0",
+    entry_points={"console_scripts": [
+        "robot_sim = rfidnav_sim.robot_sim_node:main",
+        "rfid_reader_sim = rfidnav_sim.rfid_reader_sim_node:main",
+    ]},
+)
