@@ -223,3 +223,10 @@ def node_parameters_from_file(cls: type, path: Path, node_name: str) -> Any:
         node_section = document.section(wildcard[0])
     return parameters_from_mapping(cls, node_section.raw("ros__parameters"), str(path),
                                    node_section.field("ros__parameters"))
+
+
+def param(doc: str, default: Any) -> Any:
+    """A parameter dataclass field: its default and the description the node declares with it."""
+    if isinstance(default, list):
+        return dataclasses.field(default_factory=lambda: list(default), metadata={"doc": doc})
+    return dataclasses.field(default=default, metadata={"doc": doc})

@@ -1,0 +1,84 @@
+"""Tracking metrics of a tag-route run (paper 001 section V), from ground truth and arrival events.
+
+Used both on bags (``./rfidnav report``) and on in-process runs (``./rfidnav reproduce``), so the
+figures of the two agree by construction.
+
+* e(t): distance of the ground-truth position from the current desired segment, i.e. the segment
+  between the ground projections of the last route tag reached and the next one, from arrival at
+  the first route tag until arrival at the last; signed, positive to the left of the direction of
+  travel.
+* RMSE (eq. 4): sqrt(mean e(t)^2) over equally spaced samples; max |e|.
+* Time to come within 1 cm of the first tag's projection, from the mission start.
+* Path length from the mission start to the end.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+FIRST_TAG_RADIUS_M = 0.01
+
+
+@dataclass(frozen=True)
+class Trajectory:
+    times_s: np.ndarray      # N, increasing
+    xy: np.ndarray           # N x 2, map frame
+
+    def between(self, start_s: float, end_s: float) -> "Trajectory":
+        keep = (self.times_s >= start_s) & (self.times_s <= end_s)
+        return Trajectory(self.times_s[keep], self.xy[keep])
+
+
+@dataclass(frozen=True)
+class TrackingMetrics:
+    tracking_rmse_m: float | None
+    tracking_max_abs_m: float | None
+    time_to_first_tag_s: float | None
+    path_length_m: float
+    tags_reached: int
+
+    def as_dict(self) -> dict[str, float | int | None]:
+        return dict(self.__dict__)
+
+
+def signed_segment_error(points: np.ndarray, start: np.ndarray, end: np.ndarray) -> np.ndarray:
+    """Distance from the segment start-end (clamped to it), signed positive on the left of start->end."""
+    direction = end - start
+    length_sq = float(direction @ direction)
+    relative = points - start
+    if length_sq == 0.0:
+        return np.linalg.norm(relative, axis=1)
+    t = np.clip((relative @ direction) / length_sq, 0.0, 1.0)
+    distance = np.linalg.norm(relative - t[:, None] * direction, axis=1)
+    side = np.sign(direction[0] * relative[:, 1] - direction[1] * relative[:, 0])
+    return np.where(side == 0.0, 1.0, side) * distance
+
+
+def tracking_error(trajectory: Trajectory, tag_points: np.ndarray, arrival_times_s: list[float]) -> Trajectory:
+    """e(t) samples (as a Trajectory whose xy[:, 0] is e and xy[:, 1] the segment index)."""
+    times, errors, segments = [], [], []
+    for k in range(min(len(arrival_times_s), len(tag_points)) - 1):
+        if k + 1 >= len(arrival_times_s):
+            break
+        part = trajectory.between(arrival_times_s[k], arrival_times_s[k + 1])
+        times.append(part.times_s)
+        errors.append(signed_segment_error(part.xy, tag_points[k], tag_points[k + 1]))
+        segments.append(np.full(part.times_s.shape, k, dtype=float))
+    if not times:
+        return Trajectory(np.empty(0), np.empty((0, 2)))
+    return Trajectory(np.concatenate(times), np.column_stack((np.concatenate(errors), np.concatenate(segments))))
+
+
+def tracking_metrics(trajectory: Trajectory, tag_points: np.ndarray, arrival_times_s: list[float],
+                     mission_start_s: float, mission_end_s: float) -> TrackingMetrics:
+    """Metrics of one run; ``arrival_times_s[k]`` is when route tag k was reached."""
+    run = trajectory.between(mission_start_s, mission_end_s)
+    error = tracking_error(run, tag_points, arrival_times_s).xy[:, 0]
+    rmse = float(np.sqrt(np.mean(error ** 2))) if error.size else None
+    max_abs = float(np.max(np.abs(error))) if error.size else None
+    near_first = np.nonzero(np.linalg.norm(run.xy - tag_points[0], axis=1) <= FIRST_TAG_RADIUS_M)[0]
+    time_to_first = float(run.times_s[near_first[0]] - mission_start_s) if near_first.size else None
+    path_length = float(np.sum(np.linalg.norm(np.diff(run.xy, axis=0), axis=1))) if len(run.xy) > 1 else 0.0
+    return TrackingMetrics(rmse, max_abs, time_to_first, path_length, len(arrival_times_s))

@@ -1,0 +1,233 @@
+"""Tag-route following (paper 001, section IV-C): the supervisory loop around the fuzzy controller.
+
+Once per inventory round: check arrival (the floor tag paired with the target is read, step 8), take
+the target's phases at the left and right antennas (steps 3-4), form the phase difference
+dphi = phi_left - phi_right (step 5, eq. 2), run the fuzzy controller for the heading change dtheta
+(steps 6-7) and command the yaw rate that turns the robot by dtheta over the round, at constant
+forward speed.
+
+Beyond the paper, and switchable so the faithful baseline stays available:
+
+* Receding target. A tag straight behind also gives dphi ~ 0, "go straight", which drives away from
+  it. The round-trip phase at each antenna changes by 4*pi*dd/lambda when the range changes by dd,
+  so consecutive rounds on one channel give the range rate to millimetres per second. When the
+  filtered range rate stays positive (the target is receding) the robot turns towards the side the
+  phase difference points to (CCW when it is zero) until the range shrinks again.
+* Filtering (``filter_rounds``): the circular mean of the last N phase differences.
+* Closest-approach arrival (``arrival: closest_approach``): the floor tag is first read up to ~9 cm
+  before the robot is over it; switching targets there cuts the corner. The floor antenna's own phase
+  of that tag tracks its range with sub-millimetre noise, so the switch waits for its minimum.
+* Speed scheduling in turns (``turn_speed_fraction``): slow down while the controller commands large
+  heading changes, so corners are turned on a tighter radius.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+
+from rfidnav_common.geometry import wrap_angle
+from rfidnav_common.rf import range_change_m
+
+ARRIVAL_MODES = ("first_read", "closest_approach")
+
+
+@dataclass(frozen=True)
+class TagObservation:
+    """One validated tag read (finite numbers only; the node drops the rest)."""
+
+    tag_id: str
+    antenna: int
+    phase_rad: float
+    rssi_dbm: float
+    frequency_hz: float
+
+
+@dataclass(frozen=True)
+class FollowerSettings:
+    forward_speed_mps: float = 0.2
+    left_antenna: int = 1
+    right_antenna: int = 2
+    floor_antenna: int = 3
+    phase_difference_offset_rad: float = 0.0   # calibration: phi_left - phi_right of a tag straight ahead
+    max_yaw_rate_radps: float = 2.0
+    nominal_round_s: float = 0.04              # used for the first round and to bound measured round times
+    unheard_timeout_s: float = 10.0
+    filter_rounds: int = 1                     # 1 = the paper: the latest phase difference only
+    receding_detection: bool = True
+    receding_rate_mps: float = 0.02            # filtered range rate above which the target recedes
+    range_rate_smoothing: float = 0.2          # weight of the newest round in the range-rate average
+    arrival: str = "first_read"
+    turn_speed_fraction: float = 1.0           # forward speed at the largest heading change, as a fraction
+
+    def validate(self) -> None:
+        if self.arrival not in ARRIVAL_MODES:
+            raise ValueError(f"arrival: '{self.arrival}' is not one of {', '.join(ARRIVAL_MODES)}")
+        if self.filter_rounds < 1:
+            raise ValueError("filter_rounds: must be at least 1")
+        if not 0.0 < self.range_rate_smoothing <= 1.0:
+            raise ValueError("range_rate_smoothing: must be in (0, 1]")
+        if not 0.0 <= self.turn_speed_fraction <= 1.0:
+            raise ValueError("turn_speed_fraction: must be in [0, 1]")
+        if self.left_antenna == self.right_antenna:
+            raise ValueError("left_antenna and right_antenna must differ")
+
+
+@dataclass(frozen=True)
+class Command:
+    linear_mps: float
+    angular_radps: float
+    mode: str                      # seeking, receding_turn, unheard, arriving, finished, failed
+    target_index: int
+    target_tag_id: str
+    phase_difference_rad: float
+    heading_change_rad: float
+    arrived_index: int | None = None   # index of the route tag reached this round
+    failure: str | None = None
+
+
+class PhaseTrack:
+    """Range change of one tag at one antenna between consecutive reads on the same channel.
+
+    Valid while the range changes by less than lambda/4 between reads (8 cm at 915 MHz), far above
+    what a robot moves in one inventory round; a channel hop restarts the track."""
+
+    def __init__(self) -> None:
+        self.last: tuple[float, float, float] | None = None  # time, phase, frequency
+
+    def update(self, time_s: float, phase_rad: float, frequency_hz: float) -> tuple[float, float] | None:
+        """(range change [m], elapsed [s]) since the previous read, or None when there is none to compare."""
+        previous, self.last = self.last, (time_s, phase_rad, frequency_hz)
+        if previous is None or previous[2] != frequency_hz or time_s <= previous[0]:
+            return None
+        return range_change_m(wrap_angle(phase_rad - previous[1]), frequency_hz), time_s - previous[0]
+
+
+class TagRouteFollower:
+    """Follows an ordered list of ceiling tags; call :meth:`step` once per inventory round."""
+
+    def __init__(self, settings: FollowerSettings, heading_controller: Callable[[float], float],
+                 arrival_tags: dict[str, str]) -> None:
+        settings.validate()
+        self.settings = settings
+        self.heading_controller = heading_controller
+        self.arrival_tags = dict(arrival_tags)
+        self.route: list[str] = []
+        self.index = 0
+        self.finished = False
+
+    def unknown_tags(self, route: list[str]) -> list[str]:
+        return [tag for tag in route if tag not in self.arrival_tags]
+
+    def start(self, route: list[str], time_s: float) -> None:
+        unknown = self.unknown_tags(route)
+        if not route or unknown:
+            raise ValueError(f"unknown tag ids {unknown}" if unknown else "empty route")
+        self.route = list(route)
+        self.index = 0
+        self.finished = False
+        self._reset_target(time_s)
+        self.last_round_s: float | None = None
+
+    def _reset_target(self, time_s: float) -> None:
+        self.last_heard_s = time_s
+        self.differences: list[float] = []
+        self.tracks = {self.settings.left_antenna: PhaseTrack(), self.settings.right_antenna: PhaseTrack()}
+        self.range_rate_mps: float | None = None
+        self.last_difference = 0.0
+        self.receding = False
+        self.floor_track = PhaseTrack()
+        self.floor_range_m = 0.0
+        self.floor_minimum_m = 0.0
+        self.floor_seen = False
+
+    @property
+    def target(self) -> str:
+        return self.route[min(self.index, len(self.route) - 1)]
+
+    def step(self, time_s: float, reads: list[TagObservation]) -> Command:
+        s = self.settings
+        round_s = s.nominal_round_s if self.last_round_s is None else time_s - self.last_round_s
+        round_s = min(max(round_s, 0.25 * s.nominal_round_s), 4.0 * s.nominal_round_s)
+        self.last_round_s = time_s
+
+        if self._arrived(time_s, reads):
+            arrived = self.index
+            self.index += 1
+            if self.index == len(self.route):
+                self.finished = True
+                return Command(0.0, 0.0, "finished", arrived, self.route[arrived], self.last_difference, 0.0,
+                               arrived_index=arrived)
+            self._reset_target(time_s)
+            command = self._steer(time_s, round_s, reads)
+            return Command(**{**command.__dict__, "arrived_index": arrived})
+        return self._steer(time_s, round_s, reads)
+
+    def _arrived(self, time_s: float, reads: list[TagObservation]) -> bool:
+        s = self.settings
+        floor_tag = self.arrival_tags[self.target]
+        floor_reads = [r for r in reads if r.tag_id == floor_tag]
+        if s.arrival == "first_read":
+            return bool(floor_reads)
+        below = [r for r in floor_reads if r.antenna == s.floor_antenna] or floor_reads
+        if not below:
+            # Heard before and now silent: the robot has passed over it.
+            return self.floor_seen
+        change = self.floor_track.update(time_s, below[0].phase_rad, below[0].frequency_hz)
+        self.floor_seen = True
+        if change is not None:
+            self.floor_range_m += change[0]
+        self.floor_minimum_m = min(self.floor_minimum_m, self.floor_range_m)
+        # A millimetre above the minimum: past the closest point, with margin over the phase noise.
+        return self.floor_range_m > self.floor_minimum_m + 1e-3
+
+    def _steer(self, time_s: float, round_s: float, reads: list[TagObservation]) -> Command:
+        s = self.settings
+        target = self.target
+        phases: dict[int, TagObservation] = {}
+        for read in reads:
+            if read.tag_id == target and read.antenna in (s.left_antenna, s.right_antenna):
+                phases[read.antenna] = read
+        if s.left_antenna not in phases or s.right_antenna not in phases:
+            unheard_s = time_s - self.last_heard_s
+            if unheard_s > s.unheard_timeout_s:
+                return Command(0.0, 0.0, "failed", self.index, target, self.last_difference, 0.0,
+                               failure=f"target tag '{target}' unheard for {unheard_s:.1f} s")
+            # Keep going straight: a missed round is common and the heading is still good.
+            return Command(s.forward_speed_mps, 0.0, "unheard", self.index, target, self.last_difference, 0.0)
+        self.last_heard_s = time_s
+        left, right = phases[s.left_antenna], phases[s.right_antenna]
+        difference = wrap_angle(left.phase_rad - right.phase_rad - s.phase_difference_offset_rad)
+        self.differences = (self.differences + [difference])[-s.filter_rounds:]
+        filtered = math.atan2(sum(math.sin(d) for d in self.differences),
+                              sum(math.cos(d) for d in self.differences))
+        self.last_difference = filtered
+        self._update_range_rate(time_s, left, right)
+
+        if s.receding_detection and self.range_rate_mps is not None:
+            if self.range_rate_mps > s.receding_rate_mps:
+                self.receding = True
+            elif self.range_rate_mps < 0.0:
+                self.receding = False
+        if self.receding:
+            direction = -1.0 if filtered > 0.0 else 1.0   # dphi > 0: tag on the right, turn CW
+            turn = direction * s.max_yaw_rate_radps
+            return Command(s.forward_speed_mps * s.turn_speed_fraction, turn, "receding_turn", self.index, target,
+                           filtered, turn * round_s)
+        heading_change = float(self.heading_controller(filtered))
+        angular = float(np.clip(heading_change / round_s, -s.max_yaw_rate_radps, s.max_yaw_rate_radps))
+        speed = s.forward_speed_mps * (1.0 - (1.0 - s.turn_speed_fraction) * abs(angular) / s.max_yaw_rate_radps)
+        return Command(speed, angular, "seeking", self.index, target, filtered, heading_change)
+
+    def _update_range_rate(self, time_s: float, *reads: TagObservation) -> None:
+        changes = (self.tracks[read.antenna].update(time_s, read.phase_rad, read.frequency_hz) for read in reads)
+        rates = [change / elapsed for change, elapsed in (c for c in changes if c is not None)]
+        if not rates:
+            return
+        newest = sum(rates) / len(rates)
+        weight = self.settings.range_rate_smoothing
+        self.range_rate_mps = newest if self.range_rate_mps is None else (
+            (1.0 - weight) * self.range_rate_mps + weight * newest)

@@ -1,0 +1,110 @@
+"""Parameters of the simulator nodes: typed, with defaults and descriptions, importable without rclpy.
+
+The nodes declare them (rfidnav_common.ros.declare_parameters) and the orchestrator validates
+parameter files against them before any process starts. config/params/*.yaml document them.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from rfidnav_common.config import param
+from rfidnav_sim.rfid_model import Antenna, ReaderModel
+
+@dataclass(frozen=True)
+class RobotSimParameters:
+    world_file: str = param("world YAML (ground truth: tags, walls)", "")
+    start_x: float = param("start position x in the map frame [m]", 0.0)
+    start_y: float = param("start position y in the map frame [m]", 0.0)
+    start_yaw_deg: float = param("start heading, CCW from the map's x axis [deg]", 0.0)
+    step_s: float = param("fixed physics step [s]", 0.01)
+    rtf: float = param("real-time factor: sim seconds per wall second", 1.0)
+    start_paused: bool = param("hold the clock at zero until ~/start is called", False)
+    odom_rate_hz: float = param("rate of /odom and /sim/ground_truth [Hz, sim time]", 50.0)
+    seed: int = param("run seed; the odometry slip stream derives from it", 0)
+    track_width_m: float = param("distance between the wheels [m]", 0.30)
+    max_wheel_speed_mps: float = param("wheel speed limit [m/s]", 0.5)
+    max_wheel_accel_mps2: float = param("wheel acceleration limit [m/s^2]", 1.0)
+    command_timeout_s: float = param("stop when no /cmd_vel arrived for this long [s, sim time]", 0.5)
+    odom_left_scale_error: float = param("left wheel travel error of the odometry (0.01 = +1%)", 0.0)
+    odom_right_scale_error: float = param("right wheel travel error of the odometry", 0.0)
+    odom_track_scale_error: float = param("track width error of the odometry", 0.0)
+    odom_slip_std: float = param("random relative wheel travel error per step", 0.0)
+
+    def validate(self) -> None:
+        if not self.world_file:
+            raise ValueError("world_file: required (the world YAML to simulate)")
+        for name in ("step_s", "rtf", "odom_rate_hz", "track_width_m", "max_wheel_speed_mps",
+                     "max_wheel_accel_mps2", "command_timeout_s"):
+            if getattr(self, name) <= 0.0:
+                raise ValueError(f"{name}: must be positive, got {getattr(self, name)}")
+        if self.odom_slip_std < 0.0:
+            raise ValueError("odom_slip_std: must not be negative")
+
+
+
+FACINGS = ("up", "down")
+
+
+@dataclass(frozen=True)
+class ReaderParameters:
+    world_file: str = param("world YAML (ground truth: tag ids and positions)", "")
+    seed: int = param("run seed; the noise and miss streams derive from it", 0)
+    rate_hz: float = param("inventory rounds per second [Hz, sim time]", 25.0)
+    frame_id: str = param("frame of the reader; antenna positions are given in it", "base_link")
+    antenna_positions: list[float] = param(
+        "x, y, z of each antenna in the reader frame [m], concatenated; antenna ports are 1, 2, ... in order",
+        [0.0, 0.03, 0.30, 0.0, -0.03, 0.30, 0.0, 0.0, 0.05])
+    antenna_facing: list[str] = param("boresight of each antenna: up (ceiling tags) or down (floor tags)",
+                                      ["up", "up", "down"])
+    antenna_max_range_m: list[float] = param("read range of each antenna [m]", [12.0, 12.0, 0.10])
+    antenna_half_angle_deg: list[float] = param("beam cone half-angle of each antenna [deg]", [85.0, 85.0, 60.0])
+    antenna_phase_offset_rad: list[float] = param("phase delay of each antenna port and cable [rad]",
+                                                  [0.0, 0.0, 0.0])
+    channels_mhz: list[float] = param("channel frequencies [MHz]; more than one hops between them", [915.25])
+    hop_dwell_s: float = param("time on each channel when hopping [s]", 0.2)
+    phase_noise_rad_per_m: float = param("phase noise standard deviation per metre of distance [rad/m]", 0.02)
+    miss_probability: float = param("probability that a readable tag is missed in a round", 0.0)
+    rssi_at_1m_dbm: float = param("RSSI of a tag 1 m away on boresight [dBm]", -40.0)
+    sensitivity_dbm: float = param("weakest RSSI the reader decodes [dBm]", -85.0)
+    pattern_exponent: float = param("antenna gain pattern cos(angle)^n, one way", 1.0)
+
+    def validate(self) -> None:
+        if not self.world_file:
+            raise ValueError("world_file: required (the world YAML whose tags are read)")
+        count = len(self.antenna_facing)
+        if count == 0:
+            raise ValueError("antenna_facing: at least one antenna is needed")
+        if len(self.antenna_positions) != 3 * count:
+            raise ValueError(f"antenna_positions: expected 3 numbers per antenna ({3 * count}), "
+                             f"got {len(self.antenna_positions)}")
+        for name in ("antenna_max_range_m", "antenna_half_angle_deg", "antenna_phase_offset_rad"):
+            if len(getattr(self, name)) != count:
+                raise ValueError(f"{name}: expected one value per antenna ({count}), got {len(getattr(self, name))}")
+        for facing in self.antenna_facing:
+            if facing not in FACINGS:
+                raise ValueError(f"antenna_facing: '{facing}' is not up or down")
+        if self.rate_hz <= 0.0 or self.hop_dwell_s <= 0.0:
+            raise ValueError("rate_hz and hop_dwell_s must be positive")
+        if not self.channels_mhz or min(self.channels_mhz) <= 0.0:
+            raise ValueError("channels_mhz: at least one positive frequency is needed")
+        if not 0.0 <= self.miss_probability < 1.0:
+            raise ValueError(f"miss_probability: must be in [0, 1), got {self.miss_probability}")
+        if self.phase_noise_rad_per_m < 0.0:
+            raise ValueError("phase_noise_rad_per_m: must not be negative")
+
+    def reader_model(self) -> ReaderModel:
+        positions = np.reshape(self.antenna_positions, (-1, 3))
+        antennas = tuple(
+            Antenna(port=index + 1, position=(float(p[0]), float(p[1]), float(p[2])), facing_up=facing == "up",
+                    max_range_m=rng, half_angle_rad=math.radians(angle), phase_offset_rad=offset)
+            for index, (p, facing, rng, angle, offset) in enumerate(zip(
+                positions, self.antenna_facing, self.antenna_max_range_m, self.antenna_half_angle_deg,
+                self.antenna_phase_offset_rad)))
+        return ReaderModel(antennas=antennas, channels_hz=tuple(f * 1e6 for f in self.channels_mhz),
+                           hop_dwell_s=self.hop_dwell_s, phase_noise_rad_per_m=self.phase_noise_rad_per_m,
+                           miss_probability=self.miss_probability, rssi_at_1m_dbm=self.rssi_at_1m_dbm,
+                           sensitivity_dbm=self.sensitivity_dbm, pattern_exponent=self.pattern_exponent)

@@ -1,0 +1,117 @@
+"""UHF RFID reader model: which tags each antenna reads, and their phase, I/Q and RSSI.
+
+Phase (paper 001 section IV-A, and how LLRP readers report it): the backscattered carrier travels
+the antenna-tag distance d twice, so
+
+    phi = (4*pi*d/lambda + phi_tag + phi_antenna + noise) mod 2*pi,   lambda = c / f,
+
+with I = A*cos(phi), Q = A*sin(phi) (so phi = atan2(Q, I)). The noise is Gaussian with a standard
+deviation proportional to the distance (paper 001 section V: "magnitude proportional to the
+distance between the transponder and the receiving antenna"). RSSI follows a two-way log-distance
+path loss (exponent 4: 40 dB per decade) plus the antenna pattern on both ways. A tag is read by an
+antenna when it lies within the antenna's range and beam cone, its RSSI is above the reader's
+sensitivity, and the read does not miss (probability ``miss_probability``). Both receiving antennas
+of one round see the same backscatter (the paper's reader receives on two antennas at once), so the
+phase difference is free of motion between antenna switches.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from rfidnav_common.rf import round_trip_phase
+
+@dataclass(frozen=True)
+class Antenna:
+    port: int                                # 1-based, as the reader reports it
+    position: tuple[float, float, float]     # in base_link [m]
+    facing_up: bool                          # boresight +z (ceiling tags) or -z (floor tags)
+    max_range_m: float
+    half_angle_rad: float                    # beam cone half-angle about the boresight
+    phase_offset_rad: float = 0.0            # cable and port delay, identical for every tag
+
+
+@dataclass(frozen=True)
+class ReaderModel:
+    antennas: tuple[Antenna, ...]
+    channels_hz: tuple[float, ...]           # one channel = no hopping
+    hop_dwell_s: float = 0.2                 # time on each channel when hopping
+    phase_noise_rad_per_m: float = 0.02
+    miss_probability: float = 0.0
+    rssi_at_1m_dbm: float = -40.0
+    sensitivity_dbm: float = -85.0
+    pattern_exponent: float = 1.0            # one-way gain cos(theta)^n off boresight
+
+
+@dataclass(frozen=True)
+class Read:
+    tag_id: str
+    antenna: int
+    rssi_dbm: float
+    phase_rad: float
+    i: float
+    q: float
+    frequency_hz: float
+
+
+class ReaderSimulator:
+    """Simulates inventory rounds of one reader on a robot among fixed tags."""
+
+    def __init__(self, model: ReaderModel, tag_ids: list[str], tag_positions: np.ndarray,
+                 tag_phase_offsets: np.ndarray, rng: np.random.Generator) -> None:
+        self.model = model
+        self.tag_ids = list(tag_ids)
+        self.tag_positions = np.asarray(tag_positions, dtype=float).reshape(-1, 3)
+        self.tag_phase_offsets = np.asarray(tag_phase_offsets, dtype=float)
+        self.rng = rng
+        self.antenna_offsets = np.array([a.position for a in model.antennas], dtype=float).reshape(-1, 3)
+
+    def channel_at(self, time_s: float) -> float:
+        channels = self.model.channels_hz
+        if len(channels) == 1:
+            return channels[0]
+        return channels[int(time_s // self.model.hop_dwell_s) % len(channels)]
+
+    def antenna_positions(self, x: float, y: float, yaw: float) -> np.ndarray:
+        """World positions of the antennas for a robot pose (planar robot, antenna z is height)."""
+        c, s = math.cos(yaw), math.sin(yaw)
+        local = self.antenna_offsets
+        return np.column_stack((x + c * local[:, 0] - s * local[:, 1],
+                                y + s * local[:, 0] + c * local[:, 1],
+                                local[:, 2]))
+
+    def inventory(self, x: float, y: float, yaw: float, time_s: float) -> list[Read]:
+        """All reads of one inventory round with the robot at (x, y, yaw)."""
+        model = self.model
+        if not self.tag_ids:
+            return []
+        frequency = self.channel_at(time_s)
+        antenna_world = self.antenna_positions(x, y, yaw)
+        offsets = self.tag_positions[None, :, :] - antenna_world[:, None, :]      # antennas x tags x 3
+        distance = np.maximum(np.linalg.norm(offsets, axis=2), 1e-3)
+        facing = np.array([1.0 if a.facing_up else -1.0 for a in model.antennas])[:, None]
+        cos_off_axis = facing * offsets[:, :, 2] / distance
+        max_range = np.array([a.max_range_m for a in model.antennas])[:, None]
+        min_cos = np.cos(np.array([a.half_angle_rad for a in model.antennas]))[:, None]
+        gain_db = 20.0 * model.pattern_exponent * np.log10(np.clip(cos_off_axis, 1e-6, 1.0))
+        rssi = model.rssi_at_1m_dbm - 40.0 * np.log10(distance) + gain_db
+        readable = (distance <= max_range) & (cos_off_axis >= min_cos) & (rssi >= model.sensitivity_dbm)
+        if model.miss_probability > 0.0:
+            readable &= self.rng.random(readable.shape) >= model.miss_probability
+        antenna_index, tag_index = np.nonzero(readable)
+        if antenna_index.size == 0:
+            return []
+        d = distance[antenna_index, tag_index]
+        phase_offsets = (self.tag_phase_offsets[tag_index]
+                         + np.array([model.antennas[a].phase_offset_rad for a in antenna_index]))
+        noise = self.rng.normal(0.0, 1.0, d.size) * model.phase_noise_rad_per_m * d
+        phase = round_trip_phase(d, frequency, phase_offsets + noise)
+        rssi_read = rssi[antenna_index, tag_index]
+        amplitude = 10.0 ** (rssi_read / 20.0)
+        return [Read(tag_id=self.tag_ids[t], antenna=model.antennas[a].port, rssi_dbm=float(r),
+                     phase_rad=float(p), i=float(amp * math.cos(p)), q=float(amp * math.sin(p)),
+                     frequency_hz=frequency)
+                for a, t, r, p, amp in zip(antenna_index, tag_index, rssi_read, phase, amplitude)]
