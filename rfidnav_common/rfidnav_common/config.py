@@ -173,35 +173,32 @@ def type_name(value: Any) -> str:
     return type(value).__name__
 
 
-def parameters_from_mapping(cls: type, data: Any, source: str, prefix: str = "") -> Any:
-    """Build the parameter dataclass ``cls`` from ``data``, checking every field's type.
+def typed_values(cls: type, data: Any, source: str, prefix: str = "") -> dict[str, Any]:
+    """Type-check ``data`` against the fields of parameter dataclass ``cls``; return the values given.
 
     Fields may be float, int, bool, str, list[float] or list[str] (the ROS 2 parameter types);
-    missing fields take the dataclass default; unknown fields and NaN/Inf are errors.
-    """
+    unknown fields and NaN/Inf are errors."""
     hints = typing.get_type_hints(cls)
     section = Section(data if data is not None else {}, source, prefix)
     section.reject_unknown(hints)
+    getters = {float: section.number, bool: section.boolean, int: section.integer, str: section.string}
     values: dict[str, Any] = {}
-    for field in dataclasses.fields(cls):
-        if field.name not in section.data:
-            continue
-        kind = hints[field.name]
-        if kind is float:
-            values[field.name] = section.number(field.name)
-        elif kind is bool:
-            values[field.name] = section.boolean(field.name)
-        elif kind is int:
-            values[field.name] = section.integer(field.name)
-        elif kind is str:
-            values[field.name] = section.string(field.name)
+    for name in section.keys():
+        kind = hints[name]
+        if kind in getters:
+            values[name] = getters[kind](name)
         elif kind == list[float]:
-            values[field.name] = section.numbers(field.name)
+            values[name] = section.numbers(name)
         elif kind == list[str]:
-            values[field.name] = section.strings(field.name)
+            values[name] = section.strings(name)
         else:
-            raise TypeError(f"{cls.__name__}.{field.name}: unsupported parameter type {kind}")
-    instance = cls(**values)
+            raise TypeError(f"{cls.__name__}.{name}: unsupported parameter type {kind}")
+    return values
+
+
+def parameters_from_mapping(cls: type, data: Any, source: str, prefix: str = "") -> Any:
+    """Build and validate parameter dataclass ``cls`` from ``data``; missing fields take their defaults."""
+    instance = cls(**typed_values(cls, data, source, prefix))
     validate = getattr(instance, "validate", None)
     if validate is not None:
         try:
@@ -211,18 +208,23 @@ def parameters_from_mapping(cls: type, data: Any, source: str, prefix: str = "")
     return instance
 
 
-def node_parameters_from_file(cls: type, path: Path, node_name: str) -> Any:
-    """Validate a ROS 2 parameter file (``node_name: ros__parameters: {...}``) against ``cls``."""
+def node_parameter_values(cls: type, path: Path, node_name: str) -> dict[str, Any]:
+    """The type-checked values of a ROS 2 parameter file (``node_name: ros__parameters: {...}``)."""
     document = Section.from_file(path)
-    node_section = document.section(node_name) if document.has(node_name) else None
-    if node_section is None:
+    if document.has(node_name):
+        node_section = document.section(node_name)
+    else:
         wildcard = [key for key in document.keys() if key in ("/**", "**")]
         if not wildcard:
             raise ConfigError(str(path), node_name, "no parameters for this node (expected a top-level "
                               f"'{node_name}:' with 'ros__parameters:')")
         node_section = document.section(wildcard[0])
-    return parameters_from_mapping(cls, node_section.raw("ros__parameters"), str(path),
-                                   node_section.field("ros__parameters"))
+    return typed_values(cls, node_section.raw("ros__parameters"), str(path), node_section.field("ros__parameters"))
+
+
+def node_parameters_from_file(cls: type, path: Path, node_name: str) -> Any:
+    """Build and validate ``cls`` from a ROS 2 parameter file alone."""
+    return parameters_from_mapping(cls, node_parameter_values(cls, path, node_name), str(path), node_name)
 
 
 def param(doc: str, default: Any) -> Any:

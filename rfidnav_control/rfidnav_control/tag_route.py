@@ -46,6 +46,18 @@ class TagObservation:
     frequency_hz: float
 
 
+def observe(read) -> TagObservation | None:
+    """A TagObservation from a TagReading message (or anything with its fields); None if a number is not finite.
+
+    The phase comes from I/Q as in paper 001 eq. (1), phi = atan2(Q, I); readers that report only the
+    phase angle (I = Q = 0) are taken at their word."""
+    numbers = (read.i, read.q, read.phase_rad, read.rssi_dbm, read.frequency_hz)
+    if not all(math.isfinite(value) for value in numbers) or read.frequency_hz <= 0.0:
+        return None
+    phase = math.atan2(read.q, read.i) % (2.0 * math.pi) if (read.i or read.q) else read.phase_rad
+    return TagObservation(read.tag_id, int(read.antenna), phase, read.rssi_dbm, read.frequency_hz)
+
+
 @dataclass(frozen=True)
 class FollowerSettings:
     forward_speed_mps: float = 0.2

@@ -69,7 +69,7 @@ class ReaderParameters:
     phase_noise_rad_per_m: float = param("phase noise standard deviation per metre of distance [rad/m]", 0.02)
     miss_probability: float = param("probability that a readable tag is missed in a round", 0.0)
     rssi_at_1m_dbm: float = param("RSSI of a tag 1 m away on boresight [dBm]", -40.0)
-    sensitivity_dbm: float = param("weakest RSSI the reader decodes [dBm]", -85.0)
+    sensitivity_dbm: float = param("weakest RSSI the reader decodes [dBm]", -90.0)
     pattern_exponent: float = param("antenna gain pattern cos(angle)^n, one way", 1.0)
 
     def validate(self) -> None:

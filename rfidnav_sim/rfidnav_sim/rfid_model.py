@@ -42,7 +42,7 @@ class ReaderModel:
     phase_noise_rad_per_m: float = 0.02
     miss_probability: float = 0.0
     rssi_at_1m_dbm: float = -40.0
-    sensitivity_dbm: float = -85.0
+    sensitivity_dbm: float = -90.0
     pattern_exponent: float = 1.0            # one-way gain cos(theta)^n off boresight
 
 

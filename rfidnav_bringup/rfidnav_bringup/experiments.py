@@ -1,0 +1,110 @@
+"""In-process experiment runner: the scenario's core classes stepped in one loop, without DDS.
+
+It uses the same world, map, parameter files, seeds and core classes (DiffDriveBase,
+ReaderSimulator, TagRouteFollower, FuzzyHeadingController) as the node graph, and the same timing
+rules (inventory rounds taken on the ground-truth samples), so a run here differs from ``./rfidnav
+run`` only by the DDS graph's latency. ``./rfidnav reproduce flc`` runs hundreds of these.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from rfidnav_common.config import node_parameter_values, parameters_from_mapping
+from rfidnav_common.seeding import rng_for
+from rfidnav_control.fuzzy import FuzzyHeadingController
+from rfidnav_control.parameters import HeadingControllerParameters
+from rfidnav_control.tag_route import TagRouteFollower, observe
+from rfidnav_sim.kinematics import BaseLimits, DiffDriveBase, OdometryDrift, Pose2D
+from rfidnav_sim.parameters import ReaderParameters, RobotSimParameters
+from rfidnav_sim.rfid_model import ReaderSimulator
+from rfidnav_bringup.metrics import TrackingMetrics, Trajectory, tracking_metrics
+from rfidnav_bringup.scenario import Scenario, node_parameters
+
+
+@dataclass(frozen=True)
+class RouteRun:
+    scenario: str
+    seed: int
+    success: bool
+    message: str
+    sim_duration_s: float
+    metrics: TrackingMetrics
+    trajectory: Trajectory
+    arrival_times_s: tuple[float, ...]
+
+
+def role_parameters(scenario: Scenario, executable: str, seed: int):
+    for spec in scenario.nodes.values():
+        if spec.executable == executable:
+            return node_parameters(scenario, spec, seed=seed, rtf=1.0)
+    raise KeyError(f"scenario {scenario.name} has no {executable} node")
+
+
+def controller_parameters(scenario: Scenario, params_file: Path | None, seed: int) -> HeadingControllerParameters:
+    if params_file is None:
+        return role_parameters(scenario, "heading_controller", seed)
+    values = node_parameter_values(HeadingControllerParameters, params_file, "heading_controller")
+    return parameters_from_mapping(HeadingControllerParameters, {**values, "map_file": str(scenario.map_file)},
+                                   str(params_file), "heading_controller")
+
+
+def tag_points(scenario: Scenario, route: list[str]) -> np.ndarray:
+    """Ground projections of the route's tags (ground truth: for metrics only)."""
+    return np.array([scenario.world.tag(tag_id).position[:2] for tag_id in route], dtype=float)
+
+
+def run_tag_route(scenario: Scenario, controller: HeadingControllerParameters, seed: int,
+                  reader: ReaderParameters | None = None, timeout_s: float | None = None) -> RouteRun:
+    robot: RobotSimParameters = role_parameters(scenario, "robot_sim", seed)
+    reader = reader or role_parameters(scenario, "rfid_reader_sim", seed)
+    world = scenario.world
+    x, y, yaw_deg = scenario.robot
+    base = DiffDriveBase(
+        Pose2D(x, y, math.radians(yaw_deg)),
+        BaseLimits(robot.track_width_m, robot.max_wheel_speed_mps, robot.max_wheel_accel_mps2,
+                   robot.command_timeout_s),
+        OdometryDrift(robot.odom_left_scale_error, robot.odom_right_scale_error, robot.odom_track_scale_error,
+                      robot.odom_slip_std),
+        rng_for(seed, "robot_sim.odometry"))
+    simulator = ReaderSimulator(reader.reader_model(), [t.tag_id for t in world.tags], world.tag_positions(),
+                                np.array([t.phase_offset_rad for t in world.tags]), rng_for(seed, "rfid_reader_sim"))
+    follower = TagRouteFollower(controller.follower_settings(), FuzzyHeadingController(controller.fuzzy_spec()),
+                                scenario.route_map.arrival_tags)
+    route = list(scenario.mission.goal["tag_ids"])
+    follower.start(route, 0.0)
+    limit_s = timeout_s if timeout_s is not None else scenario.mission.timeout_s
+    steps_per_sample = max(1, round(1.0 / (robot.odom_rate_hz * robot.step_s)))
+    round_period_s = 1.0 / reader.rate_hz
+    next_round_s = 0.0
+    times, positions, arrivals = [0.0], [(base.truth.x, base.truth.y)], []
+    success, message, step, now = False, "timeout", 0, 0.0
+    while now < limit_s:
+        base.step(robot.step_s)
+        step += 1
+        if step % steps_per_sample:
+            continue
+        now = step * robot.step_s
+        times.append(now)
+        positions.append((base.truth.x, base.truth.y))
+        if now + 1e-9 < next_round_s:
+            continue
+        next_round_s = (math.floor(now / round_period_s + 1e-6) + 1) * round_period_s
+        reads = simulator.inventory(base.truth.x, base.truth.y, base.truth.yaw, now)
+        command = follower.step(now, [o for o in map(observe, reads) if o is not None])
+        if command.arrived_index is not None:
+            arrivals.append(now)
+        base.set_command(command.linear_mps, command.angular_radps)
+        if command.failure:
+            message = command.failure
+            break
+        if follower.finished:
+            success, message = True, f"reached all {len(route)} tags"
+            break
+    trajectory = Trajectory(np.array(times), np.array(positions))
+    metrics = tracking_metrics(trajectory, tag_points(scenario, route), arrivals, 0.0, now)
+    return RouteRun(scenario.name, seed, success, message, now, metrics, trajectory, tuple(arrivals))

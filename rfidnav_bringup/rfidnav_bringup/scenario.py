@@ -1,0 +1,233 @@
+"""Scenario files (``config/scenarios/NAME.yaml``): schema, validation and resolution.
+
+A scenario names a world (ground truth, simulator nodes only), a map (robot knowledge), the robot's
+start, one OS process per role with its parameters, the mission and the metrics. Loading resolves
+every path relative to the scenario file and validates the world, the map and every node's
+parameters against the node's parameter class, so a bad file fails here, before any process starts.
+See README.md, "Scenario files", for the schema.
+"""
+
+from __future__ import annotations
+
+import shlex
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from rfidnav_common.config import Section, node_parameter_values, parameters_from_mapping
+from rfidnav_common.errors import ConfigError
+from rfidnav_control.parameters import HeadingControllerParameters
+from rfidnav_control.route_map import RouteMap, load_route_map
+from rfidnav_sim.parameters import ReaderParameters, RobotSimParameters
+from rfidnav_sim.world import World, load_world
+
+CONFIG_DIR = Path(__file__).resolve().parents[2] / "config"
+SCENARIO_DIR = CONFIG_DIR / "scenarios"
+
+# Parameter classes of the nodes this suite ships, to validate parameter files before start-up.
+# Nodes not listed here (hardware drivers, user nodes) get their files passed through unchecked.
+KNOWN_NODES: dict[tuple[str, str], tuple[str, type]] = {
+    ("rfidnav_sim", "robot_sim"): ("robot_sim", RobotSimParameters),
+    ("rfidnav_sim", "rfid_reader_sim"): ("rfid_reader_sim", ReaderParameters),
+    ("rfidnav_control", "heading_controller"): ("heading_controller", HeadingControllerParameters),
+}
+METRIC_GROUPS = ("tracking",)
+
+
+@dataclass(frozen=True)
+class NodeSpec:
+    role: str
+    package: str | None
+    executable: str | None
+    command: tuple[str, ...] | None          # a raw command line instead of package/executable
+    name: str | None                         # ROS node name, for the readiness check
+    param_files: tuple[Path, ...]
+    overrides: dict[str, Any]
+    sim: bool                                # simulator: receives the world file
+    clock_source: bool                       # publishes /clock; not given use_sim_time
+    respawn: bool
+    max_respawns: int
+
+
+@dataclass(frozen=True)
+class MissionSpec:
+    action: str
+    action_type: str
+    goal: dict[str, Any]
+    timeout_s: float
+
+
+@dataclass(frozen=True)
+class Scenario:
+    name: str
+    description: str
+    path: Path
+    world_file: Path
+    map_file: Path
+    robot: tuple[float, float, float]        # x [m], y [m], yaw [deg]
+    nodes: dict[str, NodeSpec]
+    mission: MissionSpec
+    metrics: tuple[str, ...]
+    world: World = field(repr=False)
+    route_map: RouteMap = field(repr=False)
+
+    def resolved_document(self) -> dict[str, Any]:
+        """The scenario as run (absolute paths, swaps and parameter files applied), for the run folder."""
+        return {
+            "name": self.name, "description": self.description, "world": str(self.world_file),
+            "map": str(self.map_file),
+            "robot": {"x": self.robot[0], "y": self.robot[1], "yaw_deg": self.robot[2]},
+            "nodes": {role: {key: value for key, value in {
+                "package": spec.package, "executable": spec.executable,
+                "command": " ".join(shlex.quote(c) for c in spec.command) if spec.command else None,
+                "name": spec.name, "params": [str(p) for p in spec.param_files], "overrides": spec.overrides,
+                "sim": spec.sim, "clock_source": spec.clock_source, "respawn": spec.respawn,
+                "max_respawns": spec.max_respawns}.items() if value not in (None, {}, [])}
+                for role, spec in self.nodes.items()},
+            "mission": {"action": self.mission.action, "type": self.mission.action_type,
+                        "goal": self.mission.goal, "timeout_s": self.mission.timeout_s},
+            "metrics": list(self.metrics),
+        }
+
+
+def scenario_path(name_or_path: str) -> Path:
+    """A scenario given by name (config/scenarios/NAME.yaml) or by path."""
+    candidate = Path(name_or_path)
+    if candidate.suffix in (".yaml", ".yml") or candidate.exists():
+        return candidate
+    return SCENARIO_DIR / f"{name_or_path}.yaml"
+
+
+def load_scenario(name_or_path: str, swaps: dict[str, str] | None = None,
+                  param_files: dict[str, Path] | None = None) -> Scenario:
+    """Load, apply ``--swap`` and ``--params``, and validate everything the run will use."""
+    path = scenario_path(name_or_path).resolve()
+    section = Section.from_file(path)
+    section.reject_unknown(("name", "description", "world", "map", "robot", "nodes", "mission", "metrics"))
+    base = path.parent
+    world_file = (base / section.string("world")).resolve()
+    map_file = (base / section.string("map")).resolve()
+    robot = section.section("robot")
+    robot.reject_unknown(("x", "y", "yaw_deg"))
+    nodes = {role: _node_spec(role, section.section("nodes").section(role), base)
+             for role in section.section("nodes").keys()}
+    if not nodes:
+        raise section.error("nodes", "at least one node is needed")
+    for role, replacement in (swaps or {}).items():
+        if role not in nodes:
+            raise ConfigError("--swap", role, f"no role '{role}' in {path.name} (roles: {', '.join(nodes)})")
+        nodes[role] = _swapped(nodes[role], replacement)
+    for role, file in (param_files or {}).items():
+        if role not in nodes:
+            raise ConfigError("--params", role, f"no role '{role}' in {path.name} (roles: {', '.join(nodes)})")
+        nodes[role] = replace(nodes[role], param_files=(Path(file).resolve(),))
+    if sum(spec.clock_source for spec in nodes.values()) > 1:
+        raise section.error("nodes", "only one node can be the clock_source")
+    mission = section.section("mission")
+    mission.reject_unknown(("action", "type", "goal", "timeout_s"))
+    goal = mission.raw("goal")
+    if not isinstance(goal, dict):
+        raise mission.error("goal", "expected a mapping of goal fields")
+    metrics = section.strings("metrics", [])
+    for index, metric in enumerate(metrics):
+        if metric not in METRIC_GROUPS:
+            raise ConfigError(str(path), f"metrics[{index}]", f"unknown metric group '{metric}' "
+                              f"(known: {', '.join(METRIC_GROUPS)})")
+    scenario = Scenario(
+        name=section.string("name"), description=section.string("description", ""), path=path,
+        world_file=world_file, map_file=map_file,
+        robot=(robot.number("x"), robot.number("y"), robot.number("yaw_deg", 0.0)), nodes=nodes,
+        mission=MissionSpec(mission.string("action"), mission.string("type"), goal,
+                            mission.number("timeout_s", 600.0, positive=True)),
+        metrics=tuple(metrics), world=load_world(world_file), route_map=load_route_map(map_file))
+    _check_route(scenario, mission)
+    for spec in scenario.nodes.values():
+        node_parameters(scenario, spec, seed=0, rtf=1.0)
+    return scenario
+
+
+def _node_spec(role: str, entry: Section, base: Path) -> NodeSpec:
+    entry.reject_unknown(("package", "executable", "command", "name", "params", "overrides", "sim",
+                          "clock_source", "respawn", "max_respawns"))
+    command = tuple(shlex.split(entry.string("command"))) if entry.has("command") else None
+    if command is None and not (entry.has("package") and entry.has("executable")):
+        raise entry.error("package", "give package and executable, or a command")
+    params = entry.raw("params", [])
+    params = [params] if isinstance(params, str) else params
+    if not isinstance(params, list) or not all(isinstance(p, str) for p in params):
+        raise entry.error("params", "expected a parameter file path or a list of them")
+    files = tuple((base / p).resolve() for p in params)
+    for file in files:
+        if not file.is_file():
+            raise entry.error("params", f"parameter file not found: {file}")
+    overrides = entry.raw("overrides", {})
+    if not isinstance(overrides, dict):
+        raise entry.error("overrides", "expected a mapping of parameter names to values")
+    return NodeSpec(
+        role=role, package=entry.string("package") if command is None else None,
+        executable=entry.string("executable") if command is None else None, command=command,
+        name=entry.string("name", entry.raw("executable", None) or role) if command is None
+        else entry.raw("name", None),
+        param_files=files, overrides=dict(overrides), sim=entry.boolean("sim", False),
+        clock_source=entry.boolean("clock_source", False), respawn=entry.boolean("respawn", False),
+        max_respawns=entry.integer("max_respawns", 3, minimum=0))
+
+
+def _swapped(spec: NodeSpec, replacement: str) -> NodeSpec:
+    """``pkg:executable`` keeps the role's parameters; anything else is a raw command line."""
+    if ":" in replacement and " " not in replacement:
+        package, executable = replacement.split(":", 1)
+        return replace(spec, package=package, executable=executable, command=None, name=executable)
+    command = tuple(shlex.split(replacement))
+    if not command:
+        raise ConfigError("--swap", spec.role, "empty command")
+    return replace(spec, package=None, executable=None, command=command, name=None, param_files=(),
+                   overrides={})
+
+
+def _check_route(scenario: Scenario, mission: Section) -> None:
+    tag_ids = scenario.mission.goal.get("tag_ids")
+    if tag_ids is None:
+        return
+    if not isinstance(tag_ids, list) or not tag_ids or not all(isinstance(t, str) for t in tag_ids):
+        raise mission.error("goal", "tag_ids: expected a non-empty list of tag ids")
+    unknown = scenario.route_map.unknown_tags(tag_ids)
+    if unknown:
+        raise mission.error("goal", f"tag_ids: {', '.join(unknown)} not in the route map {scenario.map_file}")
+
+
+def injected_parameters(scenario: Scenario, spec: NodeSpec, seed: int, rtf: float) -> dict[str, Any]:
+    """What the orchestrator gives each node on top of its files: the world only to simulator nodes."""
+    injected: dict[str, Any] = {"seed": seed}
+    if not spec.clock_source:
+        injected["use_sim_time"] = True
+    if spec.sim:
+        injected["world_file"] = str(scenario.world_file)
+    else:
+        injected["map_file"] = str(scenario.map_file)
+    if spec.clock_source:
+        x, y, yaw_deg = scenario.robot
+        injected.update(start_x=x, start_y=y, start_yaw_deg=yaw_deg, rtf=float(rtf), start_paused=True)
+    return injected
+
+
+def node_parameters(scenario: Scenario, spec: NodeSpec, seed: int, rtf: float) -> Any | None:
+    """Validate a known node's parameter files plus injected values; None for nodes we do not know."""
+    known = KNOWN_NODES.get((spec.package or "", spec.executable or ""))
+    if known is None:
+        return None
+    node_name, cls = known
+    values: dict[str, Any] = {}
+    for file in spec.param_files:
+        values.update(node_parameter_values(cls, file, node_name))
+    values.update(spec.overrides)
+    declared = {name for name in cls.__dataclass_fields__}
+    values.update({k: v for k, v in injected_parameters(scenario, spec, seed, rtf).items() if k in declared})
+    return parameters_from_mapping(cls, values, f"{scenario.path}: nodes.{spec.role}", "overrides")
+
+
+def dump_parameters(node_name: str, values: dict[str, Any]) -> str:
+    """A ROS 2 parameter file for ``node_name``."""
+    return yaml.safe_dump({node_name: {"ros__parameters": values}}, sort_keys=True)

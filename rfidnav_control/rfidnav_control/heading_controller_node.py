@@ -1,0 +1,135 @@
+"""heading_controller: action server /follow_tag_route driving /cmd_vel from /rfid/reads (paper 001).
+
+A thin adapter around TagRouteFollower: every TagReadArray (one inventory round) while a goal is
+active becomes one follower step and one /cmd_vel. Reads with a non-finite number are dropped and
+counted before they reach the controller. The goal's coroutine awaits a future that the reads
+callback (or the supervision timer: cancel, silence) completes, so nothing blocks the executor.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from geometry_msgs.msg import Twist
+from rclpy.action import ActionServer, CancelResponse, GoalResponse
+from rclpy.action.server import ServerGoalHandle
+from rclpy.node import Node
+from rclpy.task import Future
+
+from rfidnav_common.ros import COMMAND_QOS, SENSOR_QOS, declare_parameters, run_node
+from rfidnav_control.fuzzy import FuzzyHeadingController
+from rfidnav_control.parameters import HeadingControllerParameters
+from rfidnav_control.route_map import load_route_map
+from rfidnav_control.tag_route import Command, TagRouteFollower, observe
+from rfidnav_msgs.action import FollowTagRoute
+from rfidnav_msgs.msg import TagReadArray
+
+
+@dataclass
+class ActiveGoal:
+    handle: ServerGoalHandle
+    outcome: Future          # set to (state, message): state is succeeded, aborted or canceled
+    started_s: float
+    last_step_s: float
+    tags_reached: int = 0
+
+
+class HeadingControllerNode(Node):
+    def __init__(self) -> None:
+        super().__init__("heading_controller")
+        self.params: HeadingControllerParameters = declare_parameters(self, HeadingControllerParameters)
+        route_map = load_route_map(self.params.map_file)
+        self.follower = TagRouteFollower(self.params.follower_settings(),
+                                         FuzzyHeadingController(self.params.fuzzy_spec()), route_map.arrival_tags)
+        self.active: ActiveGoal | None = None
+        self.dropped_reads = 0
+        self.cmd_pub = self.create_publisher(Twist, "/cmd_vel", COMMAND_QOS)
+        self.create_subscription(TagReadArray, "/rfid/reads", self.on_reads, SENSOR_QOS)
+        self.action_server = ActionServer(
+            self, FollowTagRoute, "/follow_tag_route", execute_callback=self.execute,
+            goal_callback=self.on_goal, cancel_callback=lambda _: CancelResponse.ACCEPT)
+        self.create_timer(0.1, self.supervise)
+        self.get_logger().info(f"route map '{route_map.name}' with {len(route_map.arrival_tags)} tags; "
+                               f"{len(self.params.rules)} fuzzy rules, arrival by {self.params.arrival}")
+
+    def now_s(self) -> float:
+        return self.get_clock().now().nanoseconds * 1e-9
+
+    def on_goal(self, goal: FollowTagRoute.Goal) -> GoalResponse:
+        route = list(goal.tag_ids)
+        problem = None
+        if self.active is not None:
+            problem = "another route is being followed"
+        elif not route:
+            problem = "the route is empty"
+        elif unknown := self.follower.unknown_tags(route):
+            problem = f"unknown tag ids {', '.join(unknown)} (not in the route map {self.params.map_file})"
+        if problem:
+            self.get_logger().error(f"goal rejected: {problem}")
+            return GoalResponse.REJECT
+        return GoalResponse.ACCEPT
+
+    async def execute(self, handle: ServerGoalHandle) -> FollowTagRoute.Result:
+        now = self.now_s()
+        self.follower.start(list(handle.request.tag_ids), now)
+        self.active = ActiveGoal(handle, Future(), now, now)
+        self.get_logger().info(f"following {len(handle.request.tag_ids)} tags: {' '.join(handle.request.tag_ids)}")
+        state, message = await self.active.outcome
+        active, self.active = self.active, None
+        self.cmd_pub.publish(Twist())
+        getattr(handle, {"succeeded": "succeed", "aborted": "abort", "canceled": "canceled"}[state])()
+        self.get_logger().info(f"route {state}: {message}")
+        return FollowTagRoute.Result(success=state == "succeeded", message=message,
+                                     tags_reached=active.tags_reached, elapsed_s=self.now_s() - active.started_s)
+
+    def on_reads(self, msg: TagReadArray) -> None:
+        observations = [observe(reading) for reading in msg.readings]
+        valid = [o for o in observations if o is not None]
+        if len(valid) < len(observations):
+            self.dropped_reads += len(observations) - len(valid)
+            self.get_logger().warning(f"dropped reads with non-finite values ({self.dropped_reads} so far)",
+                                      throttle_duration_sec=5.0)
+        active = self.active
+        if active is None or active.outcome.done():
+            return
+        now = self.now_s()
+        active.last_step_s = now
+        command = self.follower.step(now, valid)
+        if command.arrived_index is not None:
+            active.tags_reached = command.arrived_index + 1
+        self.publish(command)
+        if self.follower.finished:
+            active.outcome.set_result(("succeeded", f"reached all {active.tags_reached} tags"))
+        elif command.failure:
+            active.outcome.set_result(("aborted", command.failure))
+
+    def publish(self, command: Command) -> None:
+        twist = Twist()
+        twist.linear.x = command.linear_mps
+        twist.angular.z = command.angular_radps
+        self.cmd_pub.publish(twist)
+        feedback = FollowTagRoute.Feedback(
+            target_index=command.target_index, target_tag_id=command.target_tag_id,
+            phase_difference_rad=command.phase_difference_rad, heading_change_rad=command.heading_change_rad,
+            mode=command.mode)
+        self.active.handle.publish_feedback(feedback)
+
+    def supervise(self) -> None:
+        """Cancel requests and a silent reader are noticed here, as no reads may arrive to notice them."""
+        active = self.active
+        if active is None or active.outcome.done():
+            return
+        if active.handle.is_cancel_requested:
+            active.outcome.set_result(("canceled", "cancelled by the client"))
+            return
+        silent_s = self.now_s() - active.last_step_s
+        if silent_s > self.params.unheard_timeout_s:
+            active.outcome.set_result(("aborted", f"no inventory rounds on /rfid/reads for {silent_s:.1f} s"))
+
+
+def main(args: list[str] | None = None) -> int:
+    return run_node(HeadingControllerNode, args)
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,78 @@
+"""Parameters of the heading_controller node: typed, with defaults and descriptions, importable without
+rclpy so the orchestrator and the in-process runner validate parameter files against the same class.
+
+Defaults are the faithful paper-001 set; config/params/flc_paper.yaml repeats them and
+config/params/flc_tuned.yaml is ours.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from rfidnav_common.config import param
+from rfidnav_control.errors import FuzzySpecError
+from rfidnav_control.fuzzy import FuzzyHeadingSpec
+from rfidnav_control.tag_route import ARRIVAL_MODES, FollowerSettings
+
+
+@dataclass(frozen=True)
+class HeadingControllerParameters:
+    map_file: str = param("route map YAML: the floor tag that marks arrival under each ceiling tag", "")
+    forward_speed_mps: float = param("constant forward speed [m/s] (paper 001: 0.2)", 0.2)
+    left_antenna: int = param("reader port of the left receiving antenna (phi1)", 1)
+    right_antenna: int = param("reader port of the right receiving antenna (phi2)", 2)
+    floor_antenna: int = param("reader port of the downward antenna that reads floor tags", 3)
+    phase_difference_offset_rad: float = param("calibration: phi1 - phi2 of a tag straight ahead [rad]", 0.0)
+    max_yaw_rate_radps: float = param("largest yaw rate commanded [rad/s]", 2.0)
+    nominal_round_s: float = param("expected time between inventory rounds [s]; bounds the measured one", 0.04)
+    unheard_timeout_s: float = param("fail when the target is not heard for this long [s]", 10.0)
+    filter_rounds: int = param("circular mean of the last N phase differences (1 = paper: latest only)", 1)
+    receding_detection: bool = param("turn when the phase-derived range to the target grows", True)
+    receding_rate_mps: float = param("filtered range rate above which the target counts as receding [m/s]", 0.02)
+    range_rate_smoothing: float = param("weight of the newest round in the range-rate average (0, 1]", 0.2)
+    arrival: str = param("first_read (paper: first read of the floor tag) or closest_approach", "first_read")
+    turn_speed_fraction: float = param("forward speed at the largest yaw rate, as a fraction (1 = constant)", 1.0)
+    input_range_rad: float = param("universe of the input dphi: [-r, r] [rad]", 3.141592653589793)
+    output_range_rad: float = param("universe of the output dtheta: [-r, r] [rad per round]", 0.1)
+    input_set_names: list[str] = param("input fuzzy sets", ["neg", "zero", "pos"])
+    input_set_points: list[float] = param(
+        "4 trapezoid points a<=b<=c<=d per input set, concatenated [rad]",
+        [-3.141592653589793, -3.141592653589793, -0.6, 0.0, -0.6, 0.0, 0.0, 0.6, 0.0, 0.6, 3.141592653589793,
+         3.141592653589793])
+    output_set_names: list[str] = param("output fuzzy sets", ["cw", "zero", "ccw"])
+    output_set_points: list[float] = param(
+        "4 trapezoid points per output set, concatenated [rad]",
+        [-0.1, -0.1, -0.1, 0.0, -0.05, 0.0, 0.0, 0.05, 0.0, 0.1, 0.1, 0.1])
+    rules: list[str] = param("rules 'input_set->output_set' (paper 001: neg->ccw, zero->zero, pos->cw)",
+                             ["neg->ccw", "zero->zero", "pos->cw"])
+    resolution: int = param("samples of each universe in the scikit-fuzzy reference", 2001)
+
+    def validate(self) -> None:
+        if not self.map_file:
+            raise ValueError("map_file: required (the route map of arrival floor tags)")
+        if self.arrival not in ARRIVAL_MODES:
+            raise ValueError(f"arrival: '{self.arrival}' is not one of {', '.join(ARRIVAL_MODES)}")
+        for name in ("forward_speed_mps", "max_yaw_rate_radps", "nominal_round_s", "unheard_timeout_s"):
+            if getattr(self, name) <= 0.0:
+                raise ValueError(f"{name}: must be positive, got {getattr(self, name)}")
+        self.follower_settings().validate()
+        try:
+            self.fuzzy_spec()
+        except FuzzySpecError as error:
+            raise ValueError(str(error)) from None
+
+    def follower_settings(self) -> FollowerSettings:
+        return FollowerSettings(
+            forward_speed_mps=self.forward_speed_mps, left_antenna=self.left_antenna,
+            right_antenna=self.right_antenna, floor_antenna=self.floor_antenna,
+            phase_difference_offset_rad=self.phase_difference_offset_rad,
+            max_yaw_rate_radps=self.max_yaw_rate_radps, nominal_round_s=self.nominal_round_s,
+            unheard_timeout_s=self.unheard_timeout_s, filter_rounds=self.filter_rounds,
+            receding_detection=self.receding_detection, receding_rate_mps=self.receding_rate_mps,
+            range_rate_smoothing=self.range_rate_smoothing, arrival=self.arrival,
+            turn_speed_fraction=self.turn_speed_fraction)
+
+    def fuzzy_spec(self) -> FuzzyHeadingSpec:
+        return FuzzyHeadingSpec.from_flat(
+            self.input_range_rad, self.output_range_rad, self.input_set_names, self.input_set_points,
+            self.output_set_names, self.output_set_points, self.rules, self.resolution)
