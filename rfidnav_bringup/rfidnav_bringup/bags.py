@@ -1,0 +1,415 @@
+"""Reading rosbag2 (MCAP) directories written by the recorder, and the type knowledge both nodes share.
+
+No rclpy here: bags are read with ``rosbags`` so reports, metrics and ``./rfidnav bag info`` work without a
+running ROS graph. Every failure to read a bag becomes one :class:`BagError` that names the path (and the
+topic when one is at fault); the exceptions caught are the ones ``rosbags`` documents for bad input.
+
+Types: :func:`typestore` is the ROS 2 Jazzy store of ``rosbags`` plus every rfidnav_msgs type, read from the
+installed interface definitions (``share/rfidnav_msgs/{msg,action}``). Action topics carry types that exist in
+no file (``X_FeedbackMessage``, ``X_SendGoal_Request``, ...): rosidl derives them from the .action, and so do we
+here, with the same fields, so their RIHS01 hashes equal the ones rosidl computed.
+"""
+
+from __future__ import annotations
+
+import functools
+import os
+import struct
+import sys
+from collections.abc import Iterable, Iterator
+from dataclasses import dataclass
+from pathlib import Path
+from typing import NamedTuple
+
+from rosbags.interfaces import Connection, MessageDefinitionFormat
+from rosbags.rosbag2 import Reader, ReaderError
+from rosbags.serde import SerdeError
+from rosbags.typesys import Stores, TypesysError, get_types_from_idl, get_types_from_msg, get_typestore
+from rosbags.typesys.store import Typestore
+from ruamel.yaml import YAML, YAMLError
+
+from rfidnav_bringup.errors import BagError
+
+__all__ = [
+    "BagInfo", "OfferedQos", "RawMessage", "TopicInfo", "bag_info", "format_bag_info", "message_definition",
+    "read_messages", "read_raw", "register_installed_type", "typestore",
+]
+
+INTERFACE_PACKAGE = "rfidnav_msgs"
+
+# The message types rosidl generates for each action besides Goal/Result/Feedback (rosidl_adapter's
+# action -> service/message expansion); written as .msg text so rosbags parses them like any message.
+_ACTION_DERIVED = {
+    "_SendGoal_Request": "unique_identifier_msgs/UUID goal_id\n{action}_Goal goal",
+    "_SendGoal_Response": "bool accepted\nbuiltin_interfaces/Time stamp",
+    "_GetResult_Request": "unique_identifier_msgs/UUID goal_id",
+    "_GetResult_Response": "int8 status\n{action}_Result result",
+    "_FeedbackMessage": "unique_identifier_msgs/UUID goal_id\n{action}_Feedback feedback",
+}
+
+
+# ----------------------------------------------------------------------------------------------- types
+
+def _install_prefixes() -> list[Path]:
+    """Where installed ROS packages live: AMENT_PREFIX_PATH as a sourced workspace sets it, then this venv."""
+    prefixes = [Path(p) for p in os.environ.get("AMENT_PREFIX_PATH", "").split(os.pathsep) if p]
+    prefixes.append(Path(sys.prefix))
+    return prefixes
+
+
+def _package_share(package: str) -> Path | None:
+    for prefix in _install_prefixes():
+        share = prefix / "share" / package
+        if share.is_dir():
+            return share
+    return None
+
+
+def _package_types(package: str, share: Path) -> dict:
+    """Parse every message and action definition an installed interface package ships."""
+    types: dict = {}
+    source = share
+    try:
+        for source in sorted((share / "msg").glob("*.msg")):
+            types.update(get_types_from_msg(source.read_text(encoding="utf-8"), f"{package}/msg/{source.stem}"))
+        for source in sorted((share / "action").glob("*.idl")):
+            types.update(get_types_from_idl(source.read_text(encoding="utf-8")))
+            action = f"{package}/action/{source.stem}"
+            for suffix, text in _ACTION_DERIVED.items():
+                types.update(get_types_from_msg(text.format(action=action), action + suffix))
+    except (TypesysError, OSError, UnicodeDecodeError) as error:
+        raise BagError(f"{source}: cannot parse this interface definition: {error}") from error
+    return types
+
+
+def _register(store: Typestore, types: dict, origin: str) -> None:
+    try:
+        store.register(types)
+    except TypesysError as error:  # same name, different fields: two versions of one package
+        raise BagError(f"{origin}: {error}") from error
+
+
+@functools.lru_cache(maxsize=1)
+def typestore() -> Typestore:
+    """The ROS 2 Jazzy typestore plus the installed rfidnav_msgs types (cached, shared).
+
+    Without rfidnav_msgs installed the plain Jazzy store is returned; bags still decode from the message
+    definitions the recorder embeds in them (see :func:`read_messages`)."""
+    store = get_typestore(Stores.ROS2_JAZZY)
+    share = _package_share(INTERFACE_PACKAGE)
+    if share is not None:
+        _register(store, _package_types(INTERFACE_PACKAGE, share), str(share))
+    return store
+
+
+def register_installed_type(msgtype: str) -> bool:
+    """Make ``msgtype`` known to :func:`typestore` by loading its package's installed definitions.
+
+    For types of third-party packages the recorder meets on the graph. Returns whether the type is known."""
+    store = typestore()
+    if msgtype in store.fielddefs:
+        return True
+    package = msgtype.split("/", 1)[0]
+    share = _package_share(package)
+    if share is None:
+        return False
+    types = {name: fields for name, fields in _package_types(package, share).items() if name not in store.fielddefs}
+    _register(store, types, str(share))
+    return msgtype in store.fielddefs
+
+
+def _type_closure(store: Typestore, msgtype: str) -> list[str]:
+    """msgtype and every type its fields use, depth first."""
+    seen: list[str] = []
+    pending = [msgtype]
+    while pending:
+        name = pending.pop()
+        if name in seen:
+            continue
+        seen.append(name)
+        for _, desc in store.fielddefs[name][1]:
+            pending.extend(_nested_names(desc))
+    return seen
+
+
+def _nested_names(desc: tuple) -> list[str]:
+    kind, arg = desc
+    if kind == 2:  # Nodetype.NAME
+        return [arg]
+    if kind in (3, 4):  # Nodetype.ARRAY / SEQUENCE: ((kind, arg), length)
+        return _nested_names(arg[0])
+    return []
+
+
+def _in_msg_namespace(name: str) -> str:
+    package, namespace, leaf = name.split("/")
+    return name if namespace == "msg" else f"{package}/msg/{leaf}"
+
+
+def _rename_desc(desc: tuple) -> tuple:
+    kind, arg = desc
+    if kind == 2:
+        return (kind, _in_msg_namespace(arg))
+    if kind in (3, 4):
+        return (kind, (_rename_desc(arg[0]), arg[1]))
+    return desc
+
+
+@functools.lru_cache(maxsize=None)
+def message_definition(msgtype: str) -> tuple[str, str]:
+    """(ros2msg definition text with its dependencies, RIHS01 hash) of a type known to :func:`typestore`.
+
+    This is what MCAP schema records carry so Foxglove and ``mcap_ros2`` decode without rfidnav installed.
+    rosbags renders nested type names as ``pkg/Type``, which it can only do for ``pkg/msg/Type``; action types
+    (``pkg/action/X_Feedback``) are therefore rendered from a scratch store where they are filed under ``msg``
+    -- the text then names them ``pkg/X_Feedback``, as the ROS 2 definition format writes every nested type.
+    The hash is computed on the real names, so it matches rosidl's."""
+    store = typestore()
+    if msgtype not in store.fielddefs:
+        raise BagError(f"message type {msgtype} is unknown (not in ROS 2 Jazzy, not installed)")
+    rihs01 = store.hash_rihs01(msgtype)
+    closure = _type_closure(store, msgtype)
+    if all(name.split("/")[1] == "msg" for name in closure):
+        return store.generate_msgdef(msgtype, ros_version=2)[0], rihs01
+    scratch = get_typestore(Stores.ROS2_JAZZY)
+    renamed = {
+        _in_msg_namespace(name): (store.fielddefs[name][0],
+                                  [(field, _rename_desc(desc)) for field, desc in store.fielddefs[name][1]])
+        for name in closure if name not in scratch.fielddefs
+    }
+    scratch.register(renamed)
+    return scratch.generate_msgdef(_in_msg_namespace(msgtype), ros_version=2)[0], rihs01
+
+
+# ----------------------------------------------------------------------------------------------- info
+
+@dataclass(frozen=True)
+class OfferedQos:
+    """The QoS one recorded publisher offered (rosbag2 metadata names, lower case)."""
+
+    reliability: str  # reliable | best_effort | ...
+    durability: str  # transient_local | volatile | ...
+    history: str  # keep_last | keep_all | ...
+    depth: int
+
+    def __str__(self) -> str:
+        # DDS discovery carries neither history nor depth, so recorded offers say "unknown": leave it out.
+        history = "" if self.history == "unknown" else f" {self.history}({self.depth})"
+        return f"{self.reliability} {self.durability}{history}"
+
+
+@dataclass(frozen=True)
+class TopicInfo:
+    name: str
+    msgtype: str
+    count: int
+    qos: str | None  # one line summarising the distinct offered profiles; None when the bag recorded none
+    offered_qos: tuple[OfferedQos, ...] = ()
+
+    @property
+    def latched(self) -> bool:
+        """Every publisher kept its last messages for late joiners (maps, markers, action status)."""
+        return bool(self.offered_qos) and all(q.durability == "transient_local" for q in self.offered_qos)
+
+    @property
+    def reliable(self) -> bool:
+        return all(q.reliability == "reliable" for q in self.offered_qos)
+
+
+@dataclass(frozen=True)
+class BagInfo:
+    path: Path
+    storage: str  # storage plugin of the files: mcap | sqlite3
+    start_ns: int  # first message's timestamp (0 for an empty bag)
+    end_ns: int  # last message's timestamp
+    duration_s: float
+    message_count: int
+    topics: tuple[TopicInfo, ...]
+
+    def topic(self, name: str) -> TopicInfo:
+        for info in self.topics:
+            if info.name == name:
+                return info
+        raise KeyError(name)
+
+
+def _checked_bag_path(path: str | Path) -> Path:
+    bag = Path(path)
+    if not bag.exists():
+        raise BagError(f"{bag}: no such bag (path does not exist)")
+    if not bag.is_dir():
+        raise BagError(f"{bag}: not a rosbag2 directory (expected a directory with metadata.yaml and .mcap files)")
+    if not (bag / "metadata.yaml").is_file():
+        raise BagError(f"{bag}: no metadata.yaml -- not a rosbag2 directory, or a recording that was never "
+                       "finalised (recorder killed before it could close the bag)")
+    return bag
+
+
+def _open_reader(bag: Path) -> Reader:
+    try:
+        reader = Reader(bag)
+        reader.open()
+    except (ReaderError, OSError, struct.error, UnicodeDecodeError) as error:
+        # ReaderError: rosbags' own checks (magic, footer, record sizes, metadata keys); struct.error and
+        # UnicodeDecodeError: a corrupt record that passed those checks but cannot be unpacked.
+        raise BagError(f"{bag}: unreadable bag (truncated or corrupt?): {error}") from error
+    return reader
+
+
+def _offered(connection: Connection) -> tuple[OfferedQos, ...]:
+    profiles = getattr(connection.ext, "offered_qos_profiles", None) or []
+    return tuple(OfferedQos(q.reliability.name.lower(), q.durability.name.lower(), q.history.name.lower(), q.depth)
+                 for q in profiles)
+
+
+def _storage_identifier(bag: Path) -> str:
+    try:
+        metadata = YAML(typ="safe").load((bag / "metadata.yaml").read_text(encoding="utf-8"))
+        return str(metadata["rosbag2_bagfile_information"]["storage_identifier"])
+    except (OSError, YAMLError, KeyError, TypeError) as error:  # Reader already validated; be safe anyway
+        raise BagError(f"{bag / 'metadata.yaml'}: cannot read storage_identifier: {error}") from error
+
+
+def bag_info(path: str | Path) -> BagInfo:
+    """Topics, types, counts, QoS and time span of a rosbag2 directory (raises BagError if unreadable)."""
+    bag = _checked_bag_path(path)
+    reader = _open_reader(bag)
+    try:
+        topics: list[TopicInfo] = []
+        for name, info in sorted(reader.topics.items()):
+            offered: tuple[OfferedQos, ...] = ()
+            for connection in info.connections:
+                offered += _offered(connection)
+            distinct = list(dict.fromkeys(str(q) for q in offered))
+            topics.append(TopicInfo(name=name, msgtype=info.msgtype or "(several types)", count=info.msgcount,
+                                    qos="; ".join(distinct) if distinct else None, offered_qos=offered))
+        count = reader.message_count
+        # rosbags reports end_time one past the last message (a half-open range); we report the message itself.
+        start_ns = reader.start_time if count else 0
+        end_ns = reader.end_time - 1 if count else 0
+    finally:
+        reader.close()
+    return BagInfo(path=bag, storage=_storage_identifier(bag), start_ns=start_ns, end_ns=end_ns,
+                   duration_s=(end_ns - start_ns) / 1e9, message_count=count, topics=tuple(topics))
+
+
+def _seconds(nanoseconds: int) -> str:
+    """Exact decimal seconds (a float would round the nanoseconds of an epoch timestamp)."""
+    return f"{nanoseconds // 1_000_000_000}.{nanoseconds % 1_000_000_000:09d}"
+
+
+def format_bag_info(info: BagInfo) -> str:
+    """A table for people, in the spirit of ``ros2 bag info``."""
+    lines = [
+        f"Files:            {info.path}",
+        f"Storage:          {info.storage}",
+        f"Duration:         {info.duration_s:.3f} s",
+        f"Start:            {_seconds(info.start_ns)} s",
+        f"End:              {_seconds(info.end_ns)} s",
+        f"Messages:         {info.message_count}",
+        f"Topics:           {len(info.topics)}",
+    ]
+    if info.topics:
+        name_width = max(len("topic"), *(len(t.name) for t in info.topics))
+        type_width = max(len("type"), *(len(t.msgtype) for t in info.topics))
+        count_width = max(len("count"), *(len(str(t.count)) for t in info.topics))
+        lines.append("")
+        lines.append(f"{'topic':<{name_width}}  {'type':<{type_width}}  {'count':>{count_width}}  qos")
+        lines.append(f"{'-' * name_width}  {'-' * type_width}  {'-' * count_width}  ---")
+        for topic in info.topics:
+            lines.append(f"{topic.name:<{name_width}}  {topic.msgtype:<{type_width}}  "
+                         f"{topic.count:>{count_width}}  {topic.qos or '-'}")
+    return "\n".join(lines)
+
+
+# ----------------------------------------------------------------------------------------------- messages
+
+class RawMessage(NamedTuple):
+    """One recorded message as stored: CDR bytes, ready to republish."""
+
+    topic: str
+    msgtype: str
+    timestamp_ns: int
+    data: bytes
+
+
+def _selected(reader: Reader, topics: Iterable[str] | None) -> list[Connection]:
+    """The connections of ``topics``; a topic the bag lacks simply has no messages (a run where nothing was
+    ever published on it records no connection). Callers that need a topic check ``bag_info`` first."""
+    connections = list(reader.connections)
+    if topics is None:
+        return connections
+    wanted = set(topics)
+    return [c for c in connections if c.topic in wanted]
+
+
+def read_raw(path: str | Path, topics: Iterable[str] | None = None, *,
+             start_ns: int | None = None) -> Iterator[RawMessage]:
+    """Yield the recorded messages (all, or those of ``topics``; absent topics yield nothing) as raw CDR in
+    time order.
+
+    ``start_ns`` skips messages stamped before it (absolute bag time). Lazy: errors, including a missing bag,
+    surface as BagError on the first ``next()``."""
+    bag = _checked_bag_path(path)
+    reader = _open_reader(bag)
+    try:
+        connections = _selected(reader, topics)
+        if not connections:  # rosbags reads every connection when given none
+            return
+        try:
+            for connection, timestamp, data in reader.messages(connections, start=start_ns):
+                yield RawMessage(connection.topic, connection.msgtype, timestamp, bytes(data))
+        except (ReaderError, struct.error, UnicodeDecodeError) as error:
+            raise BagError(f"{bag}: corrupt message data (truncated or damaged chunk?): {error}") from error
+    finally:
+        reader.close()
+
+
+def _store_for(bag: Path, connections: list[Connection]) -> Typestore:
+    """The shared typestore if it knows every type; else one extended with the bag's embedded definitions
+    (a bag from another robot's packages), so the shared store never takes in a stranger's definitions."""
+    store = typestore()
+    unknown = [c for c in connections if c.msgtype not in store.fielddefs]
+    if not unknown:
+        return store
+    store = get_typestore(Stores.ROS2_JAZZY)
+    store.register({name: store_fields for name, store_fields in typestore().fielddefs.items()
+                    if name not in store.fielddefs})
+    for connection in unknown:
+        if connection.msgtype in store.fielddefs:
+            continue
+        definition = connection.msgdef
+        if definition.format != MessageDefinitionFormat.MSG or not definition.data.strip():
+            raise BagError(f"{bag}: topic {connection.topic}: message type {connection.msgtype} is unknown and "
+                           "the bag carries no definition for it")
+        try:
+            store.register(get_types_from_msg(definition.data, connection.msgtype))
+        except TypesysError as error:
+            raise BagError(f"{bag}: topic {connection.topic}: cannot use the bag's definition of "
+                           f"{connection.msgtype}: {error}") from error
+    return store
+
+
+def read_messages(path: str | Path, topics: Iterable[str] | None = None) -> Iterator[tuple[str, int, object]]:
+    """Yield (topic, timestamp_ns, message) in time order, messages deserialised as rosbags dataclasses.
+
+    Lazy like :func:`read_raw`. A message that does not deserialise raises BagError naming the topic."""
+    bag = _checked_bag_path(path)
+    reader = _open_reader(bag)
+    try:
+        connections = _selected(reader, topics)
+        if not connections:
+            return
+        store = _store_for(bag, connections)
+        try:
+            for connection, timestamp, data in reader.messages(connections):
+                try:
+                    message = store.deserialize_cdr(data, connection.msgtype)
+                except SerdeError as error:
+                    raise BagError(f"{bag}: topic {connection.topic}: message at {timestamp} ns does not "
+                                   f"deserialise as {connection.msgtype}: {error}") from error
+                yield connection.topic, timestamp, message
+        except (ReaderError, struct.error, UnicodeDecodeError) as error:
+            raise BagError(f"{bag}: corrupt message data (truncated or damaged chunk?): {error}") from error
+    finally:
+        reader.close()

@@ -1,0 +1,352 @@
+"""recorder: record every topic of the graph into a rosbag2 directory with MCAP storage.
+
+The wheels ship no rosbag2, so this node is the suite's ``ros2 bag record -a``:
+
+- it polls the graph (``discovery_period_s``, wall time) and subscribes to every topic that has a publisher,
+  hidden action topics (``/x/_action/feedback``, ``/x/_action/status``) and /rosout included, except
+  ``exclude_topics``;
+- subscriptions are raw (CDR bytes straight into the bag, nothing deserialised) with QoS adapted to the
+  publishers the way rosbag2 does it: reliable only if every publisher is reliable, transient local only if
+  every publisher is transient local (a durable subscription does not match a volatile publisher, so "any"
+  would lose the volatile ones), KEEP_LAST 1000 so a slow disk or a burst drops nothing. A publisher that
+  appears later with weaker QoS makes the recorder re-subscribe with the weaker profile;
+- the MCAP schema records carry each type's full message definition (from ``bags.typestore()``), so the
+  bag decodes in Foxglove or with ``mcap_ros2`` without rfidnav installed.
+
+Timestamps are the node clock at reception. Runs use ``use_sim_time``, so bag time is sim time; a message
+that arrives before the first /clock is stamped 0 (the ROS time of a sim-time node with no clock yet).
+
+Stopping: SIGINT or SIGTERM stops recording, drains what DDS already delivered to this process, then
+finalises the bag (MCAP summary and metadata.yaml). rclpy's own handlers are not installed because they
+shut the context down at once, which would drop the messages still queued in the subscriptions.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import importlib
+import signal
+import sys
+import time
+import typing
+from dataclasses import dataclass
+from pathlib import Path
+from types import FrameType
+from typing import Any
+
+import rclpy
+from rcl_interfaces.msg import ParameterDescriptor
+from rclpy.clock import Clock, ClockType
+from rclpy.exceptions import InvalidParameterTypeException
+from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.node import Node
+from rclpy.parameter import Parameter
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.signals import SignalHandlerOptions
+from rclpy.subscription import Subscription
+from rosbags.interfaces import Connection, Qos, QosDurability, QosHistory, QosLiveliness, QosReliability, QosTime
+from rosbags.rosbag2 import StoragePlugin, Writer, WriterError
+
+from rfidnav_bringup.bags import message_definition, register_installed_type
+from rfidnav_bringup.errors import BagError, ConfigError
+from rfidnav_common.config import param, parameters_from_mapping
+from rfidnav_common.errors import RfidnavError
+
+# rosbag2 metadata version 9 is what Jazzy's rosbag2 writes (structured QoS in metadata.yaml).
+BAG_VERSION = 9
+RECORD_DEPTH = 1000
+DRAIN_IDLE_S = 0.05  # stop draining once a wait this long delivered nothing
+DRAIN_LIMIT_S = 2.0
+
+
+@dataclass(frozen=True)
+class RecorderParameters:
+    output_dir: str = param("rosbag2 directory to create (must not exist)", "")
+    exclude_topics: list[str] = param("topics not to record (exact names)", [])
+    discovery_period_s: float = param("wall-time period of the graph poll for new topics [s]", 0.2)
+
+    def validate(self) -> None:
+        if not self.output_dir:
+            raise ValueError("output_dir: required (the rosbag2 directory to create)")
+        if Path(self.output_dir).exists():
+            raise ValueError(f"output_dir: {self.output_dir} exists already; a bag is never overwritten")
+        if not self.discovery_period_s > 0.0:
+            raise ValueError(f"discovery_period_s: must be > 0, got {self.discovery_period_s}")
+
+
+def declare_node_parameters(node: Node, cls: type) -> Any:
+    """Declare one parameter per field of the dataclass ``cls``, read them once, validate (ConfigError).
+
+    Unlike a plain ``declare_parameter(name, default)``: an empty string-array default is declared by type
+    (Jazzy cannot infer a type from ``[]``), and float parameters accept integers (``-p rate:=2``), which
+    Jazzy's static typing would otherwise reject with a traceback."""
+    hints = typing.get_type_hints(cls)
+    source = f"parameters of node '{node.get_fully_qualified_name()}'"
+    values: dict[str, Any] = {}
+    for field in dataclasses.fields(cls):
+        default = field.default if field.default is not dataclasses.MISSING else field.default_factory()
+        doc = field.metadata.get("doc", "")
+        try:
+            if hints[field.name] == list[str]:
+                value = node.declare_parameter(field.name, Parameter.Type.STRING_ARRAY,
+                                               ParameterDescriptor(description=doc)).value
+                values[field.name] = list(value) if value is not None else list(default)
+            else:
+                dynamic = hints[field.name] is float
+                values[field.name] = node.declare_parameter(
+                    field.name, default, ParameterDescriptor(description=doc, dynamic_typing=dynamic)).value
+        except InvalidParameterTypeException as error:
+            raise ConfigError(source, field.name, f"wrong type: {error}") from None
+    return parameters_from_mapping(cls, values, source)
+
+
+def message_class(msgtype: str) -> type | None:
+    """The generated Python class of ``pkg/namespace/Name``, or None when it is not installed.
+
+    Action-derived types (``X_FeedbackMessage``) are not exported by ``pkg.action``; they live in the private
+    module of their action (``pkg.action._x``), which each exported class names as its ``__module__``."""
+    parts = msgtype.split("/")
+    if len(parts) != 3:
+        return None
+    package, namespace, name = parts
+    try:
+        module = importlib.import_module(f"{package}.{namespace}")
+    except ImportError:
+        return None
+    found = getattr(module, name, None)
+    if found is None:
+        for exported in vars(module).values():
+            private = sys.modules.get(getattr(exported, "__module__", ""))
+            found = getattr(private, name, None) if private is not None else None
+            if found is not None:
+                break
+    return found if isinstance(found, type) else None
+
+
+def _qos_time(duration: Any) -> QosTime:
+    seconds, nanoseconds = divmod(int(duration.nanoseconds), 1_000_000_000)
+    return QosTime(seconds, nanoseconds)
+
+
+def to_bag_qos(profile: QoSProfile) -> Qos:
+    """An offered rclpy QoS profile in rosbags' form (rosbag2 metadata). DDS discovery does not carry
+    history and depth, so publishers show up as history 'unknown', depth 0 -- as in rosbag2's own bags."""
+    def member(enum: Any, policy: Any, unknown: Any) -> Any:
+        return enum.__members__.get(getattr(policy, "name", ""), unknown)
+
+    return Qos(
+        history=member(QosHistory, profile.history, QosHistory.UNKNOWN),
+        depth=int(profile.depth),
+        reliability=member(QosReliability, profile.reliability, QosReliability.UNKNOWN),
+        durability=member(QosDurability, profile.durability, QosDurability.UNKNOWN),
+        deadline=_qos_time(profile.deadline),
+        lifespan=_qos_time(profile.lifespan),
+        liveliness=member(QosLiveliness, profile.liveliness, QosLiveliness.UNKNOWN),
+        liveliness_lease_duration=_qos_time(profile.liveliness_lease_duration),
+        avoid_ros_namespace_conventions=bool(profile.avoid_ros_namespace_conventions),
+    )
+
+
+def subscription_qos(offered: list[QoSProfile]) -> QoSProfile:
+    """The QoS that matches every offered profile and loses nothing any of them would deliver."""
+    reliable = all(q.reliability == ReliabilityPolicy.RELIABLE for q in offered)
+    latched = all(q.durability == DurabilityPolicy.TRANSIENT_LOCAL for q in offered)
+    return QoSProfile(
+        history=HistoryPolicy.KEEP_LAST, depth=RECORD_DEPTH,
+        reliability=ReliabilityPolicy.RELIABLE if reliable else ReliabilityPolicy.BEST_EFFORT,
+        durability=DurabilityPolicy.TRANSIENT_LOCAL if latched else DurabilityPolicy.VOLATILE)
+
+
+def _weaker(current: QoSProfile, needed: QoSProfile) -> bool:
+    """Whether ``needed`` asks less than ``current``: then some publisher does not match ``current``."""
+    return ((current.reliability == ReliabilityPolicy.RELIABLE and needed.reliability != current.reliability)
+            or (current.durability == DurabilityPolicy.TRANSIENT_LOCAL and needed.durability != current.durability))
+
+
+def _describe(qos: QoSProfile) -> str:
+    return f"{qos.reliability.name.lower()}, {qos.durability.name.lower()}"
+
+
+class RecorderNode(Node):
+    def __init__(self) -> None:
+        super().__init__("recorder")
+        self.params: RecorderParameters = declare_node_parameters(self, RecorderParameters)
+        self.excluded = set(self.params.exclude_topics)
+        self.message_count = 0
+        self.connections: dict[str, Connection] = {}
+        self.recorded_qos: dict[str, QoSProfile] = {}
+        self.publisher_counts: dict[str, int] = {}
+        self.topic_subscriptions: dict[str, Subscription] = {}
+        self.unrecordable: set[str] = set()  # topics already reported as impossible to record
+        self.write_failed = False
+        self.writer = Writer(self.params.output_dir, version=BAG_VERSION, storage_plugin=StoragePlugin.MCAP)
+        try:
+            self.writer.open()
+        except (WriterError, OSError) as error:
+            raise ConfigError(f"parameters of node '{self.get_fully_qualified_name()}'", "output_dir",
+                              f"cannot create the bag: {error}") from error
+        # Wall (steady) time: with use_sim_time a ROS-time timer would not tick before the first /clock.
+        self.discovery_timer = self.create_timer(self.params.discovery_period_s, self.discover,
+                                                 clock=Clock(clock_type=ClockType.STEADY_TIME))
+        self.get_logger().info(f"recording into {self.params.output_dir}")
+
+    # -- discovery ------------------------------------------------------------------------------------
+
+    def discover(self) -> None:
+        for topic, types in self.get_topic_names_and_types():
+            if topic in self.excluded or topic in self.unrecordable:
+                continue
+            publishers = self.count_publishers(topic)
+            if publishers == self.publisher_counts.get(topic, 0):
+                continue  # nothing changed since the last poll
+            self.publisher_counts[topic] = publishers
+            if publishers == 0:
+                continue  # only subscribers, or the publishers left: nothing to record (yet)
+            if topic in self.topic_subscriptions:
+                self.adapt(topic)
+            else:
+                self.add_topic(topic, types)
+
+    def offered_profiles(self, topic: str) -> list[QoSProfile]:
+        return [info.qos_profile for info in self.get_publishers_info_by_topic(topic)]
+
+    def add_topic(self, topic: str, types: list[str]) -> None:
+        msgtype = types[0]
+        if len(types) > 1:
+            self.get_logger().warning(f"{topic} is published with several types {types}; recording {msgtype}")
+        cls = message_class(msgtype)
+        if cls is None:
+            self.skip(topic, f"its type {msgtype} has no Python message module installed")
+            return
+        try:
+            known = register_installed_type(msgtype)
+            definition, rihs01 = message_definition(msgtype) if known else ("", "")
+        except BagError as error:
+            self.skip(topic, str(error))
+            return
+        if not known:
+            self.skip(topic, f"no message definition found for {msgtype} (needed to make the bag self-describing)")
+            return
+        offered = self.offered_profiles(topic)
+        if not offered:  # the publisher left between the count and the query: look again next poll
+            self.publisher_counts.pop(topic, None)
+            return
+        qos = subscription_qos(offered)
+        try:
+            connection = self.writer.add_connection(
+                topic, msgtype, msgdef=definition, rihs01=rihs01, serialization_format="cdr",
+                offered_qos_profiles=[to_bag_qos(q) for q in offered])
+        except WriterError as error:
+            self.skip(topic, f"the bag refused the connection: {error}")
+            return
+        self.connections[topic] = connection
+        self.subscribe(topic, cls, qos)
+        self.get_logger().info(f"recording {topic} [{msgtype}] ({_describe(qos)})")
+
+    def adapt(self, topic: str) -> None:
+        """A publisher joined: re-subscribe if it offers less than the current subscription requests."""
+        offered = self.offered_profiles(topic)
+        if not offered:
+            self.publisher_counts.pop(topic, None)
+            return
+        needed = subscription_qos(offered)
+        current = self.recorded_qos[topic]
+        if not _weaker(current, needed):
+            return
+        self.get_logger().warning(f"{topic}: a publisher offers only {_describe(needed)}; re-subscribing "
+                                  f"(was {_describe(current)})")
+        cls = self.topic_subscriptions[topic].msg_type
+        self.destroy_subscription(self.topic_subscriptions.pop(topic))
+        self.subscribe(topic, cls, needed)
+
+    def subscribe(self, topic: str, cls: type, qos: QoSProfile) -> None:
+        connection = self.connections[topic]
+        self.topic_subscriptions[topic] = self.create_subscription(
+            cls, topic, lambda data, c=connection: self.write(c, data), qos, raw=True)
+        self.recorded_qos[topic] = qos
+
+    def skip(self, topic: str, why: str) -> None:
+        self.unrecordable.add(topic)
+        self.get_logger().error(f"not recording {topic}: {why}")
+
+    # -- writing --------------------------------------------------------------------------------------
+
+    def write(self, connection: Connection, data: bytes) -> None:
+        try:
+            self.writer.write(connection, self.get_clock().now().nanoseconds, data)
+        except OSError as error:  # disk full or gone: say so once, keep the node (and the run) alive
+            if not self.write_failed:
+                self.get_logger().error(f"cannot write to {self.params.output_dir}: {error}")
+            self.write_failed = True
+            return
+        self.message_count += 1
+
+    def stop_discovery(self) -> None:
+        self.discovery_timer.cancel()
+
+    def close(self) -> None:
+        """Finalise the bag: MCAP summary, then metadata.yaml. Safe to call twice."""
+        if self.writer.storage is None:
+            return
+        self.writer.close()
+        self.get_logger().info(f"bag closed: {self.message_count} messages on {len(self.connections)} topics "
+                               f"in {self.params.output_dir}")
+
+
+class _StopRequest:
+    """SIGINT/SIGTERM set a flag the spin loop checks; a second signal interrupts at once."""
+
+    def __init__(self) -> None:
+        self.requested = False
+
+    def __call__(self, signum: int, frame: FrameType | None) -> None:
+        if self.requested:
+            raise KeyboardInterrupt
+        self.requested = True
+
+
+def _drain(executor: SingleThreadedExecutor, node: RecorderNode) -> None:
+    """Record what already reached this process: spin until a short wait delivers nothing."""
+    deadline = time.monotonic() + DRAIN_LIMIT_S
+    while time.monotonic() < deadline:
+        before = node.message_count
+        executor.spin_once(timeout_sec=DRAIN_IDLE_S)
+        if node.message_count == before:
+            return
+
+
+def main(args: list[str] | None = None) -> int:
+    """Same shape as rfidnav_common.ros.run_node, with a graceful stop that drains before closing."""
+    rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
+    stop = _StopRequest()
+    signal.signal(signal.SIGINT, stop)
+    signal.signal(signal.SIGTERM, stop)
+    node: RecorderNode | None = None
+    executor = SingleThreadedExecutor()
+    try:
+        node = RecorderNode()
+        executor.add_node(node)
+        while not stop.requested and rclpy.ok():
+            # Bounded waits: a Python signal handler runs only when control returns from rcl_wait.
+            executor.spin_once(timeout_sec=0.1)
+        node.stop_discovery()
+        _drain(executor, node)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    except RfidnavError as error:
+        print(f"[FATAL] {error}", file=sys.stderr, flush=True)
+        return 2
+    finally:
+        try:
+            if node is not None:
+                node.close()
+        finally:
+            if node is not None:
+                node.destroy_node()
+            executor.shutdown()
+            rclpy.try_shutdown()
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
