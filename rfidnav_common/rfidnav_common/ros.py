@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import importlib
 import sys
 import typing
 from typing import Any, Callable
@@ -15,10 +16,11 @@ from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
 from rfidnav_common.config import parameters_from_mapping
-from rfidnav_common.errors import RfidnavError
+from rfidnav_common.errors import ConfigError, RfidnavError
 
-# Sensor streams: reliable so the recorder and the controller see every inventory round on localhost.
-SENSOR_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=10, reliability=ReliabilityPolicy.RELIABLE,
+# Sensor streams: reliable, with room for a burst (a high RTF on a busy machine) so that the recorder
+# and the controller see every message on localhost.
+SENSOR_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=100, reliability=ReliabilityPolicy.RELIABLE,
                         durability=DurabilityPolicy.VOLATILE)
 COMMAND_QOS = SENSOR_QOS
 # Maps and markers: late joiners (viewers, the recorder) get the last message.
@@ -79,3 +81,37 @@ def time_msg(seconds: float) -> Time:
 
 def seconds_of(stamp: Time) -> float:
     return stamp.sec + stamp.nanosec * 1e-9
+
+
+def interface_class(type_name: str) -> type:
+    """The Python class of ``pkg/msg/Name``, ``pkg/srv/Name`` or ``pkg/action/Name`` (rosidl_runtime_py is
+    not among the PyPI wheels). An unknown type is a ConfigError naming it."""
+    parts = type_name.split("/")
+    if len(parts) == 2:
+        parts = [parts[0], "msg", parts[1]]
+    if len(parts) != 3 or parts[1] not in ("msg", "srv", "action"):
+        raise ConfigError(type_name, "", "expected an interface type like pkg/msg/Name or pkg/action/Name")
+    package, kind, name = parts
+    try:
+        return getattr(importlib.import_module(f"{package}.{kind}"), name)
+    except (ImportError, AttributeError):
+        raise ConfigError(type_name, "", "unknown interface type (is its package built and installed?)") from None
+
+
+def fill_message(message: Any, values: dict[str, Any], where: str) -> Any:
+    """Set ``message``'s fields from a plain mapping (nested mappings fill nested messages)."""
+    fields = message.get_fields_and_field_types()
+    for name, value in values.items():
+        if name not in fields:
+            raise ConfigError(where, name, f"no such field in {type(message).__name__} "
+                              f"(fields: {', '.join(fields)})")
+        current = getattr(message, name)
+        try:
+            if isinstance(value, dict) and hasattr(current, "get_fields_and_field_types"):
+                fill_message(current, value, f"{where}.{name}")
+            else:
+                setattr(message, name, float(value) if isinstance(current, float) and isinstance(value, int)
+                        else value)
+        except (TypeError, ValueError, AssertionError) as error:
+            raise ConfigError(where, name, f"cannot hold {value!r}: {error}") from None
+    return message

@@ -16,7 +16,7 @@ from rclpy.action.server import ServerGoalHandle
 from rclpy.node import Node
 from rclpy.task import Future
 
-from rfidnav_common.ros import COMMAND_QOS, SENSOR_QOS, declare_parameters, run_node
+from rfidnav_common.ros import COMMAND_QOS, SENSOR_QOS, declare_parameters, run_node, seconds_of
 from rfidnav_control.fuzzy import FuzzyHeadingController
 from rfidnav_control.parameters import HeadingControllerParameters
 from rfidnav_control.route_map import load_route_map
@@ -92,9 +92,9 @@ class HeadingControllerNode(Node):
         active = self.active
         if active is None or active.outcome.done():
             return
-        now = self.now_s()
-        active.last_step_s = now
-        command = self.follower.step(now, valid)
+        # The round's own stamp, not arrival time: delivery jitter must not change the commanded yaw rate.
+        command = self.follower.step(seconds_of(msg.header.stamp), valid)
+        active.last_step_s = self.now_s()
         if command.arrived_index is not None:
             active.tags_reached = command.arrived_index + 1
         self.publish(command)

@@ -23,7 +23,7 @@ class RobotSimParameters:
     step_s: float = param("fixed physics step [s]", 0.01)
     rtf: float = param("real-time factor: sim seconds per wall second", 1.0)
     start_paused: bool = param("hold the clock at zero until ~/start is called", False)
-    odom_rate_hz: float = param("rate of /odom and /sim/ground_truth [Hz, sim time]", 50.0)
+    odom_rate_hz: float = param("rate of /clock, /odom and /sim/ground_truth [Hz, sim time]", 50.0)
     seed: int = param("run seed; the odometry slip stream derives from it", 0)
     track_width_m: float = param("distance between the wheels [m]", 0.30)
     max_wheel_speed_mps: float = param("wheel speed limit [m/s]", 0.5)

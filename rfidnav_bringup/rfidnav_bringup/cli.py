@@ -1,0 +1,203 @@
+"""``./rfidnav VERB``: the command line (the entry script has already run the set-up)."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+from rfidnav_bringup.errors import RfidnavError
+from rfidnav_common.errors import ConfigError
+
+WORKSPACE = Path(__file__).resolve().parents[2]
+DEMO_SCENARIO = "hallway"
+DEMO_RTF = 5.0
+
+
+def key_value(text: str) -> tuple[str, str]:
+    if "=" not in text:
+        raise argparse.ArgumentTypeError(f"expected ROLE=VALUE, got '{text}'")
+    role, value = text.split("=", 1)
+    return role, value
+
+
+def add_run_options(parser: argparse.ArgumentParser, default_rtf: float) -> None:
+    parser.add_argument("--rtf", type=float, default=default_rtf, help="real-time factor (sim s per wall s)")
+    parser.add_argument("--seed", type=int, default=1, help="run seed (every node derives its own)")
+    parser.add_argument("--out", type=Path, default=WORKSPACE / "bags", help="folder for the run folder")
+    parser.add_argument("--swap", type=key_value, action="append", default=[], metavar="ROLE=CMD",
+                        help="replace a role: ROLE=pkg:executable or ROLE='command line'")
+    parser.add_argument("--params", type=key_value, action="append", default=[], metavar="ROLE=FILE",
+                        help="replace a role's parameter file")
+    parser.add_argument("--no-record", action="store_true", help="do not record a bag")
+    parser.add_argument("--quiet", action="store_true", help="print only the summary")
+
+
+def parser() -> argparse.ArgumentParser:
+    top = argparse.ArgumentParser(prog="rfidnav", description="RFID navigation for ROS 2 Jazzy (see README.md)")
+    verbs = top.add_subparsers(dest="verb", required=True)
+    verbs.add_parser("setup", help="create/refresh .venv, build rfidnav_msgs, install packages")
+    demo = verbs.add_parser("demo", help=f"the {DEMO_SCENARIO} scenario over DDS, about a minute")
+    add_run_options(demo, DEMO_RTF)
+    test = verbs.add_parser("test", help="the full test suite")
+    test.add_argument("pytest_args", nargs=argparse.REMAINDER, help="passed to pytest")
+    run = verbs.add_parser("run", help="one mission through the real node graph")
+    run.add_argument("scenario", help="scenario name (config/scenarios/NAME.yaml) or path")
+    run.add_argument("--goal", help="mission goal as YAML, replacing the scenario's, e.g. '{tag_ids: [C1]}'")
+    add_run_options(run, 1.0)
+    replay = verbs.add_parser("replay", help="republish a bag")
+    replay.add_argument("bag", type=Path)
+    replay.add_argument("--rate", type=float, default=1.0)
+    replay.add_argument("--topics", nargs="+", default=[])
+    replay.add_argument("--loop", action="store_true")
+    replay.add_argument("--clock", action="store_true", help="publish /clock from the bag's time")
+    replay.add_argument("--start", type=float, default=0.0, help="skip the first S seconds")
+    bag = verbs.add_parser("bag", help="bag tools")
+    bag_verbs = bag.add_subparsers(dest="bag_verb", required=True)
+    info = bag_verbs.add_parser("info", help="topics, types, counts, duration")
+    info.add_argument("bag", type=Path)
+    info.add_argument("--json", action="store_true")
+    report = verbs.add_parser("report", help="plots and recomputed metrics of a run")
+    report.add_argument("run", type=Path)
+    report.add_argument("--json", action="store_true")
+    reproduce = verbs.add_parser("reproduce", help="the papers' experiments in-process, beside the papers' figures")
+    reproduce.add_argument("name", choices=["flc"])
+    reproduce.add_argument("--seeds", type=int, default=10)
+    reproduce.add_argument("--out", type=Path, default=WORKSPACE / "bags" / "reproduce")
+    reproduce.add_argument("--json", action="store_true")
+    bench = verbs.add_parser("bench", help="performance benchmarks (JSON figures)")
+    bench.add_argument("name", choices=["flc"])
+    bench.add_argument("--json", action="store_true")
+    bench.add_argument("--evaluations", type=int, default=2000)
+    return top
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = parser().parse_args(argv)
+    try:
+        return VERBS[args.verb](args)
+    except (RfidnavError, ConfigError) as error:
+        print(f"rfidnav {args.verb}: {error}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        return 130
+
+
+def verb_setup(_args) -> int:
+    print("rfidnav setup: ready")
+    return 0
+
+
+def verb_run(args, scenario_name: str | None = None) -> int:
+    import yaml
+
+    from rfidnav_bringup.orchestrator import Orchestrator, RunOptions, print_summary
+    from rfidnav_bringup.scenario import load_scenario
+
+    scenario = load_scenario(scenario_name or args.scenario, swaps=dict(args.swap),
+                             param_files={role: Path(file) for role, file in args.params})
+    if getattr(args, "goal", None):
+        from dataclasses import replace
+
+        goal = yaml.safe_load(args.goal)
+        if not isinstance(goal, dict):
+            raise ConfigError("--goal", "", "expected a YAML mapping of goal fields")
+        scenario = replace(scenario, mission=replace(scenario.mission, goal=goal))
+    if args.rtf <= 0:
+        raise ConfigError("--rtf", "", "must be positive")
+    options = RunOptions(rtf=args.rtf, seed=args.seed, out_dir=args.out, record=not args.no_record,
+                         quiet=args.quiet)
+    summary = Orchestrator(scenario, options).run()
+    print_summary(summary)
+    return 0 if summary.success else 1
+
+
+def verb_demo(args) -> int:
+    code = verb_run(args, DEMO_SCENARIO)
+    runs = sorted(p for p in args.out.glob(f"*_{DEMO_SCENARIO}*") if (p / "summary.json").exists())
+    if runs and (runs[-1] / "bag").exists():
+        from rfidnav_bringup.report import write_report
+
+        _, plots = write_report(runs[-1])
+        print("plots:", *plots, sep="\n  ")
+        print(f"open {runs[-1] / 'bag'} (the .mcap file) in Foxglove to replay the run")
+    return code
+
+
+def verb_test(args) -> int:
+    env = dict(os.environ, ROS_PYTHON_CHECK_FIELDS="1", PYTHONDONTWRITEBYTECODE="1")
+    command = [sys.executable, "-m", "pytest", str(WORKSPACE / "test"), *args.pytest_args]
+    return subprocess.call(command, cwd=WORKSPACE, env=env)
+
+
+def verb_replay(args) -> int:
+    from rfidnav_bringup.bags import bag_info
+    from rfidnav_bringup.processes import resolve_executable
+    from rfidnav_bringup.report import locate_run
+
+    _, bag = locate_run(args.bag)
+    bag_info(bag)  # fails early, with one clear message, on a missing or truncated bag
+    command = resolve_executable("rfidnav_bringup", "player") + [
+        "--ros-args", "-p", f"bag:={bag.resolve()}", "-p", f"rate:={float(args.rate)}",
+        "-p", f"loop:={str(args.loop).lower()}", "-p", f"clock:={str(args.clock).lower()}",
+        "-p", f"start_s:={float(args.start)}"]
+    if args.topics:
+        command += ["-p", f"topics:={json.dumps(args.topics)}"]
+    return subprocess.call(command)
+
+
+def verb_bag(args) -> int:
+    from rfidnav_bringup.bags import bag_info, format_bag_info
+    from rfidnav_bringup.report import locate_run
+
+    _, bag = locate_run(args.bag)
+    info = bag_info(bag)
+    if args.json:
+        print(json.dumps({"path": str(info.path), "storage": info.storage, "duration_s": info.duration_s,
+                          "message_count": info.message_count,
+                          "topics": [{"name": t.name, "type": t.msgtype, "count": t.count} for t in info.topics]}))
+    else:
+        print(format_bag_info(info))
+    return 0
+
+
+def verb_report(args) -> int:
+    from rfidnav_bringup.report import write_report
+
+    metrics, plots = write_report(args.run)
+    if args.json:
+        print(json.dumps({"metrics": metrics, "plots": [str(p) for p in plots]}))
+    else:
+        for key, value in metrics.items():
+            print(f"  {key:22s} {value:.4f}" if isinstance(value, float) else f"  {key:22s} {value}")
+        print("plots:", *plots, sep="\n  ")
+    return 0
+
+
+def verb_reproduce(args) -> int:
+    from rfidnav_bringup.reproduce import reproduce_flc
+
+    return reproduce_flc(seeds=args.seeds, out_dir=args.out, as_json=args.json)
+
+
+def verb_bench(args) -> int:
+    from rfidnav_control.fuzzy import benchmark
+
+    figures = benchmark(evaluations=args.evaluations)
+    if args.json:
+        print(json.dumps(figures))
+    else:
+        print(f"fuzzy controller per evaluation: scikit-fuzzy {figures['reference_us']:.1f} us, "
+              f"fast path {figures['fast_us']:.2f} us, speed-up {figures['speedup']:.0f}x")
+    return 0
+
+
+VERBS = {"setup": verb_setup, "demo": verb_demo, "test": verb_test, "run": verb_run, "replay": verb_replay,
+         "bag": verb_bag, "report": verb_report, "reproduce": verb_reproduce, "bench": verb_bench}
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,384 @@
+"""``./rfidnav run``: one mission through the real node graph, every node its own OS process.
+
+Order of events: lease a DDS domain; write each node's resolved parameter file; start the recorder
+and wait until it is in the graph; start the nodes; wait until every node is in the graph, the
+mission's action server answers and the recorder subscribes to every topic; start the simulation
+clock; send the goal and show its feedback on one progress line; on result, timeout or Ctrl-C
+cancel the goal, stop the nodes (SIGINT, then SIGKILL), stop the recorder last so it finalizes the
+bag; compute the metrics from the bag and write summary.json.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import signal
+import sys
+import time
+from dataclasses import dataclass, field
+from datetime import datetime, timezone
+from pathlib import Path
+from typing import Any
+
+import rclpy
+import yaml
+from rclpy.action import ActionClient
+from rclpy.context import Context
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.node import Node
+from std_srvs.srv import Trigger
+
+from rfidnav_bringup.errors import ReadinessError, RfidnavError
+from rfidnav_bringup.processes import DomainLease, NodeProcess, resolve_executable
+from rfidnav_common.ros import fill_message, interface_class
+from rfidnav_bringup.scenario import KNOWN_NODES, NodeSpec, Scenario, dump_parameters, injected_parameters, node_parameters
+
+READY_TIMEOUT_S = 90.0
+STOP_GRACE_S = 5.0
+RECORDER_ROLE = "recorder"
+
+
+@dataclass(frozen=True)
+class RunOptions:
+    rtf: float = 1.0
+    seed: int = 1
+    out_dir: Path = Path("bags")
+    record: bool = True
+    quiet: bool = False
+
+
+@dataclass
+class MissionOutcome:
+    success: bool = False
+    message: str = "not started"
+    started_wall: float | None = None
+    started_sim_s: float | None = None
+    ended_sim_s: float | None = None
+    feedback: Any = None
+    result: Any = None
+
+
+@dataclass
+class RunSummary:
+    run_dir: Path
+    document: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def success(self) -> bool:
+        return bool(self.document.get("success"))
+
+
+class Progress:
+    """One updating line on a terminal; occasional plain lines otherwise (CI logs)."""
+
+    def __init__(self, quiet: bool) -> None:
+        self.quiet = quiet
+        self.tty = sys.stdout.isatty()
+        self.last_text = ""
+        self.last_print = 0.0
+
+    def show(self, text: str, milestone: bool = False) -> None:
+        if self.quiet:
+            return
+        now = time.monotonic()
+        if self.tty and now - self.last_print > 0.2:
+            print("\r" + text.ljust(len(self.last_text)), end="", flush=True)
+            self.last_text, self.last_print = text, now
+        elif not self.tty and milestone:
+            print(text, flush=True)
+
+    def done(self) -> None:
+        if self.tty and self.last_text and not self.quiet:
+            print()
+
+
+def run_id(scenario: str) -> str:
+    return f"{datetime.now(timezone.utc).strftime('%Y%m%dT%H%M%SZ')}_{scenario}"
+
+
+class Orchestrator:
+    def __init__(self, scenario: Scenario, options: RunOptions) -> None:
+        self.scenario = scenario
+        self.options = options
+        self.run_dir = unique_dir(options.out_dir / run_id(scenario.name))
+        self.processes: dict[str, NodeProcess] = {}
+        self.outcome = MissionOutcome()
+        self.progress = Progress(options.quiet)
+        self.interrupted = False
+
+    # ----------------------------------------------------------------- set-up
+    def prepare(self, env: dict[str, str]) -> None:
+        self.run_dir.mkdir(parents=True)
+        for source, name in ((self.scenario.world_file, "world.yaml"), (self.scenario.map_file, "map.yaml")):
+            shutil.copyfile(source, self.run_dir / name)
+        document = self.scenario.resolved_document()
+        document["run"] = {"seed": self.options.seed, "rtf": self.options.rtf}
+        (self.run_dir / "scenario.yaml").write_text(yaml.safe_dump(document, sort_keys=False))
+        params_dir = self.run_dir / "params"
+        params_dir.mkdir()
+        if self.options.record:
+            command = resolve_executable("rfidnav_bringup", "recorder") + [
+                "--ros-args", "-p", f"output_dir:={self.run_dir / 'bag'}", "-p", "use_sim_time:=true"]
+            self.processes[RECORDER_ROLE] = NodeProcess(RECORDER_ROLE, command, self.log_path(RECORDER_ROLE), env)
+        for role, spec in self.scenario.nodes.items():
+            command = self.node_command(spec, params_dir)
+            self.processes[role] = NodeProcess(role, command, self.log_path(role), env, spec.respawn,
+                                               spec.max_respawns)
+
+    def log_path(self, role: str) -> Path:
+        return self.run_dir / "logs" / f"{role}.log"
+
+    def node_command(self, spec: NodeSpec, params_dir: Path) -> list[str]:
+        if spec.command is not None:
+            return list(spec.command)
+        command = resolve_executable(spec.package, spec.executable) + ["--ros-args"]
+        parameters = node_parameters(self.scenario, spec, self.options.seed, self.options.rtf)
+        if parameters is not None:
+            node_name = KNOWN_NODES[(spec.package, spec.executable)][0]
+            values = dict(parameters.__dict__)
+            values.update({k: v for k, v in injected_parameters(self.scenario, spec, self.options.seed,
+                                                                 self.options.rtf).items() if k not in values})
+            file = params_dir / f"{spec.role}.yaml"
+            file.write_text(dump_parameters(node_name, values))
+            return command + ["--params-file", str(file)]
+        for file in spec.param_files:
+            command += ["--params-file", str(file)]
+        for key, value in {**spec.overrides, **injected_parameters(self.scenario, spec, self.options.seed,
+                                                                   self.options.rtf)}.items():
+            command += ["-p", f"{key}:={json.dumps(value)}"]
+        return command
+
+    # ----------------------------------------------------------------- run
+    def run(self) -> RunSummary:
+        lease = DomainLease()
+        env = child_environment(lease.domain_id)
+        os.environ.update({k: env[k] for k in ("ROS_DOMAIN_ID", "ROS_AUTOMATIC_DISCOVERY_RANGE")})
+        context = Context()
+        rclpy.init(context=context, domain_id=lease.domain_id)
+        node = Node("rfidnav_orchestrator", context=context,
+                    parameter_overrides=[rclpy.parameter.Parameter("use_sim_time", value=True)])
+        executor = SingleThreadedExecutor(context=context)
+        executor.add_node(node)
+        previous_handler = signal.signal(signal.SIGINT, self.on_interrupt)
+        try:
+            self.prepare(env)
+            self.say(f"run {self.run_dir.name}: domain {lease.domain_id}, seed {self.options.seed}, "
+                     f"RTF {self.options.rtf:g}")
+            self.start_graph(node, executor)
+            if not self.interrupted:
+                self.fly_mission(node, executor)
+        except RfidnavError as error:
+            self.outcome.message = str(error)
+            self.say(f"error: {error}", always=True)
+        finally:
+            signal.signal(signal.SIGINT, previous_handler)
+            self.progress.done()
+            self.shut_down()
+            executor.shutdown()
+            node.destroy_node()
+            rclpy.try_shutdown(context=context)
+            lease.close()
+        return self.write_summary()
+
+    def on_interrupt(self, _signum, _frame) -> None:
+        self.interrupted = True
+        self.outcome.message = "interrupted (Ctrl-C)"
+
+    def say(self, text: str, always: bool = False) -> None:
+        if always or not self.options.quiet:
+            print(text, flush=True)
+
+    def spin_until(self, executor: SingleThreadedExecutor, condition, timeout_s: float, what: str) -> None:
+        """Spin until ``condition()`` holds; fail naming ``what`` (and any node that died meanwhile)."""
+        deadline = time.monotonic() + timeout_s
+        while not condition():
+            self.check_processes(starting=True)
+            if self.interrupted:
+                return
+            if time.monotonic() > deadline:
+                raise ReadinessError(f"timed out after {timeout_s:.0f} s waiting for {what}\n{self.all_last_lines()}")
+            executor.spin_once(timeout_sec=0.05)
+
+    def start_graph(self, node: Node, executor: SingleThreadedExecutor) -> None:
+        if RECORDER_ROLE in self.processes:
+            self.processes[RECORDER_ROLE].start()
+            self.spin_until(executor, lambda: "recorder" in node.get_node_names(), READY_TIMEOUT_S,
+                            "the recorder to join the graph")
+        for role in self.scenario.nodes:
+            self.processes[role].start()
+        expected = {spec.name for spec in self.scenario.nodes.values() if spec.name}
+        self.spin_until(executor, lambda: expected <= set(node.get_node_names()), READY_TIMEOUT_S,
+                        f"nodes {', '.join(sorted(expected))} to join the graph")
+        self.action_type = interface_class(self.scenario.mission.action_type)
+        self.client = ActionClient(node, self.action_type, self.scenario.mission.action)
+        self.spin_until(executor, self.client.server_is_ready, READY_TIMEOUT_S,
+                        f"action server {self.scenario.mission.action}")
+        if RECORDER_ROLE in self.processes:
+            self.spin_until(executor, lambda: self.recorder_covers(node), READY_TIMEOUT_S,
+                            "the recorder to subscribe to every topic")
+        clock_roles = [spec for spec in self.scenario.nodes.values() if spec.clock_source and spec.name]
+        if clock_roles:
+            start = node.create_client(Trigger, f"/{clock_roles[0].name}/start")
+            self.spin_until(executor, start.service_is_ready, READY_TIMEOUT_S, "the simulation clock service")
+            future = start.call_async(Trigger.Request())
+            self.spin_until(executor, future.done, READY_TIMEOUT_S, "the simulation clock to start")
+            self.spin_until(executor, lambda: node.get_clock().now().nanoseconds > 0, READY_TIMEOUT_S,
+                            "the first /clock message")
+
+    @staticmethod
+    def recorder_covers(node: Node) -> bool:
+        for topic, _ in node.get_topic_names_and_types():
+            if not node.get_publishers_info_by_topic(topic):
+                continue
+            if not any(info.node_name == "recorder" for info in node.get_subscriptions_info_by_topic(topic)):
+                return False
+        return True
+
+    def fly_mission(self, node: Node, executor: SingleThreadedExecutor) -> None:
+        mission = self.scenario.mission
+        goal = self.action_type.Goal()
+        fill_message(goal, mission.goal, f"{self.scenario.path}: mission.goal")
+        self.outcome.started_sim_s = sim_seconds(node)
+        self.outcome.started_wall = time.monotonic()
+        send = self.client.send_goal_async(goal, feedback_callback=self.on_feedback)
+        self.spin_until(executor, send.done, READY_TIMEOUT_S, "the goal to be accepted")
+        if self.interrupted:
+            return
+        handle = send.result()
+        if not handle.accepted:
+            role = self.mission_role()
+            detail = f"\n{self.processes[role].last_lines(5)}" if role else ""
+            raise ReadinessError(f"goal rejected by {mission.action}{detail}")
+        result_future = handle.get_result_async()
+        wall_limit = mission.timeout_s / self.options.rtf * 3.0 + 60.0
+        while not result_future.done():
+            executor.spin_once(timeout_sec=0.05)
+            elapsed_sim = sim_seconds(node) - self.outcome.started_sim_s
+            self.check_processes(starting=False)
+            if self.interrupted or elapsed_sim > mission.timeout_s or \
+                    time.monotonic() - self.outcome.started_wall > wall_limit:
+                if not self.interrupted:
+                    self.outcome.message = f"timeout after {elapsed_sim:.1f} s of sim time"
+                cancel = handle.cancel_goal_async()
+                deadline = time.monotonic() + 5.0
+                while not (cancel.done() and result_future.done()) and time.monotonic() < deadline:
+                    executor.spin_once(timeout_sec=0.05)
+                break
+        self.outcome.ended_sim_s = sim_seconds(node)
+        if result_future.done():
+            result = result_future.result().result
+            self.outcome.result = result
+            self.outcome.success = bool(getattr(result, "success", False)) and not self.interrupted \
+                and self.outcome.message == "not started"
+            if self.outcome.message == "not started":
+                self.outcome.message = getattr(result, "message", "")
+
+    def on_feedback(self, message) -> None:
+        feedback = message.feedback
+        self.outcome.feedback = feedback
+        fields = feedback.get_fields_and_field_types()
+        text = " ".join(f"{name}={format_value(getattr(feedback, name))}" for name in fields)
+        milestone = getattr(feedback, "target_index", None) != getattr(self, "last_target_index", None)
+        self.last_target_index = getattr(feedback, "target_index", None)
+        self.progress.show(f"[{self.scenario.name}] {text}", milestone)
+
+    def mission_role(self) -> str | None:
+        for role, spec in self.scenario.nodes.items():
+            if not spec.sim:
+                return role
+        return None
+
+    def check_processes(self, starting: bool) -> None:
+        for role, process in self.processes.items():
+            code = process.poll()
+            if code is None or process.popen is None:
+                continue
+            if process.respawn and process.restarts < process.max_respawns and not self.interrupted:
+                self.say(f"\n{role} exited with code {code}; restarting ({process.restarts + 1}/"
+                         f"{process.max_respawns})\n{process.last_lines(5)}", always=True)
+                process.restarts += 1
+                process.start()
+                continue
+            if starting or not process.respawn:
+                process.popen = None if starting else process.popen
+                raise ReadinessError(f"node {role} exited with code {code}; last log lines:\n{process.last_lines()}")
+
+    def all_last_lines(self) -> str:
+        return "\n".join(f"  {role} ({'running' if p.running else f'exit {p.exit_code}'}):\n{p.last_lines(5)}"
+                         for role, p in self.processes.items())
+
+    def shut_down(self) -> None:
+        for role, process in self.processes.items():
+            if role != RECORDER_ROLE:
+                process.stop(STOP_GRACE_S)
+        if RECORDER_ROLE in self.processes:
+            self.processes[RECORDER_ROLE].stop(3 * STOP_GRACE_S)
+
+    # ----------------------------------------------------------------- results
+    def write_summary(self) -> RunSummary:
+        from rfidnav_bringup.report import run_metrics
+
+        metrics: dict[str, Any] = {}
+        bag = self.run_dir / "bag"
+        if (bag / "metadata.yaml").exists() and self.scenario.metrics:
+            try:
+                metrics = run_metrics(self.run_dir)
+            except RfidnavError as error:
+                self.say(f"metrics not computed: {error}", always=True)
+        sim_duration = None
+        if self.outcome.started_sim_s is not None and self.outcome.ended_sim_s is not None:
+            sim_duration = round(self.outcome.ended_sim_s - self.outcome.started_sim_s, 3)
+        document = {
+            "scenario": self.scenario.name,
+            "success": self.outcome.success,
+            "message": self.outcome.message,
+            "seed": self.options.seed,
+            "rtf": self.options.rtf,
+            "sim_duration_s": sim_duration,
+            "wall_duration_s": round(time.monotonic() - self.outcome.started_wall, 3)
+            if self.outcome.started_wall else None,
+            "metrics": metrics,
+            "nodes": {role: {"restarts": p.restarts, "exit_code": p.exit_code} for role, p in self.processes.items()},
+            "bag": str(bag if bag.exists() else self.run_dir),
+            "run_dir": str(self.run_dir),
+        }
+        (self.run_dir / "summary.json").write_text(json.dumps(document, indent=2) + "\n")
+        return RunSummary(self.run_dir, document)
+
+
+def child_environment(domain_id: int) -> dict[str, str]:
+    env = dict(os.environ)
+    env.update(ROS_DOMAIN_ID=str(domain_id), ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST", PYTHONUNBUFFERED="1",
+               RCUTILS_COLORIZED_OUTPUT="0")
+    env.setdefault("AMENT_PREFIX_PATH", sys.prefix)
+    return env
+
+
+def sim_seconds(node: Node) -> float:
+    return node.get_clock().now().nanoseconds * 1e-9
+
+
+def format_value(value: Any) -> str:
+    return f"{value:+.3f}" if isinstance(value, float) else str(value)
+
+
+def unique_dir(path: Path) -> Path:
+    candidate, index = path, 1
+    while candidate.exists():
+        index += 1
+        candidate = path.with_name(f"{path.name}_{index}")
+    return candidate
+
+
+def print_summary(summary: RunSummary) -> None:
+    document = summary.document
+    rows = [("scenario", document["scenario"]), ("success", document["success"]), ("message", document["message"]),
+            ("sim duration [s]", document["sim_duration_s"]), ("wall duration [s]", document["wall_duration_s"])]
+    rows += [(key, f"{value:.4f}" if isinstance(value, float) else value) for key, value in document["metrics"].items()]
+    rows += [(f"node {role}", f"exit {info['exit_code']}, restarts {info['restarts']}")
+             for role, info in document["nodes"].items()]
+    rows += [("bag", document["bag"]), ("summary", str(summary.run_dir / "summary.json"))]
+    width = max(len(str(key)) for key, _ in rows)
+    for key, value in rows:
+        print(f"  {str(key).ljust(width)}  {value}")

@@ -1,0 +1,133 @@
+"""Node processes: resolving ``package executable`` like ``ros2 run``, starting with logs, stopping politely.
+
+Also hands out DDS domain ids: each run holds an exclusive lock on one id for its lifetime, so
+concurrent runs (and test sessions) on one machine never hear each other.
+"""
+
+from __future__ import annotations
+
+import fcntl
+import os
+import signal
+import subprocess
+import sys
+import tempfile
+from dataclasses import dataclass, field
+from importlib import metadata
+from pathlib import Path
+from typing import IO
+
+from rfidnav_bringup.errors import LaunchError
+
+RUN_DOMAINS = range(51, 102)   # 1-50 are left to test sessions; 0-101 avoid the ephemeral port range
+
+
+class DomainLease:
+    """An exclusive ROS_DOMAIN_ID for this process's lifetime (released on close or exit)."""
+
+    def __init__(self, candidates: range = RUN_DOMAINS) -> None:
+        self.handle: IO[str] | None = None
+        for domain in candidates:
+            handle = open(Path(tempfile.gettempdir()) / f"rfidnav-domain-{domain}.lock", "w")
+            try:
+                fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except BlockingIOError:
+                handle.close()
+                continue
+            self.handle, self.domain_id = handle, domain
+            return
+        raise LaunchError(f"all ROS domain ids {candidates.start}-{candidates.stop - 1} are in use by other runs")
+
+    def close(self) -> None:
+        if self.handle is not None:
+            self.handle.close()
+            self.handle = None
+
+
+def resolve_executable(package: str, executable: str) -> list[str]:
+    """The command for a node executable: ``<prefix>/lib/<package>/<executable>`` on any AMENT_PREFIX_PATH
+    entry (a colcon install), else the package's console_scripts entry point (an editable install)."""
+    prefixes = [p for p in os.environ.get("AMENT_PREFIX_PATH", "").split(os.pathsep) if p] + [sys.prefix]
+    for prefix in prefixes:
+        candidate = Path(prefix) / "lib" / package / executable
+        if candidate.is_file() and os.access(candidate, os.X_OK):
+            return [str(candidate)]
+    try:
+        distribution = metadata.distribution(package)
+    except metadata.PackageNotFoundError:
+        raise LaunchError(f"unknown package '{package}' (not installed in {sys.prefix})") from None
+    scripts = {ep.name: ep for ep in distribution.entry_points if ep.group == "console_scripts"}
+    if executable not in scripts:
+        raise LaunchError(f"package '{package}' has no executable '{executable}' "
+                          f"(it has: {', '.join(sorted(scripts)) or 'none'})")
+    script = Path(sys.prefix) / "bin" / executable
+    if script.is_file():
+        return [str(script)]
+    module, function = scripts[executable].value.split(":")
+    return [sys.executable, "-c", f"import sys; from {module} import {function}; sys.exit({function}())"]
+
+
+@dataclass
+class NodeProcess:
+    role: str
+    command: list[str]
+    log_path: Path
+    env: dict[str, str]
+    respawn: bool = False
+    max_respawns: int = 0
+    restarts: int = 0
+    popen: subprocess.Popen | None = field(default=None, repr=False)
+    exit_code: int | None = None
+
+    def start(self) -> None:
+        self.log_path.parent.mkdir(parents=True, exist_ok=True)
+        log = self.log_path.open("a")
+        log.write(f"$ {' '.join(self.command)}\n")
+        log.flush()
+        try:
+            # A session of its own: Ctrl-C in the terminal reaches the orchestrator, which stops nodes in order.
+            self.popen = subprocess.Popen(self.command, stdout=log, stderr=subprocess.STDOUT, env=self.env,
+                                          start_new_session=True)
+        except OSError as error:
+            raise LaunchError(f"{self.role}: cannot start '{self.command[0]}': {error.strerror}") from None
+        finally:
+            log.close()
+        self.exit_code = None
+
+    def poll(self) -> int | None:
+        if self.popen is not None and self.exit_code is None:
+            self.exit_code = self.popen.poll()
+        return self.exit_code
+
+    @property
+    def running(self) -> bool:
+        return self.popen is not None and self.poll() is None
+
+    def signal(self, signum: int) -> None:
+        if self.running:
+            os.killpg(self.popen.pid, signum)
+
+    def wait(self, timeout_s: float) -> bool:
+        if self.popen is None:
+            return True
+        try:
+            self.exit_code = self.popen.wait(timeout=timeout_s)
+            return True
+        except subprocess.TimeoutExpired:
+            return False
+
+    def stop(self, grace_s: float) -> None:
+        """SIGINT, then SIGKILL after the grace period."""
+        if not self.running:
+            return
+        self.signal(signal.SIGINT)
+        if not self.wait(grace_s):
+            self.signal(signal.SIGKILL)
+            self.wait(5.0)
+
+    def last_lines(self, count: int = 12) -> str:
+        try:
+            lines = self.log_path.read_text(errors="replace").splitlines()
+        except FileNotFoundError:
+            return "(no log)"
+        return "\n".join("    " + line for line in lines[-count:])

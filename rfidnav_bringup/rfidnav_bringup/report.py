@@ -1,0 +1,145 @@
+"""``./rfidnav report RUN``: metrics recomputed from a run's bag, and plots like paper 001 Figs. 9, 11, 13.
+
+The run folder holds the bag, the resolved scenario and copies of its world and map, so a report
+needs nothing else. From the bag: ground truth (/sim/ground_truth), the mission start and end (the
+action's status topic: accepted, then succeeded/aborted/canceled) and the arrivals at route tags
+(the feedback's target index stepping on).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+import yaml  # noqa: E402
+
+from rfidnav_bringup.bags import read_messages  # noqa: E402
+from rfidnav_bringup.errors import BagError  # noqa: E402
+from rfidnav_bringup.metrics import Trajectory, tracking_error, tracking_metrics  # noqa: E402
+from rfidnav_sim.world import World, load_world  # noqa: E402
+
+STATUS_ACCEPTED, STATUS_EXECUTING = 1, 2
+STATUS_FINAL = {4: "succeeded", 5: "canceled", 6: "aborted"}
+
+
+@dataclass(frozen=True)
+class RunRecord:
+    run_dir: Path
+    bag: Path
+    world: World
+    route: list[str]
+    ground_truth: Trajectory
+    mission_start_s: float
+    mission_end_s: float
+    final_status: str | None
+    arrival_times_s: list[float]
+
+
+def locate_run(path: Path) -> tuple[Path, Path]:
+    """(run folder, bag folder) for a run folder or its bag folder."""
+    path = Path(path)
+    if (path / "bag" / "metadata.yaml").exists():
+        return path, path / "bag"
+    if (path / "metadata.yaml").exists():
+        return path.parent, path
+    raise BagError(f"{path}: not a run folder nor a rosbag2 folder (no metadata.yaml)")
+
+
+def load_run(path: Path) -> RunRecord:
+    run_dir, bag = locate_run(path)
+    scenario_file = run_dir / "scenario.yaml"
+    if not scenario_file.exists():
+        raise BagError(f"{run_dir}: no scenario.yaml beside the bag; report needs the run folder ./rfidnav run wrote")
+    scenario = yaml.safe_load(scenario_file.read_text())
+    world = load_world(run_dir / "world.yaml")
+    route = list(scenario["mission"]["goal"].get("tag_ids", []))
+    action = scenario["mission"]["action"].rstrip("/")
+    status_topic, feedback_topic = f"{action}/_action/status", f"{action}/_action/feedback"
+    times, xy = [], []
+    start_s = end_s = None
+    final = None
+    arrivals: list[float] = []
+    target = 0
+    for topic, stamp_ns, msg in read_messages(bag, ["/sim/ground_truth", status_topic, feedback_topic]):
+        now_s = stamp_ns * 1e-9
+        if topic == "/sim/ground_truth":
+            times.append(msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9)
+            xy.append((msg.pose.pose.position.x, msg.pose.pose.position.y))
+        elif topic == status_topic:
+            for status in msg.status_list:
+                if status.status in (STATUS_ACCEPTED, STATUS_EXECUTING) and start_s is None:
+                    start_s = status.goal_info.stamp.sec + status.goal_info.stamp.nanosec * 1e-9
+                elif status.status in STATUS_FINAL and final is None:
+                    final, end_s = STATUS_FINAL[status.status], now_s
+        elif topic == feedback_topic and final is None:
+            while msg.feedback.target_index > target:
+                arrivals.append(now_s)
+                target += 1
+    if not times:
+        raise BagError(f"{bag}: no /sim/ground_truth messages; metrics need the simulator's ground truth")
+    if start_s is None:
+        raise BagError(f"{bag}: no goal status on {status_topic}; was the mission sent?")
+    if final == "succeeded" and len(arrivals) < len(route):
+        arrivals.append(end_s)
+    trajectory = Trajectory(np.array(times), np.array(xy))
+    return RunRecord(run_dir, bag, world, route, trajectory, start_s,
+                     end_s if end_s is not None else float(trajectory.times_s[-1]), final, arrivals)
+
+
+def route_points(world: World, route: list[str]) -> np.ndarray:
+    return np.array([world.tag(tag).position[:2] for tag in route], dtype=float).reshape(-1, 2)
+
+
+def run_metrics(path: Path) -> dict[str, float | int | None]:
+    record = load_run(path)
+    metrics = tracking_metrics(record.ground_truth, route_points(record.world, record.route),
+                               record.arrival_times_s, record.mission_start_s, record.mission_end_s)
+    return metrics.as_dict()
+
+
+def write_report(path: Path) -> tuple[dict[str, float | int | None], list[Path]]:
+    """Recompute the metrics and write trajectory.png and tracking_error.png into the run folder."""
+    record = load_run(path)
+    points = route_points(record.world, record.route)
+    metrics = tracking_metrics(record.ground_truth, points, record.arrival_times_s, record.mission_start_s,
+                               record.mission_end_s)
+    run = record.ground_truth.between(record.mission_start_s, record.mission_end_s)
+    figure, axes = plt.subplots(figsize=(7, 7))
+    for x1, y1, x2, y2 in record.world.walls:
+        axes.plot([x1, x2], [y1, y2], color="0.6", linewidth=2)
+    axes.plot(points[:, 0], points[:, 1], "--", color="tab:green", label="desired path")
+    axes.plot(run.xy[:, 0], run.xy[:, 1], color="tab:blue", label="robot (ground truth)")
+    for tag in record.world.tags:
+        marker, colour = ("s", "tab:orange") if tag.kind == "ceiling" else ("o", "tab:purple")
+        axes.plot(tag.position[0], tag.position[1], marker, color=colour, markersize=5)
+        if tag.kind == "ceiling":
+            axes.annotate(tag.tag_id, tag.position[:2], textcoords="offset points", xytext=(4, 4))
+    axes.plot(*run.xy[0], "k^", label="start")
+    axes.set_aspect("equal")
+    axes.set_xlabel("x [m]")
+    axes.set_ylabel("y [m]")
+    axes.set_title(f"{record.run_dir.name}: trajectory")
+    axes.legend(loc="best")
+    axes.grid(True, alpha=0.3)
+    trajectory_png = record.run_dir / "trajectory.png"
+    figure.savefig(trajectory_png, dpi=110, bbox_inches="tight")
+    plt.close(figure)
+
+    error = tracking_error(run, points, record.arrival_times_s)
+    figure, axes = plt.subplots(figsize=(8, 3.5))
+    axes.plot(error.times_s - record.mission_start_s, error.xy[:, 0] * 100.0, color="tab:red")
+    axes.axhline(0.0, color="0.5", linewidth=0.8)
+    rmse = metrics.tracking_rmse_m
+    axes.set_title(f"tracking error (RMSE {rmse * 100:.2f} cm)" if rmse is not None else "tracking error")
+    axes.set_xlabel("time since mission start [s]")
+    axes.set_ylabel("e(t) [cm], + = left of path")
+    axes.grid(True, alpha=0.3)
+    error_png = record.run_dir / "tracking_error.png"
+    figure.savefig(error_png, dpi=110, bbox_inches="tight")
+    plt.close(figure)
+    return metrics.as_dict(), [trajectory_png, error_png]
