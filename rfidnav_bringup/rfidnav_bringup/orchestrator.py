@@ -118,8 +118,10 @@ class Orchestrator:
         params_dir = self.run_dir / "params"
         params_dir.mkdir()
         if self.options.record:
+            simulated = any(spec.clock_source for spec in self.scenario.nodes.values())
             command = resolve_executable("rfidnav_bringup", "recorder") + [
-                "--ros-args", "-p", f"output_dir:={self.run_dir / 'bag'}", "-p", "use_sim_time:=true"]
+                "--ros-args", "-p", f"output_dir:={self.run_dir / 'bag'}",
+                "-p", f"stamp_from_clock_topic:={str(simulated).lower()}"]
             self.processes[RECORDER_ROLE] = NodeProcess(RECORDER_ROLE, command, self.log_path(RECORDER_ROLE), env)
         for role, spec in self.scenario.nodes.items():
             command = self.node_command(spec, params_dir)
@@ -217,6 +219,7 @@ class Orchestrator:
         if RECORDER_ROLE in self.processes:
             self.spin_until(executor, lambda: self.recorder_covers(node), READY_TIMEOUT_S,
                             "the recorder to subscribe to every topic")
+        self.write_graph(node)
         clock_roles = [spec for spec in self.scenario.nodes.values() if spec.clock_source and spec.name]
         if clock_roles:
             start = node.create_client(Trigger, f"/{clock_roles[0].name}/start")
@@ -225,6 +228,20 @@ class Orchestrator:
             self.spin_until(executor, future.done, READY_TIMEOUT_S, "the simulation clock to start")
             self.spin_until(executor, lambda: node.get_clock().now().nanoseconds > 0, READY_TIMEOUT_S,
                             "the first /clock message")
+
+    def write_graph(self, node: Node) -> None:
+        """graph.json: who publishes and subscribes what once the graph is ready (checked by the tests:
+        no navigation node may subscribe to /sim/*)."""
+        graph: dict[str, dict[str, list[str]]] = {}
+        for name, namespace in node.get_node_names_and_namespaces():
+            if name == node.get_name():
+                continue
+            graph[name] = {
+                "subscriptions": sorted(t for t, _ in node.get_subscriber_names_and_types_by_node(name, namespace)),
+                "publishers": sorted(t for t, _ in node.get_publisher_names_and_types_by_node(name, namespace))}
+        simulators = sorted(spec.name for spec in self.scenario.nodes.values() if spec.sim and spec.name)
+        (self.run_dir / "graph.json").write_text(json.dumps({"simulator_nodes": simulators, "nodes": graph},
+                                                            indent=2) + "\n")
 
     @staticmethod
     def recorder_covers(node: Node) -> bool:

@@ -26,6 +26,7 @@ from __future__ import annotations
 import dataclasses
 import importlib
 import signal
+import struct
 import sys
 import time
 import typing
@@ -64,6 +65,9 @@ class RecorderParameters:
     output_dir: str = param("rosbag2 directory to create (must not exist)", "")
     exclude_topics: list[str] = param("topics not to record (exact names)", [])
     discovery_period_s: float = param("wall-time period of the graph poll for new topics [s]", 0.2)
+    stamp_from_clock_topic: bool = param(
+        "stamp messages with the latest recorded /clock (0 before the first) instead of the node clock: "
+        "sim time without a second /clock subscription, which costs a callback per clock tick", False)
 
     def validate(self) -> None:
         if not self.output_dir:
@@ -179,6 +183,7 @@ class RecorderNode(Node):
         self.topic_subscriptions: dict[str, Subscription] = {}
         self.unrecordable: set[str] = set()  # topics already reported as impossible to record
         self.write_failed = False
+        self.clock_ns = 0  # latest /clock seen, when stamping from the clock topic
         self.writer = Writer(self.params.output_dir, version=BAG_VERSION, storage_plugin=StoragePlugin.MCAP)
         try:
             self.writer.open()
@@ -272,8 +277,16 @@ class RecorderNode(Node):
     # -- writing --------------------------------------------------------------------------------------
 
     def write(self, connection: Connection, data: bytes) -> None:
+        if self.params.stamp_from_clock_topic:
+            if connection.topic == "/clock" and len(data) >= 12:
+                # CDR: 4-byte encapsulation header, then builtin_interfaces/Time (int32 sec, uint32 nanosec).
+                sec, nanosec = struct.unpack_from("<iI" if data[1] == 1 else ">iI", data, 4)
+                self.clock_ns = sec * 1_000_000_000 + nanosec
+            stamp_ns = self.clock_ns
+        else:
+            stamp_ns = self.get_clock().now().nanoseconds
         try:
-            self.writer.write(connection, self.get_clock().now().nanoseconds, data)
+            self.writer.write(connection, stamp_ns, data)
         except OSError as error:  # disk full or gone: say so once, keep the node (and the run) alive
             if not self.write_failed:
                 self.get_logger().error(f"cannot write to {self.params.output_dir}: {error}")

@@ -18,7 +18,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import yaml  # noqa: E402
 
-from rfidnav_bringup.bags import read_messages  # noqa: E402
+from rfidnav_bringup.bags import bag_info, read_messages  # noqa: E402
 from rfidnav_bringup.errors import BagError  # noqa: E402
 from rfidnav_bringup.metrics import Trajectory, tracking_error, tracking_metrics  # noqa: E402
 from rfidnav_sim.world import World, load_world  # noqa: E402
@@ -52,6 +52,7 @@ def locate_run(path: Path) -> tuple[Path, Path]:
 
 def load_run(path: Path) -> RunRecord:
     run_dir, bag = locate_run(path)
+    bag_info(bag)  # a missing or truncated bag is named first, before anything that depends on it
     scenario_file = run_dir / "scenario.yaml"
     if not scenario_file.exists():
         raise BagError(f"{run_dir}: no scenario.yaml beside the bag; report needs the run folder ./rfidnav run wrote")
