@@ -14,7 +14,7 @@ from rfidnav_common.errors import ConfigError
 
 WORKSPACE = Path(__file__).resolve().parents[2]
 DEMO_SCENARIO = "hallway"
-DEMO_RTF = 5.0
+DEMO_RTF = 3.0
 
 
 def key_value(text: str) -> tuple[str, str]:
