@@ -1,0 +1,239 @@
+"""Bad input (issue 2, section 7): a broken scenario, world, map or parameter file is one ConfigError naming the
+file and the field, raised while loading, before any process starts; an unknown package or executable is a
+LaunchError; the CLI prints one line (no traceback), exits non-zero and creates no run folder.
+
+Each case copies line_follow_90 and the files it references into tmp_path (relative paths kept) and breaks one
+thing."""
+
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable
+
+import pytest
+
+from rfidnav_bringup.errors import LaunchError
+from rfidnav_bringup.processes import resolve_executable
+from rfidnav_bringup.scenario import load_scenario
+from rfidnav_common.errors import ConfigError
+
+WORKSPACE = Path(__file__).resolve().parents[1]
+CONFIG = WORKSPACE / "config"
+SCENARIO = "scenarios/line_follow_90.yaml"
+REFERENCED = (SCENARIO, "worlds/line_follow.yaml", "maps/line_follow.yaml", "params/robot_sim.yaml",
+              "params/reader_uhf_2ant.yaml", "params/flc_tuned.yaml", "params/flc_paper.yaml")
+
+
+@pytest.fixture
+def config(tmp_path: Path) -> Path:
+    root = tmp_path / "config"
+    for relative in REFERENCED:
+        (root / relative).parent.mkdir(parents=True, exist_ok=True)
+        shutil.copyfile(CONFIG / relative, root / relative)
+    return root
+
+
+def edit(path: Path, old: str, new: str) -> None:
+    """Replace ``old`` once; fail loudly if the shipped file no longer contains it (the case would test nothing)."""
+    text = path.read_text()
+    assert text.count(old) == 1, f"{path.name}: expected exactly one {old!r}"
+    path.write_text(text.replace(old, new))
+
+
+@dataclass(frozen=True)
+class Case:
+    break_it: Callable[[Path], None]
+    file: str              # relative to config/, the file the error must name
+    field: str             # the dotted field the error must name ("" for a file-level error)
+    words: tuple[str, ...] = ()   # further words the message must contain
+
+
+def use_flc_paper_with_nan_speed(root: Path) -> None:
+    edit(root / SCENARIO, "params: ../params/flc_tuned.yaml", "params: ../params/flc_paper.yaml")
+    edit(root / "params/flc_paper.yaml", "forward_speed_mps: 0.2", "forward_speed_mps: .nan")
+
+
+def unbalanced_bracket(root: Path) -> None:
+    edit(root / SCENARIO, "goal: {tag_ids: [C1, C2]}", "goal: {tag_ids: [C1, C2}")
+
+
+SCENARIO_LINES = (CONFIG / SCENARIO).read_text().splitlines()
+GOAL_LINE = next(n for n, line in enumerate(SCENARIO_LINES, 1) if "goal: {tag_ids" in line)
+
+CASES = {
+    "missing mission.action": Case(
+        lambda root: edit(root / SCENARIO, "  action: /follow_tag_route\n", ""),
+        SCENARIO, "mission.action", ("missing",)),
+    "missing world name": Case(
+        lambda root: edit(root / "worlds/line_follow.yaml", "name: line_follow\n", ""),
+        "worlds/line_follow.yaml", "name", ("missing",)),
+    "wrong type robot.x": Case(
+        lambda root: edit(root / SCENARIO, "x: -5.0", 'x: "abc"'),
+        SCENARIO, "robot.x", ("number", "abc")),
+    "wrong type in a parameter file": Case(
+        lambda root: edit(root / "params/reader_uhf_2ant.yaml", "rate_hz: 25.0", "rate_hz: fast"),
+        "params/reader_uhf_2ant.yaml", "rfid_reader_sim.ros__parameters.rate_hz", ("number",)),
+    "wrong type of a tag position": Case(
+        lambda root: edit(root / "worlds/line_follow.yaml", "position: [0.0, 5.0, 3.0]", "position: up"),
+        "worlds/line_follow.yaml", "tags[1].position", ("list",)),
+    "duplicate tag id in the world": Case(
+        lambda root: edit(root / "worlds/line_follow.yaml", "{id: F2,", "{id: C1,"),
+        "worlds/line_follow.yaml", "tags[3].id", ("duplicate", "C1")),
+    "NaN in a tag position": Case(
+        lambda root: edit(root / "worlds/line_follow.yaml", "position: [0.0, 5.0, 3.0]", "position: [0.0, .nan, 3.0]"),
+        "worlds/line_follow.yaml", "tags[1].position[1]", ("finite",)),
+    "Inf in the robot start": Case(
+        lambda root: edit(root / SCENARIO, "y: -5.0", "y: .inf"),
+        SCENARIO, "robot.y", ("finite",)),
+    "NaN in a parameter file": Case(
+        use_flc_paper_with_nan_speed,
+        "params/flc_paper.yaml", "heading_controller.ros__parameters.forward_speed_mps", ("finite",)),
+    "NaN in a list parameter": Case(
+        lambda root: edit(root / "params/reader_uhf_2ant.yaml", "antenna_max_range_m: [12.0, 12.0, 0.10]",
+                          "antenna_max_range_m: [12.0, .nan, 0.10]"),
+        "params/reader_uhf_2ant.yaml", "rfid_reader_sim.ros__parameters.antenna_max_range_m[1]", ("finite",)),
+    "unknown top-level field": Case(
+        lambda root: edit(root / SCENARIO, "metrics: [tracking]", "metrics: [tracking]\ncolour: red"),
+        SCENARIO, "colour", ("unknown",)),
+    "unknown robot field": Case(
+        lambda root: edit(root / SCENARIO, "yaw_deg: 90.0}", "yaw_deg: 90.0, z: 1.0}"),
+        SCENARIO, "robot.z", ("unknown",)),
+    "unknown parameter": Case(
+        lambda root: edit(root / "params/robot_sim.yaml", "step_s: 0.01", "step_s: 0.01\n    warp_drive: true"),
+        "params/robot_sim.yaml", "robot_sim.ros__parameters.warp_drive", ("unknown",)),
+    "unknown tag field in the world": Case(
+        lambda root: edit(root / "worlds/line_follow.yaml", "{id: C1, position: [0.0, 0.0, 3.0]}",
+                          "{id: C1, position: [0.0, 0.0, 3.0], colour: red}"),
+        "worlds/line_follow.yaml", "tags[0].colour", ("unknown",)),
+    "malformed YAML names the line": Case(
+        unbalanced_bracket, SCENARIO, "", ("YAML", f"line {GOAL_LINE}")),
+    "route goal tag missing from the map": Case(
+        lambda root: edit(root / SCENARIO, "tag_ids: [C1, C2]", "tag_ids: [C1, C9]"),
+        SCENARIO, "mission.goal", ("C9",)),
+    "parameter file without the node key": Case(
+        lambda root: edit(root / "params/reader_uhf_2ant.yaml", "rfid_reader_sim:\n", "reader_sim:\n"),
+        "params/reader_uhf_2ant.yaml", "rfid_reader_sim", ("no parameters",)),
+    "parameter file that is not found": Case(
+        lambda root: (root / "params/robot_sim.yaml").unlink(),
+        SCENARIO, "nodes.robot_sim.params", ("not found",)),
+    "world file that is not found": Case(
+        lambda root: (root / "worlds/line_follow.yaml").unlink(),
+        "worlds/line_follow.yaml", "", ("not found",)),
+    "map without arrival tags": Case(
+        lambda root: edit(root / "maps/line_follow.yaml", "arrival_tags: {C1: F1, C2: F2}", "arrival_tags: {}"),
+        "maps/line_follow.yaml", "arrival_tags", ()),
+    "out-of-range parameter value": Case(
+        lambda root: edit(root / "params/reader_uhf_2ant.yaml", "miss_probability: 0.0", "miss_probability: 1.5"),
+        "params/reader_uhf_2ant.yaml", "rfid_reader_sim.ros__parameters", ("miss_probability",)),
+}
+KNOWN_BUGS = {
+    "out-of-range parameter value": (
+        "a value that passes the type check but fails the parameter class's validate() (miss_probability: 1.5 "
+        "in reader_uhf_2ant.yaml) is reported against the scenario file and a field 'overrides' the scenario "
+        "does not have, not against the parameter file that holds it (scenario.node_parameters passes "
+        "'<scenario>: nodes.<role>' / 'overrides' to parameters_from_mapping)"),
+}
+
+
+def test_the_unbroken_copy_loads(config: Path):
+    scenario = load_scenario(str(config / SCENARIO))
+    assert scenario.name == "line_follow_90"
+    assert scenario.world_file == (config / "worlds/line_follow.yaml").resolve()
+    assert scenario.mission.goal == {"tag_ids": ["C1", "C2"]}
+
+
+@pytest.mark.parametrize("name", [
+    pytest.param(name, marks=pytest.mark.xfail(strict=True, reason=KNOWN_BUGS[name])) if name in KNOWN_BUGS
+    else name for name in sorted(CASES)])
+def test_broken_file_is_one_config_error_naming_file_and_field(config: Path, name: str):
+    case = CASES[name]
+    case.break_it(config)
+    with pytest.raises(ConfigError) as raised:
+        load_scenario(str(config / SCENARIO))
+    error = raised.value
+    message = str(error)
+    expected_file = (config / case.file).resolve()
+    assert Path(error.source).resolve() == expected_file, message
+    assert str(expected_file) in message
+    if case.field:
+        assert error.field == case.field, message
+        assert f": {case.field}:" in message
+    for word in case.words:
+        assert word in message, message
+    assert "\n" not in message
+
+
+def test_nan_is_rejected_by_name_not_by_python(config: Path):
+    """A NaN must not slip through as a float (NaN compares false with every bound)."""
+    use_flc_paper_with_nan_speed(config)
+    with pytest.raises(ConfigError, match=r"forward_speed_mps: expected a finite number"):
+        load_scenario(str(config / SCENARIO))
+
+
+# ------------------------------------------------------------------------------------ unknown package/executable
+
+def test_unknown_package_is_a_launch_error():
+    with pytest.raises(LaunchError, match=r"unknown package 'nope_pkg'"):
+        resolve_executable("nope_pkg", "x")
+
+
+def test_unknown_executable_is_a_launch_error_listing_the_known_ones():
+    with pytest.raises(LaunchError) as raised:
+        resolve_executable("rfidnav_sim", "nope")
+    message = str(raised.value)
+    assert "'rfidnav_sim'" in message and "'nope'" in message
+    assert "robot_sim" in message and "rfid_reader_sim" in message
+
+
+def test_known_executable_resolves_to_a_runnable_command():
+    command = resolve_executable("rfidnav_sim", "robot_sim")
+    assert command
+    assert Path(command[0]).exists()
+
+
+# -------------------------------------------------------------------------------------------------------- CLI
+
+def run_cli(scenario: Path, out: Path) -> subprocess.CompletedProcess:
+    env = dict(os.environ)
+    return subprocess.run([sys.executable, "-m", "rfidnav_bringup.cli", "run", str(scenario), "--out", str(out),
+                           "--rtf", "5"], capture_output=True, text=True, timeout=60, env=env, cwd=WORKSPACE)
+
+
+@pytest.mark.parametrize("name", ["wrong type robot.x", "NaN in a parameter file", "duplicate tag id in the world"])
+def test_cli_run_of_a_broken_scenario_prints_one_line_and_starts_nothing(config: Path, tmp_path: Path, name: str):
+    case = CASES[name]
+    case.break_it(config)
+    out = tmp_path / "runs"
+    result = run_cli(config / SCENARIO, out)
+    assert result.returncode != 0
+    assert "Traceback" not in result.stderr, result.stderr
+    lines = [line for line in result.stderr.splitlines() if line.strip()]
+    assert len(lines) == 1, result.stderr
+    assert str((config / case.file).resolve()) in lines[0]
+    assert case.field in lines[0]
+    # Nothing started: no run folder (nor the --out folder itself).
+    assert not out.exists() or not any(out.iterdir())
+
+
+@pytest.mark.xfail(strict=True, reason=(
+    "issue 2 section 7: an unknown package is one error naming the file and the field, before anything starts; "
+    "the orchestrator resolves executables only in Orchestrator.prepare(), after creating the run folder "
+    "(summary.json, scenario.yaml, params/), prints 'error: unknown package ...' on stdout without naming "
+    "the scenario file or nodes.<role>.package, and exits 1"))
+def test_cli_run_with_an_unknown_package_names_the_scenario_field_and_starts_nothing(config: Path, tmp_path: Path):
+    edit(config / SCENARIO, "package: rfidnav_control, executable: heading_controller",
+         "package: nope_pkg, executable: heading_controller")
+    out = tmp_path / "runs"
+    result = run_cli(config / SCENARIO, out)
+    assert result.returncode != 0
+    assert "Traceback" not in result.stderr, result.stderr
+    lines = [line for line in result.stderr.splitlines() if line.strip()]
+    assert len(lines) == 1, result.stderr
+    assert str((config / SCENARIO).resolve()) in lines[0]
+    assert "nodes.heading_controller.package" in lines[0] and "nope_pkg" in lines[0]
+    assert not out.exists() or not any(out.iterdir())

@@ -1,0 +1,140 @@
+"""Tracking metrics of a tag-route run (paper 001 sec. V, eq. 4) on synthetic trajectories with known answers."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from rfidnav_bringup.metrics import Trajectory, signed_segment_error, tracking_error, tracking_metrics
+
+LINE_TAGS = np.array([[0.0, 0.0], [0.0, 5.0]])
+
+
+def straight_run(offset_m: float, *, speed: float = 0.2, approach_s: float = 10.0, dt: float = 0.01):
+    """Approach along -x to the first tag's projection shifted sideways, then drive parallel to the segment
+    (0,0)->(0,5) at a constant lateral ``offset_m`` (positive = left of the direction of travel = -x)."""
+    approach = np.arange(0.0, approach_s, dt)
+    leg_s = 5.0 / speed
+    leg = np.arange(0.0, leg_s + dt / 2, dt)
+    times = np.concatenate((approach, approach_s + leg))
+    xy = np.concatenate((
+        np.column_stack((-offset_m - speed * (approach_s - approach), np.zeros_like(approach))),
+        np.column_stack((np.full_like(leg, -offset_m), speed * leg)),
+    ))
+    return Trajectory(times, xy), [approach_s, approach_s + leg_s]
+
+
+@pytest.mark.parametrize("offset_m", [0.03, -0.03])
+def test_constant_offset_gives_rmse_and_max_of_the_offset(offset_m):
+    trajectory, arrivals = straight_run(offset_m)
+    metrics = tracking_metrics(trajectory, LINE_TAGS, arrivals, mission_start_s=0.0, mission_end_s=arrivals[-1])
+    assert metrics.tracking_rmse_m == pytest.approx(0.03, abs=1e-9)
+    assert metrics.tracking_max_abs_m == pytest.approx(0.03, abs=1e-9)
+    assert metrics.tags_reached == 2
+    # The approach before the first arrival does not count: it is 2 m off the line at the start.
+    errors = tracking_error(trajectory, LINE_TAGS, arrivals).xy[:, 0]
+    assert errors.size > 2000
+    assert np.allclose(errors, offset_m, atol=1e-9)   # positive on the left (x < 0 when travelling +y)
+
+
+def test_rmse_is_the_root_mean_square_of_a_varying_error():
+    times = np.linspace(0.0, 10.0, 10001)
+    amplitude = 0.05
+    lateral = amplitude * np.sin(2 * np.pi * times / 2.0)             # 5 full periods
+    trajectory = Trajectory(times, np.column_stack((-lateral, 0.5 * times)))
+    metrics = tracking_metrics(trajectory, LINE_TAGS, [0.0, 10.0], 0.0, 10.0)
+    assert metrics.tracking_rmse_m == pytest.approx(amplitude / math.sqrt(2), rel=1e-3)
+    assert metrics.tracking_max_abs_m == pytest.approx(amplitude, rel=1e-6)
+
+
+def test_sign_is_positive_on_the_left_of_the_direction_of_travel():
+    start, end = np.array([1.0, 1.0]), np.array([4.0, 1.0])           # travelling +x: left is +y
+    points = np.array([[2.0, 1.5], [2.0, 0.2], [3.0, 1.0], [5.0, 1.0], [0.0, 2.0]])
+    errors = signed_segment_error(points, start, end)
+    assert errors[0] == pytest.approx(0.5)
+    assert errors[1] == pytest.approx(-0.8)
+    assert errors[2] == pytest.approx(0.0)
+    assert abs(errors[3]) == pytest.approx(1.0)                        # past the end: distance to the end point
+    assert errors[4] == pytest.approx(math.sqrt(2.0))                  # before the start, on the left
+    reverse = signed_segment_error(points[:2], end, start)
+    assert reverse == pytest.approx(-errors[:2])
+
+
+def test_segments_switch_at_the_arrival_times():
+    # An L route: (0,0) -> (4,0) -> (4,3). The robot drives 0.1 m left of each leg at 1 m/s, turning at (3.9, 0.1).
+    tags = np.array([[0.0, 0.0], [4.0, 0.0], [4.0, 3.0]])
+    t1 = np.linspace(0.0, 3.9, 391)
+    leg1 = np.column_stack((t1, np.full_like(t1, 0.1)))                # travelling +x, left is +y
+    t2 = np.linspace(3.91, 6.8, 290)
+    leg2 = np.column_stack((np.full_like(t2, 3.9), 0.1 + (t2 - 3.9)))  # travelling +y, left is -x
+    trajectory = Trajectory(np.concatenate((t1, t2)), np.concatenate((leg1, leg2)))
+    arrivals = [0.0, 3.9, 6.8]
+    error = tracking_error(trajectory, tags, arrivals)
+    segment = error.xy[:, 1]
+    assert set(segment) == {0.0, 1.0}
+    assert np.all(error.times_s[segment == 0.0] <= 3.9)
+    assert np.all(error.times_s[segment == 1.0] >= 3.9)
+    assert np.all(segment[error.times_s < 3.9] == 0.0)
+    assert np.all(segment[error.times_s > 3.9] == 1.0)
+    assert np.all(np.diff(segment) >= 0.0)
+    # Against the wrong segment, (3.9, y) would be up to 2.9 m off the first leg; against the right one 0.1 m.
+    assert np.allclose(error.xy[:, 0], 0.1, atol=1e-9)
+    metrics = tracking_metrics(trajectory, tags, arrivals, 0.0, 6.8)
+    assert metrics.tracking_max_abs_m == pytest.approx(0.1, abs=1e-9)
+    assert metrics.tracking_rmse_m == pytest.approx(0.1, abs=1e-9)
+    # Had the switch come late (at 6 s), the first leg's segment would be used far past its end.
+    late = tracking_metrics(trajectory, tags, [0.0, 6.0, 6.8], 0.0, 6.8)
+    assert late.tracking_max_abs_m > 1.0
+
+
+def test_error_stops_at_the_last_arrival_and_needs_two_arrivals():
+    trajectory, arrivals = straight_run(0.03)
+    # After the last tag the robot wanders 1 m off: not part of e(t).
+    extra_t = np.arange(arrivals[-1] + 0.01, arrivals[-1] + 5.0, 0.01)
+    wandering = Trajectory(np.concatenate((trajectory.times_s, extra_t)),
+                           np.concatenate((trajectory.xy, np.column_stack((np.full_like(extra_t, 1.0),
+                                                                           np.full_like(extra_t, 5.0))))))
+    metrics = tracking_metrics(wandering, LINE_TAGS, arrivals, 0.0, extra_t[-1])
+    assert metrics.tracking_max_abs_m == pytest.approx(0.03, abs=1e-9)
+    only_first = tracking_metrics(trajectory, LINE_TAGS, arrivals[:1], 0.0, arrivals[-1])
+    assert only_first.tracking_rmse_m is None and only_first.tracking_max_abs_m is None
+    assert only_first.tags_reached == 1
+
+
+def test_time_to_first_tag_is_measured_from_the_mission_start():
+    times = np.arange(0.0, 30.0, 0.01)
+    # Straight at the first tag's projection from 2 m away at 0.1 m/s, starting at t = 5 s.
+    y = np.clip(-2.0 + 0.1 * (times - 5.0), -2.0, 0.5)
+    trajectory = Trajectory(times, np.column_stack((np.zeros_like(times), y)))
+    metrics = tracking_metrics(trajectory, LINE_TAGS, [], mission_start_s=5.0, mission_end_s=30.0)
+    # Within 1 cm of (0, 0) once y >= -0.01: 1.99 m / 0.1 m/s = 19.9 s after the start.
+    assert metrics.time_to_first_tag_s == pytest.approx(19.9, abs=0.011)
+    later = tracking_metrics(trajectory, LINE_TAGS, [], mission_start_s=10.0, mission_end_s=30.0)
+    assert later.time_to_first_tag_s == pytest.approx(metrics.time_to_first_tag_s - 5.0, abs=0.011)
+
+
+def test_time_to_first_tag_is_none_when_never_within_1_cm():
+    times = np.arange(0.0, 20.0, 0.01)
+    trajectory = Trajectory(times, np.column_stack((np.full_like(times, 0.011), 0.5 * times - 5.0)))
+    metrics = tracking_metrics(trajectory, LINE_TAGS, [], 0.0, 20.0)
+    assert metrics.time_to_first_tag_s is None
+    closer = Trajectory(times, np.column_stack((np.full_like(times, 0.009), 0.5 * times - 5.0)))
+    assert tracking_metrics(closer, LINE_TAGS, [], 0.0, 20.0).time_to_first_tag_s is not None
+
+
+def test_path_length_of_a_known_polyline():
+    corners = np.array([[0.0, 0.0], [3.0, 0.0], [3.0, 4.0], [0.0, 0.0], [-1.0, 0.0]])   # 3 + 4 + 5 + 1
+    trajectory = Trajectory(np.arange(len(corners), dtype=float), corners)
+    assert tracking_metrics(trajectory, LINE_TAGS, [], 0.0, 10.0).path_length_m == pytest.approx(13.0)
+    # Only the part of the run between mission start and end counts.
+    assert tracking_metrics(trajectory, LINE_TAGS, [], 1.0, 3.0).path_length_m == pytest.approx(9.0)
+    single = Trajectory(np.array([0.0]), np.array([[1.0, 1.0]]))
+    assert tracking_metrics(single, LINE_TAGS, [], 0.0, 1.0).path_length_m == 0.0
+
+
+def test_as_dict_has_the_summary_keys():
+    trajectory, arrivals = straight_run(0.03)
+    keys = tracking_metrics(trajectory, LINE_TAGS, arrivals, 0.0, arrivals[-1]).as_dict()
+    assert {"tracking_rmse_m", "tracking_max_abs_m", "time_to_first_tag_s", "path_length_m"} <= set(keys)

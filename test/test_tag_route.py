@@ -1,0 +1,279 @@
+"""Tag-route follower (paper 001 sec. IV-C): arrival on the floor tag, finishing, steering sign, the unheard
+failure, validation of reads (NaN/Inf dropped, phase from I/Q), and the receding-target guard.
+
+Pure-module tests with a linear heading controller and with the real fuzzy controller of the paper."""
+
+from __future__ import annotations
+
+import math
+from types import SimpleNamespace
+
+import pytest
+
+from rfidnav_common.rf import round_trip_phase, wavelength_m
+from rfidnav_control.fuzzy import FuzzyHeadingController, paper_spec
+from rfidnav_control.tag_route import FollowerSettings, PhaseTrack, TagObservation, TagRouteFollower, observe
+
+FREQUENCY_HZ = 915e6
+ROUND_S = 0.04
+ARRIVAL_TAGS = {"C1": "F1", "C2": "F2", "C3": "F3"}
+
+
+def linear_controller(delta_phi: float) -> float:
+    return -0.05 * delta_phi
+
+
+CONTROLLERS = {"linear": lambda: linear_controller, "fuzzy_paper": lambda: FuzzyHeadingController(paper_spec())}
+
+
+@pytest.fixture(params=sorted(CONTROLLERS))
+def controller(request):
+    return CONTROLLERS[request.param]()
+
+
+def follower(controller=linear_controller, **settings) -> TagRouteFollower:
+    return TagRouteFollower(FollowerSettings(**settings), controller, ARRIVAL_TAGS)
+
+
+def ceiling_pair(tag_id: str, left_phase: float, right_phase: float,
+                 frequency_hz: float = FREQUENCY_HZ) -> list[TagObservation]:
+    return [TagObservation(tag_id, 1, left_phase % (2 * math.pi), -60.0, frequency_hz),
+            TagObservation(tag_id, 2, right_phase % (2 * math.pi), -60.0, frequency_hz)]
+
+
+def floor_read(tag_id: str) -> TagObservation:
+    return TagObservation(tag_id, 3, 1.0, -50.0, FREQUENCY_HZ)
+
+
+# ------------------------------------------------------------------------------------------- arrival, finishing
+
+def test_floor_tag_read_advances_the_target_and_the_last_one_finishes(controller):
+    route = follower(controller)
+    route.start(["C1", "C2", "C3"], 0.0)
+    command = route.step(0.04, ceiling_pair("C1", 1.0, 1.0))
+    assert (command.mode, command.target_index, command.target_tag_id, command.arrived_index) == ("seeking", 0,
+                                                                                                  "C1", None)
+    # Another route tag's floor tag is not an arrival.
+    assert route.step(0.08, ceiling_pair("C1", 1.0, 1.0) + [floor_read("F2")]).arrived_index is None
+
+    command = route.step(0.12, [floor_read("F1")] + ceiling_pair("C2", 0.5, 0.5))
+    assert command.arrived_index == 0
+    assert (command.target_index, command.target_tag_id) == (1, "C2")
+    assert command.mode == "seeking" and command.linear_mps == pytest.approx(0.2)
+    assert route.target == "C2"
+
+    command = route.step(0.16, [floor_read("F2")])
+    assert (command.arrived_index, command.target_tag_id) == (1, "C3")
+    assert not route.finished
+
+    command = route.step(0.20, [floor_read("F3")] + ceiling_pair("C3", 0.0, 0.0))
+    assert command.mode == "finished"
+    assert command.arrived_index == 2 and command.target_tag_id == "C3"
+    assert (command.linear_mps, command.angular_radps) == (0.0, 0.0)
+    assert route.finished
+
+
+def test_single_tag_route_finishes_on_its_floor_tag():
+    route = follower()
+    route.start(["C2"], 0.0)
+    assert route.step(0.04, [floor_read("F1")]).mode != "finished"   # F1 belongs to C1, not on this route
+    assert route.step(0.08, [floor_read("F2")]).mode == "finished"
+
+
+def test_unknown_tag_or_empty_route_in_start_raises():
+    route = follower()
+    with pytest.raises(ValueError, match="C9"):
+        route.start(["C1", "C9"], 0.0)
+    with pytest.raises(ValueError, match="empty"):
+        route.start([], 0.0)
+    assert route.unknown_tags(["C1", "X", "C3", "Y"]) == ["X", "Y"]
+
+
+# ---------------------------------------------------------------------------------------------------- steering
+
+@pytest.mark.parametrize("delta_phi", [-2.5, -1.0, -0.3])
+def test_tag_on_the_left_commands_a_ccw_turn_and_on_the_right_a_cw_turn(controller, delta_phi):
+    left = follower(controller)
+    left.start(["C1"], 0.0)
+    command = left.step(0.04, ceiling_pair("C1", 2.0 + delta_phi, 2.0))   # phi1 - phi2 = delta_phi < 0
+    assert command.mode == "seeking"
+    assert command.phase_difference_rad == pytest.approx(delta_phi)
+    assert command.heading_change_rad > 0.0
+    assert command.angular_radps > 0.0
+    assert command.linear_mps == pytest.approx(0.2)
+
+    right = follower(controller)
+    right.start(["C1"], 0.0)
+    mirrored = right.step(0.04, ceiling_pair("C1", 2.0 - delta_phi, 2.0))
+    assert mirrored.angular_radps < 0.0
+    assert mirrored.angular_radps == pytest.approx(-command.angular_radps, rel=1e-6, abs=1e-9)
+
+
+def test_yaw_rate_is_the_heading_change_over_the_round_and_is_bounded():
+    route = follower(max_yaw_rate_radps=2.0, receding_detection=False)
+    route.start(["C1"], 0.0)
+    first = route.step(0.04, ceiling_pair("C1", 0.0, 0.5))           # dphi = -0.5 -> dtheta = 0.025
+    assert first.heading_change_rad == pytest.approx(0.025)
+    assert first.angular_radps == pytest.approx(0.025 / ROUND_S)
+    big = route.step(0.08, ceiling_pair("C1", 0.0, 3.0))             # dtheta = 0.15 / 0.04 s = 3.75 > 2
+    assert big.angular_radps == pytest.approx(2.0)
+
+
+def test_phase_difference_wraps_across_zero():
+    route = follower()
+    route.start(["C1"], 0.0)
+    # phi1 = 0.1, phi2 = 2*pi - 0.1: the tag is slightly right (dphi = +0.2), not 2*pi - 0.2 to the left.
+    command = route.step(0.04, ceiling_pair("C1", 0.1, -0.1))
+    assert command.phase_difference_rad == pytest.approx(0.2)
+    assert command.angular_radps < 0.0
+
+
+def test_reads_of_other_tags_do_not_steer():
+    route = follower()
+    route.start(["C1"], 0.0)
+    command = route.step(0.04, ceiling_pair("C2", 0.0, 2.0))
+    assert command.mode == "unheard"
+    assert command.angular_radps == 0.0 and command.linear_mps == pytest.approx(0.2)
+
+
+# ------------------------------------------------------------------------------------------------ unheard target
+
+def test_target_unheard_longer_than_the_timeout_fails_naming_the_tag():
+    route = follower(unheard_timeout_s=2.0)
+    route.start(["C1", "C2"], 0.0)
+    route.step(0.5, ceiling_pair("C1", 1.0, 1.0))                 # heard at 0.5 s
+    only_left = [TagObservation("C1", 1, 1.0, -60.0, FREQUENCY_HZ)]  # one antenna is not enough to steer
+    for t in (1.0, 2.0, 2.5):
+        command = route.step(t, only_left)
+        assert command.mode == "unheard" and command.failure is None
+    command = route.step(2.6, [])
+    assert command.mode == "failed"
+    assert (command.linear_mps, command.angular_radps) == (0.0, 0.0)
+    assert "C1" in command.failure and "unheard" in command.failure
+
+
+def test_unheard_clock_restarts_at_each_new_target():
+    route = follower(unheard_timeout_s=2.0)
+    route.start(["C1", "C2"], 0.0)
+    assert route.step(1.9, [floor_read("F1")]).target_tag_id == "C2"
+    assert route.step(3.8, []).mode == "unheard"       # 1.9 s since C2 became the target
+    command = route.step(4.0, [])
+    assert command.mode == "failed" and "C2" in command.failure
+
+
+# -------------------------------------------------------------------------------------------- read validation
+
+def tag_reading(**overrides) -> SimpleNamespace:
+    amplitude, phase = 1e-3, 2.5
+    fields = dict(tag_id="C1", antenna=1, i=amplitude * math.cos(phase), q=amplitude * math.sin(phase),
+                  phase_rad=phase, rssi_dbm=-60.0, frequency_hz=FREQUENCY_HZ)
+    fields.update(overrides)
+    return SimpleNamespace(**fields)
+
+
+@pytest.mark.parametrize("field", ["i", "q", "phase_rad", "rssi_dbm", "frequency_hz"])
+@pytest.mark.parametrize("bad", [math.nan, math.inf, -math.inf])
+def test_observe_drops_non_finite_numbers(field, bad):
+    assert observe(tag_reading(**{field: bad})) is None
+
+
+@pytest.mark.parametrize("frequency", [0.0, -915e6])
+def test_observe_drops_a_non_positive_frequency(frequency):
+    assert observe(tag_reading(frequency_hz=frequency)) is None
+
+
+@pytest.mark.parametrize("phase", [0.0, 0.3, 2.5, 3.5, 6.0])
+def test_observe_derives_the_phase_from_i_and_q(phase):
+    reading = tag_reading(i=2e-4 * math.cos(phase), q=2e-4 * math.sin(phase), phase_rad=1.234, antenna=2)
+    observation = observe(reading)
+    assert observation is not None
+    assert 0.0 <= observation.phase_rad < 2 * math.pi
+    assert abs(math.remainder(observation.phase_rad - phase, 2 * math.pi)) < 1e-9   # from I/Q, not 1.234
+    assert (observation.tag_id, observation.antenna, observation.rssi_dbm, observation.frequency_hz) == (
+        "C1", 2, -60.0, FREQUENCY_HZ)
+
+
+def test_observe_takes_the_phase_angle_when_a_reader_reports_no_i_q():
+    observation = observe(tag_reading(i=0.0, q=0.0, phase_rad=1.234))
+    assert observation.phase_rad == pytest.approx(1.234)
+
+
+# --------------------------------------------------------------------------------------------- receding target
+
+def rounds_with_range(start_m: float, step_m: float, count: int, t0: float = 0.0):
+    """(time, reads) of rounds whose target range changes by ``step_m`` per round, dphi = 0."""
+    for k in range(count):
+        phase = float(round_trip_phase(start_m + step_m * k, FREQUENCY_HZ))
+        yield t0 + ROUND_S * (k + 1), ceiling_pair("C1", phase, phase)
+
+
+def test_receding_target_turns_after_a_few_rounds(controller):
+    route = follower(controller)
+    route.start(["C1"], 0.0)
+    modes, commands = [], []
+    for t, reads in rounds_with_range(3.0, +0.008, 8):     # 0.2 m/s away from the tag
+        command = route.step(t, reads)
+        modes.append(command.mode)
+        commands.append(command)
+    assert modes[0] == "seeking"                             # nothing to compare with yet
+    assert "receding_turn" in modes[:4]
+    assert modes[-1] == "receding_turn"
+    assert commands[-1].angular_radps != 0.0
+    assert abs(commands[-1].angular_radps) == pytest.approx(2.0)
+    assert commands[-1].phase_difference_rad == pytest.approx(0.0, abs=1e-9)
+
+
+def test_receding_turn_follows_the_side_the_phase_difference_points_to():
+    route = follower()
+    route.start(["C1"], 0.0)
+    for k in range(6):
+        base = float(round_trip_phase(3.0 + 0.008 * k, FREQUENCY_HZ))
+        command = route.step(ROUND_S * (k + 1), ceiling_pair("C1", base + 0.05, base))   # tag slightly right
+    assert command.mode == "receding_turn"
+    assert command.angular_radps < 0.0
+
+
+def test_approaching_target_keeps_seeking(controller):
+    route = follower(controller)
+    route.start(["C1"], 0.0)
+    for t, reads in rounds_with_range(3.0, -0.008, 10):
+        command = route.step(t, reads)
+        assert command.mode == "seeking"
+        assert command.angular_radps == pytest.approx(0.0, abs=1e-6)
+        assert command.linear_mps == pytest.approx(0.2)
+
+
+def test_seeking_resumes_when_the_range_shrinks_again():
+    route = follower()
+    route.start(["C1"], 0.0)
+    for t, reads in rounds_with_range(3.0, +0.008, 6):
+        command = route.step(t, reads)
+    assert command.mode == "receding_turn"
+    last_range = 3.0 + 0.008 * 5
+    modes = [route.step(t, reads).mode for t, reads in rounds_with_range(last_range, -0.008, 12, t0=6 * ROUND_S)]
+    assert modes[-1] == "seeking"
+
+
+def test_receding_detection_can_be_switched_off():
+    route = follower(receding_detection=False)
+    route.start(["C1"], 0.0)
+    modes = {route.step(t, reads).mode for t, reads in rounds_with_range(3.0, +0.008, 10)}
+    assert modes == {"seeking"}
+
+
+# ------------------------------------------------------------------------------------------------- phase track
+
+def test_phase_track_gives_range_change_and_restarts_on_a_channel_hop():
+    track = PhaseTrack()
+    wavelength = wavelength_m(FREQUENCY_HZ)
+    assert track.update(0.0, float(round_trip_phase(2.0, FREQUENCY_HZ)), FREQUENCY_HZ) is None
+    change = track.update(0.04, float(round_trip_phase(2.008, FREQUENCY_HZ)), FREQUENCY_HZ)
+    assert change[0] == pytest.approx(0.008, abs=1e-9)
+    assert change[1] == pytest.approx(0.04)
+    # Across the 0 / 2*pi wrap, closer by 5 mm.
+    phase_at = lambda d: float(round_trip_phase(d, FREQUENCY_HZ))
+    near_wrap = 10 * wavelength / 2 + 0.002                           # phase ~0.08 rad
+    track.update(1.0, phase_at(near_wrap), FREQUENCY_HZ)
+    assert track.update(1.04, phase_at(near_wrap - 0.005), FREQUENCY_HZ)[0] == pytest.approx(-0.005, abs=1e-9)
+    assert track.update(1.08, 1.0, 927e6) is None                     # other channel: no comparison
+    assert track.update(1.08, 1.0, 927e6) is None                     # same time: no rate
