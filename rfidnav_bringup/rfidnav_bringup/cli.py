@@ -76,7 +76,12 @@ def parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
-    args = parser().parse_args(argv)
+    command_line = parser()
+    args, extra = command_line.parse_known_args(argv)
+    if extra and args.verb != "test":
+        command_line.error(f"unrecognized arguments: {' '.join(extra)}")
+    if args.verb == "test":
+        args.pytest_args = [*extra, *args.pytest_args]   # pytest options such as -q or -k pass through
     try:
         return VERBS[args.verb](args)
     except (RfidnavError, ConfigError) as error:
