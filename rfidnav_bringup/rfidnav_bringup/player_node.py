@@ -37,7 +37,8 @@ from rosgraph_msgs.msg import Clock as ClockMsg
 
 from rfidnav_bringup.bags import BagInfo, RawMessage, TopicInfo, bag_info, read_raw
 from rfidnav_bringup.errors import BagError, ConfigError
-from rfidnav_bringup.recorder_node import declare_node_parameters, message_class
+from rfidnav_bringup.recorder_node import message_class
+from rfidnav_common.ros import declare_parameters
 from rfidnav_common.config import param
 from rfidnav_common.errors import RfidnavError
 
@@ -83,7 +84,7 @@ def publisher_qos(topic: TopicInfo) -> QoSProfile:
 class PlayerNode(Node):
     def __init__(self) -> None:
         super().__init__("player")
-        self.params: PlayerParameters = declare_node_parameters(self, PlayerParameters)
+        self.params: PlayerParameters = declare_parameters(self, PlayerParameters)
         self.info: BagInfo = bag_info(self.params.bag)
         self.done: Future = Future()
         recorded = {t.name: t for t in self.info.topics}

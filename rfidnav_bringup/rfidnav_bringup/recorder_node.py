@@ -23,25 +23,20 @@ shut the context down at once, which would drop the messages still queued in the
 
 from __future__ import annotations
 
-import dataclasses
 import importlib
 import signal
 import struct
 import sys
 import time
-import typing
 from dataclasses import dataclass
 from pathlib import Path
 from types import FrameType
 from typing import Any
 
 import rclpy
-from rcl_interfaces.msg import ParameterDescriptor
 from rclpy.clock import Clock, ClockType
-from rclpy.exceptions import InvalidParameterTypeException
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
-from rclpy.parameter import Parameter
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.signals import SignalHandlerOptions
 from rclpy.subscription import Subscription
@@ -50,8 +45,9 @@ from rosbags.rosbag2 import StoragePlugin, Writer, WriterError
 
 from rfidnav_bringup.bags import message_definition, register_installed_type
 from rfidnav_bringup.errors import BagError, ConfigError
-from rfidnav_common.config import param, parameters_from_mapping
+from rfidnav_common.config import param
 from rfidnav_common.errors import RfidnavError
+from rfidnav_common.ros import declare_parameters
 
 # rosbag2 metadata version 9 is what Jazzy's rosbag2 writes (structured QoS in metadata.yaml).
 BAG_VERSION = 9
@@ -76,32 +72,6 @@ class RecorderParameters:
             raise ValueError(f"output_dir: {self.output_dir} exists already; a bag is never overwritten")
         if not self.discovery_period_s > 0.0:
             raise ValueError(f"discovery_period_s: must be > 0, got {self.discovery_period_s}")
-
-
-def declare_node_parameters(node: Node, cls: type) -> Any:
-    """Declare one parameter per field of the dataclass ``cls``, read them once, validate (ConfigError).
-
-    Unlike a plain ``declare_parameter(name, default)``: an empty string-array default is declared by type
-    (Jazzy cannot infer a type from ``[]``), and float parameters accept integers (``-p rate:=2``), which
-    Jazzy's static typing would otherwise reject with a traceback."""
-    hints = typing.get_type_hints(cls)
-    source = f"parameters of node '{node.get_fully_qualified_name()}'"
-    values: dict[str, Any] = {}
-    for field in dataclasses.fields(cls):
-        default = field.default if field.default is not dataclasses.MISSING else field.default_factory()
-        doc = field.metadata.get("doc", "")
-        try:
-            if hints[field.name] == list[str]:
-                value = node.declare_parameter(field.name, Parameter.Type.STRING_ARRAY,
-                                               ParameterDescriptor(description=doc)).value
-                values[field.name] = list(value) if value is not None else list(default)
-            else:
-                dynamic = hints[field.name] is float
-                values[field.name] = node.declare_parameter(
-                    field.name, default, ParameterDescriptor(description=doc, dynamic_typing=dynamic)).value
-        except InvalidParameterTypeException as error:
-            raise ConfigError(source, field.name, f"wrong type: {error}") from None
-    return parameters_from_mapping(cls, values, source)
 
 
 def message_class(msgtype: str) -> type | None:
@@ -174,7 +144,7 @@ def _describe(qos: QoSProfile) -> str:
 class RecorderNode(Node):
     def __init__(self) -> None:
         super().__init__("recorder")
-        self.params: RecorderParameters = declare_node_parameters(self, RecorderParameters)
+        self.params: RecorderParameters = declare_parameters(self, RecorderParameters)
         self.excluded = set(self.params.exclude_topics)
         self.message_count = 0
         self.connections: dict[str, Connection] = {}

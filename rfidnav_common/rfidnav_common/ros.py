@@ -10,9 +10,11 @@ from typing import Any, Callable
 
 import rclpy
 from builtin_interfaces.msg import Time
-from rcl_interfaces.msg import ParameterDescriptor, ParameterType
+from rcl_interfaces.msg import ParameterDescriptor
+from rclpy.exceptions import InvalidParameterTypeException
 from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
+from rclpy.parameter import Parameter
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
 from rfidnav_common.config import parameters_from_mapping
@@ -30,26 +32,28 @@ LATCHED_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1, reliability=R
 
 def declare_parameters(node: Node, cls: type) -> Any:
     """Declare one ROS parameter per field of dataclass ``cls`` (default and description from the field),
-    read them once and return a validated instance. A bad value raises a ConfigError naming the node."""
+    read them once and return a validated instance; a bad value is a ConfigError naming the node.
+
+    An empty string-array default is declared by type (Jazzy cannot infer a type from ``[]``), and float
+    parameters accept integers (``-p rate:=2``), which Jazzy's static typing would reject with a traceback."""
     hints = typing.get_type_hints(cls)
+    source = f"parameters of node '{node.get_fully_qualified_name()}'"
     values: dict[str, Any] = {}
     for field in dataclasses.fields(cls):
         default = field.default if field.default is not dataclasses.MISSING else field.default_factory()
-        descriptor = ParameterDescriptor(description=field.metadata.get("doc", ""))
-        if isinstance(default, list) and not default:  # ROS cannot infer an array type from []
-            descriptor.type = (ParameterType.PARAMETER_STRING_ARRAY if hints[field.name] == list[str]
-                               else ParameterType.PARAMETER_DOUBLE_ARRAY)
-            values[field.name] = node.declare_parameter(field.name, descriptor=descriptor).value or []
-        else:
-            values[field.name] = node.declare_parameter(field.name, default, descriptor).value
-    for name, value in values.items():
-        if hints[name] is float and isinstance(value, int) and not isinstance(value, bool):
-            values[name] = float(value)
-        elif hints[name] == list[float]:
-            values[name] = [float(v) for v in value]
-        elif hints[name] == list[str]:
-            values[name] = list(value)
-    return parameters_from_mapping(cls, values, f"parameters of node '{node.get_fully_qualified_name()}'")
+        doc = field.metadata.get("doc", "")
+        try:
+            if hints[field.name] == list[str]:
+                value = node.declare_parameter(field.name, Parameter.Type.STRING_ARRAY,
+                                               ParameterDescriptor(description=doc)).value
+                values[field.name] = list(value) if value is not None else list(default)
+            else:
+                dynamic = hints[field.name] is float
+                values[field.name] = node.declare_parameter(
+                    field.name, default, ParameterDescriptor(description=doc, dynamic_typing=dynamic)).value
+        except InvalidParameterTypeException as error:
+            raise ConfigError(source, field.name, f"wrong type: {error}") from None
+    return parameters_from_mapping(cls, values, source)
 
 
 def run_node(make_node: Callable[[], Node], args: list[str] | None = None) -> int:
