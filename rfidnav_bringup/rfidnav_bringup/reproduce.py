@@ -33,7 +33,6 @@ import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
 
 from rfidnav_common.errors import ConfigError  # noqa: E402
 from rfidnav_bringup.experiments import (RouteRun, controller_parameters, role_parameters,  # noqa: E402
