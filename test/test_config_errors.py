@@ -58,6 +58,12 @@ def use_flc_paper_with_nan_speed(root: Path) -> None:
     edit(root / "params/flc_paper.yaml", "forward_speed_mps: 0.2", "forward_speed_mps: .nan")
 
 
+def use_flc_paper_after_tuned_with_negative_speed(root: Path) -> None:
+    edit(root / SCENARIO, "params: ../params/flc_tuned.yaml",
+         "params: [../params/flc_tuned.yaml, ../params/flc_paper.yaml]")
+    edit(root / "params/flc_paper.yaml", "forward_speed_mps: 0.2", "forward_speed_mps: -0.2")
+
+
 def unbalanced_bracket(root: Path) -> None:
     edit(root / SCENARIO, "goal: {tag_ids: [C1, C2]}", "goal: {tag_ids: [C1, C2}")
 
@@ -129,14 +135,21 @@ CASES = {
         "maps/line_follow.yaml", "arrival_tags", ()),
     "out-of-range parameter value": Case(
         lambda root: edit(root / "params/reader_uhf_2ant.yaml", "miss_probability: 0.0", "miss_probability: 1.5"),
-        "params/reader_uhf_2ant.yaml", "rfid_reader_sim.ros__parameters", ("miss_probability",)),
-}
-KNOWN_BUGS = {
-    "out-of-range parameter value": (
-        "a value that passes the type check but fails the parameter class's validate() (miss_probability: 1.5 "
-        "in reader_uhf_2ant.yaml) is reported against the scenario file and a field 'overrides' the scenario "
-        "does not have, not against the parameter file that holds it (scenario.node_parameters passes "
-        "'<scenario>: nodes.<role>' / 'overrides' to parameters_from_mapping)"),
+        "params/reader_uhf_2ant.yaml", "rfid_reader_sim.ros__parameters.miss_probability", ("[0, 1)", "1.5")),
+    "out-of-range value in the second parameter file": Case(
+        use_flc_paper_after_tuned_with_negative_speed,
+        "params/flc_paper.yaml", "heading_controller.ros__parameters.forward_speed_mps", ("positive",)),
+    "out-of-range value in a scenario override": Case(
+        lambda root: edit(root / SCENARIO, "params: ../params/reader_uhf_2ant.yaml}",
+                          "params: ../params/reader_uhf_2ant.yaml, overrides: {miss_probability: 1.5}}"),
+        SCENARIO, "nodes.rfid_reader.overrides.miss_probability", ("[0, 1)",)),
+    "wrong type in a scenario override": Case(
+        lambda root: edit(root / SCENARIO, "params: ../params/reader_uhf_2ant.yaml}",
+                          "params: ../params/reader_uhf_2ant.yaml, overrides: {rate_hz: fast}}"),
+        SCENARIO, "nodes.rfid_reader.overrides.rate_hz", ("number",)),
+    "validate() error naming no single field": Case(
+        lambda root: edit(root / "params/reader_uhf_2ant.yaml", "hop_dwell_s: 0.2", "hop_dwell_s: 0.0"),
+        "params/reader_uhf_2ant.yaml", "rfid_reader_sim.ros__parameters", ("hop_dwell_s", "positive")),
 }
 
 
@@ -147,9 +160,7 @@ def test_the_unbroken_copy_loads(config: Path):
     assert scenario.mission.goal == {"tag_ids": ["C1", "C2"]}
 
 
-@pytest.mark.parametrize("name", [
-    pytest.param(name, marks=pytest.mark.xfail(strict=True, reason=KNOWN_BUGS[name])) if name in KNOWN_BUGS
-    else name for name in sorted(CASES)])
+@pytest.mark.parametrize("name", sorted(CASES))
 def test_broken_file_is_one_config_error_naming_file_and_field(config: Path, name: str):
     case = CASES[name]
     case.break_it(config)

@@ -16,7 +16,7 @@ from typing import Any
 
 import yaml
 
-from rfidnav_common.config import Section, node_parameter_values, parameters_from_mapping
+from rfidnav_common.config import Section, node_parameter_section, parameters_from_mapping, typed_values
 from rfidnav_common.errors import ConfigError
 from rfidnav_control.parameters import HeadingControllerParameters
 from rfidnav_control.route_map import RouteMap, load_route_map
@@ -214,18 +214,28 @@ def injected_parameters(scenario: Scenario, spec: NodeSpec, seed: int, rtf: floa
 
 
 def node_parameters(scenario: Scenario, spec: NodeSpec, seed: int, rtf: float) -> Any | None:
-    """Validate a known node's parameter files plus injected values; None for nodes we do not know."""
+    """Validate a known node's parameter files, overrides and injected values; None for nodes we do not know.
+
+    Later files override earlier ones and the scenario's overrides override the files; a bad value is reported
+    against the file (or the overrides) it came from."""
     known = KNOWN_NODES.get((spec.package or "", spec.executable or ""))
     if known is None:
         return None
     node_name, cls = known
     values: dict[str, Any] = {}
-    for file in spec.param_files:
-        values.update(node_parameter_values(cls, file, node_name))
-    values.update(spec.overrides)
+    origins: dict[str, tuple[str, str]] = {}
+    layers = [node_parameter_section(file, node_name) for file in spec.param_files]
+    layers.append(Section(spec.overrides, str(scenario.path), f"nodes.{spec.role}.overrides"))
+    for layer in layers:
+        layer_values = typed_values(cls, layer.data, layer.source, layer.prefix)
+        values.update(layer_values)
+        origins.update(dict.fromkeys(layer_values, (layer.source, layer.prefix)))
     declared = {name for name in cls.__dataclass_fields__}
     values.update({k: v for k, v in injected_parameters(scenario, spec, seed, rtf).items() if k in declared})
-    return parameters_from_mapping(cls, values, f"{scenario.path}: nodes.{spec.role}", "overrides")
+    # A problem no single value explains: the one file that gave values, else the scenario entry naming them.
+    given = set(origins.values())
+    source, prefix = given.pop() if len(given) == 1 else (str(scenario.path), f"nodes.{spec.role}")
+    return parameters_from_mapping(cls, values, source, prefix, origins)
 
 
 def dump_parameters(node_name: str, values: dict[str, Any]) -> str:

@@ -196,20 +196,32 @@ def typed_values(cls: type, data: Any, source: str, prefix: str = "") -> dict[st
     return values
 
 
-def parameters_from_mapping(cls: type, data: Any, source: str, prefix: str = "") -> Any:
-    """Build and validate parameter dataclass ``cls`` from ``data``; missing fields take their defaults."""
+def parameters_from_mapping(cls: type, data: Any, source: str, prefix: str = "",
+                            origins: Mapping[str, tuple[str, str]] | None = None) -> Any:
+    """Build and validate parameter dataclass ``cls`` from ``data``; missing fields take their defaults.
+
+    A ``validate()`` error whose message starts with a field name (``miss_probability: must be ...``) is
+    reported against that field where its value came from: ``origins`` maps field names to the (source,
+    prefix) of the file that set them; without ``origins`` every value came from ``source``/``prefix``. Any
+    other ``validate()`` error is reported against ``source``/``prefix``."""
     instance = cls(**typed_values(cls, data, source, prefix))
     validate = getattr(instance, "validate", None)
     if validate is not None:
         try:
             validate()
         except ValueError as error:
+            if origins is None:
+                origins = dict.fromkeys(typing.get_type_hints(cls), (source, prefix))
+            name, separator, problem = str(error).partition(": ")
+            if separator and name in origins:
+                origin, origin_prefix = origins[name]
+                raise ConfigError(origin, f"{origin_prefix}.{name}" if origin_prefix else name, problem) from None
             raise ConfigError(source, prefix, str(error)) from None
     return instance
 
 
-def node_parameter_values(cls: type, path: Path, node_name: str) -> dict[str, Any]:
-    """The type-checked values of a ROS 2 parameter file (``node_name: ros__parameters: {...}``)."""
+def node_parameter_section(path: Path, node_name: str) -> Section:
+    """The ``ros__parameters`` of ``node_name`` (or of the ``/**`` wildcard) in a ROS 2 parameter file."""
     document = Section.from_file(path)
     if document.has(node_name):
         node_section = document.section(node_name)
@@ -219,12 +231,14 @@ def node_parameter_values(cls: type, path: Path, node_name: str) -> dict[str, An
             raise ConfigError(str(path), node_name, "no parameters for this node (expected a top-level "
                               f"'{node_name}:' with 'ros__parameters:')")
         node_section = document.section(wildcard[0])
-    return typed_values(cls, node_section.raw("ros__parameters"), str(path), node_section.field("ros__parameters"))
+    values = node_section.raw("ros__parameters")
+    return Section(values if values is not None else {}, str(path), node_section.field("ros__parameters"))
 
 
-def node_parameters_from_file(cls: type, path: Path, node_name: str) -> Any:
-    """Build and validate ``cls`` from a ROS 2 parameter file alone."""
-    return parameters_from_mapping(cls, node_parameter_values(cls, path, node_name), str(path), node_name)
+def node_parameter_values(cls: type, path: Path, node_name: str) -> dict[str, Any]:
+    """The type-checked values of a ROS 2 parameter file (``node_name: ros__parameters: {...}``)."""
+    section = node_parameter_section(path, node_name)
+    return typed_values(cls, section.data, section.source, section.prefix)
 
 
 def param(doc: str, default: Any) -> Any:
