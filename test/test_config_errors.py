@@ -1,6 +1,6 @@
-"""Bad input (issue 2, section 7): a broken scenario, world, map or parameter file is one ConfigError naming the
-file and the field, raised while loading, before any process starts; an unknown package or executable is a
-LaunchError; the CLI prints one line (no traceback), exits non-zero and creates no run folder.
+"""Bad input (issue 2, section 7): a broken scenario, world, map or parameter file -- an unknown package or
+executable included -- is one ConfigError naming the file and the field, raised while loading, before any process
+starts; the CLI prints one line (no traceback), exits non-zero and creates no run folder.
 
 Each case copies line_follow_90 and the files it references into tmp_path (relative paths kept) and breaks one
 thing."""
@@ -150,6 +150,16 @@ CASES = {
     "validate() error naming no single field": Case(
         lambda root: edit(root / "params/reader_uhf_2ant.yaml", "hop_dwell_s: 0.2", "hop_dwell_s: 0.0"),
         "params/reader_uhf_2ant.yaml", "rfid_reader_sim.ros__parameters", ("hop_dwell_s", "positive")),
+    "unknown package": Case(
+        lambda root: edit(root / SCENARIO, "package: rfidnav_control,", "package: nope_pkg,"),
+        SCENARIO, "nodes.heading_controller.package", ("unknown package 'nope_pkg'",)),
+    "unknown executable": Case(
+        lambda root: edit(root / SCENARIO, "executable: heading_controller", "executable: nope_exe"),
+        SCENARIO, "nodes.heading_controller.executable", ("'nope_exe'", "heading_controller")),
+    "command that is not a program": Case(
+        lambda root: edit(root / SCENARIO, "package: rfidnav_control, executable: heading_controller",
+                          "command: nope_driver --port 1"),
+        SCENARIO, "nodes.heading_controller.command", ("'nope_driver'",)),
 }
 
 
@@ -207,6 +217,30 @@ def test_known_executable_resolves_to_a_runnable_command():
     assert Path(command[0]).exists()
 
 
+@pytest.mark.parametrize("replacement, field, words", [
+    ("nope_pkg:robot_sim", "heading_controller.package", ("unknown package 'nope_pkg'",)),
+    ("rfidnav_sim:nope", "heading_controller.executable", ("'nope'", "robot_sim")),
+    ("nope_driver --port 1", "heading_controller", ("'nope_driver'",)),
+    ("", "heading_controller", ("empty command",)),
+])
+def test_swap_to_an_unknown_executable_is_a_config_error_naming_the_option(config: Path, replacement: str,
+                                                                          field: str, words: tuple[str, ...]):
+    with pytest.raises(ConfigError) as raised:
+        load_scenario(str(config / SCENARIO), swaps={"heading_controller": replacement})
+    assert (raised.value.source, raised.value.field) == ("--swap", field), str(raised.value)
+    for word in words:
+        assert word in str(raised.value)
+
+
+def test_swap_resolves_the_replacement_and_keeps_a_command_line(config: Path):
+    scenario = load_scenario(str(config / SCENARIO), swaps={"rfid_reader": "rfidnav_bringup:player",
+                                                            "heading_controller": "true --flag"})
+    reader, controller = scenario.nodes["rfid_reader"], scenario.nodes["heading_controller"]
+    assert reader.command == tuple(resolve_executable("rfidnav_bringup", "player"))
+    assert reader.param_files
+    assert (controller.package, controller.command, controller.param_files) == (None, ("true", "--flag"), ())
+
+
 # -------------------------------------------------------------------------------------------------------- CLI
 
 def run_cli(scenario: Path, out: Path) -> subprocess.CompletedProcess:
@@ -231,11 +265,6 @@ def test_cli_run_of_a_broken_scenario_prints_one_line_and_starts_nothing(config:
     assert not out.exists() or not any(out.iterdir())
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "issue 2 section 7: an unknown package is one error naming the file and the field, before anything starts; "
-    "the orchestrator resolves executables only in Orchestrator.prepare(), after creating the run folder "
-    "(summary.json, scenario.yaml, params/), prints 'error: unknown package ...' on stdout without naming "
-    "the scenario file or nodes.<role>.package, and exits 1"))
 def test_cli_run_with_an_unknown_package_names_the_scenario_field_and_starts_nothing(config: Path, tmp_path: Path):
     edit(config / SCENARIO, "package: rfidnav_control, executable: heading_controller",
          "package: nope_pkg, executable: heading_controller")

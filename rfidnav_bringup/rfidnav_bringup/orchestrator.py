@@ -132,9 +132,9 @@ class Orchestrator:
         return self.run_dir / "logs" / f"{role}.log"
 
     def node_command(self, spec: NodeSpec, params_dir: Path) -> list[str]:
-        if spec.command is not None:
+        if spec.package is None:
             return list(spec.command)
-        command = resolve_executable(spec.package, spec.executable) + ["--ros-args"]
+        command = [*spec.command, "--ros-args"]
         parameters = node_parameters(self.scenario, spec, self.options.seed, self.options.rtf)
         if parameters is not None:
             node_name = KNOWN_NODES[(spec.package, spec.executable)][0]

@@ -44,9 +44,18 @@ class DomainLease:
             self.handle = None
 
 
+class UnknownExecutableError(LaunchError):
+    """``field`` is ``package`` (not installed) or ``executable`` (the package has no such executable)."""
+
+    def __init__(self, field: str, message: str) -> None:
+        super().__init__(message)
+        self.field = field
+
+
 def resolve_executable(package: str, executable: str) -> list[str]:
     """The command for a node executable: ``<prefix>/lib/<package>/<executable>`` on any AMENT_PREFIX_PATH
-    entry (a colcon install), else the package's console_scripts entry point (an editable install)."""
+    entry (a colcon install), else the package's console_scripts entry point (an editable install).
+    An unknown package or executable is an :class:`UnknownExecutableError`."""
     prefixes = [p for p in os.environ.get("AMENT_PREFIX_PATH", "").split(os.pathsep) if p] + [sys.prefix]
     for prefix in prefixes:
         candidate = Path(prefix) / "lib" / package / executable
@@ -55,11 +64,12 @@ def resolve_executable(package: str, executable: str) -> list[str]:
     try:
         distribution = metadata.distribution(package)
     except metadata.PackageNotFoundError:
-        raise LaunchError(f"unknown package '{package}' (not installed in {sys.prefix})") from None
+        raise UnknownExecutableError("package",
+                                     f"unknown package '{package}' (not installed in {sys.prefix})") from None
     scripts = {ep.name: ep for ep in distribution.entry_points if ep.group == "console_scripts"}
     if executable not in scripts:
-        raise LaunchError(f"package '{package}' has no executable '{executable}' "
-                          f"(it has: {', '.join(sorted(scripts)) or 'none'})")
+        raise UnknownExecutableError("executable", f"package '{package}' has no executable '{executable}' "
+                                     f"(it has: {', '.join(sorted(scripts)) or 'none'})")
     script = Path(sys.prefix) / "bin" / executable
     if script.is_file():
         return [str(script)]

@@ -2,20 +2,23 @@
 
 A scenario names a world (ground truth, simulator nodes only), a map (robot knowledge), the robot's
 start, one OS process per role with its parameters, the mission and the metrics. Loading resolves
-every path relative to the scenario file and validates the world, the map and every node's
-parameters against the node's parameter class, so a bad file fails here, before any process starts.
+every path relative to the scenario file and every node's executable, and validates the world, the
+map and every node's parameters against the node's parameter class, so a bad file fails here,
+before any process starts.
 See README.md, "Scenario files", for the schema.
 """
 
 from __future__ import annotations
 
 import shlex
+import shutil
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
 import yaml
 
+from rfidnav_bringup.processes import UnknownExecutableError, resolve_executable
 from rfidnav_common.config import Section, node_parameter_section, parameters_from_mapping, typed_values
 from rfidnav_common.errors import ConfigError
 from rfidnav_control.parameters import HeadingControllerParameters
@@ -41,7 +44,8 @@ class NodeSpec:
     role: str
     package: str | None
     executable: str | None
-    command: tuple[str, ...] | None          # a raw command line instead of package/executable
+    command: tuple[str, ...]                 # what starts the process: the package's executable resolved like
+                                             # ``ros2 run``, or the given command line (then package is None)
     name: str | None                         # ROS node name, for the readiness check
     param_files: tuple[Path, ...]
     overrides: dict[str, Any]
@@ -81,7 +85,7 @@ class Scenario:
             "robot": {"x": self.robot[0], "y": self.robot[1], "yaw_deg": self.robot[2]},
             "nodes": {role: {key: value for key, value in {
                 "package": spec.package, "executable": spec.executable,
-                "command": " ".join(shlex.quote(c) for c in spec.command) if spec.command else None,
+                "command": " ".join(shlex.quote(c) for c in spec.command) if spec.package is None else None,
                 "name": spec.name, "params": [str(p) for p in spec.param_files], "overrides": spec.overrides,
                 "sim": spec.sim, "clock_source": spec.clock_source, "respawn": spec.respawn,
                 "max_respawns": spec.max_respawns}.items() if value not in (None, {}, [])}
@@ -151,8 +155,13 @@ def load_scenario(name_or_path: str, swaps: dict[str, str] | None = None,
 def _node_spec(role: str, entry: Section, base: Path) -> NodeSpec:
     entry.reject_unknown(("package", "executable", "command", "name", "params", "overrides", "sim",
                           "clock_source", "respawn", "max_respawns"))
-    command = tuple(shlex.split(entry.string("command"))) if entry.has("command") else None
-    if command is None and not (entry.has("package") and entry.has("executable")):
+    if entry.has("command"):
+        package = executable = None
+        command = _program(tuple(shlex.split(entry.string("command"))), entry.source, entry.field("command"))
+    elif entry.has("package") and entry.has("executable"):
+        package, executable = entry.string("package"), entry.string("executable")
+        command = _resolved(package, executable, entry.source, entry.prefix)
+    else:
         raise entry.error("package", "give package and executable, or a command")
     params = entry.raw("params", [])
     params = [params] if isinstance(params, str) else params
@@ -166,10 +175,8 @@ def _node_spec(role: str, entry: Section, base: Path) -> NodeSpec:
     if not isinstance(overrides, dict):
         raise entry.error("overrides", "expected a mapping of parameter names to values")
     return NodeSpec(
-        role=role, package=entry.string("package") if command is None else None,
-        executable=entry.string("executable") if command is None else None, command=command,
-        name=entry.string("name", entry.raw("executable", None) or role) if command is None
-        else entry.raw("name", None),
+        role=role, package=package, executable=executable, command=command,
+        name=entry.string("name", executable) if package is not None else entry.raw("name", None),
         param_files=files, overrides=dict(overrides), sim=entry.boolean("sim", False),
         clock_source=entry.boolean("clock_source", False), respawn=entry.boolean("respawn", False),
         max_respawns=entry.integer("max_respawns", 3, minimum=0))
@@ -179,12 +186,27 @@ def _swapped(spec: NodeSpec, replacement: str) -> NodeSpec:
     """``pkg:executable`` keeps the role's parameters; anything else is a raw command line."""
     if ":" in replacement and " " not in replacement:
         package, executable = replacement.split(":", 1)
-        return replace(spec, package=package, executable=executable, command=None, name=executable)
-    command = tuple(shlex.split(replacement))
+        command = _resolved(package, executable, "--swap", spec.role)
+        return replace(spec, package=package, executable=executable, command=command, name=executable)
+    command = _program(tuple(shlex.split(replacement)), "--swap", spec.role)
+    return replace(spec, package=None, executable=None, command=command, name=None, param_files=(), overrides={})
+
+
+def _resolved(package: str, executable: str, source: str, prefix: str) -> tuple[str, ...]:
+    """The command of a package's executable; an unknown one is an error naming ``prefix``.package/.executable."""
+    try:
+        return tuple(resolve_executable(package, executable))
+    except UnknownExecutableError as error:
+        raise ConfigError(source, f"{prefix}.{error.field}", str(error)) from None
+
+
+def _program(command: tuple[str, ...], source: str, field: str) -> tuple[str, ...]:
+    """A command line whose program exists (a path, or a name on PATH)."""
     if not command:
-        raise ConfigError("--swap", spec.role, "empty command")
-    return replace(spec, package=None, executable=None, command=command, name=None, param_files=(),
-                   overrides={})
+        raise ConfigError(source, field, "empty command")
+    if shutil.which(command[0]) is None:
+        raise ConfigError(source, field, f"no program '{command[0]}' (not an executable file, not on PATH)")
+    return command
 
 
 def _check_route(scenario: Scenario, mission: Section) -> None:
