@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import os
 import subprocess
 import sys
@@ -107,12 +108,15 @@ def verb_run(args, scenario_name: str | None = None) -> int:
     if getattr(args, "goal", None):
         from dataclasses import replace
 
-        goal = yaml.safe_load(args.goal)
+        try:
+            goal = yaml.safe_load(args.goal)
+        except yaml.YAMLError as error:
+            raise ConfigError("--goal", "", f"not valid YAML: {getattr(error, 'problem', None) or error}") from None
         if not isinstance(goal, dict):
             raise ConfigError("--goal", "", "expected a YAML mapping of goal fields")
         scenario = replace(scenario, mission=replace(scenario.mission, goal=goal))
-    if args.rtf <= 0:
-        raise ConfigError("--rtf", "", "must be positive")
+    if not math.isfinite(args.rtf) or args.rtf <= 0:
+        raise ConfigError("--rtf", "", f"must be a positive number, got {args.rtf}")
     options = RunOptions(rtf=args.rtf, seed=args.seed, out_dir=args.out, record=not args.no_record,
                          quiet=args.quiet)
     summary = Orchestrator(scenario, options).run()
