@@ -9,6 +9,7 @@ callback (or the supervision timer: cancel, silence) completes, so nothing block
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 from geometry_msgs.msg import Twist
 from rclpy.action import ActionServer, CancelResponse, GoalResponse
@@ -35,8 +36,9 @@ class ActiveGoal:
 
 
 class HeadingControllerNode(Node):
-    def __init__(self) -> None:
-        super().__init__("heading_controller")
+    def __init__(self, **node_options: Any) -> None:
+        """``node_options``: keyword arguments of rclpy's Node (``context``, ``parameter_overrides``), for tests."""
+        super().__init__("heading_controller", **node_options)
         self.params: HeadingControllerParameters = declare_parameters(self, HeadingControllerParameters)
         route_map = load_route_map(self.params.map_file)
         self.follower = TagRouteFollower(self.params.follower_settings(),

@@ -8,6 +8,7 @@ and the seed, never on process scheduling, so a run repeats exactly and a replay
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 from nav_msgs.msg import Odometry
@@ -22,9 +23,11 @@ from rfidnav_sim.parameters import ReaderParameters
 from rfidnav_sim.rfid_model import ReaderSimulator
 from rfidnav_sim.world import load_world
 
+
 class RfidReaderSimNode(Node):
-    def __init__(self) -> None:
-        super().__init__("rfid_reader_sim")
+    def __init__(self, **node_options: Any) -> None:
+        """``node_options``: keyword arguments of rclpy's Node (``context``, ``parameter_overrides``), for tests."""
+        super().__init__("rfid_reader_sim", **node_options)
         self.params: ReaderParameters = declare_parameters(self, ReaderParameters)
         world = load_world(self.params.world_file)
         self.simulator = ReaderSimulator(

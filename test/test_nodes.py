@@ -1,0 +1,291 @@
+"""Node tests: real nodes constructed in this process on a private rclpy Context, driven by a probe node on
+the same executor, stepped with ``spin_once`` until a stated condition holds (no sleeps).
+
+Each test leases its own DDS domain (as ``./rfidnav run`` does), so concurrent sessions never cross-talk.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable, Iterator
+from pathlib import Path
+from typing import Any
+
+import pytest
+import rclpy
+from geometry_msgs.msg import Twist
+from nav_msgs.msg import Odometry
+from rcl_interfaces.msg import Log
+from rclpy.action import ActionClient
+from rclpy.context import Context
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.node import Node
+from rclpy.parameter import Parameter
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+
+from rfidnav_bringup.processes import DomainLease
+from rfidnav_common.geometry import yaw_to_quaternion
+from rfidnav_common.ros import COMMAND_QOS, SENSOR_QOS, time_msg
+from rfidnav_control.heading_controller_node import HeadingControllerNode
+from rfidnav_msgs.action import FollowTagRoute
+from rfidnav_msgs.msg import TagReadArray, TagReading
+from rfidnav_sim.rfid_reader_sim_node import RfidReaderSimNode
+
+WORKSPACE = Path(__file__).resolve().parents[1]
+ROUTE_MAP = WORKSPACE / "config/maps/line_follow.yaml"     # C1 -> F1, C2 -> F2
+WORLD = WORKSPACE / "config/worlds/line_follow.yaml"       # C1 (0, 0, 3), C2 (0, 5, 3), F1, F2 on the floor
+WAIT_S = 10.0   # generous for a loaded 2-core machine; each wait normally takes milliseconds
+FREQUENCY_HZ = 915.25e6
+ROUND_S = 0.04
+# /rosout is transient local: a subscriber that joins late still gets what the nodes logged.
+ROSOUT_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1000, reliability=ReliabilityPolicy.RELIABLE,
+                        durability=DurabilityPolicy.TRANSIENT_LOCAL)
+
+
+class Graph:
+    """A private context, one executor, and the nodes under test plus a probe node on it."""
+
+    def __init__(self, domain_id: int) -> None:
+        self.context = Context()
+        rclpy.init(context=self.context, domain_id=domain_id)
+        self.executor = SingleThreadedExecutor(context=self.context)
+        self.nodes: list[Node] = []
+        self.probe = self.add(Node("probe", context=self.context))
+        self.logs: list[Log] = []
+        self.probe.create_subscription(Log, "/rosout", self.logs.append, ROSOUT_QOS)
+
+    def add(self, node: Node) -> Any:
+        self.nodes.append(node)
+        self.executor.add_node(node)
+        return node
+
+    def spin_until(self, condition: Callable[[], bool], what: str, timeout_s: float = WAIT_S) -> None:
+        deadline = time.monotonic() + timeout_s
+        while not condition():
+            if time.monotonic() > deadline:
+                pytest.fail(f"timed out after {timeout_s:.0f} s waiting for {what}")
+            self.executor.spin_once(timeout_sec=0.05)
+
+    def logged(self, node_name: str, *words: str) -> list[str]:
+        return [log.msg for log in self.logs if log.name == node_name and all(w in log.msg for w in words)]
+
+    def close(self) -> None:
+        self.executor.shutdown()
+        for node in self.nodes:
+            node.destroy_node()
+        self.context.try_shutdown()
+
+
+@pytest.fixture
+def graph() -> Iterator[Graph]:
+    lease = DomainLease()
+    graph = Graph(lease.domain_id)
+    try:
+        yield graph
+    finally:
+        graph.close()
+        lease.close()
+
+
+def reading(tag_id: str, antenna: int, phase: float, **bad: float) -> TagReading:
+    """A read as a reader reports it (I/Q consistent with the phase); ``bad`` overrides fields with NaN/Inf."""
+    read = TagReading(tag_id=tag_id, antenna=antenna, rssi_dbm=-55.0, phase_rad=phase % (2 * math.pi),
+                      i=math.cos(phase), q=math.sin(phase), frequency_hz=FREQUENCY_HZ)
+    for field, value in bad.items():
+        setattr(read, field, value)
+    return read
+
+
+def target_round(tag_id: str, phase_difference_rad: float) -> list[TagReading]:
+    """The target read by the left (1) and right (2) antennas with phi1 - phi2 = ``phase_difference_rad``."""
+    return [reading(tag_id, 1, 1.0 + phase_difference_rad), reading(tag_id, 2, 1.0)]
+
+
+class ControllerHarness:
+    """heading_controller (paper defaults, the line_follow route map) with a probe that sends it rounds."""
+
+    def __init__(self, graph: Graph) -> None:
+        self.graph = graph
+        self.node: HeadingControllerNode = graph.add(HeadingControllerNode(
+            context=graph.context, parameter_overrides=[Parameter("map_file", value=str(ROUTE_MAP))]))
+        probe = graph.probe
+        self.commands: list[Twist] = []
+        self.feedback: list[FollowTagRoute.Feedback] = []
+        self.reads_pub = probe.create_publisher(TagReadArray, "/rfid/reads", SENSOR_QOS)
+        cmd_sub = probe.create_subscription(Twist, "/cmd_vel", self.commands.append, COMMAND_QOS)
+        self.client = ActionClient(probe, FollowTagRoute, "/follow_tag_route")
+        graph.spin_until(lambda: self.client.server_is_ready() and self.reads_pub.get_subscription_count() > 0
+                         and cmd_sub.get_publisher_count() > 0, "heading_controller's action server and topics")
+        # Rounds are stamped on a fixed 25 Hz grid: the node steps on the rounds' own stamps.
+        self.stamp_s = self.node.get_clock().now().nanoseconds * 1e-9
+        self.sent_rounds = 0
+
+    def send_goal(self, tag_ids: list[str]):
+        future = self.client.send_goal_async(FollowTagRoute.Goal(tag_ids=tag_ids),
+                                             feedback_callback=lambda m: self.feedback.append(m.feedback))
+        self.graph.spin_until(future.done, f"an answer to the goal {tag_ids}")
+        return future.result()
+
+    def start_route(self, tag_ids: list[str]):
+        handle = self.send_goal(tag_ids)
+        assert handle.accepted, f"goal {tag_ids} rejected: {self.graph.logged('heading_controller')}"
+        # Accepted is answered before the goal executes; rounds sent before that would be ignored.
+        self.graph.spin_until(lambda: self.node.active is not None, "the goal to start executing")
+        return handle
+
+    def send_round(self, readings: list[TagReading]) -> Twist:
+        """Publish one inventory round while a goal is active and return the /cmd_vel it is answered with."""
+        self.stamp_s += ROUND_S
+        msg = TagReadArray(readings=readings)
+        msg.header.stamp = time_msg(self.stamp_s)
+        msg.header.frame_id = "base_link"
+        for read in readings:
+            read.stamp = msg.header.stamp
+        before = len(self.commands)
+        self.reads_pub.publish(msg)
+        self.sent_rounds += 1
+        self.graph.spin_until(lambda: len(self.commands) > before, f"a /cmd_vel for round {self.sent_rounds}")
+        return self.commands[before]
+
+
+# ------------------------------------------------------------------------------------- heading_controller
+
+@pytest.mark.parametrize("route, named", [(["C1", "NOPE"], "NOPE"), (["X9"], "X9"), ([], "empty")])
+def test_controller_rejects_an_unknown_or_empty_route_naming_the_problem(graph: Graph, route, named) -> None:
+    controller = ControllerHarness(graph)
+    handle = controller.send_goal(route)
+    assert not handle.accepted, f"route {route} was accepted"
+    graph.spin_until(lambda: graph.logged("heading_controller", "goal rejected", named),
+                     f"heading_controller to log why {route} was rejected (naming '{named}')")
+    if named != "empty":
+        message = graph.logged("heading_controller", "goal rejected")[0]
+        assert "C1" not in message.split("unknown tag ids")[-1].split("(")[0], message  # only the unknown ones
+    assert controller.node.active is None
+    # Still serving: a valid route is accepted afterwards.
+    controller.start_route(["C1"])
+
+
+def test_controller_steers_towards_the_tag_and_reports_each_arrival(graph: Graph) -> None:
+    controller = ControllerHarness(graph)
+    handle = controller.start_route(["C1", "C2"])
+    result_future = handle.get_result_async()
+
+    # phi1 - phi2 > 0: the tag is nearer the right antenna, so turn clockwise (negative yaw rate).
+    right = controller.send_round(target_round("C1", +0.5))
+    left = controller.send_round(target_round("C1", -0.5))
+    ahead = controller.send_round(target_round("C1", 0.0))
+    assert right.linear.x == pytest.approx(0.2) and right.angular.z < -0.1, right
+    assert left.angular.z == pytest.approx(-right.angular.z), (left, right)
+    assert ahead.angular.z == pytest.approx(0.0, abs=1e-9)
+    unheard = controller.send_round([reading("C2", 1, 0.3)])
+    assert (unheard.linear.x, unheard.angular.z) == (pytest.approx(0.2), 0.0), "a missed round keeps going straight"
+
+    # The floor tag under C1 marks arrival; the next target is C2.
+    controller.send_round([reading("F1", 3, 2.0),
+                           *target_round("C2", 0.2)])
+    graph.spin_until(lambda: controller.feedback and controller.feedback[-1].target_tag_id == "C2",
+                     "feedback naming C2 as the target after F1 was read")
+    assert [f.target_index for f in controller.feedback][:4] == [0, 0, 0, 0]
+    assert {f.mode for f in controller.feedback[:3]} == {"seeking"}
+
+    controller.send_round([reading("F2", 3, 2.0)])
+    graph.spin_until(result_future.done, "the route's result after F2 was read")
+    result = result_future.result().result
+    assert result.success and result.tags_reached == 2, result
+    assert "2 tags" in result.message
+    graph.spin_until(lambda: len(controller.commands) >= 7, "the stop command sent when the route ends")
+    assert (controller.commands[-1].linear.x, controller.commands[-1].angular.z) == (0.0, 0.0)
+    assert controller.node.active is None
+
+
+NAN, INF = math.nan, math.inf
+
+
+def test_controller_drops_and_counts_non_finite_reads_and_stays_up(graph: Graph) -> None:
+    controller = ControllerHarness(graph)
+    node = controller.node
+    fuzzy_inputs: list[float] = []
+    fuzzy = node.follower.heading_controller
+    node.follower.heading_controller = lambda dphi: fuzzy_inputs.append(dphi) or fuzzy(dphi)
+    handle = controller.start_route(["C1", "C2"])
+
+    rounds = [
+        # A good target pair beside bad copies of it: the good pair steers, the bad reads are dropped.
+        target_round("C1", 0.4) + [reading("C1", 1, 0.0, i=NAN), reading("C1", 2, 0.0, q=INF)],
+        # The left antenna's only read of the target is bad: the target counts as unheard this round.
+        [reading("C1", 1, 0.0, phase_rad=NAN, i=0.0, q=0.0), reading("C1", 2, 1.0)],
+        # A bad read of the floor tag must not count as arriving under C1.
+        target_round("C1", -0.3) + [reading("F1", 3, 1.0, i=-INF), reading("F1", 3, 1.0, rssi_dbm=NAN)],
+        # Nothing usable at all.
+        [reading("C1", 1, 0.0, i=NAN, q=NAN), reading("C1", 2, 0.0, frequency_hz=INF),
+         reading("C2", 1, 0.0, frequency_hz=NAN)],
+    ]
+    bad_reads = 2 + 1 + 2 + 3
+    commands = [controller.send_round(readings) for readings in rounds]
+    assert node.dropped_reads == bad_reads
+    for command in commands:
+        assert all(math.isfinite(v) for v in (command.linear.x, command.linear.y, command.linear.z,
+                                              command.angular.x, command.angular.y, command.angular.z)), command
+    assert commands[0].angular.z < -0.1 and commands[2].angular.z > 0.1, "the good pairs still steer"
+    assert (commands[1].linear.x, commands[1].angular.z) == (pytest.approx(0.2), 0.0), "unheard: straight on"
+    assert (commands[3].linear.x, commands[3].angular.z) == (pytest.approx(0.2), 0.0), "unheard: straight on"
+    assert len(fuzzy_inputs) == 2 and all(math.isfinite(x) for x in fuzzy_inputs), fuzzy_inputs
+    graph.spin_until(lambda: len(controller.feedback) >= len(rounds), "feedback for every round")
+    assert all(math.isfinite(f.phase_difference_rad) and math.isfinite(f.heading_change_rad)
+               for f in controller.feedback)
+    assert {f.target_tag_id for f in controller.feedback} == {"C1"}, "a NaN read of F1 counted as arrival"
+    graph.spin_until(lambda: graph.logged("heading_controller", "dropped reads with non-finite values"),
+                     "the warning that counts dropped reads on /rosout")
+
+    # Still alive and steering: a good read of F1 is an arrival, and the goal is still the same goal.
+    controller.send_round([reading("F1", 3, 1.0), *target_round("C2", 0.0)])
+    graph.spin_until(lambda: controller.feedback[-1].target_tag_id == "C2", "arrival at C1 after the bad reads")
+    assert node.active is not None and node.active.handle.goal_id == handle.goal_id
+    assert node.dropped_reads == bad_reads
+
+
+# ---------------------------------------------------------------------------------------- rfid_reader_sim
+
+def ground_truth(x: float, y: float, yaw_deg: float, stamp_s: float) -> Odometry:
+    msg = Odometry()
+    msg.header.stamp = time_msg(stamp_s)
+    msg.header.frame_id = "map"
+    msg.pose.pose.position.x, msg.pose.pose.position.y = x, y
+    qx, qy, qz, qw = yaw_to_quaternion(math.radians(yaw_deg))
+    msg.pose.pose.orientation.x, msg.pose.pose.orientation.y = qx, qy
+    msg.pose.pose.orientation.z, msg.pose.pose.orientation.w = qz, qw
+    return msg
+
+
+def test_reader_sim_publishes_one_round_per_period_on_the_ground_truth_clock(graph: Graph) -> None:
+    reader = graph.add(RfidReaderSimNode(context=graph.context, parameter_overrides=[
+        Parameter("world_file", value=str(WORLD)), Parameter("seed", value=7)]))
+    rounds: list[TagReadArray] = []
+    truth_pub = graph.probe.create_publisher(Odometry, "/sim/ground_truth", SENSOR_QOS)
+    reads_sub = graph.probe.create_subscription(TagReadArray, "/rfid/reads", rounds.append, SENSOR_QOS)
+    graph.spin_until(lambda: truth_pub.get_subscription_count() > 0 and reads_sub.get_publisher_count() > 0,
+                     "rfid_reader_sim's topics")
+    # Heading north 0.5 m left of the line x = 0: C1 (3 m up, 1 m ahead) is to the right.
+    stamps = [round(0.02 * k, 2) for k in range(1, 11)]   # ground truth at 50 Hz, rounds at 25 Hz
+    for stamp in stamps:
+        truth_pub.publish(ground_truth(-0.5, -1.0, 90.0, stamp))
+    expected = [0.02, 0.04, 0.08, 0.12, 0.16, 0.2]   # the first pose at or after each round's due time
+    graph.spin_until(lambda: len(rounds) >= len(expected), f"{len(expected)} rounds on /rfid/reads")
+    assert [round(r.header.stamp.sec + r.header.stamp.nanosec * 1e-9, 6) for r in rounds] == expected
+    differences = []
+    for msg in rounds:
+        seen = {(r.tag_id, r.antenna) for r in msg.readings}
+        assert {("C1", 1), ("C1", 2), ("C2", 1), ("C2", 2)} <= seen, seen
+        assert not {tag for tag, _ in seen} & {"F1", "F2"}, "floor tags are out of the downward antenna's range"
+        for r in msg.readings:
+            assert r.stamp == msg.header.stamp
+            assert 0.0 <= r.phase_rad < 2 * math.pi and r.frequency_hz == pytest.approx(FREQUENCY_HZ)
+            assert math.atan2(r.q, r.i) % (2 * math.pi) == pytest.approx(r.phase_rad, abs=1e-9)
+        phase = {r.antenna: r.phase_rad for r in msg.readings if r.tag_id == "C1"}
+        differences.append(math.remainder(phase[1] - phase[2], 2 * math.pi))
+    # Left antenna farther from a tag on the right: phi1 > phi2 by 4*pi*(0.06 m * 0.5/2.9)/lambda ~ 0.4 rad,
+    # the sign heading_controller turns clockwise on. Phase noise (0.02 rad/m) is ~0.06 rad at 2.9 m.
+    mean = sum(differences) / len(differences)
+    assert 0.25 < mean < 0.55, differences
+    assert reader.get_name() == "rfid_reader_sim"
