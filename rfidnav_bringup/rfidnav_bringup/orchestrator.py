@@ -2,14 +2,16 @@
 
 Order of events: lease a DDS domain; write each node's resolved parameter file; start the recorder
 and wait until it is in the graph; start the nodes; wait until every node is in the graph, the
-mission's action server answers and the recorder subscribes to every topic; start the simulation
-clock; send the goal and show its feedback on one progress line; on result, timeout or Ctrl-C
-cancel the goal, stop the nodes (SIGINT, then SIGKILL), stop the recorder last so it finalizes the
-bag; compute the metrics from the bag and write summary.json.
+mission's action server answers and the recorder subscribes to every topic it will record (not the
+excluded ones, nor those of a type it cannot store); start the simulation clock; send the goal and
+show its feedback on one progress line; on result, timeout or Ctrl-C cancel the goal, stop the
+nodes (SIGINT, then SIGKILL), stop the recorder last so it finalizes the bag; compute the metrics
+from the bag and write summary.json.
 """
 
 from __future__ import annotations
 
+import functools
 import json
 import os
 import shutil
@@ -19,7 +21,7 @@ import time
 from dataclasses import dataclass, field
 from datetime import datetime, timezone
 from pathlib import Path
-from typing import Any
+from typing import Any, Callable, Collection, Iterable
 
 import rclpy
 import yaml
@@ -29,8 +31,10 @@ from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from std_srvs.srv import Trigger
 
-from rfidnav_bringup.errors import ReadinessError, RfidnavError
+from rfidnav_bringup.bags import message_definition, register_installed_type
+from rfidnav_bringup.errors import BagError, ReadinessError, RfidnavError
 from rfidnav_bringup.processes import DomainLease, NodeProcess, resolve_executable
+from rfidnav_bringup.recorder_node import message_class
 from rfidnav_common.ros import fill_message, interface_class
 from rfidnav_bringup.scenario import KNOWN_NODES, NodeSpec, Scenario, dump_parameters, injected_parameters, node_parameters
 
@@ -45,6 +49,7 @@ class RunOptions:
     seed: int = 1
     out_dir: Path = Path("bags")
     record: bool = True
+    record_exclude: tuple[str, ...] = ()     # topics the recorder leaves out (its exclude_topics)
     quiet: bool = False
 
 
@@ -122,6 +127,8 @@ class Orchestrator:
             command = resolve_executable("rfidnav_bringup", "recorder") + [
                 "--ros-args", "-p", f"output_dir:={self.run_dir / 'bag'}",
                 "-p", f"stamp_from_clock_topic:={str(simulated).lower()}"]
+            if self.options.record_exclude:
+                command += ["-p", f"exclude_topics:={json.dumps(list(self.options.record_exclude))}"]
             self.processes[RECORDER_ROLE] = NodeProcess(RECORDER_ROLE, command, self.log_path(RECORDER_ROLE), env)
         for role, spec in self.scenario.nodes.items():
             command = self.node_command(spec, params_dir)
@@ -191,15 +198,19 @@ class Orchestrator:
         if always or not self.options.quiet:
             print(text, flush=True)
 
-    def spin_until(self, executor: SingleThreadedExecutor, condition, timeout_s: float, what: str) -> None:
-        """Spin until ``condition()`` holds; fail naming ``what`` (and any node that died meanwhile)."""
+    def spin_until(self, executor: SingleThreadedExecutor, condition, timeout_s: float,
+                   what: str | Callable[[], str]) -> None:
+        """Spin until ``condition()`` holds; fail naming ``what`` (a text, or a function giving it at the
+        timeout) and any node that died meanwhile."""
         deadline = time.monotonic() + timeout_s
         while not condition():
             self.check_processes(starting=True)
             if self.interrupted:
                 return
             if time.monotonic() > deadline:
-                raise ReadinessError(f"timed out after {timeout_s:.0f} s waiting for {what}\n{self.all_last_lines()}")
+                waited_for = what() if callable(what) else what
+                raise ReadinessError(f"timed out after {timeout_s:.0f} s waiting for {waited_for}\n"
+                                     f"{self.all_last_lines()}")
             executor.spin_once(timeout_sec=0.05)
 
     def start_graph(self, node: Node, executor: SingleThreadedExecutor) -> None:
@@ -217,8 +228,8 @@ class Orchestrator:
         self.spin_until(executor, self.client.server_is_ready, READY_TIMEOUT_S,
                         f"action server {self.scenario.mission.action}")
         if RECORDER_ROLE in self.processes:
-            self.spin_until(executor, lambda: self.recorder_covers(node), READY_TIMEOUT_S,
-                            "the recorder to subscribe to every topic")
+            self.spin_until(executor, lambda: not self.unrecorded_topics(node), READY_TIMEOUT_S,
+                            lambda: f"the recorder to subscribe to {', '.join(self.unrecorded_topics(node))}")
         self.write_graph(node)
         clock_roles = [spec for spec in self.scenario.nodes.values() if spec.clock_source and spec.name]
         if clock_roles:
@@ -243,14 +254,12 @@ class Orchestrator:
         (self.run_dir / "graph.json").write_text(json.dumps({"simulator_nodes": simulators, "nodes": graph},
                                                             indent=2) + "\n")
 
-    @staticmethod
-    def recorder_covers(node: Node) -> bool:
-        for topic, _ in node.get_topic_names_and_types():
-            if not node.get_publishers_info_by_topic(topic):
-                continue
-            if not any(info.node_name == "recorder" for info in node.get_subscriptions_info_by_topic(topic)):
-                return False
-        return True
+    def unrecorded_topics(self, node: Node) -> list[str]:
+        """Published topics the recorder will record but does not subscribe to yet."""
+        published = [(topic, types) for topic, types in node.get_topic_names_and_types()
+                     if node.get_publishers_info_by_topic(topic)]
+        return [topic for topic in topics_to_record(published, self.options.record_exclude, recordable_type)
+                if not any(info.node_name == "recorder" for info in node.get_subscriptions_info_by_topic(topic))]
 
     def fly_mission(self, node: Node, executor: SingleThreadedExecutor) -> None:
         mission = self.scenario.mission
@@ -362,6 +371,26 @@ class Orchestrator:
         }
         (self.run_dir / "summary.json").write_text(json.dumps(document, indent=2) + "\n")
         return RunSummary(self.run_dir, document)
+
+
+def topics_to_record(published: Iterable[tuple[str, list[str]]], exclude: Collection[str],
+                     recordable: Callable[[str], bool]) -> list[str]:
+    """Which published topics (name, types) the recorder records: the ones not excluded whose type it can
+    store (it records a topic's first type), as recorder_node.RecorderNode.discover and add_topic decide."""
+    return sorted(topic for topic, types in published if topic not in exclude and types and recordable(types[0]))
+
+
+@functools.cache
+def recordable_type(msgtype: str) -> bool:
+    """Whether the recorder can record ``msgtype``: its Python class is installed and its definition is known
+    (the bag embeds it); recorder_node.RecorderNode.add_topic skips a topic of any other type."""
+    try:
+        if message_class(msgtype) is None or not register_installed_type(msgtype):
+            return False
+        message_definition(msgtype)
+    except BagError:
+        return False
+    return True
 
 
 def child_environment(domain_id: int) -> dict[str, str]:
