@@ -35,7 +35,7 @@ from typing import Any
 
 import rclpy
 from rclpy.clock import Clock, ClockType
-from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.executors import Executor, ExternalShutdownException
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.signals import SignalHandlerOptions
@@ -47,7 +47,7 @@ from rfidnav_bringup.bags import message_definition, register_installed_type
 from rfidnav_bringup.errors import BagError, ConfigError
 from rfidnav_common.config import param
 from rfidnav_common.errors import RfidnavError
-from rfidnav_common.ros import declare_parameters
+from rfidnav_common.ros import declare_parameters, events_executor
 
 # rosbag2 metadata version 9 is what Jazzy's rosbag2 writes (structured QoS in metadata.yaml).
 BAG_VERSION = 9
@@ -288,7 +288,7 @@ class _StopRequest:
         self.requested = True
 
 
-def _drain(executor: SingleThreadedExecutor, node: RecorderNode) -> None:
+def _drain(executor: Executor, node: RecorderNode) -> None:
     """Record what already reached this process: spin until a short wait delivers nothing."""
     deadline = time.monotonic() + DRAIN_LIMIT_S
     while time.monotonic() < deadline:
@@ -305,7 +305,7 @@ def main(args: list[str] | None = None) -> int:
     signal.signal(signal.SIGINT, stop)
     signal.signal(signal.SIGTERM, stop)
     node: RecorderNode | None = None
-    executor = SingleThreadedExecutor()
+    executor = events_executor()
     try:
         node = RecorderNode()
         executor.add_node(node)

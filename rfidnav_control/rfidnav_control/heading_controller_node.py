@@ -14,6 +14,7 @@ from typing import Any
 from geometry_msgs.msg import Twist
 from rclpy.action import ActionServer, CancelResponse, GoalResponse
 from rclpy.action.server import ServerGoalHandle
+from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.task import Future
 
@@ -130,7 +131,9 @@ class HeadingControllerNode(Node):
 
 
 def main(args: list[str] | None = None) -> int:
-    return run_node(HeadingControllerNode, args)
+    # The goal's execute() is a coroutine awaiting its outcome: that needs SingleThreadedExecutor (see
+    # rfidnav_common.ros.events_executor).
+    return run_node(HeadingControllerNode, args, SingleThreadedExecutor)
 
 
 if __name__ == "__main__":
