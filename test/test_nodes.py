@@ -51,6 +51,7 @@ class Graph:
         rclpy.init(context=self.context, domain_id=domain_id)
         self.executor = SingleThreadedExecutor(context=self.context)
         self.nodes: list[Node] = []
+        self.clients: list[ActionClient] = []
         self.probe = self.add(Node("probe", context=self.context))
         self.logs: list[Log] = []
         self.probe.create_subscription(Log, "/rosout", self.logs.append, ROSOUT_QOS)
@@ -71,10 +72,16 @@ class Graph:
         return [log.msg for log in self.logs if log.name == node_name and all(w in log.msg for w in words)]
 
     def close(self) -> None:
+        """Destroy everything, so no DDS entity outlives the test (the domain goes back to the lease pool):
+        rclpy's destroy_node leaves action clients and servers alive, and the participant lives until the
+        context is destroyed."""
         self.executor.shutdown()
+        for client in self.clients:
+            client.destroy()
         for node in self.nodes:
             node.destroy_node()
         self.context.try_shutdown()
+        self.context.destroy()
 
 
 @pytest.fixture
@@ -115,6 +122,7 @@ class ControllerHarness:
         self.reads_pub = probe.create_publisher(TagReadArray, "/rfid/reads", SENSOR_QOS)
         cmd_sub = probe.create_subscription(Twist, "/cmd_vel", self.commands.append, COMMAND_QOS)
         self.client = ActionClient(probe, FollowTagRoute, "/follow_tag_route")
+        graph.clients.append(self.client)
         graph.spin_until(lambda: self.client.server_is_ready() and self.reads_pub.get_subscription_count() > 0
                          and cmd_sub.get_publisher_count() > 0, "heading_controller's action server and topics")
         # Rounds are stamped on a fixed 25 Hz grid: the node steps on the rounds' own stamps.

@@ -55,6 +55,12 @@ class HeadingControllerNode(Node):
         self.get_logger().info(f"route map '{route_map.name}' with {len(route_map.arrival_tags)} tags; "
                                f"{len(self.params.rules)} fuzzy rules, arrival by {self.params.arrival}")
 
+    def destroy_node(self) -> None:
+        # rclpy's destroy_node leaves waitables alive: without this the action server (and its latched goal
+        # status) outlives the node in a process that goes on, e.g. a test that built the node in-process.
+        self.action_server.destroy()
+        super().destroy_node()
+
     def now_s(self) -> float:
         return self.get_clock().now().nanoseconds * 1e-9
 
