@@ -15,6 +15,9 @@ a best-effort one would not match a reliable subscriber.
 left out so there is one time source); otherwise a recorded /clock is replayed like any topic.
 ``wait_for_subscribers`` holds playback until each named topic has a subscriber -- for a topic of the bag,
 until one is matched to our publisher, so the first message is not published into the void.
+``start_paused`` holds it until ``~/start`` (std_srvs/Trigger) is called as well (``ros2 bag play
+--start-paused``): a test or an orchestrator first readies the graph -- sends the goal a node under test
+must be executing before the first message arrives -- and then starts playback.
 """
 
 from __future__ import annotations
@@ -23,6 +26,7 @@ import sys
 import time
 from collections.abc import Iterator
 from dataclasses import dataclass
+from typing import Any
 
 import rclpy
 from rclpy.clock import Clock, ClockType
@@ -34,6 +38,7 @@ from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPo
 from rclpy.task import Future
 from builtin_interfaces.msg import Time
 from rosgraph_msgs.msg import Clock as ClockMsg
+from std_srvs.srv import Trigger
 
 from rfidnav_bringup.bags import BagInfo, RawMessage, TopicInfo, bag_info, read_raw
 from rfidnav_bringup.errors import BagError, ConfigError
@@ -57,6 +62,7 @@ class PlayerParameters:
     clock_rate_hz: float = param("rate of /clock when clock is true [Hz, wall time]", 100.0)
     start_s: float = param("skip the first seconds of bag time [s]", 0.0)
     wait_for_subscribers: list[str] = param("topics that need a subscriber before playback starts", [])
+    start_paused: bool = param("hold playback until ~/start (std_srvs/Trigger) is called", False)
 
     def validate(self) -> None:
         if not self.bag:
@@ -82,8 +88,9 @@ def publisher_qos(topic: TopicInfo) -> QoSProfile:
 
 
 class PlayerNode(Node):
-    def __init__(self) -> None:
-        super().__init__("player")
+    def __init__(self, **node_options: Any) -> None:
+        """``node_options``: keyword arguments of rclpy's Node (``context``, ``parameter_overrides``), for tests."""
+        super().__init__("player", **node_options)
         self.params: PlayerParameters = declare_parameters(self, PlayerParameters)
         self.info: BagInfo = bag_info(self.params.bag)
         self.done: Future = Future()
@@ -112,6 +119,8 @@ class PlayerNode(Node):
             self.get_logger().warning(f"start_s {self.params.start_s} is past the bag's end "
                                       f"({self.info.duration_s:.3f} s): nothing to play")
         self.waiting_for = list(self.params.wait_for_subscribers)
+        self.paused = self.params.start_paused
+        self.create_service(Trigger, "~/start", self.on_start)
         self.messages: Iterator[RawMessage] | None = None
         self.pending: RawMessage | None = None
         self.wall_t0 = 0.0
@@ -119,6 +128,8 @@ class PlayerNode(Node):
         self.published = 0
         self.tick_timer = self.create_timer(min(TICK_S, 1.0 / self.params.clock_rate_hz), self.tick,
                                             clock=Clock(clock_type=ClockType.STEADY_TIME))
+        if self.paused:
+            self.get_logger().info("paused until ~/start is called")
         if self.waiting_for:
             self.get_logger().info(f"waiting for subscribers on {', '.join(self.waiting_for)}")
         self.get_logger().info(f"playing {self.params.bag}: {len(self.topic_publishers)} topics, "
@@ -132,6 +143,16 @@ class PlayerNode(Node):
         if publisher is not None:  # matched to our publisher, not merely present in the graph
             return publisher.get_subscription_count() > 0
         return self.count_subscribers(topic) > 0
+
+    def on_start(self, _request: Trigger.Request, response: Trigger.Response) -> Trigger.Response:
+        if self.paused:
+            self.paused = False
+            self.get_logger().info("started")
+        response.success = True
+        response.message = ("playing" if self.messages is not None else
+                            f"waiting for subscribers on {', '.join(self.waiting_for)}" if self.waiting_for else
+                            "starting")
+        return response
 
     # -- playback ---------------------------------------------------------------------------------------
 
@@ -160,6 +181,8 @@ class PlayerNode(Node):
             self.finish(1)
 
     def play_due(self) -> None:
+        if self.paused:
+            return
         if self.waiting_for:
             self.waiting_for = [t for t in self.waiting_for if not self.has_subscriber(t)]
             if self.waiting_for:
