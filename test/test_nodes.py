@@ -23,7 +23,13 @@ from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.serialization import serialize_message
+from rosbags.rosbag2 import StoragePlugin, Writer
+from rosgraph_msgs.msg import Clock as ClockMsg
+from std_srvs.srv import Trigger
 
+from rfidnav_bringup.bags import message_definition
+from rfidnav_bringup.player_node import PlayerNode
 from rfidnav_bringup.processes import DomainLease
 from rfidnav_common.geometry import yaw_to_quaternion
 from rfidnav_common.ros import COMMAND_QOS, SENSOR_QOS, time_msg
@@ -297,3 +303,35 @@ def test_reader_sim_publishes_one_round_per_period_on_the_ground_truth_clock(gra
     mean = sum(differences) / len(differences)
     assert 0.25 < mean < 0.55, differences
     assert reader.get_name() == "rfid_reader_sim"
+
+
+# ------------------------------------------------------------------------------------------------- player
+
+def test_player_holds_playback_until_started(graph: Graph, tmp_path: Path) -> None:
+    bag = tmp_path / "bag"
+    writer = Writer(bag, version=9, storage_plugin=StoragePlugin.MCAP)
+    writer.open()
+    definition, rihs01 = message_definition("rosgraph_msgs/msg/Clock")
+    connection = writer.add_connection("/clock", "rosgraph_msgs/msg/Clock", msgdef=definition, rihs01=rihs01)
+    stamps_ns = [1_000_000_000 + 10_000_000 * k for k in range(5)]
+    for stamp_ns in stamps_ns:
+        writer.write(connection, stamp_ns, serialize_message(ClockMsg(clock=time_msg(stamp_ns * 1e-9))))
+    writer.close()
+
+    player = graph.add(PlayerNode(context=graph.context, parameter_overrides=[
+        Parameter("bag", value=str(bag)), Parameter("start_paused", value=True)]))
+    received: list[ClockMsg] = []
+    clock_sub = graph.probe.create_subscription(ClockMsg, "/clock", received.append, SENSOR_QOS)
+    start = graph.probe.create_client(Trigger, "/player/start")
+    graph.spin_until(lambda: clock_sub.get_publisher_count() > 0 and start.service_is_ready(),
+                     "the player's /clock and ~/start")
+    for _ in range(20):   # ~20 ticks of the player's 5 ms timer: playback would be over by now
+        graph.executor.spin_once(timeout_sec=0.05)
+    assert not received and player.published == 0 and not player.done.done(), "played while paused"
+
+    answer = start.call_async(Trigger.Request())
+    graph.spin_until(lambda: answer.done() and player.done.done() and len(received) == len(stamps_ns),
+                     "playback of the 5 messages after ~/start")
+    assert answer.result().success
+    assert [m.clock.sec * 1_000_000_000 + m.clock.nanosec for m in received] == stamps_ns
+    assert player.done.result() == 0
