@@ -80,6 +80,42 @@ def test_single_tag_route_finishes_on_its_floor_tag():
     assert route.step(0.08, [floor_read("F2")]).mode == "finished"
 
 
+def floor_read_at(tag_id: str, range_m: float) -> TagObservation:
+    return TagObservation(tag_id, 3, float(round_trip_phase(range_m, FREQUENCY_HZ)), -50.0, FREQUENCY_HZ)
+
+
+def test_closest_approach_arrival_waits_for_the_floor_range_minimum_while_slowing_down():
+    """The floor antenna passes 1 cm beside floor tag F1, 5 cm above it; arrival comes once the range has
+    grown a millimetre past its minimum (about 1 cm of travel here), and from the first floor read the robot
+    runs at the approach fraction."""
+    route = follower(arrival="closest_approach", approach_speed_fraction=0.1)
+    route.start(["C1", "C2"], 0.0)
+    assert route.step(0.04, ceiling_pair("C1", 1.0, 1.0)).linear_mps == pytest.approx(0.2)
+    along = [-0.08 + 0.004 * k for k in range(41)]           # 0.1 m/s over the floor tag, 4 mm per round
+    closest = min(range(len(along)), key=lambda k: abs(along[k]))
+    arrivals = []
+    for k, x in enumerate(along):
+        reads = [floor_read_at("F1", math.hypot(0.05, math.hypot(x, 0.01)))] + ceiling_pair("C1", 1.0, 1.0)
+        command = route.step(0.08 + ROUND_S * k, reads)
+        if command.arrived_index is not None:
+            arrivals.append(k)
+            break
+        assert command.linear_mps == pytest.approx(0.02)
+    assert arrivals and 0.0 < along[arrivals[0]] - along[closest] <= 0.015, (closest, arrivals)
+    assert route.target == "C2"
+    assert route.step(0.08 + ROUND_S * 50, ceiling_pair("C2", 1.0, 1.0)).linear_mps == pytest.approx(0.2)
+
+
+def test_closest_approach_arrival_when_the_floor_tag_falls_silent():
+    """A pass at the edge of the floor antenna's range may end before the range grows: silence after reads
+    is arrival too, or the robot would drive on for ever."""
+    route = follower(arrival="closest_approach")
+    route.start(["C1"], 0.0)
+    for k, range_m in enumerate((0.10, 0.09, 0.085)):
+        assert route.step(ROUND_S * (k + 1), [floor_read_at("F1", range_m)]).mode != "finished"
+    assert route.step(ROUND_S * 4, ceiling_pair("C1", 1.0, 1.0)).mode == "finished"
+
+
 def test_unknown_tag_or_empty_route_in_start_raises():
     route = follower()
     with pytest.raises(ValueError, match="C9"):

@@ -7,6 +7,8 @@ config/params/flc_tuned.yaml is ours.
 
 from __future__ import annotations
 
+import dataclasses
+
 from dataclasses import dataclass
 
 from rfidnav_common.config import param
@@ -32,6 +34,9 @@ class HeadingControllerParameters:
     range_rate_smoothing: float = param("weight of the newest round in the range-rate average (0, 1]", 0.2)
     arrival: str = param("first_read (paper: first read of the floor tag) or closest_approach", "first_read")
     turn_speed_fraction: float = param("forward speed at the largest yaw rate, as a fraction (1 = constant)", 1.0)
+    approach_speed_fraction: float = param(
+        "forward speed once the target's floor tag is heard, as a fraction, so the robot can stop and turn over it "
+        "(1 = constant)", 1.0)
     input_range_rad: float = param("universe of the input dphi: [-r, r] [rad]", 3.141592653589793)
     output_range_rad: float = param("universe of the output dtheta: [-r, r] [rad per round]", 0.1)
     input_set_names: list[str] = param("input fuzzy sets", ["neg", "zero", "pos"])
@@ -62,15 +67,8 @@ class HeadingControllerParameters:
             raise ValueError(str(error)) from None
 
     def follower_settings(self) -> FollowerSettings:
-        return FollowerSettings(
-            forward_speed_mps=self.forward_speed_mps, left_antenna=self.left_antenna,
-            right_antenna=self.right_antenna, floor_antenna=self.floor_antenna,
-            phase_difference_offset_rad=self.phase_difference_offset_rad,
-            max_yaw_rate_radps=self.max_yaw_rate_radps, nominal_round_s=self.nominal_round_s,
-            unheard_timeout_s=self.unheard_timeout_s, filter_rounds=self.filter_rounds,
-            receding_detection=self.receding_detection, receding_rate_mps=self.receding_rate_mps,
-            range_rate_smoothing=self.range_rate_smoothing, arrival=self.arrival,
-            turn_speed_fraction=self.turn_speed_fraction)
+        # Every follower setting is a node parameter of the same name.
+        return FollowerSettings(**{field.name: getattr(self, field.name) for field in dataclasses.fields(FollowerSettings)})
 
     def fuzzy_spec(self) -> FuzzyHeadingSpec:
         return FuzzyHeadingSpec.from_flat(
