@@ -23,11 +23,12 @@ from datetime import datetime, timezone
 from pathlib import Path
 from typing import Any, Callable, Collection, Iterable
 
+import psutil
 import rclpy
 import yaml
 from rclpy.action import ActionClient
 from rclpy.context import Context
-from rclpy.executors import SingleThreadedExecutor
+from rclpy.executors import Executor
 from rclpy.node import Node
 from std_srvs.srv import Trigger
 
@@ -35,7 +36,7 @@ from rfidnav_bringup.bags import message_definition, register_installed_type
 from rfidnav_bringup.errors import BagError, ReadinessError, RfidnavError
 from rfidnav_bringup.processes import DomainLease, NodeProcess, resolve_executable
 from rfidnav_bringup.recorder_node import message_class
-from rfidnav_common.ros import fill_message, interface_class
+from rfidnav_common.ros import events_executor, fill_message, interface_class
 from rfidnav_bringup.scenario import KNOWN_NODES, NodeSpec, Scenario, dump_parameters, injected_parameters, node_parameters
 
 READY_TIMEOUT_S = 90.0
@@ -62,6 +63,9 @@ class MissionOutcome:
     ended_sim_s: float | None = None
     feedback: Any = None
     result: Any = None
+    ended_wall: float | None = None
+    cpu_at_start: dict[str, float | None] = field(default_factory=dict)
+    cpu_at_end: dict[str, float | None] = field(default_factory=dict)
 
 
 @dataclass
@@ -167,7 +171,7 @@ class Orchestrator:
         rclpy.init(context=context, domain_id=lease.domain_id)
         node = Node("rfidnav_orchestrator", context=context,
                     parameter_overrides=[rclpy.parameter.Parameter("use_sim_time", value=True)])
-        executor = SingleThreadedExecutor(context=context)
+        executor = events_executor(context)
         executor.add_node(node)
         previous_handler = signal.signal(signal.SIGINT, self.on_interrupt)
         try:
@@ -198,7 +202,7 @@ class Orchestrator:
         if always or not self.options.quiet:
             print(text, flush=True)
 
-    def spin_until(self, executor: SingleThreadedExecutor, condition, timeout_s: float,
+    def spin_until(self, executor: Executor, condition, timeout_s: float,
                    what: str | Callable[[], str]) -> None:
         """Spin until ``condition()`` holds; fail naming ``what`` (a text, or a function giving it at the
         timeout) and any node that died meanwhile."""
@@ -213,7 +217,7 @@ class Orchestrator:
                                      f"{self.all_last_lines()}")
             executor.spin_once(timeout_sec=0.05)
 
-    def start_graph(self, node: Node, executor: SingleThreadedExecutor) -> None:
+    def start_graph(self, node: Node, executor: Executor) -> None:
         if RECORDER_ROLE in self.processes:
             self.processes[RECORDER_ROLE].start()
             self.spin_until(executor, lambda: "recorder" in node.get_node_names(), READY_TIMEOUT_S,
@@ -261,7 +265,7 @@ class Orchestrator:
         return [topic for topic in topics_to_record(published, self.options.record_exclude, recordable_type)
                 if not any(info.node_name == "recorder" for info in node.get_subscriptions_info_by_topic(topic))]
 
-    def fly_mission(self, node: Node, executor: SingleThreadedExecutor) -> None:
+    def fly_mission(self, node: Node, executor: Executor) -> None:
         mission = self.scenario.mission
         goal = self.action_type.Goal()
         fill_message(goal, mission.goal, f"{self.scenario.path}: mission.goal")
@@ -277,6 +281,7 @@ class Orchestrator:
             detail = f"\n{self.processes[role].last_lines(5)}" if role else ""
             raise ReadinessError(f"goal rejected by {mission.action}{detail}")
         result_future = handle.get_result_async()
+        self.outcome.cpu_at_start = self.cpu_seconds()
         wall_limit = mission.timeout_s / self.options.rtf * 3.0 + 60.0
         while not result_future.done():
             executor.spin_once(timeout_sec=0.05)
@@ -292,6 +297,8 @@ class Orchestrator:
                     executor.spin_once(timeout_sec=0.05)
                 break
         self.outcome.ended_sim_s = sim_seconds(node)
+        self.outcome.ended_wall = time.monotonic()
+        self.outcome.cpu_at_end = self.cpu_seconds()
         if result_future.done():
             result = result_future.result().result
             self.outcome.result = result
@@ -308,6 +315,28 @@ class Orchestrator:
         milestone = getattr(feedback, "target_index", None) != getattr(self, "last_target_index", None)
         self.last_target_index = getattr(feedback, "target_index", None)
         self.progress.show(f"[{self.scenario.name}] {text}", milestone)
+
+    def cpu_seconds(self) -> dict[str, float | None]:
+        """CPU time so far of each node process and of this orchestrator (the mission's action client)."""
+        own = psutil.Process().cpu_times()
+        return {**{role: p.cpu_seconds() for role, p in self.processes.items()},
+                "orchestrator": own.user + own.system}
+
+    def mission_cpu(self) -> dict[str, Any] | None:
+        """CPU used by the graph while the mission ran, per process and in total, as a percentage of one core.
+
+        A process that exited or restarted during the mission has no figure (it is left out of the total)."""
+        outcome = self.outcome
+        if outcome.ended_wall is None or outcome.started_wall is None or not outcome.cpu_at_end:
+            return None
+        wall_s = outcome.ended_wall - outcome.started_wall
+        used = {role: round(end - start, 3) if None not in (start, end) and end >= start else None
+                for role in outcome.cpu_at_end
+                for start, end in [(outcome.cpu_at_start.get(role), outcome.cpu_at_end[role])]}
+        total = sum(value for value in used.values() if value is not None)
+        return {"mission_wall_s": round(wall_s, 3), "cores": psutil.cpu_count(), "process_cpu_s": used,
+                "graph_cpu_s": round(total, 3),
+                "graph_cpu_percent_of_one_core": round(100.0 * total / wall_s, 1) if wall_s > 0 else None}
 
     def mission_role(self) -> str | None:
         for role, spec in self.scenario.nodes.items():
@@ -362,9 +391,10 @@ class Orchestrator:
             "seed": self.options.seed,
             "rtf": self.options.rtf,
             "sim_duration_s": sim_duration,
-            "wall_duration_s": round(time.monotonic() - self.outcome.started_wall, 3)
+            "wall_duration_s": round((self.outcome.ended_wall or time.monotonic()) - self.outcome.started_wall, 3)
             if self.outcome.started_wall else None,
             "metrics": metrics,
+            "cpu": self.mission_cpu(),
             "nodes": {role: {"restarts": p.restarts, "exit_code": p.exit_code} for role, p in self.processes.items()},
             "bag": str(bag if bag.exists() else self.run_dir),
             "run_dir": str(self.run_dir),
@@ -424,6 +454,9 @@ def print_summary(summary: RunSummary) -> None:
     rows += [(key, f"{value:.4f}" if isinstance(value, float) else value) for key, value in document["metrics"].items()]
     rows += [(f"node {role}", f"exit {info['exit_code']}, restarts {info['restarts']}")
              for role, info in document["nodes"].items()]
+    if cpu := document.get("cpu"):
+        rows.append(("graph CPU in mission", f"{cpu['graph_cpu_percent_of_one_core']}% of one core "
+                                             f"({cpu['cores']} cores) over {cpu['mission_wall_s']} s"))
     rows += [("bag", document["bag"]), ("summary", str(summary.run_dir / "summary.json"))]
     width = max(len(str(key)) for key, _ in rows)
     for key, value in rows:

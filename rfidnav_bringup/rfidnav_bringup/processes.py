@@ -17,6 +17,8 @@ from importlib import metadata
 from pathlib import Path
 from typing import IO
 
+import psutil
+
 from rfidnav_bringup.errors import LaunchError
 
 RUN_DOMAINS = range(51, 102)   # 1-50 are left to test sessions; 0-101 avoid the ephemeral port range
@@ -134,6 +136,16 @@ class NodeProcess:
         if not self.wait(grace_s):
             self.signal(signal.SIGKILL)
             self.wait(5.0)
+
+    def cpu_seconds(self) -> float | None:
+        """User + system CPU time of the running process (None once it has exited)."""
+        if not self.running:
+            return None
+        try:
+            times = psutil.Process(self.popen.pid).cpu_times()
+        except psutil.Error:
+            return None
+        return times.user + times.system
 
     def last_lines(self, count: int = 12) -> str:
         try:

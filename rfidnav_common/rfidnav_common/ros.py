@@ -9,6 +9,7 @@ import typing
 from typing import Any, Callable
 
 import rclpy
+from rclpy.context import Context
 from builtin_interfaces.msg import Time
 from rcl_interfaces.msg import ParameterDescriptor
 from rclpy.exceptions import InvalidParameterTypeException
@@ -57,7 +58,7 @@ def declare_parameters(node: Node, cls: type) -> Any:
     return parameters_from_mapping(cls, values, source)
 
 
-def events_executor() -> Executor:
+def events_executor(context: Context | None = None) -> Executor:
     """rclpy's C++ EventsExecutor: about a third of SingleThreadedExecutor's CPU per callback, which is what
     lets five Python processes share two cores at RTF 5.
 
@@ -65,7 +66,7 @@ def events_executor() -> Executor:
     Future: in rclpy 7.1 an awaiting task is re-queued at once, so it -- and ``spin()`` or
     ``spin_until_future_complete()`` -- busy-loops a core. Nodes with ``async`` callbacks use
     SingleThreadedExecutor, which polls pending tasks only when something else wakes it."""
-    return EventsExecutor()
+    return EventsExecutor(context=context)
 
 
 def run_node(make_node: Callable[[], Node], args: list[str] | None = None,
