@@ -9,6 +9,7 @@ run`` only by the DDS graph's latency. ``./rfidnav reproduce flc`` runs hundreds
 from __future__ import annotations
 
 import math
+from collections import deque
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -18,7 +19,7 @@ from rfidnav_common.config import node_parameter_values, parameters_from_mapping
 from rfidnav_common.seeding import rng_for
 from rfidnav_control.fuzzy import FuzzyHeadingController
 from rfidnav_control.parameters import HeadingControllerParameters
-from rfidnav_control.tag_route import TagRouteFollower, observe
+from rfidnav_control.tag_route import Command, TagRouteFollower, observe
 from rfidnav_sim.kinematics import BaseLimits, DiffDriveBase, OdometryDrift, Pose2D
 from rfidnav_sim.parameters import ReaderParameters, RobotSimParameters
 from rfidnav_sim.rfid_model import ReaderSimulator
@@ -59,7 +60,12 @@ def tag_points(scenario: Scenario, route: list[str]) -> np.ndarray:
 
 
 def run_tag_route(scenario: Scenario, controller: HeadingControllerParameters, seed: int,
-                  reader: ReaderParameters | None = None, timeout_s: float | None = None) -> RouteRun:
+                  reader: ReaderParameters | None = None, timeout_s: float | None = None,
+                  command_delay_s: float = 0.0) -> RouteRun:
+    """One run of the scenario's route, in-process and in lockstep.
+
+    ``command_delay_s`` applies each command that much sim time after the round it answers: the latency of
+    reads -> controller -> /cmd_vel over DDS, which at a high RTF on a loaded machine spans several rounds."""
     robot: RobotSimParameters = role_parameters(scenario, "robot_sim", seed)
     reader = reader or role_parameters(scenario, "rfid_reader_sim", seed)
     world = scenario.world
@@ -82,8 +88,12 @@ def run_tag_route(scenario: Scenario, controller: HeadingControllerParameters, s
     round_period_s = 1.0 / reader.rate_hz
     next_round_s = 0.0
     times, positions, arrivals = [0.0], [(base.truth.x, base.truth.y)], []
+    pending: deque[tuple[float, Command]] = deque()
     success, message, step, now = False, "timeout", 0, 0.0
     while now < limit_s:
+        while pending and pending[0][0] <= step * robot.step_s + 1e-9:
+            delayed = pending.popleft()[1]
+            base.set_command(delayed.linear_mps, delayed.angular_radps)
         base.step(robot.step_s)
         step += 1
         if step % steps_per_sample:
@@ -98,7 +108,7 @@ def run_tag_route(scenario: Scenario, controller: HeadingControllerParameters, s
         command = follower.step(now, [o for o in map(observe, reads) if o is not None])
         if command.arrived_index is not None:
             arrivals.append(now)
-        base.set_command(command.linear_mps, command.angular_radps)
+        pending.append((now + command_delay_s, command))
         if command.failure:
             message = command.failure
             break
