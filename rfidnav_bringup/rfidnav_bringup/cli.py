@@ -25,6 +25,16 @@ def key_value(text: str) -> tuple[str, str]:
     return role, value
 
 
+def float_list(text: str) -> list[float]:
+    try:
+        values = [float(part) for part in text.split(",")]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected comma-separated numbers, got '{text}'") from None
+    if not all(math.isfinite(value) and value > 0 for value in values):
+        raise argparse.ArgumentTypeError(f"expected positive numbers, got '{text}'")
+    return values
+
+
 def add_run_options(parser: argparse.ArgumentParser, default_rtf: float) -> None:
     parser.add_argument("--rtf", type=float, default=default_rtf, help="real-time factor (sim s per wall s)")
     parser.add_argument("--seed", type=int, default=1, help="run seed (every node derives its own)")
@@ -70,9 +80,15 @@ def parser() -> argparse.ArgumentParser:
     reproduce.add_argument("--out", type=Path, default=WORKSPACE / "bags" / "reproduce")
     reproduce.add_argument("--json", action="store_true")
     bench = verbs.add_parser("bench", help="performance benchmarks (JSON figures)")
-    bench.add_argument("name", choices=["flc"])
+    bench.add_argument("name", choices=["flc", "rtf"],
+                       help="flc: fuzzy fast path vs scikit-fuzzy; rtf: a scenario over DDS at rising RTF")
     bench.add_argument("--json", action="store_true")
-    bench.add_argument("--evaluations", type=int, default=2000)
+    bench.add_argument("--evaluations", type=int, default=2000, help="flc: evaluations per timing")
+    bench.add_argument("--scenario", default="hallway", help="rtf: the scenario to run")
+    bench.add_argument("--rtfs", type=float_list, default=[1.0, 2.0, 3.0, 5.0, 8.0], help="rtf: e.g. 1,2,5")
+    bench.add_argument("--tolerance", type=float, default=0.10, help="rtf: allowed RMSE growth over RTF 1")
+    bench.add_argument("--seed", type=int, default=1)
+    bench.add_argument("--out", type=Path, default=WORKSPACE / "bags" / "bench_rtf")
     return top
 
 
@@ -193,6 +209,8 @@ def verb_reproduce(args) -> int:
 
 
 def verb_bench(args) -> int:
+    if args.name == "rtf":
+        return bench_rtf(args)
     from rfidnav_control.fuzzy import benchmark
 
     figures = benchmark(evaluations=args.evaluations)
@@ -202,6 +220,15 @@ def verb_bench(args) -> int:
         print(f"fuzzy controller per evaluation: scikit-fuzzy {figures['reference_us']:.1f} us, "
               f"fast path {figures['fast_us']:.2f} us, speed-up {figures['speedup']:.0f}x")
     return 0
+
+
+def bench_rtf(args) -> int:
+    from rfidnav_bringup.rtf_sweep import highest_usable_rtf, report, sweep
+    from rfidnav_bringup.scenario import load_scenario
+
+    rows = sweep(load_scenario(args.scenario), args.rtfs, args.seed, args.out)
+    print(report(args.scenario, rows, args.tolerance, args.json))
+    return 0 if highest_usable_rtf(rows, args.tolerance) else 1
 
 
 VERBS = {"setup": verb_setup, "demo": verb_demo, "test": verb_test, "run": verb_run, "replay": verb_replay,
