@@ -130,9 +130,11 @@ def run_all(seeds: int) -> dict[tuple[str, str], list[RouteRun]]:
     todo = jobs(seeds)
     results: dict[tuple[str, str], list[RouteRun]] = {}
     started = time.monotonic()
-    # fork: workers inherit the imported packages (spawn would re-import them for seconds); this
-    # verb initialises no ROS context, so there is no DDS state to duplicate.
-    with multiprocessing.get_context("fork").Pool(WORKERS) as pool:
+    # forkserver, not fork: the caller may hold DDS threads (the test suite's own rclpy contexts), and a
+    # forked copy of those can hang; the server imports this module once and forks the workers from it.
+    context = multiprocessing.get_context("forkserver")
+    context.set_forkserver_preload([__name__])
+    with context.Pool(WORKERS) as pool:
         for done, (params, run) in enumerate(pool.imap_unordered(run_one, todo), start=1):
             results.setdefault((params, run.scenario), []).append(run)
             progress(f"reproduce flc: {done}/{len(todo)} runs ({params} {run.scenario} seed {run.seed}: "
