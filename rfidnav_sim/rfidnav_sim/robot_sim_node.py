@@ -56,7 +56,6 @@ class RobotSimNode(Node):
         period = max(p.step_s / p.rtf, 0.01)
         self.create_timer(period, self.on_tick, clock=Clock(clock_type=ClockType.STEADY_TIME))
         self.markers_pub.publish(world_markers(self.world, self.sim_time_msg()))
-        self.publish_clock()
         self.get_logger().info(
             f"world '{self.world.name}' with {len(self.world.tags)} tags; step {p.step_s} s at RTF {p.rtf}"
             + (" (paused until ~/start)" if p.start_paused else ""))
