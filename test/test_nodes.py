@@ -131,8 +131,9 @@ class ControllerHarness:
         graph.clients.append(self.client)
         graph.spin_until(lambda: self.client.server_is_ready() and self.reads_pub.get_subscription_count() > 0
                          and cmd_sub.get_publisher_count() > 0, "heading_controller's action server and topics")
-        # Rounds are stamped on a fixed 25 Hz grid: the node steps on the rounds' own stamps.
-        self.stamp_s = self.node.get_clock().now().nanoseconds * 1e-9
+        # Rounds are stamped on a fixed 25 Hz grid: the node steps on the rounds' own stamps. A small origin
+        # keeps the round time exact in float seconds (at an epoch time it is off by ~1e-7 s).
+        self.stamp_s = 100.0
         self.sent_rounds = 0
 
     def send_goal(self, tag_ids: list[str]):

@@ -16,9 +16,11 @@ give bit-identical commands. What scheduling does change is *which* rounds each 
   fill up (the replay sees one or two more rounds, so the two lists are aligned on their ends: both end on
   the round where the last floor tag is reached -- its first read or the closest approach in its phase --
   a function of the recorded reads alone);
-* a round lost under load by the recorded controller, the recorder or the replayed controller (reliable,
-  but keep-last 100 for the controllers and 1000 for the recorder): the lists shift by one there and the
-  few commands whose filter window holds that round differ.
+* a round lost under load, by the recorded controller or the recorder, or in the replay (reliable, but the
+  publishers and the controller keep the last 100 messages: a process stalled for longer than that loses
+  some): the lists shift by one there and the few commands whose filter window holds that round differ.
+  Losses in the replay are visible (fewer commands than the bag has rounds), so such a replay is run once
+  more; with every round delivered the node must send exactly what its core computes in-process on them.
 
 So the comparison is the longest common subsequence of the two command lists (drift of at most BAND commands
 between them), two commands being equal when linear.x and angular.z both agree within TOLERANCE, and it
@@ -26,8 +28,9 @@ must cover MIN_MATCHED_FRACTION of the recorded commands. Measured on a busy 2-c
 replay matches 100% of ~1150 commands, while a regression changes nearly every command: a 2% lower fuzzy
 output gain leaves 0.5% of the commands within the tolerance, the paper's parameter set 0.2% (it also arrives
 ~100 rounds earlier), another turn_speed_fraction (angular.z unchanged) 0.4%, a 4-round filter 2-3%. The last
-test checks that on every run, with the controller's core in-process. (The receding-target guard rarely acts
-on this route: switching it off usually changes nothing.)
+test checks that on every run, with the controller's core in-process. Not reliably caught: a change confined
+to the creep over the floor tags (approach_speed_fraction alone leaves 83-92% of the commands unchanged), nor
+one to the receding-target guard or nominal_round_s, which rarely act on this route.
 """
 
 from __future__ import annotations
@@ -38,6 +41,7 @@ import os
 import subprocess
 import sys
 import time
+import warnings
 from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
@@ -69,10 +73,13 @@ RECORD_RTF = 3.0          # the demo's: a busy 2-core machine keeps the closed l
 PLAYBACK_RATE = 6.0       # bag seconds per wall second: ~8 s for the ~46 s run; 150 rounds/s
 TOLERANCE = 1e-6          # [rad/s and m/s]: identical rounds give identical floats; a 5% lower fuzzy gain
                           # moves the median angular.z by ~7e-3 rad/s
-BAND = 20                 # most commands by which the two lists may drift apart (lost rounds)
-# ~55 of ~1150 commands may differ: the filter filling at the start (a few), and each round lost on one side
-# costs about a filter length; every changed controller tried matches less than 4%.
-MIN_MATCHED_FRACTION = 0.95
+BAND = 40                 # most commands by which the two lists may drift apart (lost rounds)
+REPLAY_ATTEMPTS = 2       # a replay that lost rounds in transit is run once more
+# ~115 of ~1150 commands may differ. The filter filling at the start costs a few; a round lost on either side
+# costs about a filter length: ~6 commands, up to ~50 while flc_tuned creeps over a floor tag and averages
+# 10x longer (offline, 7 rounds dropped at random leave 90-97%, 10 leave 89-96%). Every changed controller
+# tried matches at most 4%, except one that changes only the creep over the floor tags (83-92%).
+MIN_MATCHED_FRACTION = 0.90
 WAIT_S = 60.0             # process start-up and DDS discovery on a loaded machine
 Command = tuple[float, float]   # (linear.x [m/s], angular.z [rad/s])
 
@@ -247,17 +254,40 @@ def test_replayed_controller_reproduces_the_recorded_cmd_vel(recorded_run: Path,
     summary = json.loads((recorded_run / "summary.json").read_text())
     assert summary["success"], summary["message"]
     recorded = recorded_commands(recorded_run)
-    replay = replay_controller(recorded_run, tmp_path)
+    rounds, route = recorded_rounds(recorded_run), recorded_route(recorded_run)
+    # What the node must send when it gets every round of the bag: its core, in-process, on those rounds.
+    ideal = core_commands(rounds, route, run_parameters(recorded_run))
+    for attempt in range(1, REPLAY_ATTEMPTS + 1):
+        replay = replay_controller(recorded_run, tmp_path / f"attempt_{attempt}")
+        # Fewer commands than rounds: the player or the controller stalled for longer than their keep-last
+        # queues hold (100 rounds, 0.67 s at 6x) and rounds were lost in transit. That is the machine, not
+        # the controller; such a replay says little, so it is run again.
+        if len(replay.commands) >= len(ideal):
+            break
+        warnings.warn(f"replay attempt {attempt} lost {len(ideal) - len(replay.commands)} of {len(ideal)} rounds "
+                      "in transit (a process stalled)")
 
-    route = recorded_route(recorded_run)
     assert replay.result.success, replay.result.message
     # The recorded run reached every tag (its goal succeeded); so must the replay, on the same rounds.
     assert replay.result.tags_reached == len(route), replay.result
-    assert abs(len(replay.commands) - len(recorded)) <= BAND, describe(recorded, replay.commands)
+    if len(replay.commands) == len(ideal):
+        # Every round arrived: the node over DDS is exactly its core (no arrival-time or clock dependence).
+        assert matched_commands(ideal, replay.commands) == len(ideal), describe(ideal, replay.commands)
     matched = matched_commands(recorded, replay.commands)
     assert matched >= MIN_MATCHED_FRACTION * len(recorded), (
         f"only {matched} of {len(recorded)} recorded commands replayed within {TOLERANCE:g}\n"
-        + describe(recorded, replay.commands))
+        + describe(recorded, replay.commands) + "\n" + losses(rounds, ideal, replay.commands))
+
+
+def losses(rounds: list[tuple[float, list[TagObservation]]], ideal: Sequence[Command],
+           replayed: Sequence[Command]) -> str:
+    """Where rounds went missing, to tell lost messages from a changed controller in a failure message."""
+    steps = sorted(b[0] - a[0] for a, b in zip(rounds, rounds[1:]))
+    period = steps[len(steps) // 2]
+    in_bag = sum(round(step / period) - 1 for step in steps if step > 1.5 * period)
+    return (f"the bag misses {in_bag} rounds (lost by the recorder); the replay has {len(ideal) - len(replayed)} "
+            f"fewer commands than the bag has rounds (lost in the replay) and matches "
+            f"{matched_commands(ideal, replayed)} of the {len(ideal)} commands the core gives on the bag's rounds")
 
 
 # ------------------------------------------------------------------------------------------ can it fail?
@@ -294,6 +324,11 @@ def core_commands(rounds: list[tuple[float, list[TagObservation]]], route: list[
     return commands
 
 
+def nudged(fraction: float, step: float) -> float:
+    """Another value of a fraction in [0, 1]."""
+    return fraction + step if fraction + step <= 1.0 else fraction - step
+
+
 def test_the_comparison_catches_a_changed_controller(recorded_run: Path) -> None:
     """The tolerance and fraction above, applied to the recorded rounds run through the controller's core with
     the run's parameters (must match) and with changed ones (must not)."""
@@ -309,8 +344,8 @@ def test_the_comparison_catches_a_changed_controller(recorded_run: Path) -> None
         "flc_paper parameters": paper,
         "fuzzy output gain x0.9": dataclasses.replace(
             tuned, output_set_points=[0.9 * p for p in tuned.output_set_points]),
-        "turn_speed_fraction +0.2 (angular.z unchanged)": dataclasses.replace(
-            tuned, turn_speed_fraction=min(1.0, tuned.turn_speed_fraction + 0.2)),
+        "turn_speed_fraction (angular.z unchanged)": dataclasses.replace(
+            tuned, turn_speed_fraction=nudged(tuned.turn_speed_fraction, 0.2)),
         "filter_rounds +1": dataclasses.replace(tuned, filter_rounds=tuned.filter_rounds + 1),
     }
     for name, params in changed.items():
