@@ -40,7 +40,7 @@ from visualization_msgs.msg import Marker, MarkerArray
 
 from rfidnav_bringup.bags import bag_info, format_bag_info, message_definition, read_messages, read_raw, typestore
 from rfidnav_bringup.errors import BagError
-from rfidnav_bringup.recorder_node import message_class
+from rfidnav_common.ros import message_class
 from rfidnav_common.ros import LATCHED_QOS
 from rfidnav_msgs.action import FollowTagRoute
 from rfidnav_msgs.msg import TagReadArray, TagReading

@@ -42,7 +42,7 @@ from std_srvs.srv import Trigger
 
 from rfidnav_bringup.bags import BagInfo, RawMessage, TopicInfo, bag_info, read_raw
 from rfidnav_bringup.errors import BagError, ConfigError
-from rfidnav_bringup.recorder_node import message_class
+from rfidnav_common.ros import message_class
 from rfidnav_common.ros import declare_parameters
 from rfidnav_common.config import param
 from rfidnav_common.errors import RfidnavError

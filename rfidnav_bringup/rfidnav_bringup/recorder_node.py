@@ -23,7 +23,6 @@ shut the context down at once, which would drop the messages still queued in the
 
 from __future__ import annotations
 
-import importlib
 import signal
 import struct
 import sys
@@ -47,7 +46,7 @@ from rfidnav_bringup.bags import message_definition, register_installed_type
 from rfidnav_bringup.errors import BagError, ConfigError
 from rfidnav_common.config import param
 from rfidnav_common.errors import RfidnavError
-from rfidnav_common.ros import declare_parameters, events_executor
+from rfidnav_common.ros import declare_parameters, events_executor, message_class
 
 # rosbag2 metadata version 9 is what Jazzy's rosbag2 writes (structured QoS in metadata.yaml).
 BAG_VERSION = 9
@@ -74,27 +73,14 @@ class RecorderParameters:
             raise ValueError(f"discovery_period_s: must be > 0, got {self.discovery_period_s}")
 
 
-def message_class(msgtype: str) -> type | None:
-    """The generated Python class of ``pkg/namespace/Name``, or None when it is not installed.
-
-    Action-derived types (``X_FeedbackMessage``) are not exported by ``pkg.action``; they live in the private
-    module of their action (``pkg.action._x``), which each exported class names as its ``__module__``."""
-    parts = msgtype.split("/")
-    if len(parts) != 3:
-        return None
-    package, namespace, name = parts
-    try:
-        module = importlib.import_module(f"{package}.{namespace}")
-    except ImportError:
-        return None
-    found = getattr(module, name, None)
-    if found is None:
-        for exported in vars(module).values():
-            private = sys.modules.get(getattr(exported, "__module__", ""))
-            found = getattr(private, name, None) if private is not None else None
-            if found is not None:
-                break
-    return found if isinstance(found, type) else None
+def recordable_definition(msgtype: str) -> tuple[str, str]:
+    """(definition, RIHS01 hash) that the bag embeds for ``msgtype``; a BagError saying why a topic of this
+    type cannot be recorded (no Python class installed, no definition to make the bag self-describing)."""
+    if message_class(msgtype) is None:
+        raise BagError(f"its type {msgtype} has no Python message module installed")
+    if not register_installed_type(msgtype):
+        raise BagError(f"no message definition found for {msgtype} (needed to make the bag self-describing)")
+    return message_definition(msgtype)
 
 
 def _qos_time(duration: Any) -> QosTime:
@@ -189,18 +175,10 @@ class RecorderNode(Node):
         msgtype = types[0]
         if len(types) > 1:
             self.get_logger().warning(f"{topic} is published with several types {types}; recording {msgtype}")
-        cls = message_class(msgtype)
-        if cls is None:
-            self.skip(topic, f"its type {msgtype} has no Python message module installed")
-            return
         try:
-            known = register_installed_type(msgtype)
-            definition, rihs01 = message_definition(msgtype) if known else ("", "")
+            definition, rihs01 = recordable_definition(msgtype)
         except BagError as error:
             self.skip(topic, str(error))
-            return
-        if not known:
-            self.skip(topic, f"no message definition found for {msgtype} (needed to make the bag self-describing)")
             return
         offered = self.offered_profiles(topic)
         if not offered:  # the publisher left between the count and the query: look again next poll
@@ -215,7 +193,7 @@ class RecorderNode(Node):
             self.skip(topic, f"the bag refused the connection: {error}")
             return
         self.connections[topic] = connection
-        self.subscribe(topic, cls, qos)
+        self.subscribe(topic, message_class(msgtype), qos)
         self.get_logger().info(f"recording {topic} [{msgtype}] ({_describe(qos)})")
 
     def adapt(self, topic: str) -> None:

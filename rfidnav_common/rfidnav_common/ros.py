@@ -64,8 +64,8 @@ def events_executor(context: Context | None = None) -> Executor:
 
     Spin it only with bounded ``spin_once`` calls (see run_node) and never give it a coroutine that awaits a
     Future: in rclpy 7.1 an awaiting task is re-queued at once, so it -- and ``spin()`` or
-    ``spin_until_future_complete()`` -- busy-loops a core. Nodes with ``async`` callbacks use
-    SingleThreadedExecutor, which polls pending tasks only when something else wakes it."""
+    ``spin_until_future_complete()`` -- busy-loops a core (heading_controller therefore runs a goal's execute
+    callback only once the outcome is known). Pass SingleThreadedExecutor to run_node for such a node."""
     return EventsExecutor(context=context)
 
 
@@ -106,19 +106,42 @@ def seconds_of(stamp: Time) -> float:
     return stamp.sec + stamp.nanosec * 1e-9
 
 
+def message_class(type_name: str) -> type | None:
+    """The generated Python class of ``pkg/kind/Name`` (kind msg, srv or action), or None when it is not
+    installed (rosidl_runtime_py is not among the PyPI wheels).
+
+    Action-derived types (``X_FeedbackMessage``) are not exported by ``pkg.action``; they live in the private
+    module of their action (``pkg.action._x``), which each exported class names as its ``__module__``."""
+    parts = type_name.split("/")
+    if len(parts) != 3:
+        return None
+    package, kind, name = parts
+    try:
+        module = importlib.import_module(f"{package}.{kind}")
+    except ImportError:
+        return None
+    found = getattr(module, name, None)
+    if found is None:
+        for exported in vars(module).values():
+            private = sys.modules.get(getattr(exported, "__module__", ""))
+            found = getattr(private, name, None) if private is not None else None
+            if found is not None:
+                break
+    return found if isinstance(found, type) else None
+
+
 def interface_class(type_name: str) -> type:
-    """The Python class of ``pkg/msg/Name``, ``pkg/srv/Name`` or ``pkg/action/Name`` (rosidl_runtime_py is
-    not among the PyPI wheels). An unknown type is a ConfigError naming it."""
+    """message_class for a configured type (``pkg/Name`` means ``pkg/msg/Name``); an unknown type is a
+    ConfigError naming it."""
     parts = type_name.split("/")
     if len(parts) == 2:
         parts = [parts[0], "msg", parts[1]]
     if len(parts) != 3 or parts[1] not in ("msg", "srv", "action"):
         raise ConfigError(type_name, "", "expected an interface type like pkg/msg/Name or pkg/action/Name")
-    package, kind, name = parts
-    try:
-        return getattr(importlib.import_module(f"{package}.{kind}"), name)
-    except (ImportError, AttributeError):
-        raise ConfigError(type_name, "", "unknown interface type (is its package built and installed?)") from None
+    found = message_class("/".join(parts))
+    if found is None:
+        raise ConfigError(type_name, "", "unknown interface type (is its package built and installed?)")
+    return found
 
 
 def fill_message(message: Any, values: dict[str, Any], where: str) -> Any:
