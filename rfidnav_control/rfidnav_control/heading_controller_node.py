@@ -2,8 +2,12 @@
 
 A thin adapter around TagRouteFollower: every TagReadArray (one inventory round) while a goal is
 active becomes one follower step and one /cmd_vel. Reads with a non-finite number are dropped and
-counted before they reach the controller. The goal's coroutine awaits a future that the reads
-callback (or the supervision timer: cancel, silence) completes, so nothing blocks the executor.
+counted before they reach the controller.
+
+A goal is followed from the moment it is accepted; its execute callback runs only once the outcome is known
+(reached, failed, cancelled), so no coroutine waits in the executor. That keeps the node on rclpy's
+EventsExecutor (see rfidnav_common.ros.events_executor), at the price of the goal status reading ACCEPTED
+rather than EXECUTING while the route is followed.
 """
 
 from __future__ import annotations
@@ -14,9 +18,7 @@ from typing import Any
 from geometry_msgs.msg import Twist
 from rclpy.action import ActionServer, CancelResponse, GoalResponse
 from rclpy.action.server import ServerGoalHandle
-from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
-from rclpy.task import Future
 
 from rfidnav_common.ros import COMMAND_QOS, SENSOR_QOS, declare_parameters, run_node, seconds_of
 from rfidnav_control.fuzzy import FuzzyHeadingController
@@ -30,10 +32,10 @@ from rfidnav_msgs.msg import TagReadArray
 @dataclass
 class ActiveGoal:
     handle: ServerGoalHandle
-    outcome: Future          # set to (state, message): state is succeeded, aborted or canceled
     started_s: float
     last_step_s: float
     tags_reached: int = 0
+    outcome: tuple[str, str] | None = None   # (succeeded | aborted | canceled, message) once concluded
 
 
 class HeadingControllerNode(Node):
@@ -49,8 +51,9 @@ class HeadingControllerNode(Node):
         self.cmd_pub = self.create_publisher(Twist, "/cmd_vel", COMMAND_QOS)
         self.create_subscription(TagReadArray, "/rfid/reads", self.on_reads, SENSOR_QOS)
         self.action_server = ActionServer(
-            self, FollowTagRoute, "/follow_tag_route", execute_callback=self.execute,
-            goal_callback=self.on_goal, cancel_callback=lambda _: CancelResponse.ACCEPT)
+            self, FollowTagRoute, "/follow_tag_route", execute_callback=self.finish,
+            goal_callback=self.on_goal, handle_accepted_callback=self.on_accepted,
+            cancel_callback=lambda _: CancelResponse.ACCEPT)
         self.create_timer(0.1, self.supervise)
         self.get_logger().info(f"route map '{route_map.name}' with {len(route_map.arrival_tags)} tags; "
                                f"{len(self.params.rules)} fuzzy rules, arrival by {self.params.arrival}")
@@ -78,14 +81,21 @@ class HeadingControllerNode(Node):
             return GoalResponse.REJECT
         return GoalResponse.ACCEPT
 
-    async def execute(self, handle: ServerGoalHandle) -> FollowTagRoute.Result:
+    def on_accepted(self, handle: ServerGoalHandle) -> None:
         now = self.now_s()
         self.follower.start(list(handle.request.tag_ids), now)
-        self.active = ActiveGoal(handle, Future(), now, now)
+        self.active = ActiveGoal(handle, now, now)
         self.get_logger().info(f"following {len(handle.request.tag_ids)} tags: {' '.join(handle.request.tag_ids)}")
-        state, message = await self.active.outcome
-        active, self.active = self.active, None
+
+    def conclude(self, state: str, message: str) -> None:
+        """Stop the robot and let the action server run ``finish`` (the execute callback) with the outcome."""
+        self.active.outcome = (state, message)
         self.cmd_pub.publish(Twist())
+        self.active.handle.execute()
+
+    def finish(self, handle: ServerGoalHandle) -> FollowTagRoute.Result:
+        active, self.active = self.active, None
+        state, message = active.outcome
         getattr(handle, {"succeeded": "succeed", "aborted": "abort", "canceled": "canceled"}[state])()
         self.get_logger().info(f"route {state}: {message}")
         return FollowTagRoute.Result(success=state == "succeeded", message=message,
@@ -99,7 +109,7 @@ class HeadingControllerNode(Node):
             self.get_logger().warning(f"dropped reads with non-finite values ({self.dropped_reads} so far)",
                                       throttle_duration_sec=5.0)
         active = self.active
-        if active is None or active.outcome.done():
+        if active is None or active.outcome is not None:
             return
         # The round's own stamp, not arrival time: delivery jitter must not change the commanded yaw rate.
         command = self.follower.step(seconds_of(msg.header.stamp), valid)
@@ -108,9 +118,9 @@ class HeadingControllerNode(Node):
             active.tags_reached = command.arrived_index + 1
         self.publish(command)
         if self.follower.finished:
-            active.outcome.set_result(("succeeded", f"reached all {active.tags_reached} tags"))
+            self.conclude("succeeded", f"reached all {active.tags_reached} tags")
         elif command.failure:
-            active.outcome.set_result(("aborted", command.failure))
+            self.conclude("aborted", command.failure)
 
     def publish(self, command: Command) -> None:
         twist = Twist()
@@ -126,20 +136,18 @@ class HeadingControllerNode(Node):
     def supervise(self) -> None:
         """Cancel requests and a silent reader are noticed here, as no reads may arrive to notice them."""
         active = self.active
-        if active is None or active.outcome.done():
+        if active is None or active.outcome is not None:
             return
         if active.handle.is_cancel_requested:
-            active.outcome.set_result(("canceled", "cancelled by the client"))
+            self.conclude("canceled", "cancelled by the client")
             return
         silent_s = self.now_s() - active.last_step_s
         if silent_s > self.params.unheard_timeout_s:
-            active.outcome.set_result(("aborted", f"no inventory rounds on /rfid/reads for {silent_s:.1f} s"))
+            self.conclude("aborted", f"no inventory rounds on /rfid/reads for {silent_s:.1f} s")
 
 
 def main(args: list[str] | None = None) -> int:
-    # The goal's execute() is a coroutine awaiting its outcome: that needs SingleThreadedExecutor (see
-    # rfidnav_common.ros.events_executor).
-    return run_node(HeadingControllerNode, args, SingleThreadedExecutor)
+    return run_node(HeadingControllerNode, args)
 
 
 if __name__ == "__main__":
