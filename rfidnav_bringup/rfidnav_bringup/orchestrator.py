@@ -32,16 +32,17 @@ from rclpy.executors import Executor
 from rclpy.node import Node
 from std_srvs.srv import Trigger
 
-from rfidnav_bringup.bags import message_definition, register_installed_type
 from rfidnav_bringup.errors import BagError, ReadinessError, RfidnavError
 from rfidnav_bringup.processes import DomainLease, NodeProcess, resolve_executable
-from rfidnav_bringup.recorder_node import message_class
+from rfidnav_bringup.recorder_node import recordable_definition
 from rfidnav_common.ros import events_executor, fill_message, interface_class
 from rfidnav_bringup.scenario import KNOWN_NODES, NodeSpec, Scenario, dump_parameters, injected_parameters, node_parameters
 
 READY_TIMEOUT_S = 90.0
 STOP_GRACE_S = 5.0
 RECORDER_ROLE = "recorder"
+RESEND_ATTEMPTS = 6
+RESEND_TIMEOUT_S = 5.0
 
 
 @dataclass(frozen=True)
@@ -271,22 +272,26 @@ class Orchestrator:
         fill_message(goal, mission.goal, f"{self.scenario.path}: mission.goal")
         self.outcome.started_sim_s = sim_seconds(node)
         self.outcome.started_wall = time.monotonic()
-        send = self.client.send_goal_async(goal, feedback_callback=self.on_feedback)
-        self.spin_until(executor, send.done, READY_TIMEOUT_S, "the goal to be accepted")
-        if self.interrupted:
+        handle = self.send_goal(executor, goal)
+        if handle is None:
             return
-        handle = send.result()
-        if not handle.accepted:
-            role = self.mission_role()
-            detail = f"\n{self.processes[role].last_lines(5)}" if role else ""
-            raise ReadinessError(f"goal rejected by {mission.action}{detail}")
         result_future = handle.get_result_async()
         self.outcome.cpu_at_start = self.cpu_seconds()
+        role = self.mission_role()
+        restarts = self.processes[role].restarts if role else 0
         wall_limit = mission.timeout_s / self.options.rtf * 3.0 + 60.0
         while not result_future.done():
             executor.spin_once(timeout_sec=0.05)
             elapsed_sim = sim_seconds(node) - self.outcome.started_sim_s
             self.check_processes(starting=False)
+            if role and self.processes[role].restarts > restarts and not self.interrupted:
+                # The goal died with the server: give the respawned one the mission again.
+                restarts = self.processes[role].restarts
+                self.say(f"\nre-sending the goal to the restarted {role}", always=True)
+                handle = self.resend_goal(executor, goal, role)
+                if handle is None:
+                    return
+                result_future = handle.get_result_async()
             if self.interrupted or elapsed_sim > mission.timeout_s or \
                     time.monotonic() - self.outcome.started_wall > wall_limit:
                 if not self.interrupted:
@@ -306,6 +311,31 @@ class Orchestrator:
                 and self.outcome.message == "not started"
             if self.outcome.message == "not started":
                 self.outcome.message = getattr(result, "message", "")
+
+    def send_goal(self, executor: Executor, goal: Any, timeout_s: float = READY_TIMEOUT_S):
+        """The accepted goal's handle; None when interrupted; a ReadinessError when it is rejected or unanswered."""
+        send = self.client.send_goal_async(goal, feedback_callback=self.on_feedback)
+        self.spin_until(executor, send.done, timeout_s, "the goal to be accepted")
+        if self.interrupted:
+            return None
+        handle = send.result()
+        if not handle.accepted:
+            role = self.mission_role()
+            detail = f"\n{self.processes[role].last_lines(5)}" if role else ""
+            raise ReadinessError(f"goal rejected by {self.scenario.mission.action}{detail}")
+        return handle
+
+    def resend_goal(self, executor: Executor, goal: Any, role: str):
+        """Send the goal to a respawned server. Until discovery drops the dead server (its DDS lease), the
+        client may count it as available and a request can go unanswered: retry a few times."""
+        self.spin_until(executor, self.client.server_is_ready, READY_TIMEOUT_S, f"the restarted {role}'s action server")
+        for attempt in range(RESEND_ATTEMPTS):
+            try:
+                return self.send_goal(executor, goal, timeout_s=RESEND_TIMEOUT_S)
+            except ReadinessError:
+                if attempt == RESEND_ATTEMPTS - 1:
+                    raise
+        return None
 
     def on_feedback(self, message) -> None:
         feedback = message.feedback
@@ -412,12 +442,9 @@ def topics_to_record(published: Iterable[tuple[str, list[str]]], exclude: Collec
 
 @functools.cache
 def recordable_type(msgtype: str) -> bool:
-    """Whether the recorder can record ``msgtype``: its Python class is installed and its definition is known
-    (the bag embeds it); recorder_node.RecorderNode.add_topic skips a topic of any other type."""
+    """Whether the recorder can record ``msgtype`` (the check its add_topic makes)."""
     try:
-        if message_class(msgtype) is None or not register_installed_type(msgtype):
-            return False
-        message_definition(msgtype)
+        recordable_definition(msgtype)
     except BagError:
         return False
     return True
