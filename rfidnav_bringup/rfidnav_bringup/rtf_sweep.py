@@ -39,7 +39,10 @@ def sweep(scenario: Scenario, rtfs: list[float], seed: int, out_dir: Path) -> li
         raise ConfigError("--rtfs", "", f"must include the reference RTF {REFERENCE_RTF:g}")
     rows = []
     for rtf in sorted(rtfs):
-        summary = Orchestrator(scenario, RunOptions(rtf=rtf, seed=seed, out_dir=out_dir, quiet=True)).run()
+        orchestrator = Orchestrator(scenario, RunOptions(rtf=rtf, seed=seed, out_dir=out_dir, quiet=True))
+        summary = orchestrator.run()
+        if orchestrator.interrupted:   # Ctrl-C stops the sweep, not just the run in progress
+            raise KeyboardInterrupt
         document = summary.document
         cpu = document.get("cpu") or {}
         rows.append(SweepRow(rtf, summary.success, document["metrics"].get("tracking_rmse_m"),
