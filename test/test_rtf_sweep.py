@@ -10,7 +10,7 @@ from rfidnav_bringup.rtf_sweep import SweepRow, highest_usable_rtf, report
 
 
 def row(rtf: float, rmse_cm: float | None, success: bool = True) -> SweepRow:
-    return SweepRow(rtf, success, None if rmse_cm is None else rmse_cm / 100, 40.0 * rtf, 100.0 / rtf, f"run{rtf:g}")
+    return SweepRow(rtf, success, None if rmse_cm is None else rmse_cm / 100, 40.0 * rtf, 100.0 / rtf, (f"run{rtf:g}",))
 
 
 def test_highest_rtf_stops_at_the_first_run_beyond_the_tolerance():

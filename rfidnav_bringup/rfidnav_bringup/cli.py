@@ -85,9 +85,9 @@ def parser() -> argparse.ArgumentParser:
     bench.add_argument("--json", action="store_true")
     bench.add_argument("--evaluations", type=int, default=2000, help="flc: evaluations per timing")
     bench.add_argument("--scenario", default="hallway", help="rtf: the scenario to run")
-    bench.add_argument("--rtfs", type=float_list, default=[1.0, 2.0, 3.0, 5.0, 8.0], help="rtf: e.g. 1,2,5")
+    bench.add_argument("--rtfs", type=float_list, default=[1.0, 3.0, 5.0, 8.0, 12.0], help="rtf: e.g. 1,2,5")
     bench.add_argument("--tolerance", type=float, default=0.10, help="rtf: allowed RMSE growth over RTF 1")
-    bench.add_argument("--seed", type=int, default=1)
+    bench.add_argument("--seeds", type=int, default=3, help="rtf: runs per RTF (seeds 1..N)")
     bench.add_argument("--out", type=Path, default=WORKSPACE / "bags" / "bench_rtf")
     return top
 
@@ -226,7 +226,7 @@ def bench_rtf(args) -> int:
     from rfidnav_bringup.rtf_sweep import highest_usable_rtf, report, sweep
     from rfidnav_bringup.scenario import load_scenario
 
-    rows = sweep(load_scenario(args.scenario), args.rtfs, args.seed, args.out)
+    rows = sweep(load_scenario(args.scenario), args.rtfs, list(range(1, args.seeds + 1)), args.out)
     print(report(args.scenario, rows, args.tolerance, args.json))
     return 0 if highest_usable_rtf(rows, args.tolerance) else 1
 

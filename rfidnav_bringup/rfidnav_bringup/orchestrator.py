@@ -240,10 +240,17 @@ class Orchestrator:
         if clock_roles:
             start = node.create_client(Trigger, f"/{clock_roles[0].name}/start")
             self.spin_until(executor, start.service_is_ready, READY_TIMEOUT_S, "the simulation clock service")
-            future = start.call_async(Trigger.Request())
-            self.spin_until(executor, future.done, READY_TIMEOUT_S, "the simulation clock to start")
-            self.spin_until(executor, lambda: node.get_clock().now().nanoseconds > 0, READY_TIMEOUT_S,
-                            "the first /clock message")
+            # ~/start is idempotent: ask again if the request or its answer was lost (Fast DDS can drop a
+            # service exchange right after service_is_ready()). The clock running is the answer that counts.
+            for attempt in range(RESEND_ATTEMPTS):
+                start.call_async(Trigger.Request())
+                try:
+                    self.spin_until(executor, lambda: node.get_clock().now().nanoseconds > 0, RESEND_TIMEOUT_S,
+                                    "the simulation clock to start (the first /clock message)")
+                    break
+                except ReadinessError:
+                    if attempt == RESEND_ATTEMPTS - 1:
+                        raise
 
     def write_graph(self, node: Node) -> None:
         """graph.json: who publishes and subscribes what once the graph is ready (checked by the tests:
