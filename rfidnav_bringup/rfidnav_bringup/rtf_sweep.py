@@ -96,5 +96,5 @@ def report(scenario: str, rows: list[SweepRow], tolerance: float, as_json: bool)
         lines.append(f"{row.rtf:>5g}  {str(row.success):>7}  {rmse:>8}  {ratio:>8}  {cpu:>6}  {wall:>7}  "
                      f"{' '.join(row.run_dirs)}")
     lines.append(f"highest RTF within {100 * tolerance:.0f}% of the RTF 1 RMSE: "
-                 + (f"{best.rtf:g}, graph CPU {best.cpu_percent_of_one_core}% of one core" if best else "none"))
+                 + (f"{best.rtf:g}, graph CPU {best.cpu_percent_of_one_core:.1f}% of one core" if best else "none"))
     return "\n".join(lines)
