@@ -22,16 +22,14 @@ must be executing before the first message arrives -- and then starts playback.
 
 from __future__ import annotations
 
-import sys
 import time
 from collections.abc import Iterator
 from dataclasses import dataclass
 from typing import Any
 
-import rclpy
 from rclpy.clock import Clock, ClockType
 from rclpy.duration import Duration
-from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.executors import Executor, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.publisher import Publisher
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
@@ -42,10 +40,8 @@ from std_srvs.srv import Trigger
 
 from rfidnav_bringup.bags import BagInfo, RawMessage, TopicInfo, bag_info, read_raw
 from rfidnav_bringup.errors import BagError, ConfigError
-from rfidnav_common.ros import message_class
-from rfidnav_common.ros import declare_parameters
+from rfidnav_common.ros import declare_parameters, message_class, run_node
 from rfidnav_common.config import param
-from rfidnav_common.errors import RfidnavError
 
 TICK_S = 0.005  # the pacing timer's period: the worst lateness of a message [s, wall]
 VOLATILE_DEPTH = 100  # room for a burst of due messages at a high rate before a reliable reader acks
@@ -226,29 +222,17 @@ class PlayerNode(Node):
                                           "last messages")
 
 
-def main(args: list[str] | None = None) -> int:
-    """Jazzy main() of rfidnav_common.ros.run_node, spinning until playback is done (exit code 0)."""
-    rclpy.init(args=args)
-    node: PlayerNode | None = None
-    executor = SingleThreadedExecutor()
-    code = 0
-    try:
-        node = PlayerNode()
-        executor.add_node(node)
-        executor.spin_until_future_complete(node.done)
-        code = node.done.result() if node.done.done() else 0
-        node.wait_for_acknowledgements()
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    except RfidnavError as error:
-        print(f"[FATAL] {error}", file=sys.stderr, flush=True)
-        return 2
-    finally:
-        if node is not None:
-            node.destroy_node()
-        executor.shutdown()
-        rclpy.try_shutdown()
+def spin_until_played(executor: Executor, node: PlayerNode) -> int:
+    """Spin until playback is done; its exit code."""
+    executor.spin_until_future_complete(node.done)
+    code = node.done.result() if node.done.done() else 0
+    node.wait_for_acknowledgements()
     return code
+
+
+def main(args: list[str] | None = None) -> int:
+    # SingleThreadedExecutor: spin_until_future_complete busy-loops rclpy 7.1's EventsExecutor.
+    return run_node(PlayerNode, args, SingleThreadedExecutor, spin_until_played)
 
 
 if __name__ == "__main__":

@@ -25,7 +25,6 @@ from __future__ import annotations
 
 import signal
 import struct
-import sys
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -34,7 +33,7 @@ from typing import Any
 
 import rclpy
 from rclpy.clock import Clock, ClockType
-from rclpy.executors import Executor, ExternalShutdownException
+from rclpy.executors import Executor
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.signals import SignalHandlerOptions
@@ -45,8 +44,7 @@ from rosbags.rosbag2 import StoragePlugin, Writer, WriterError
 from rfidnav_bringup.bags import message_definition, register_installed_type
 from rfidnav_bringup.errors import BagError, ConfigError
 from rfidnav_common.config import param
-from rfidnav_common.errors import RfidnavError
-from rfidnav_common.ros import declare_parameters, events_executor, message_class
+from rfidnav_common.ros import declare_parameters, events_executor, message_class, run_node
 
 # rosbag2 metadata version 9 is what Jazzy's rosbag2 writes (structured QoS in metadata.yaml).
 BAG_VERSION = 9
@@ -245,6 +243,12 @@ class RecorderNode(Node):
     def stop_discovery(self) -> None:
         self.discovery_timer.cancel()
 
+    def destroy_node(self) -> None:
+        try:
+            self.close()
+        finally:
+            super().destroy_node()
+
     def close(self) -> None:
         """Finalise the bag: MCAP summary, then metadata.yaml. Safe to call twice."""
         if self.writer.storage is None:
@@ -276,37 +280,22 @@ def _drain(executor: Executor, node: RecorderNode) -> None:
             return
 
 
-def main(args: list[str] | None = None) -> int:
-    """Same shape as rfidnav_common.ros.run_node, with a graceful stop that drains before closing."""
-    rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
+def spin_until_stopped(executor: Executor, node: RecorderNode) -> int:
+    """Record until SIGINT/SIGTERM (or shutdown), then what already reached this process."""
     stop = _StopRequest()
     signal.signal(signal.SIGINT, stop)
     signal.signal(signal.SIGTERM, stop)
-    node: RecorderNode | None = None
-    executor = events_executor()
-    try:
-        node = RecorderNode()
-        executor.add_node(node)
-        while not stop.requested and rclpy.ok():
-            # Bounded waits: a Python signal handler runs only when control returns from rcl_wait.
-            executor.spin_once(timeout_sec=0.1)
-        node.stop_discovery()
-        _drain(executor, node)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    except RfidnavError as error:
-        print(f"[FATAL] {error}", file=sys.stderr, flush=True)
-        return 2
-    finally:
-        try:
-            if node is not None:
-                node.close()
-        finally:
-            if node is not None:
-                node.destroy_node()
-            executor.shutdown()
-            rclpy.try_shutdown()
+    while not stop.requested and rclpy.ok():
+        # Bounded waits: a Python signal handler runs only when control returns from the executor.
+        executor.spin_once(timeout_sec=0.1)
+    node.stop_discovery()
+    _drain(executor, node)
     return 0
+
+
+def main(args: list[str] | None = None) -> int:
+    """rfidnav_common.ros.run_node with rclpy's signal handlers off: a stop drains before the bag closes."""
+    return run_node(RecorderNode, args, events_executor, spin_until_stopped, SignalHandlerOptions.NO)
 
 
 if __name__ == "__main__":

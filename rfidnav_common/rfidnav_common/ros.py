@@ -17,6 +17,7 @@ from rclpy.executors import Executor, ExternalShutdownException
 from rclpy.experimental import EventsExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
+from rclpy.signals import SignalHandlerOptions
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
 from rfidnav_common.config import parameters_from_mapping
@@ -69,20 +70,29 @@ def events_executor(context: Context | None = None) -> Executor:
     return EventsExecutor(context=context)
 
 
+def spin_until_shutdown(executor: Executor, _node: Node) -> int:
+    while rclpy.ok():
+        # Bounded waits: Python signal handlers run only when control returns from the executor.
+        executor.spin_once(timeout_sec=0.1)
+    return 0
+
+
 def run_node(make_node: Callable[[], Node], args: list[str] | None = None,
-             make_executor: Callable[[], Executor] = events_executor) -> int:
-    """Jazzy main(): init, spin until Ctrl-C or shutdown, always destroy and shut down.
+             make_executor: Callable[[], Executor] = events_executor,
+             spin: Callable[[Executor, Node], int] = spin_until_shutdown,
+             signal_handler_options: SignalHandlerOptions = SignalHandlerOptions.ALL) -> int:
+    """Jazzy main() of every rfidnav node: init, ``spin`` (until Ctrl-C or shutdown by default; its value is
+    the exit code), always destroy the node and shut down.
 
     A configuration problem found while constructing the node is printed as one line and exits 2."""
-    rclpy.init(args=args)
+    rclpy.init(args=args, signal_handler_options=signal_handler_options)
     node = None
     executor = make_executor()
+    code = 0
     try:
         node = make_node()
         executor.add_node(node)
-        while rclpy.ok():
-            # Bounded waits: Python signal handlers run only when control returns from the executor.
-            executor.spin_once(timeout_sec=0.1)
+        code = spin(executor, node)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     except RfidnavError as error:
@@ -93,7 +103,7 @@ def run_node(make_node: Callable[[], Node], args: list[str] | None = None,
             node.destroy_node()
         executor.shutdown()
         rclpy.try_shutdown()
-    return 0
+    return code
 
 
 def time_msg(seconds: float) -> Time:
