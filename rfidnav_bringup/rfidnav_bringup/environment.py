@@ -21,7 +21,8 @@ import sys
 import sysconfig
 from pathlib import Path
 
-PYTHON_PACKAGES = ("rfidnav_common", "rfidnav_sim", "rfidnav_control", "rfidnav_bringup")
+PYTHON_PACKAGES = ("rfidnav_common", "rfidnav_sim", "rfidnav_control", "rfidnav_localization", "rfidnav_planning",
+                   "rfidnav_bringup")
 INTERFACE_PACKAGE = "rfidnav_msgs"
 
 

@@ -1,0 +1,1 @@
+"""Localizers of rfidnav: the RFID space-partition localizer (paper 000)."""

@@ -1,0 +1,21 @@
+from setuptools import find_packages, setup
+
+package_name = "rfidnav_localization"
+
+setup(
+    name=package_name,
+    version="0.1.0",
+    packages=find_packages(exclude=["test"]),
+    data_files=[
+        ("share/ament_index/resource_index/packages", ["resource/" + package_name]),
+        ("share/" + package_name, ["package.xml"]),
+    ],
+    install_requires=["setuptools"],
+    zip_safe=True,
+    maintainer="rfidnav developers",
+    description="Localizers of rfidnav: the RFID space-partition localizer (paper 000).",
+    license="Apache-2.0",
+    entry_points={"console_scripts": [
+        "partition_localizer = rfidnav_localization.partition_localizer_node:main",
+    ]},
+)

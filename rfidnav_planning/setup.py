@@ -1,0 +1,21 @@
+from setuptools import find_packages, setup
+
+package_name = "rfidnav_planning"
+
+setup(
+    name=package_name,
+    version="0.1.0",
+    packages=find_packages(exclude=["test"]),
+    data_files=[
+        ("share/ament_index/resource_index/packages", ["resource/" + package_name]),
+        ("share/" + package_name, ["package.xml"]),
+    ],
+    install_requires=["setuptools"],
+    zip_safe=True,
+    maintainer="rfidnav developers",
+    description="Planners and navigators of rfidnav: the partition path planner and navigator (paper 000).",
+    license="Apache-2.0",
+    entry_points={"console_scripts": [
+        "partition_navigator = rfidnav_planning.partition_navigator_node:main",
+    ]},
+)
