@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import functools
 import os
+import re
 import struct
 import sys
 from collections.abc import Iterable, Iterator
@@ -73,7 +74,9 @@ def _package_types(package: str, share: Path) -> dict:
         for source in sorted((share / "msg").glob("*.msg")):
             types.update(get_types_from_msg(source.read_text(encoding="utf-8"), f"{package}/msg/{source.stem}"))
         for source in sorted((share / "action").glob("*.idl")):
-            types.update(get_types_from_idl(source.read_text(encoding="utf-8")))
+            # rosbags' IDL parser takes no #include lines; the included types are in the typestore already.
+            text = re.sub(r"^#include .*$", "", source.read_text(encoding="utf-8"), flags=re.MULTILINE)
+            types.update(get_types_from_idl(text))
             action = f"{package}/action/{source.stem}"
             for suffix, text in _ACTION_DERIVED.items():
                 types.update(get_types_from_msg(text.format(action=action), action + suffix))

@@ -77,8 +77,7 @@ def run_tag_route(scenario: Scenario, controller: HeadingControllerParameters, s
         OdometryDrift(robot.odom_left_scale_error, robot.odom_right_scale_error, robot.odom_track_scale_error,
                       robot.odom_slip_std),
         rng_for(seed, "robot_sim.odometry"))
-    simulator = ReaderSimulator(reader.reader_model(), [t.tag_id for t in world.tags], world.tag_positions(),
-                                np.array([t.phase_offset_rad for t in world.tags]), rng_for(seed, "rfid_reader_sim"))
+    simulator = ReaderSimulator.for_world(reader.reader_model(), world, rng_for(seed, "rfid_reader_sim"))
     follower = TagRouteFollower(controller.follower_settings(), FuzzyHeadingController(controller.fuzzy_spec()),
                                 scenario.route_map.arrival_tags)
     route = list(scenario.mission.goal["tag_ids"])

@@ -9,6 +9,7 @@ from std_msgs.msg import ColorRGBA
 from visualization_msgs.msg import Marker, MarkerArray
 
 from rfidnav_common.geometry import yaw_to_quaternion
+from rfidnav_common.tag_lattice import Deployment
 from rfidnav_msgs.msg import TagReadArray, TagReading
 from rfidnav_sim.kinematics import Pose2D
 from rfidnav_sim.rfid_model import Read
@@ -70,4 +71,31 @@ def world_markers(world: World, stamp: Time) -> MarkerArray:
         for x1, y1, x2, y2 in world.walls:
             walls.points += [Point(x=x1, y=y1, z=0.0), Point(x=x2, y=y2, z=0.0)]
         markers.append(walls)
+    for index, deployment in enumerate(world.deployments):
+        markers += deployment_markers(deployment, index, world.frame_id, stamp)
     return MarkerArray(markers=markers)
+
+
+MAX_LATTICE_POINTS = 20_000   # a viewer draws a few thousand points at ease, not 870,000
+
+
+def deployment_markers(deployment: Deployment, index: int, frame_id: str, stamp: Time) -> list[Marker]:
+    """The deployment's area as an outline and, when not too many, its tags as points."""
+    outline = Marker(ns="lattice_areas", id=index, type=Marker.LINE_STRIP, action=Marker.ADD)
+    outline.header.frame_id, outline.header.stamp = frame_id, stamp
+    outline.pose.orientation.w = 1.0
+    outline.scale.x = 0.02
+    outline.color = TAG_COLOURS["floor"]
+    x_min, y_min, x_max, y_max = deployment.area
+    outline.points = [Point(x=x, y=y, z=0.0) for x, y in
+                      ((x_min, y_min), (x_max, y_min), (x_max, y_max), (x_min, y_max), (x_min, y_min))]
+    if deployment.tag_count() > MAX_LATTICE_POINTS:
+        return [outline]
+    points = Marker(ns="lattice_tags", id=index, type=Marker.POINTS, action=Marker.ADD)
+    points.header = outline.header
+    points.pose.orientation.w = 1.0
+    points.scale.x = points.scale.y = min(0.05, deployment.read_range_m / 2.0)
+    points.color = TAG_COLOURS["floor"]
+    points.points = [Point(x=float(x), y=float(y), z=0.0)
+                     for x, y in deployment.lattice.positions(deployment.coordinates())]
+    return [outline, points]

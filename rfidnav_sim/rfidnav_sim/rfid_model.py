@@ -10,7 +10,9 @@ deviation proportional to the distance (paper 001 section V: "magnitude proporti
 distance between the transponder and the receiving antenna"). RSSI follows a two-way log-distance
 path loss (exponent 4: 40 dB per decade) plus the antenna pattern on both ways. A tag is read by an
 antenna when it lies within the antenna's range and beam cone, its RSSI is above the reader's
-sensitivity, and the read does not miss (probability ``miss_probability``). Both receiving antennas
+sensitivity, and the read does not miss (probability ``miss_probability``). Floor tags of a lattice
+deployment (paper 000) are read by the downward antennas within the deployment's read range r,
+measured horizontally: the read disc of paper 000 section 3.1 is the ground truth of those tags. Both receiving antennas
 of one round see the same backscatter (the paper's reader receives on two antennas at once), so the
 phase difference is free of motion between antenna switches.
 """
@@ -23,6 +25,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from rfidnav_common.rf import round_trip_phase
+from rfidnav_common.tag_lattice import Deployment
+from rfidnav_sim.world import World
 
 @dataclass(frozen=True)
 class Antenna:
@@ -60,9 +64,18 @@ class Read:
 class ReaderSimulator:
     """Simulates inventory rounds of one reader on a robot among fixed tags."""
 
+    @classmethod
+    def for_world(cls, model: ReaderModel, world: World, rng: np.random.Generator) -> ReaderSimulator:
+        """A reader among the world's listed tags and its lattice floor deployments."""
+        return cls(model, [t.tag_id for t in world.tags], world.tag_positions(),
+                   np.array([t.phase_offset_rad for t in world.tags]), rng, world.deployments)
+
     def __init__(self, model: ReaderModel, tag_ids: list[str], tag_positions: np.ndarray,
-                 tag_phase_offsets: np.ndarray, rng: np.random.Generator) -> None:
+                 tag_phase_offsets: np.ndarray, rng: np.random.Generator,
+                 floor_deployments: tuple[Deployment, ...] = ()) -> None:
         self.model = model
+        self.floor_deployments = floor_deployments
+        self.down_antennas = [index for index, antenna in enumerate(model.antennas) if not antenna.facing_up]
         self.tag_ids = list(tag_ids)
         self.tag_positions = np.asarray(tag_positions, dtype=float).reshape(-1, 3)
         self.tag_phase_offsets = np.asarray(tag_phase_offsets, dtype=float)
@@ -85,11 +98,49 @@ class ReaderSimulator:
 
     def inventory(self, x: float, y: float, yaw: float, time_s: float) -> list[Read]:
         """All reads of one inventory round with the robot at (x, y, yaw)."""
-        model = self.model
-        if not self.tag_ids:
-            return []
         frequency = self.channel_at(time_s)
         antenna_world = self.antenna_positions(x, y, yaw)
+        reads = self.listed_tag_reads(antenna_world, frequency) if self.tag_ids else []
+        if self.floor_deployments:
+            reads += self.lattice_reads(antenna_world, frequency)
+        return reads
+
+    def lattice_reads(self, antenna_world: np.ndarray, frequency: float) -> list[Read]:
+        """Reads of the lattice floor tags within r (horizontally) of each downward antenna."""
+        reads: list[Read] = []
+        for a in self.down_antennas:
+            ax, ay, az = antenna_world[a]
+            for deployment in self.floor_deployments:
+                coordinates = deployment.tags_reading(ax, ay)
+                if not coordinates:
+                    continue
+                if self.model.miss_probability > 0.0:
+                    kept = self.rng.random(len(coordinates)) >= self.model.miss_probability
+                    coordinates = [c for c, keep in zip(coordinates, kept) if keep]
+                positions = deployment.lattice.positions(np.array(coordinates, dtype=float).reshape(-1, 2))
+                distance = np.maximum(np.sqrt(np.sum((positions - (ax, ay)) ** 2, axis=1) + az * az), 1e-3)
+                cos_off_axis = np.clip(abs(az) / distance, 1e-6, 1.0)
+                rssi = (self.model.rssi_at_1m_dbm - 40.0 * np.log10(distance)
+                        + 20.0 * self.model.pattern_exponent * np.log10(cos_off_axis))
+                reads += self.reads_of([deployment.lattice.tag_id(c) for c in coordinates],
+                                       np.full(len(coordinates), a), distance,
+                                       np.full(len(coordinates), self.model.antennas[a].phase_offset_rad),
+                                       rssi, frequency)
+        return reads
+
+    def reads_of(self, tag_ids: list[str], antenna_indices: np.ndarray, distance: np.ndarray,
+                 phase_offsets: np.ndarray, rssi: np.ndarray, frequency: float) -> list[Read]:
+        """One Read per (tag, antenna, distance): phase with distance-proportional noise, I/Q from RSSI."""
+        noise = self.rng.normal(0.0, 1.0, distance.size) * self.model.phase_noise_rad_per_m * distance
+        phase = round_trip_phase(distance, frequency, phase_offsets + noise)
+        amplitude = 10.0 ** (rssi / 20.0)
+        return [Read(tag_id=tag_id, antenna=self.model.antennas[a].port, rssi_dbm=float(r), phase_rad=float(p),
+                     i=float(amp * math.cos(p)), q=float(amp * math.sin(p)), frequency_hz=frequency)
+                for tag_id, a, r, p, amp in zip(tag_ids, antenna_indices, rssi, phase, amplitude)]
+
+    def listed_tag_reads(self, antenna_world: np.ndarray, frequency: float) -> list[Read]:
+        """Reads of the tags listed in the world: within each antenna's range, beam cone and sensitivity."""
+        model = self.model
         offsets = self.tag_positions[None, :, :] - antenna_world[:, None, :]      # antennas x tags x 3
         distance = np.maximum(np.linalg.norm(offsets, axis=2), 1e-3)
         facing = np.array([1.0 if a.facing_up else -1.0 for a in model.antennas])[:, None]
@@ -107,11 +158,5 @@ class ReaderSimulator:
         d = distance[antenna_index, tag_index]
         phase_offsets = (self.tag_phase_offsets[tag_index]
                          + np.array([model.antennas[a].phase_offset_rad for a in antenna_index]))
-        noise = self.rng.normal(0.0, 1.0, d.size) * model.phase_noise_rad_per_m * d
-        phase = round_trip_phase(d, frequency, phase_offsets + noise)
-        rssi_read = rssi[antenna_index, tag_index]
-        amplitude = 10.0 ** (rssi_read / 20.0)
-        return [Read(tag_id=self.tag_ids[t], antenna=model.antennas[a].port, rssi_dbm=float(r),
-                     phase_rad=float(p), i=float(amp * math.cos(p)), q=float(amp * math.sin(p)),
-                     frequency_hz=frequency)
-                for a, t, r, p, amp in zip(antenna_index, tag_index, rssi_read, phase, amplitude)]
+        return self.reads_of([self.tag_ids[t] for t in tag_index], antenna_index, d, phase_offsets,
+                             rssi[antenna_index, tag_index], frequency)

@@ -10,7 +10,6 @@ from __future__ import annotations
 import math
 from typing import Any
 
-import numpy as np
 from nav_msgs.msg import Odometry
 from rclpy.node import Node
 
@@ -30,14 +29,15 @@ class RfidReaderSimNode(Node):
         super().__init__("rfid_reader_sim", **node_options)
         self.params: ReaderParameters = declare_parameters(self, ReaderParameters)
         world = load_world(self.params.world_file)
-        self.simulator = ReaderSimulator(
-            self.params.reader_model(), [t.tag_id for t in world.tags], world.tag_positions(),
-            np.array([t.phase_offset_rad for t in world.tags]), rng_for(self.params.seed, "rfid_reader_sim"))
+        self.simulator = ReaderSimulator.for_world(self.params.reader_model(), world,
+                                                   rng_for(self.params.seed, "rfid_reader_sim"))
         self.period_s = 1.0 / self.params.rate_hz
         self.next_round_s = 0.0
         self.reads_pub = self.create_publisher(TagReadArray, "/rfid/reads", SENSOR_QOS)
         self.create_subscription(Odometry, "/sim/ground_truth", self.on_ground_truth, SENSOR_QOS)
-        self.get_logger().info(f"{len(world.tags)} tags, {len(self.params.antenna_facing)} antennas, "
+        lattice_tags = sum(deployment.tag_count() for deployment in world.deployments)
+        self.get_logger().info(f"{len(world.tags)} listed tags, {lattice_tags} lattice floor tags, "
+                               f"{len(self.params.antenna_facing)} antennas, "
                                f"{self.params.rate_hz:g} rounds/s")
 
     def on_ground_truth(self, msg: Odometry) -> None:
