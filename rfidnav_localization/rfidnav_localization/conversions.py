@@ -1,0 +1,62 @@
+"""LocalizationEstimate -> ROS messages (geometry_msgs/PoseWithCovarianceStamped, rfidnav_msgs/LocalizationStatus)."""
+
+from __future__ import annotations
+
+from builtin_interfaces.msg import Time
+from geometry_msgs.msg import PoseWithCovarianceStamped
+
+from rfidnav_common.geometry import yaw_to_quaternion
+from rfidnav_localization.partition_localization import LocalizationEstimate
+from rfidnav_msgs.msg import LocalizationStatus
+
+# Yaw variance published while the heading is unknown: no consumer should mistake it for information.
+UNKNOWN_YAW_VARIANCE = 1e6
+# Row-major indices into the 6 x 6 covariance of (x, y, z, roll, pitch, yaw). z, roll and pitch stay 0:
+# the robot drives on the floor plane, so they are known exactly.
+XX, XY, YX, YY, YAW_YAW = 0, 1, 6, 7, 35
+
+
+def pose_message(estimate: LocalizationEstimate, stamp: Time, frame_id: str) -> PoseWithCovarianceStamped:
+    """The estimate's pose in ``frame_id``; requires a position. An unknown heading is the identity
+    orientation with UNKNOWN_YAW_VARIANCE."""
+    if estimate.position is None:
+        raise ValueError("an estimate without a position has no pose")
+    message = PoseWithCovarianceStamped()
+    message.header.stamp = stamp
+    message.header.frame_id = frame_id
+    pose = message.pose.pose
+    pose.position.x, pose.position.y = float(estimate.position[0]), float(estimate.position[1])
+    if estimate.yaw is not None:
+        x, y, z, w = yaw_to_quaternion(estimate.yaw)
+        pose.orientation.x, pose.orientation.y, pose.orientation.z, pose.orientation.w = x, y, z, w
+    covariance = [0.0] * 36
+    var_x, cov_xy, var_y = estimate.position_covariance
+    covariance[XX], covariance[XY], covariance[YX], covariance[YY] = (float(var_x), float(cov_xy), float(cov_xy),
+                                                                      float(var_y))
+    covariance[YAW_YAW] = float(estimate.yaw_std ** 2) if estimate.yaw_std is not None else UNKNOWN_YAW_VARIANCE
+    message.pose.covariance = covariance
+    return message
+
+
+def status_message(estimate: LocalizationEstimate, stamp: Time, frame_id: str) -> LocalizationStatus:
+    """Everything the localizer knows besides the pose; fields without a value yet are 0 with their
+    ``*_valid`` flag false."""
+    message = LocalizationStatus()
+    message.header.stamp = stamp
+    message.header.frame_id = frame_id
+    message.method = estimate.method
+    message.partition_tag_ids = list(estimate.partition_tag_ids)
+    message.partitions_traversed = int(estimate.partitions_traversed)
+    message.position_valid = estimate.position is not None
+    if estimate.position is not None:
+        message.x, message.y = float(estimate.position[0]), float(estimate.position[1])
+    message.orientation_valid = estimate.yaw is not None
+    if estimate.yaw is not None:
+        message.yaw_rad = float(estimate.yaw)
+        lower, upper = estimate.yaw_bounds
+        message.yaw_lower_rad, message.yaw_upper_rad = float(lower), float(upper)
+    message.read_range_m = float(estimate.read_range_m) if estimate.read_range_m is not None else 0.0
+    message.rejected_tag_ids = list(estimate.rejected_tag_ids)
+    message.rogue_count = int(estimate.rogue_count)
+    message.undecodable_count = int(estimate.undecodable_count)
+    return message

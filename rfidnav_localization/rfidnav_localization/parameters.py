@@ -1,0 +1,52 @@
+"""Parameters of the partition_localizer node: typed, with defaults and descriptions, importable without
+rclpy so the orchestrator and the in-process runner validate parameter files against the same class.
+
+Defaults are the paper-000 set; config/params/partition_localizer_paper.yaml repeats them and
+config/params/partition_localizer_filter.yaml selects the particle filter.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+
+from rfidnav_common.config import param
+from rfidnav_localization.partition_localization import LocalizerSettings
+
+
+@dataclass(frozen=True)
+class PartitionLocalizerParameters:
+    # The orchestrator gives every non-sim node a map_file. This node needs none, but an empty default cannot be
+    # declared: parameter strings must be non-empty (rfidnav_common.config).
+    map_file: str = param("robot map (unused: positions come from the tag ids)", "unused")
+    method: str = param("paper (partition centre, sec. 4.2 orientation bounds) or filter (particle filter)", "paper")
+    antenna: int = param("reader port of the downward antenna that reads the floor tags", 3)
+    map_frame: str = param("frame of the published pose", "map")
+    seed: int = param("run seed; the node draws its own random stream from it", 0)
+    turn_threshold_rad: float = param(
+        "odometry heading change that ends a straight stretch (the partitions traversed start again) [rad]", 0.05)
+    particles: int = param("filter: number of particles", 500)
+    motion_noise_fraction: float = param("filter: odometry translation and rotation noise, relative", 0.02)
+    motion_noise_floor_m: float = param("filter: translation noise added to each step that moves [m]", 0.001)
+    motion_noise_yaw_rad_per_m: float = param("filter: heading noise per metre travelled [rad/m]", 0.02)
+    boundary_softness_m: float = param(
+        "filter: width of the soft read/no-read edge of a tag's disc (about the distance moved per round) [m]",
+        0.004)
+    read_error_probability: float = param(
+        "filter: chance that a tag's read or no-read contradicts the disc geometry (missed or spurious read)", 0.01)
+    rogue_distance_factor: float = param(
+        "tags read in one round lie within this factor times the read range of each other; others are rogue", 2.0)
+
+    def validate(self) -> None:
+        if not 1 <= self.antenna <= 65535:
+            raise ValueError(f"antenna: a reader port is 1..65535, got {self.antenna}")
+        if not self.map_frame:
+            raise ValueError("map_frame: must not be empty")
+        if self.seed < 0:
+            raise ValueError(f"seed: must not be negative, got {self.seed}")
+        self.settings().validate()
+
+    def settings(self) -> LocalizerSettings:
+        # Every localizer setting is a node parameter of the same name.
+        return LocalizerSettings(**{field.name: getattr(self, field.name)
+                                    for field in dataclasses.fields(LocalizerSettings)})

@@ -1,0 +1,97 @@
+"""partition_localizer: /localization/pose and /localization/status from the floor tags read (paper 000).
+
+A thin adapter around PartitionLocalizer: every TagReadArray (one inventory round) becomes one update with
+the ids its floor antenna read and the latest /odom pose, and one pose and status stamped with the round's
+own stamp. Positions and the read range come from the tag ids themselves, so the node needs no map. Reads
+with a non-finite number and /odom messages with one are dropped and counted; junk ids are counted by the
+localizer (LocalizationStatus.undecodable_count). The pose is published once a tag has been read; the
+status from the first round on.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+from geometry_msgs.msg import PoseWithCovarianceStamped
+from nav_msgs.msg import Odometry
+from rclpy.node import Node
+
+from rfidnav_common.geometry import quaternion_to_yaw
+from rfidnav_common.ros import SENSOR_QOS, declare_parameters, run_node, seconds_of
+from rfidnav_common.seeding import rng_for
+from rfidnav_localization.conversions import pose_message, status_message
+from rfidnav_localization.parameters import PartitionLocalizerParameters
+from rfidnav_localization.partition_localization import PartitionLocalizer
+from rfidnav_msgs.msg import LocalizationStatus, TagReadArray
+
+NODE_NAME = "partition_localizer"
+# Before the first /odom the robot is taken to stand at the odometry origin: the position needs no odometry,
+# and the heading follows it once it arrives.
+ODOMETRY_ORIGIN = (0.0, 0.0, 0.0)
+
+
+def finite_reading(reading: Any) -> bool:
+    return all(math.isfinite(value) for value in (reading.rssi_dbm, reading.phase_rad, reading.i, reading.q,
+                                                   reading.frequency_hz))
+
+
+class PartitionLocalizerNode(Node):
+    def __init__(self, **node_options: Any) -> None:
+        """``node_options``: keyword arguments of rclpy's Node (``context``, ``parameter_overrides``), for tests."""
+        super().__init__(NODE_NAME, **node_options)
+        self.params: PartitionLocalizerParameters = declare_parameters(self, PartitionLocalizerParameters)
+        self.localizer = PartitionLocalizer(self.params.settings(), rng_for(self.params.seed, NODE_NAME))
+        self.odom: tuple[float, float, float] | None = None
+        self.dropped_reads = 0
+        self.dropped_odometry = 0
+        self.rounds = 0
+        self.pose_pub = self.create_publisher(PoseWithCovarianceStamped, "/localization/pose", SENSOR_QOS)
+        self.status_pub = self.create_publisher(LocalizationStatus, "/localization/status", SENSOR_QOS)
+        self.create_subscription(Odometry, "/odom", self.on_odometry, SENSOR_QOS)
+        self.create_subscription(TagReadArray, "/rfid/reads", self.on_reads, SENSOR_QOS)
+        self.get_logger().info(f"method {self.params.method}, floor antenna port {self.params.antenna}, "
+                               f"publishing in frame '{self.params.map_frame}'")
+
+    def on_odometry(self, msg: Odometry) -> None:
+        pose = msg.pose.pose
+        q = pose.orientation
+        odom = (pose.position.x, pose.position.y, quaternion_to_yaw(q.x, q.y, q.z, q.w))
+        if not all(math.isfinite(value) for value in odom):
+            self.dropped_odometry += 1
+            self.get_logger().warning(f"dropped /odom with a non-finite pose ({self.dropped_odometry} so far)",
+                                      throttle_duration_sec=5.0)
+            return
+        self.odom = odom
+
+    def on_reads(self, msg: TagReadArray) -> None:
+        floor_reads = [reading for reading in msg.readings if reading.antenna == self.params.antenna]
+        tag_ids = [reading.tag_id for reading in floor_reads if finite_reading(reading)]
+        if len(tag_ids) < len(floor_reads):
+            self.dropped_reads += len(floor_reads) - len(tag_ids)
+            self.get_logger().warning(f"dropped floor reads with non-finite values ({self.dropped_reads} so far)",
+                                      throttle_duration_sec=5.0)
+        if self.odom is None and floor_reads:
+            self.get_logger().warning("no /odom yet: taking the robot to stand at the odometry origin",
+                                      throttle_duration_sec=5.0)
+        undecodable_before, rogue_before = self.localizer.undecodable_count, self.localizer.rogue_count
+        # The round's own stamp, not arrival time: the estimate belongs to the moment the tags were read.
+        estimate = self.localizer.update(seconds_of(msg.header.stamp), tag_ids, self.odom or ODOMETRY_ORIGIN)
+        self.rounds += 1
+        if estimate.undecodable_count > undecodable_before:
+            self.get_logger().warning(f"ignored tag ids that are not lattice ids of this deployment "
+                                      f"({estimate.undecodable_count} so far)", throttle_duration_sec=5.0)
+        if estimate.rogue_count > rogue_before:
+            self.get_logger().warning(f"rejected rogue tags {', '.join(estimate.rejected_tag_ids)}: too far from "
+                                      f"the others read ({estimate.rogue_count} so far)", throttle_duration_sec=5.0)
+        if estimate.position is not None:
+            self.pose_pub.publish(pose_message(estimate, msg.header.stamp, self.params.map_frame))
+        self.status_pub.publish(status_message(estimate, msg.header.stamp, self.params.map_frame))
+
+
+def main(args: list[str] | None = None) -> int:
+    return run_node(PartitionLocalizerNode, args)
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
