@@ -62,7 +62,7 @@ from rfidnav_bringup.processes import DomainLease, NodeProcess, resolve_executab
 from rfidnav_common.config import parameters_from_mapping
 from rfidnav_control.fuzzy import FuzzyHeadingController
 from rfidnav_control.parameters import HeadingControllerParameters
-from rfidnav_control.route_map import load_route_map
+from rfidnav_common.robot_map import load_route_map
 from rfidnav_control.tag_route import TagObservation, TagRouteFollower, observe
 from rfidnav_msgs.action import FollowTagRoute
 

@@ -75,15 +75,22 @@ def parser() -> argparse.ArgumentParser:
     report.add_argument("run", type=Path)
     report.add_argument("--json", action="store_true")
     reproduce = verbs.add_parser("reproduce", help="the papers' experiments in-process, beside the papers' figures")
-    reproduce.add_argument("name", choices=["flc"])
-    reproduce.add_argument("--seeds", type=int, default=10)
+    reproduce.add_argument("name", choices=["flc", "partitions"],
+                           help="flc: paper 001 sec. V; partitions: paper 000 sec. 6")
+    reproduce.add_argument("--seeds", type=int, default=10, help="flc: seeds per setting")
+    reproduce.add_argument("--runs", type=int, default=250, help="partitions: runs per (read range, level, method)")
     reproduce.add_argument("--out", type=Path, default=WORKSPACE / "bags" / "reproduce")
     reproduce.add_argument("--json", action="store_true")
     bench = verbs.add_parser("bench", help="performance benchmarks (JSON figures)")
-    bench.add_argument("name", choices=["flc", "rtf"],
-                       help="flc: fuzzy fast path vs scikit-fuzzy; rtf: a scenario over DDS at rising RTF")
+    bench.add_argument("name", choices=["flc", "rtf", "planner", "partitions"],
+                       help="flc: fuzzy fast path vs scikit-fuzzy; rtf: a scenario over DDS at rising RTF; "
+                            "planner: Algorithm 1 in a 30 x 30 m field at r = 2 cm; partitions: the navigations of "
+                            "paper 000 Figs. 12-14 in-process")
     bench.add_argument("--json", action="store_true")
     bench.add_argument("--evaluations", type=int, default=2000, help="flc: evaluations per timing")
+    bench.add_argument("--plans", type=int, default=200, help="planner: random segments planned")
+    bench.add_argument("--runs", type=int, default=250, help="partitions: runs per (read range, level)")
+    bench.add_argument("--method", choices=["paper", "filter"], default="paper", help="partitions: localizer method")
     bench.add_argument("--scenario", default="hallway", help="rtf: the scenario to run")
     bench.add_argument("--rtfs", type=float_list, default=[1.0, 3.0, 5.0, 8.0, 12.0], help="rtf: e.g. 1,2,5")
     bench.add_argument("--tolerance", type=float, default=0.10, help="rtf: allowed RMSE growth over RTF 1")
@@ -119,18 +126,16 @@ def verb_run(args, scenario_name: str | None = None) -> int:
     from rfidnav_bringup.orchestrator import Orchestrator, RunOptions, print_summary
     from rfidnav_bringup.scenario import load_scenario
 
-    scenario = load_scenario(scenario_name or args.scenario, swaps=dict(args.swap),
-                             param_files={role: Path(file) for role, file in args.params})
+    goal = None
     if getattr(args, "goal", None):
-        from dataclasses import replace
-
         try:
             goal = yaml.safe_load(args.goal)
         except yaml.YAMLError as error:
             raise ConfigError("--goal", "", f"not valid YAML: {getattr(error, 'problem', None) or error}") from None
         if not isinstance(goal, dict):
             raise ConfigError("--goal", "", "expected a YAML mapping of goal fields")
-        scenario = replace(scenario, mission=replace(scenario.mission, goal=goal))
+    scenario = load_scenario(scenario_name or args.scenario, swaps=dict(args.swap),
+                             param_files={role: Path(file) for role, file in args.params}, goal=goal)
     if not math.isfinite(args.rtf) or args.rtf <= 0:
         raise ConfigError("--rtf", "", f"must be a positive number, got {args.rtf}")
     options = RunOptions(rtf=args.rtf, seed=args.seed, out_dir=args.out, record=not args.no_record,
@@ -203,6 +208,10 @@ def verb_report(args) -> int:
 
 
 def verb_reproduce(args) -> int:
+    if args.name == "partitions":
+        from rfidnav_bringup.reproduce_partitions import reproduce_partitions
+
+        return reproduce_partitions(runs=args.runs, out_dir=args.out, as_json=args.json)
     from rfidnav_bringup.reproduce import reproduce_flc
 
     return reproduce_flc(seeds=args.seeds, out_dir=args.out, as_json=args.json)
@@ -211,6 +220,8 @@ def verb_reproduce(args) -> int:
 def verb_bench(args) -> int:
     if args.name == "rtf":
         return bench_rtf(args)
+    if args.name in ("planner", "partitions"):
+        return bench_partitions(args)
     from rfidnav_control.fuzzy import benchmark
 
     figures = benchmark(evaluations=args.evaluations)
@@ -219,6 +230,25 @@ def verb_bench(args) -> int:
     else:
         print(f"fuzzy controller per evaluation: scikit-fuzzy {figures['reference_us']:.1f} us, "
               f"fast path {figures['fast_us']:.2f} us, speed-up {figures['speedup']:.0f}x")
+    return 0
+
+
+def bench_partitions(args) -> int:
+    if args.name == "planner":
+        from rfidnav_planning.partition_planner import benchmark
+
+        figures = benchmark(plans=args.plans)
+        summary = (f"Algorithm 1, {figures['field_m']:g} x {figures['field_m']:g} m at r = "
+                   f"{figures['read_range_m'] * 100:g} cm ({figures['tags']} tags): {figures['mean_ms']:.1f} ms per plan "
+                   f"on average, p99 {figures['p99_ms']:.1f} ms, {figures['mean_partitions']:.0f} partitions per plan")
+    else:
+        from rfidnav_bringup.reproduce_partitions import benchmark
+
+        figures = benchmark(runs=args.runs, method=args.method)
+        summary = (f"{figures['navigations']} navigations ({args.method}) in {figures['wall_s']:.0f} s on "
+                   f"{figures['workers']} workers: {figures['navigations_per_s']:.1f} per second, "
+                   f"{figures['success_pct']:.1f} % reached the goal's partition")
+    print(json.dumps(figures) if args.json else summary)
     return 0
 
 

@@ -376,10 +376,10 @@ class Orchestrator:
                 "graph_cpu_percent_of_one_core": round(100.0 * total / wall_s, 1) if wall_s > 0 else None}
 
     def mission_role(self) -> str | None:
-        for role, spec in self.scenario.nodes.items():
-            if not spec.sim:
-                return role
-        return None
+        """The role serving the mission's action: the scenario's mission.server, else the first non-simulator."""
+        if self.scenario.mission.server is not None:
+            return self.scenario.mission.server
+        return next((role for role, spec in self.scenario.nodes.items() if not spec.sim), None)
 
     def check_processes(self, starting: bool) -> None:
         for role, process in self.processes.items():

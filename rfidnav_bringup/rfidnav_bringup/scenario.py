@@ -22,7 +22,9 @@ from rfidnav_bringup.processes import UnknownExecutableError, resolve_executable
 from rfidnav_common.config import Section, node_parameter_section, parameters_from_mapping, typed_values
 from rfidnav_common.errors import ConfigError
 from rfidnav_control.parameters import HeadingControllerParameters
-from rfidnav_control.route_map import RouteMap, load_route_map
+from rfidnav_localization.parameters import PartitionLocalizerParameters
+from rfidnav_planning.parameters import PartitionNavigatorParameters
+from rfidnav_common.robot_map import RouteMap, load_route_map
 from rfidnav_sim.parameters import ReaderParameters, RobotSimParameters
 from rfidnav_sim.world import World, load_world
 
@@ -35,8 +37,10 @@ KNOWN_NODES: dict[tuple[str, str], tuple[str, type]] = {
     ("rfidnav_sim", "robot_sim"): ("robot_sim", RobotSimParameters),
     ("rfidnav_sim", "rfid_reader_sim"): ("rfid_reader_sim", ReaderParameters),
     ("rfidnav_control", "heading_controller"): ("heading_controller", HeadingControllerParameters),
+    ("rfidnav_localization", "partition_localizer"): ("partition_localizer", PartitionLocalizerParameters),
+    ("rfidnav_planning", "partition_navigator"): ("partition_navigator", PartitionNavigatorParameters),
 }
-METRIC_GROUPS = ("tracking",)
+METRIC_GROUPS = ("tracking", "partition")
 
 
 @dataclass(frozen=True)
@@ -61,6 +65,7 @@ class MissionSpec:
     action_type: str
     goal: dict[str, Any]
     timeout_s: float
+    server: str | None = None                # role serving the action; None: the first non-simulator role
 
 
 @dataclass(frozen=True)
@@ -90,8 +95,9 @@ class Scenario:
                 "sim": spec.sim, "clock_source": spec.clock_source, "respawn": spec.respawn,
                 "max_respawns": spec.max_respawns}.items() if value not in (None, {}, [])}
                 for role, spec in self.nodes.items()},
-            "mission": {"action": self.mission.action, "type": self.mission.action_type,
-                        "goal": self.mission.goal, "timeout_s": self.mission.timeout_s},
+            "mission": {key: value for key, value in {
+                "action": self.mission.action, "type": self.mission.action_type, "server": self.mission.server,
+                "goal": self.mission.goal, "timeout_s": self.mission.timeout_s}.items() if value is not None},
             "metrics": list(self.metrics),
         }
 
@@ -105,8 +111,8 @@ def scenario_path(name_or_path: str) -> Path:
 
 
 def load_scenario(name_or_path: str, swaps: dict[str, str] | None = None,
-                  param_files: dict[str, Path] | None = None) -> Scenario:
-    """Load, apply ``--swap`` and ``--params``, and validate everything the run will use."""
+                  param_files: dict[str, Path] | None = None, goal: dict[str, Any] | None = None) -> Scenario:
+    """Load, apply ``--swap``, ``--params`` and ``--goal``, and validate everything the run will use."""
     path = scenario_path(name_or_path).resolve()
     section = Section.from_file(path)
     section.reject_unknown(("name", "description", "world", "map", "robot", "nodes", "mission", "metrics"))
@@ -130,10 +136,13 @@ def load_scenario(name_or_path: str, swaps: dict[str, str] | None = None,
     if sum(spec.clock_source for spec in nodes.values()) > 1:
         raise section.error("nodes", "only one node can be the clock_source")
     mission = section.section("mission")
-    mission.reject_unknown(("action", "type", "goal", "timeout_s"))
-    goal = mission.raw("goal")
-    if not isinstance(goal, dict):
-        raise mission.error("goal", "expected a mapping of goal fields")
+    mission.reject_unknown(("action", "type", "server", "goal", "timeout_s"))
+    if goal is None:
+        goal = mission.raw("goal")
+        if not isinstance(goal, dict):
+            raise mission.error("goal", "expected a mapping of goal fields")
+    else:
+        mission = Section({**mission.data, "goal": goal}, "--goal", "mission")
     metrics = section.strings("metrics", [])
     for index, metric in enumerate(metrics):
         if metric not in METRIC_GROUPS:
@@ -144,9 +153,12 @@ def load_scenario(name_or_path: str, swaps: dict[str, str] | None = None,
         world_file=world_file, map_file=map_file,
         robot=(robot.number("x"), robot.number("y"), robot.number("yaw_deg", 0.0)), nodes=nodes,
         mission=MissionSpec(mission.string("action"), mission.string("type"), goal,
-                            mission.number("timeout_s", 600.0, positive=True)),
+                            mission.number("timeout_s", 600.0, positive=True), mission.raw("server", None)),
         metrics=tuple(metrics), world=load_world(world_file), route_map=load_route_map(map_file))
+    if scenario.mission.server is not None and scenario.mission.server not in nodes:
+        raise mission.error("server", f"no role '{scenario.mission.server}' (roles: {', '.join(nodes)})")
     _check_route(scenario, mission)
+    _check_goal_area(scenario, mission)
     for spec in scenario.nodes.values():
         node_parameters(scenario, spec, seed=0, rtf=1.0)
     return scenario
@@ -218,6 +230,19 @@ def _check_route(scenario: Scenario, mission: Section) -> None:
     unknown = scenario.route_map.unknown_tags(tag_ids)
     if unknown:
         raise mission.error("goal", f"tag_ids: {', '.join(unknown)} not in the route map {scenario.map_file}")
+
+
+def _check_goal_area(scenario: Scenario, mission: Section) -> None:
+    """A point goal must lie on the tagged area the map declares (the navigator would refuse it)."""
+    target = scenario.mission.goal.get("target")
+    area = scenario.route_map.deployment_area
+    if not isinstance(target, dict) or area is None:
+        return
+    x, y = target.get("x"), target.get("y")
+    if not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in (x, y)):
+        raise mission.error("goal", "target: expected numbers x and y")
+    if not (area[0] <= x <= area[2] and area[1] <= y <= area[3]):
+        raise mission.error("goal", f"target ({x}, {y}) is outside the map's deployment_area {list(area)}")
 
 
 def injected_parameters(scenario: Scenario, spec: NodeSpec, seed: int, rtf: float) -> dict[str, Any]:

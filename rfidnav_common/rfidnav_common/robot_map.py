@@ -1,5 +1,11 @@
-"""Route map (robot knowledge, ``config/maps/*.yaml``): which floor tag tells the robot it has arrived
-under each ceiling tag (paper 001, step 8). It holds no positions: the robot never knows where tags are.
+"""Robot maps (robot knowledge, ``config/maps/*.yaml``): what a navigation node may know of the world.
+
+They hold no tag positions: the robot never knows where tags are. A map has any of:
+
+* ``arrival_tags`` (paper 001, step 8): the floor tag that tells the robot it has arrived under each
+  ceiling tag;
+* ``deployment_area`` (paper 000): the rectangle covered by floor tags. Layout, spacing and read range
+  the robot learns from the tags' own IDs; the area lets a navigator refuse a goal off the deployment.
 
 Schema::
 
@@ -7,6 +13,7 @@ Schema::
     arrival_tags:          # ceiling tag id -> id of the short-range floor tag under it
       C1: F1
       C2: F2
+    deployment_area: [0.0, 0.0, 5.0, 5.0]   # x_min, y_min, x_max, y_max [m], map frame
 """
 
 from __future__ import annotations
@@ -21,6 +28,7 @@ from rfidnav_common.config import Section
 class RouteMap:
     name: str
     arrival_tags: dict[str, str]
+    deployment_area: tuple[float, float, float, float] | None = None
 
     def unknown_tags(self, route: list[str]) -> list[str]:
         return [tag for tag in route if tag not in self.arrival_tags]
@@ -28,7 +36,20 @@ class RouteMap:
 
 def load_route_map(path: Path) -> RouteMap:
     section = Section.from_file(Path(path))
-    section.reject_unknown(("name", "description", "arrival_tags"))
+    section.reject_unknown(("name", "description", "arrival_tags", "deployment_area"))
+    arrival = _arrival_tags(section) if section.has("arrival_tags") else {}
+    area = None
+    if section.has("deployment_area"):
+        x_min, y_min, x_max, y_max = section.numbers("deployment_area", length=4)
+        if not (x_max > x_min and y_max > y_min):
+            raise section.error("deployment_area", "expected [x_min, y_min, x_max, y_max] with max > min")
+        area = (x_min, y_min, x_max, y_max)
+    if not arrival and area is None:
+        raise section.error("arrival_tags", "a map needs arrival_tags or a deployment_area (none given)")
+    return RouteMap(name=section.string("name"), arrival_tags=arrival, deployment_area=area)
+
+
+def _arrival_tags(section: Section) -> dict[str, str]:
     pairs = section.section("arrival_tags")
     arrival: dict[str, str] = {}
     used: dict[str, str] = {}
@@ -42,4 +63,4 @@ def load_route_map(path: Path) -> RouteMap:
         arrival[ceiling_tag] = floor_tag
     if not arrival:
         raise section.error("arrival_tags", "at least one ceiling tag -> floor tag pair is needed")
-    return RouteMap(name=section.string("name"), arrival_tags=arrival)
+    return arrival

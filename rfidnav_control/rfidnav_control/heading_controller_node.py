@@ -23,7 +23,7 @@ from rclpy.node import Node
 from rfidnav_common.ros import COMMAND_QOS, SENSOR_QOS, declare_parameters, run_node, seconds_of
 from rfidnav_control.fuzzy import FuzzyHeadingController
 from rfidnav_control.parameters import HeadingControllerParameters
-from rfidnav_control.route_map import load_route_map
+from rfidnav_common.robot_map import load_route_map
 from rfidnav_control.tag_route import Command, TagRouteFollower, observe
 from rfidnav_msgs.action import FollowTagRoute
 from rfidnav_msgs.msg import TagReadArray
