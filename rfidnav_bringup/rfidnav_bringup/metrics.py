@@ -1,4 +1,5 @@
-"""Tracking metrics of a tag-route run (paper 001 section V), from ground truth and arrival events.
+"""Metrics of a run from ground truth: tag-route tracking (paper 001 section V) and partition navigation
+(paper 000 section 6.2).
 
 Used both on bags (``./rfidnav report``) and on in-process runs (``./rfidnav reproduce``), so the
 figures of the two agree by construction.
@@ -82,3 +83,29 @@ def tracking_metrics(trajectory: Trajectory, tag_points: np.ndarray, arrival_tim
     time_to_first = float(run.times_s[near_first[0]] - mission_start_s) if near_first.size else None
     path_length = float(np.sum(np.linalg.norm(np.diff(run.xy, axis=0), axis=1))) if len(run.xy) > 1 else 0.0
     return TrackingMetrics(rmse, max_abs, time_to_first, path_length, len(arrival_times_s))
+
+
+@dataclass(frozen=True)
+class PartitionMetrics:
+    """Paper 000 section 6.2: extra navigation cost (l - |SD|) / |SD| with l the distance driven (ground
+    truth) and SD the segment from the true start to the goal; where the robot stopped; re-plans."""
+    extra_cost_pct: float | None
+    final_error_m: float | None
+    path_length_m: float
+    straight_distance_m: float | None
+    replans: int | None
+
+    def as_dict(self) -> dict[str, float | int | None]:
+        return dict(self.__dict__)
+
+
+def partition_metrics(trajectory: Trajectory, mission_start_s: float, mission_end_s: float,
+                      goal: tuple[float, float], replans: int | None) -> PartitionMetrics:
+    run = trajectory.between(mission_start_s, mission_end_s)
+    if len(run.xy) == 0:
+        return PartitionMetrics(None, None, 0.0, None, replans)
+    path_length = float(np.sum(np.linalg.norm(np.diff(run.xy, axis=0), axis=1))) if len(run.xy) > 1 else 0.0
+    straight = float(np.linalg.norm(np.asarray(goal) - run.xy[0]))
+    extra = 100.0 * (path_length - straight) / straight if straight > 0.0 else None
+    return PartitionMetrics(extra, float(np.linalg.norm(run.xy[-1] - np.asarray(goal))), path_length, straight,
+                            replans)

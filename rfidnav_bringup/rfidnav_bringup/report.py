@@ -1,4 +1,5 @@
-"""``./rfidnav report RUN``: metrics recomputed from a run's bag, and plots like paper 001 Figs. 9, 11, 13.
+"""``./rfidnav report RUN``: metrics recomputed from a run's bag, and plots like paper 001 Figs. 9, 11, 13
+(tag routes) or the trajectory against the shortest path (partition navigation, paper 000).
 
 The run folder holds the bag, the resolved scenario and copies of its world and map, so a report
 needs nothing else. From the bag: ground truth (/sim/ground_truth), the mission start and end (the
@@ -20,7 +21,8 @@ import yaml  # noqa: E402
 
 from rfidnav_bringup.bags import bag_info, read_messages  # noqa: E402
 from rfidnav_bringup.errors import BagError  # noqa: E402
-from rfidnav_bringup.metrics import Trajectory, tracking_error, tracking_metrics  # noqa: E402
+from rfidnav_bringup.metrics import (Trajectory, partition_metrics, tracking_error,  # noqa: E402
+                                     tracking_metrics)
 from rfidnav_sim.world import World, load_world  # noqa: E402
 
 STATUS_ACCEPTED, STATUS_EXECUTING = 1, 2
@@ -38,6 +40,9 @@ class RunRecord:
     mission_end_s: float
     final_status: str | None
     arrival_times_s: list[float]
+    metric_groups: list[str]
+    goal: dict
+    last_feedback: object | None             # the mission's last feedback before it ended
 
 
 def locate_run(path: Path) -> tuple[Path, Path]:
@@ -66,6 +71,7 @@ def load_run(path: Path) -> RunRecord:
     final = None
     arrivals: list[float] = []
     target = 0
+    last_feedback = None
     for topic, stamp_ns, msg in read_messages(bag, ["/sim/ground_truth", status_topic, feedback_topic]):
         now_s = stamp_ns * 1e-9
         if topic == "/sim/ground_truth":
@@ -78,7 +84,8 @@ def load_run(path: Path) -> RunRecord:
                 elif status.status in STATUS_FINAL and final is None:
                     final, end_s = STATUS_FINAL[status.status], now_s
         elif topic == feedback_topic and final is None:
-            while msg.feedback.target_index > target:
+            last_feedback = msg.feedback
+            while getattr(msg.feedback, "target_index", 0) > target:   # tag routes: the next target means arrival
                 arrivals.append(now_s)
                 target += 1
     if not times:
@@ -89,7 +96,8 @@ def load_run(path: Path) -> RunRecord:
         arrivals.append(end_s)
     trajectory = Trajectory(np.array(times), np.array(xy))
     return RunRecord(run_dir, bag, world, route, trajectory, start_s,
-                     end_s if end_s is not None else float(trajectory.times_s[-1]), final, arrivals)
+                     end_s if end_s is not None else float(trajectory.times_s[-1]), final, arrivals,
+                     list(scenario.get("metrics", [])), dict(scenario["mission"]["goal"]), last_feedback)
 
 
 def route_points(world: World, route: list[str]) -> np.ndarray:
@@ -97,23 +105,45 @@ def route_points(world: World, route: list[str]) -> np.ndarray:
 
 
 def run_metrics(path: Path) -> dict[str, float | int | None]:
-    record = load_run(path)
-    metrics = tracking_metrics(record.ground_truth, route_points(record.world, record.route),
-                               record.arrival_times_s, record.mission_start_s, record.mission_end_s)
-    return metrics.as_dict()
+    """The metric groups the run's scenario asks for, from its bag."""
+    return record_metrics(load_run(path))
+
+
+def record_metrics(record: RunRecord) -> dict[str, float | int | None]:
+    metrics: dict[str, float | int | None] = {}
+    if "tracking" in record.metric_groups:
+        metrics.update(tracking_metrics(record.ground_truth, route_points(record.world, record.route),
+                                        record.arrival_times_s, record.mission_start_s,
+                                        record.mission_end_s).as_dict())
+    if "partition" in record.metric_groups:
+        target = record.goal.get("target", {})
+        replans = getattr(record.last_feedback, "replans", None)
+        metrics.update(partition_metrics(record.ground_truth, record.mission_start_s, record.mission_end_s,
+                                         (float(target.get("x", 0.0)), float(target.get("y", 0.0))),
+                                         replans).as_dict())
+    return metrics
 
 
 def write_report(path: Path) -> tuple[dict[str, float | int | None], list[Path]]:
-    """Recompute the metrics and write trajectory.png and tracking_error.png into the run folder."""
+    """Recompute the metrics and write trajectory.png (and tracking_error.png for tag routes) into the run folder."""
     record = load_run(path)
-    points = route_points(record.world, record.route)
-    metrics = tracking_metrics(record.ground_truth, points, record.arrival_times_s, record.mission_start_s,
-                               record.mission_end_s)
+    metrics = record_metrics(record)
     run = record.ground_truth.between(record.mission_start_s, record.mission_end_s)
     figure, axes = plt.subplots(figsize=(7, 7))
     for x1, y1, x2, y2 in record.world.walls:
         axes.plot([x1, x2], [y1, y2], color="0.6", linewidth=2)
-    axes.plot(points[:, 0], points[:, 1], "--", color="tab:green", label="desired path")
+    for deployment in record.world.deployments:
+        x_min, y_min, x_max, y_max = deployment.area
+        axes.plot([x_min, x_max, x_max, x_min, x_min], [y_min, y_min, y_max, y_max, y_min], color="tab:purple",
+                  linewidth=1, label=f"{deployment.lattice.layout} tags, r = {deployment.read_range_m * 100:g} cm")
+    points = route_points(record.world, record.route)
+    if len(points):
+        axes.plot(points[:, 0], points[:, 1], "--", color="tab:green", label="desired path")
+    target = record.goal.get("target")
+    if isinstance(target, dict) and len(run.xy):
+        axes.plot([run.xy[0, 0], target["x"]], [run.xy[0, 1], target["y"]], "--", color="tab:green",
+                  label="shortest path")
+        axes.plot(target["x"], target["y"], "*", color="tab:red", markersize=12, label="goal")
     axes.plot(run.xy[:, 0], run.xy[:, 1], color="tab:blue", label="robot (ground truth)")
     for tag in record.world.tags:
         marker, colour = ("s", "tab:orange") if tag.kind == "ceiling" else ("o", "tab:purple")
@@ -130,12 +160,14 @@ def write_report(path: Path) -> tuple[dict[str, float | int | None], list[Path]]
     trajectory_png = record.run_dir / "trajectory.png"
     figure.savefig(trajectory_png, dpi=110, bbox_inches="tight")
     plt.close(figure)
+    if "tracking" not in record.metric_groups:
+        return metrics, [trajectory_png]
 
     error = tracking_error(run, points, record.arrival_times_s)
     figure, axes = plt.subplots(figsize=(8, 3.5))
     axes.plot(error.times_s - record.mission_start_s, error.xy[:, 0] * 100.0, color="tab:red")
     axes.axhline(0.0, color="0.5", linewidth=0.8)
-    rmse = metrics.tracking_rmse_m
+    rmse = metrics.get("tracking_rmse_m")
     axes.set_title(f"tracking error (RMSE {rmse * 100:.2f} cm)" if rmse is not None else "tracking error")
     axes.set_xlabel("time since mission start [s]")
     axes.set_ylabel("e(t) [cm], + = left of path")
@@ -143,4 +175,4 @@ def write_report(path: Path) -> tuple[dict[str, float | int | None], list[Path]]
     error_png = record.run_dir / "tracking_error.png"
     figure.savefig(error_png, dpi=110, bbox_inches="tight")
     plt.close(figure)
-    return metrics.as_dict(), [trajectory_png, error_png]
+    return metrics, [trajectory_png, error_png]

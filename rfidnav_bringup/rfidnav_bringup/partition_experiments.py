@@ -1,0 +1,149 @@
+"""In-process partition navigation (paper 000 section 6): the localizer, planner and navigator cores of the
+DDS nodes driving an idealised robot, as the paper's simulation does, thousands of times a minute.
+
+The robot is a point with a heading that drives straight at constant speed and turns on the spot exactly
+as the navigator asks (paper 000 section 6.2 studies the imprecision of partitions, not of motors). Its
+reader sees every partition it crosses: the simulation walks the straight motion partition boundary by
+partition boundary (:func:`rfidnav_common.tag_lattice.partitions_along_segment`, exact geometry) and
+hands the localizer one round on entering each partition and one every ``round_spacing_m`` inside it
+(a reader's inventory rounds). Odometry is the true motion, optionally with a relative error
+(``odometry_noise``), expressed in an odom frame that starts at the start pose.
+
+Only ground truth knows the start pose and the deployment's tags; the localizer sees tag IDs and odometry,
+the navigator sees estimates, exactly as over DDS.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from rfidnav_common.tag_lattice import Deployment, partitions_along_segment
+from rfidnav_localization.partition_localization import LocalizerSettings, PartitionLocalizer
+from rfidnav_planning.partition_navigation import FORWARD, ROTATE, NavigatorSettings, PartitionNavigator
+
+SPEED_MPS = 0.2                 # paper 001's speed; only the stamps depend on it
+INSIDE_M = 1e-7                 # how far past a boundary the round on entering a partition is taken
+
+
+@dataclass(frozen=True)
+class NavigationRun:
+    success: bool
+    message: str
+    start: tuple[float, float]
+    goal: tuple[float, float]
+    path_length_m: float
+    straight_distance_m: float
+    final_position: tuple[float, float]
+    replans: int
+    partitions_entered: int
+    trajectory: np.ndarray          # N x 2, the robot's true positions at each stop, turn and crossing
+
+    @property
+    def extra_cost_pct(self) -> float:
+        """Paper 000 section 6.2: (l - |SD|) / |SD| in percent."""
+        return 100.0 * (self.path_length_m - self.straight_distance_m) / self.straight_distance_m
+
+    @property
+    def final_error_m(self) -> float:
+        return math.dist(self.final_position, self.goal)
+
+
+class IdealRobot:
+    """True pose, odometry (relative to the start, with an optional relative error) and distance driven."""
+
+    def __init__(self, x: float, y: float, yaw: float, odometry_noise: float, rng: np.random.Generator) -> None:
+        self.x, self.y, self.yaw = x, y, yaw
+        self.start = (x, y, yaw)
+        self.odom = [0.0, 0.0, 0.0]
+        self.travelled_m = 0.0
+        self.time_s = 0.0
+        self.noise = odometry_noise
+        self.rng = rng
+        self.trajectory = [(x, y)]
+
+    def drive(self, distance: float) -> None:
+        self.x += distance * math.cos(self.yaw)
+        self.y += distance * math.sin(self.yaw)
+        self.travelled_m += distance
+        self.time_s += distance / SPEED_MPS
+        measured = distance * (1.0 + self.noise * self.rng.standard_normal()) if self.noise else distance
+        self.odom[0] += measured * math.cos(self.odom[2])
+        self.odom[1] += measured * math.sin(self.odom[2])
+
+    def turn(self, angle: float) -> None:
+        self.yaw += angle
+        self.time_s += abs(angle) / 1.0
+        self.odom[2] += angle * (1.0 + self.noise * self.rng.standard_normal()) if self.noise else angle
+        self.trajectory.append((self.x, self.y))
+
+    def odometry(self) -> tuple[float, float, float]:
+        return self.odom[0], self.odom[1], self.odom[2]
+
+
+def run_navigation(deployment: Deployment, start: tuple[float, float, float], goal: tuple[float, float],
+                   localizer_settings: LocalizerSettings, navigator_settings: NavigatorSettings,
+                   rng: np.random.Generator, round_spacing_m: float | None = None,
+                   odometry_noise: float = 0.0) -> NavigationRun:
+    """One navigation from ``start`` (x, y, yaw; ground truth) to ``goal``."""
+    robot = IdealRobot(*start, odometry_noise, rng)
+    localizer = PartitionLocalizer(localizer_settings, rng)
+    navigator = PartitionNavigator(navigator_settings, deployment.area)
+    lattice = deployment.lattice
+    spacing = round_spacing_m or deployment.read_range_m / 2.0
+
+    def observe() -> object:
+        tags = deployment.partition_at(robot.x, robot.y)
+        estimate = localizer.update(robot.time_s, [lattice.tag_id(c) for c in tags], robot.odometry())
+        return navigator.on_estimate(estimate, robot.travelled_m)
+
+    decision = navigator.start(goal)
+    decision = observe()
+    while not decision.finished:
+        if decision.motion.kind == ROTATE:
+            robot.turn(decision.motion.rotate_by_rad)
+            decision = navigator.rotation_done()
+            decision = observe()          # the localizer sees the turn in the odometry
+            continue
+        assert decision.motion.kind == FORWARD
+        decision = drive_until_decision(deployment, robot, spacing, observe)
+    robot.trajectory.append((robot.x, robot.y))
+    state = navigator.state
+    return NavigationRun(decision.success, decision.message, (start[0], start[1]), goal, robot.travelled_m,
+                         math.dist(start[:2], goal), (robot.x, robot.y), state.replans, state.partitions_entered,
+                         np.array(robot.trajectory))
+
+
+def drive_until_decision(deployment: Deployment, robot: IdealRobot, spacing: float, observe) -> object:
+    """Drive straight, observing on entering each partition and every ``spacing`` inside one, until the
+    navigator wants something other than driving on."""
+    while True:
+        start = (robot.x, robot.y)
+        end = (robot.x + spacing * math.cos(robot.yaw), robot.y + spacing * math.sin(robot.yaw))
+        pieces = partitions_along_segment(deployment, start, end)
+        for piece in pieces[1:]:
+            robot.drive(piece.t_start * spacing + INSIDE_M - math.dist(start, (robot.x, robot.y)))
+            decision = observe()
+            if decision.motion.kind != FORWARD:
+                robot.trajectory.append((robot.x, robot.y))
+                return decision
+        robot.drive(spacing - math.dist(start, (robot.x, robot.y)))
+        decision = observe()
+        if decision.motion.kind != FORWARD:
+            robot.trajectory.append((robot.x, robot.y))
+            return decision
+
+
+def random_task(deployment: Deployment, distance_m: float, rng: np.random.Generator,
+                margin_m: float = 0.0) -> tuple[tuple[float, float, float], tuple[float, float]]:
+    """A random start pose (position uniform in the area, heading uniform) and a goal ``distance_m`` away
+    in a uniformly random direction, both inside the area (paper 000 section 6.2)."""
+    x_min, y_min, x_max, y_max = deployment.area
+    while True:
+        sx, sy = rng.uniform(x_min + margin_m, x_max - margin_m), rng.uniform(y_min + margin_m, y_max - margin_m)
+        bearing = rng.uniform(-math.pi, math.pi)
+        gx, gy = sx + distance_m * math.cos(bearing), sy + distance_m * math.sin(bearing)
+        if x_min + margin_m <= gx <= x_max - margin_m and y_min + margin_m <= gy <= y_max - margin_m:
+            return (sx, sy, rng.uniform(-math.pi, math.pi)), (gx, gy)

@@ -1,0 +1,68 @@
+"""Planning domain objects <-> ROS messages: localization status in, plans out."""
+
+from __future__ import annotations
+
+import math
+
+from builtin_interfaces.msg import Time
+from geometry_msgs.msg import Point, PoseStamped
+from nav_msgs.msg import Path
+
+from rfidnav_common.geometry import yaw_to_quaternion
+from rfidnav_common.tag_lattice import Coordinate, Lattice, TagIdError, decode_tag_id, partition_centre
+from rfidnav_localization.partition_localization import LocalizationEstimate
+from rfidnav_msgs.msg import LocalizationStatus, Partition, PartitionPath
+from rfidnav_planning.partition_planner import PartitionPlan
+
+
+def estimate_from_status(msg: LocalizationStatus, stamp_s: float,
+                         previous_partition: frozenset[Coordinate] | None) -> LocalizationEstimate:
+    """The localizer's estimate as the navigator core takes it; the lattice comes from the tag IDs again.
+
+    The status names tags the localizer accepted, so they decode; one that does not is left out."""
+    lattice: Lattice | None = None
+    partition: set[Coordinate] = set()
+    for tag_id in msg.partition_tag_ids:
+        try:
+            decoded = decode_tag_id(tag_id)
+        except TagIdError:
+            continue
+        lattice = lattice or Lattice(decoded.layout, decoded.spacing_m)
+        partition.add(decoded.coordinate)
+    frozen = frozenset(partition)
+    bounds = (msg.yaw_lower_rad, msg.yaw_upper_rad) if msg.orientation_valid else None
+    return LocalizationEstimate(
+        stamp_s=stamp_s, method=msg.method, partition=frozen, partition_tag_ids=tuple(msg.partition_tag_ids),
+        partition_changed=bool(frozen) and frozen != previous_partition,
+        partitions_traversed=msg.partitions_traversed,
+        position=(msg.x, msg.y) if msg.position_valid else None, position_covariance=(0.0, 0.0, 0.0),
+        yaw=msg.yaw_rad if msg.orientation_valid else None, yaw_bounds=bounds,
+        yaw_std=(bounds[1] - bounds[0]) / 4.0 if bounds else None,
+        read_range_m=msg.read_range_m if msg.read_range_m > 0.0 else None, lattice=lattice,
+        rejected_tag_ids=tuple(msg.rejected_tag_ids), rogue_count=msg.rogue_count,
+        undecodable_count=msg.undecodable_count)
+
+
+def plan_messages(plan: PartitionPlan, lattice: Lattice, replans: int, stamp: Time,
+                  frame_id: str) -> tuple[Path, PartitionPath]:
+    """/planning/path (the partition centres, headed along the segment) and /planning/partitions."""
+    heading = math.atan2(plan.goal[1] - plan.start[1], plan.goal[0] - plan.start[0])
+    qx, qy, qz, qw = yaw_to_quaternion(heading)
+    path = Path()
+    path.header.stamp, path.header.frame_id = stamp, frame_id
+    partitions = PartitionPath()
+    partitions.header = path.header
+    partitions.start = Point(x=float(plan.start[0]), y=float(plan.start[1]), z=0.0)
+    partitions.goal = Point(x=float(plan.goal[0]), y=float(plan.goal[1]), z=0.0)
+    partitions.replans = replans
+    for tags in plan.partitions:
+        x, y = partition_centre(lattice, tags)
+        pose = PoseStamped()
+        pose.header = path.header
+        pose.pose.position.x, pose.pose.position.y = x, y
+        pose.pose.orientation.x, pose.pose.orientation.y = qx, qy
+        pose.pose.orientation.z, pose.pose.orientation.w = qz, qw
+        path.poses.append(pose)
+        partitions.partitions.append(Partition(tag_ids=sorted(lattice.tag_id(c) for c in tags),
+                                               centre=Point(x=x, y=y, z=0.0)))
+    return path, partitions

@@ -1,0 +1,41 @@
+"""Parameters of the partition_navigator node: typed, with defaults and descriptions, importable without
+rclpy so the orchestrator and the in-process runner validate parameter files against the same class.
+config/params/partition_navigator.yaml repeats the defaults and documents them."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from rfidnav_common.config import param
+from rfidnav_planning.partition_navigation import NavigatorSettings
+
+
+@dataclass(frozen=True)
+class PartitionNavigatorParameters:
+    map_file: str = param("robot map YAML with the deployment_area (where the floor is tagged)", "")
+    approximation_level: int = param("partitions crossed in the localization phase (paper 000: 1-8)", 4)
+    localized_yaw_sd_rad: float = param(
+        "also end the localization phase once the heading sd is below this [rad] (0 = paper: N partitions only)", 0.0)
+    max_path_factor: float = param("give up after driving this many times the first planned distance (+1 m)", 5.0)
+    lost_distance_m: float = param("give up after driving this far without reading a floor tag [m]", 1.0)
+    max_replans: int = param("give up after this many re-plans", 500)
+    forward_speed_mps: float = param("speed when driving straight [m/s]", 0.2)
+    turn_rate_radps: float = param("largest yaw rate when turning on the spot [rad/s]", 0.8)
+    turn_gain_per_s: float = param("yaw rate per radian still to turn, near the end of a turn [1/s]", 3.0)
+    turn_tolerance_rad: float = param("a turn is done when this close to its target heading [rad]", 0.005)
+    unheard_timeout_s: float = param("abort when no localization status arrives for this long [s]", 5.0)
+
+    def validate(self) -> None:
+        if not self.map_file:
+            raise ValueError("map_file: required (the map with the deployment_area)")
+        for name in ("forward_speed_mps", "turn_rate_radps", "turn_gain_per_s", "turn_tolerance_rad",
+                     "unheard_timeout_s"):
+            if getattr(self, name) <= 0.0:
+                raise ValueError(f"{name}: must be positive, got {getattr(self, name)}")
+        self.settings().validate()
+
+    def settings(self) -> NavigatorSettings:
+        return NavigatorSettings(approximation_level=self.approximation_level,
+                                 localized_yaw_sd_rad=self.localized_yaw_sd_rad,
+                                 max_path_factor=self.max_path_factor, lost_distance_m=self.lost_distance_m,
+                                 max_replans=self.max_replans)

@@ -1,0 +1,264 @@
+"""Navigation in an RFID-enabled space (paper 000 section 5.2), as a decision core without motion or ROS.
+
+The navigator decides; something else moves the robot. It is fed one localization estimate per
+inventory round (or per partition crossing in the in-process experiments) and answers with a motion:
+drive straight on, rotate on the spot by an angle, or stop. The DDS node turns these into /cmd_vel
+(rotations measured with odometry); the experiment runner applies them to an idealised robot. Both
+run exactly this code.
+
+Phases (paper 000 sections 5.2 and 6.3):
+
+1. ``localizing``: drive straight across N partitions (N = the approximation level, 1-8) so the
+   localizer can bound the heading from the partitions traversed;
+2. ``rotating``: turn towards the goal by (bearing to the goal from the estimated location) minus the
+   estimated heading;
+3. ``following``: drive straight along the planned partition path (Algorithm 1). Entering the goal's
+   partition ends the navigation (success). Entering a partition that is not on the plan is a
+   deviation: ``replanning`` re-estimates the heading from the partitions traversed (the localizer's
+   current estimate), plans again from the estimated location, rotates, and goes on. The two partitions
+   either side of the boundary where the robot last turned are no deviation (see
+   :meth:`PartitionNavigator.unexpected`).
+4. Leaving the tagged floor (no tag read after some were), the robot turns back while localizing and
+   re-plans while following.
+
+The goal's partition is the set of tags that read the goal point; the robot computes it from the
+lattice the tags describe (layout and spacing in every ID), not from a map of tag positions.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from rfidnav_common.geometry import wrap_angle
+from rfidnav_common.tag_lattice import Coordinate, Deployment, Lattice
+from rfidnav_localization.partition_localization import LocalizationEstimate
+from rfidnav_planning.partition_planner import PartitionPlan, plan_partition_path
+
+LOCALIZING, ROTATING, FOLLOWING, REPLANNING, DONE = "localizing", "rotating", "following", "replanning", "done"
+FORWARD, ROTATE, STOP = "forward", "rotate", "stop"
+DEVIATION_CHECKS = ("partition", "pose")
+
+
+@dataclass(frozen=True)
+class NavigatorSettings:
+    approximation_level: int = 4           # N: partitions crossed in the localization phase (paper 000: 1..8)
+    localized_yaw_sd_rad: float = 0.0      # > 0: also end the localization phase once the heading's sd is below this
+    max_path_factor: float = 5.0           # give up after driving this many times the first planned distance (+ 1 m)
+    lost_distance_m: float = 1.0           # give up after driving this far without reading any tag
+    max_replans: int = 500
+    deviation_check: str = "partition"     # partition (paper: a partition off the plan) or pose (ours, see deviated)
+    pose_miss_tolerance_r: float = 0.25    # pose check: re-plan when the estimate would miss the goal by this x r
+
+    def validate(self) -> None:
+        if not 1 <= self.approximation_level <= 64:
+            raise ValueError(f"approximation_level: must be in 1..64, got {self.approximation_level}")
+        if self.localized_yaw_sd_rad < 0.0:
+            raise ValueError("localized_yaw_sd_rad: must not be negative")
+        if self.max_path_factor <= 1.0:
+            raise ValueError(f"max_path_factor: must be above 1, got {self.max_path_factor}")
+        if self.lost_distance_m <= 0.0:
+            raise ValueError(f"lost_distance_m: must be positive, got {self.lost_distance_m}")
+        if self.max_replans < 0:
+            raise ValueError("max_replans: must not be negative")
+        if self.deviation_check not in DEVIATION_CHECKS:
+            raise ValueError(f"deviation_check: '{self.deviation_check}' is not one of {', '.join(DEVIATION_CHECKS)}")
+        if self.pose_miss_tolerance_r <= 0.0:
+            raise ValueError(f"pose_miss_tolerance_r: must be positive, got {self.pose_miss_tolerance_r}")
+
+
+@dataclass(frozen=True)
+class Motion:
+    kind: str                              # forward | rotate | stop
+    rotate_by_rad: float = 0.0             # for rotate: CCW positive, relative to the current heading
+
+
+@dataclass(frozen=True)
+class Decision:
+    phase: str
+    motion: Motion
+    new_plan: PartitionPlan | None = None  # set when this decision (re)planned
+    finished: bool = False
+    success: bool = False
+    message: str = ""
+
+
+@dataclass
+class NavigationState:
+    goal: tuple[float, float]
+    tolerance_m: float
+    phase: str = LOCALIZING
+    resume_phase: str = FOLLOWING            # the phase a turn on the spot leads to
+    off_deployment: bool = False             # reading no tags since it last turned back
+    current_partition: frozenset[Coordinate] | None = None
+    previous_partition: frozenset[Coordinate] | None = None
+    tolerated: frozenset[frozenset[Coordinate]] = frozenset()   # off-plan partitions that are no deviation
+    plan: PartitionPlan | None = None
+    goal_partition: frozenset[Coordinate] | None = None
+    lattice: Lattice | None = None           # learnt from the tag IDs
+    replans: int = 0
+    partitions_entered: int = 0
+    last_read_travel_m: float = 0.0
+    path_limit_m: float = math.inf
+    outcome: Decision | None = None
+
+
+class GoalRejected(ValueError):
+    """A goal the navigator cannot accept; the message says why."""
+
+
+class PartitionNavigator:
+    def __init__(self, settings: NavigatorSettings, deployment_area: tuple[float, float, float, float]) -> None:
+        settings.validate()
+        self.settings = settings
+        self.area = deployment_area
+        self.state: NavigationState | None = None
+
+    # ------------------------------------------------------------------------------------- goals
+    def check_goal(self, goal: tuple[float, float], tolerance_m: float) -> None:
+        x_min, y_min, x_max, y_max = self.area
+        if not all(math.isfinite(v) for v in (*goal, tolerance_m)):
+            raise GoalRejected(f"goal ({goal[0]}, {goal[1]}) or tolerance {tolerance_m} is not a finite number")
+        if tolerance_m < 0.0:
+            raise GoalRejected(f"tolerance {tolerance_m} m is negative")
+        if not (x_min <= goal[0] <= x_max and y_min <= goal[1] <= y_max):
+            raise GoalRejected(f"goal ({goal[0]:.3f}, {goal[1]:.3f}) is outside the deployment "
+                               f"[{x_min:g}, {x_max:g}] x [{y_min:g}, {y_max:g}] m")
+
+    def start(self, goal: tuple[float, float], tolerance_m: float = 0.0) -> Decision:
+        self.check_goal(goal, tolerance_m)
+        self.state = NavigationState(goal=(float(goal[0]), float(goal[1])), tolerance_m=tolerance_m)
+        return Decision(LOCALIZING, Motion(FORWARD))
+
+    @property
+    def active(self) -> bool:
+        return self.state is not None and self.state.outcome is None
+
+    # ----------------------------------------------------------------------------------- decisions
+    def on_estimate(self, estimate: LocalizationEstimate, travelled_m: float) -> Decision:
+        """One localization estimate; ``travelled_m`` is the distance driven since the start (odometry)."""
+        state = self.state
+        if state is None or state.outcome is not None:
+            raise RuntimeError("on_estimate without an active goal")
+        if estimate.partition:
+            state.last_read_travel_m = travelled_m
+            state.off_deployment = False
+            if estimate.partition_changed:
+                state.partitions_entered += 1
+                state.previous_partition, state.current_partition = state.current_partition, estimate.partition
+        elif travelled_m - state.last_read_travel_m > self.settings.lost_distance_m:
+            return self.finish(False, f"lost: no floor tag read over the last {self.settings.lost_distance_m:g} m "
+                                      "(off the deployment?)")
+        if travelled_m > state.path_limit_m:
+            return self.finish(False, f"gave up after driving {travelled_m:.2f} m "
+                                      f"({self.settings.max_path_factor:g} x the planned distance)")
+        if state.phase == ROTATING:
+            return Decision(ROTATING, Motion(ROTATE, 0.0))     # the rotation in progress finishes first
+        if estimate.position is None:
+            return Decision(state.phase, Motion(FORWARD))
+        if not estimate.partition:
+            return self.left_deployment(estimate)
+        if state.goal_partition is None and estimate.lattice is not None:
+            state.lattice = estimate.lattice
+            state.goal_partition = self.deployment(estimate).partition_at(*state.goal)
+        if self.arrived(estimate):
+            return self.finish(True, f"arrived in the goal's partition after {state.replans} re-plans")
+        if state.phase == LOCALIZING:
+            if self.localized(estimate):
+                return self.plan_and_turn(estimate, LOCALIZING)
+            return Decision(LOCALIZING, Motion(FORWARD))
+        # following
+        if estimate.partition_changed and self.deviated(estimate):
+            if state.replans >= self.settings.max_replans:
+                return self.finish(False, f"gave up after {state.replans} re-plans")
+            state.replans += 1
+            return self.plan_and_turn(estimate, REPLANNING)
+        return Decision(FOLLOWING, Motion(FORWARD))
+
+    def left_deployment(self, estimate: LocalizationEstimate) -> Decision:
+        """No tag read after some were: the robot drove off the tagged floor. Localizing, it turns back and
+        starts the straight stretch again; following, it re-plans from its last estimate."""
+        state = self.state
+        if state.off_deployment:
+            return Decision(state.phase, Motion(FORWARD))     # already turned back: drive on to the tags
+        state.off_deployment = True
+        if state.phase == LOCALIZING or estimate.yaw is None:
+            state.phase, state.resume_phase = ROTATING, LOCALIZING
+            return Decision(LOCALIZING, Motion(ROTATE, math.pi))
+        state.replans += 1
+        return self.plan_and_turn(estimate, REPLANNING)
+
+    def rotation_done(self) -> Decision:
+        """The robot has turned as asked; drive along the plan."""
+        if self.state is None or self.state.outcome is not None:
+            raise RuntimeError("rotation_done without an active goal")
+        self.state.phase, self.state.resume_phase = self.state.resume_phase, FOLLOWING
+        return Decision(self.state.phase, Motion(FORWARD))
+
+    def cancel(self, message: str = "cancelled") -> Decision:
+        return self.finish(False, message)
+
+    # ------------------------------------------------------------------------------------- helpers
+    def localized(self, estimate: LocalizationEstimate) -> bool:
+        if estimate.yaw is None:
+            return False
+        if estimate.partitions_traversed >= self.settings.approximation_level:
+            return True
+        sd_limit = self.settings.localized_yaw_sd_rad
+        return sd_limit > 0.0 and estimate.yaw_std is not None and estimate.yaw_std <= sd_limit
+
+    def arrived(self, estimate: LocalizationEstimate) -> bool:
+        state = self.state
+        if state.goal_partition is not None and estimate.partition == state.goal_partition:
+            return True
+        if state.tolerance_m > 0.0 and estimate.position is not None:
+            return math.dist(estimate.position, state.goal) <= state.tolerance_m
+        return False
+
+    def deviated(self, estimate: LocalizationEstimate) -> bool:
+        """Time to re-plan. ``partition`` (paper 000 section 5.2): the robot entered a partition off the plan.
+        ``pose`` (ours, for an estimate that is more than a partition, such as the particle filter's): the
+        estimated heading would miss the goal by more than ``pose_miss_tolerance_r`` read ranges."""
+        if self.settings.deviation_check == "partition":
+            return self.unexpected(estimate.partition)
+        if estimate.yaw is None:
+            return False
+        goal = self.state.goal
+        remaining = math.dist(estimate.position, goal)
+        error = wrap_angle(math.atan2(goal[1] - estimate.position[1], goal[0] - estimate.position[0]) - estimate.yaw)
+        miss = remaining if abs(error) >= math.pi / 2.0 else remaining * abs(math.sin(error))
+        return miss > self.settings.pose_miss_tolerance_r * estimate.read_range_m
+
+    def unexpected(self, partition: frozenset[Coordinate]) -> bool:
+        """Off the plan. The partitions on both sides of the boundary where the robot last turned count as on
+        it: the robot turns where it entered a partition, so driving off it may first cross back that
+        boundary, and calling that a deviation re-plans on the spot forever."""
+        state = self.state
+        return state.plan is not None and state.plan.index_of(partition) is None and partition not in state.tolerated
+
+    def deployment(self, estimate: LocalizationEstimate) -> Deployment:
+        """The deployment as the robot knows it: lattice and r from the tag IDs, area from the map."""
+        return Deployment(estimate.lattice, estimate.read_range_m, self.area)
+
+    def plan_and_turn(self, estimate: LocalizationEstimate, phase: str) -> Decision:
+        state = self.state
+        start = self.clamped(estimate.position)
+        plan = plan_partition_path(self.deployment(estimate), start, state.goal)
+        state.plan = plan
+        state.tolerated = frozenset(p for p in (state.current_partition, state.previous_partition) if p)
+        if state.path_limit_m == math.inf:
+            state.path_limit_m = self.settings.max_path_factor * math.dist(start, state.goal) + 1.0
+        bearing = math.atan2(state.goal[1] - start[1], state.goal[0] - start[0])
+        state.phase = ROTATING
+        return Decision(phase, Motion(ROTATE, wrap_angle(bearing - estimate.yaw)), new_plan=plan)
+
+    def clamped(self, position: tuple[float, float]) -> tuple[float, float]:
+        """A partition centre can lie just outside the area (edge tags): plan from the nearest point inside."""
+        x_min, y_min, x_max, y_max = self.area
+        return min(max(position[0], x_min), x_max), min(max(position[1], y_min), y_max)
+
+    def finish(self, success: bool, message: str) -> Decision:
+        state = self.state
+        state.phase = DONE
+        state.outcome = Decision(DONE, Motion(STOP), finished=True, success=success, message=message)
+        return state.outcome

@@ -1,0 +1,212 @@
+"""partition_navigator: action server /navigate_to_point driving /cmd_vel from /localization/status (paper 000).
+
+A thin adapter around PartitionNavigator: each LocalizationStatus (one inventory round, from
+partition_localizer) becomes one navigator decision. "Drive on" is the forward speed; "rotate by an
+angle" is a turn on the spot measured with /odom, after which the navigator is told the turn is done.
+Every new plan is published on /planning/path (partition centres) and /planning/partitions (their tags).
+
+As heading_controller does, the goal is followed from its acceptance and its execute callback runs only
+once the outcome is known, so the node stays on rclpy's EventsExecutor with no coroutine waiting.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+from geometry_msgs.msg import Pose2D, Twist
+from nav_msgs.msg import Odometry, Path
+from rclpy.action import ActionServer, CancelResponse, GoalResponse
+from rclpy.action.server import ServerGoalHandle
+from rclpy.node import Node
+
+from rfidnav_common.errors import ConfigError
+from rfidnav_common.geometry import quaternion_to_yaw, wrap_angle
+from rfidnav_common.robot_map import load_route_map
+from rfidnav_common.ros import COMMAND_QOS, LATCHED_QOS, SENSOR_QOS, declare_parameters, run_node, seconds_of
+from rfidnav_common.tag_lattice import Coordinate
+from rfidnav_msgs.action import NavigateToPoint
+from rfidnav_msgs.msg import LocalizationStatus, PartitionPath
+from rfidnav_planning.conversions import estimate_from_status, plan_messages
+from rfidnav_planning.parameters import PartitionNavigatorParameters
+from rfidnav_planning.partition_navigation import FORWARD, ROTATE, STOP, Decision, GoalRejected, PartitionNavigator
+
+
+@dataclass
+class ActiveGoal:
+    handle: ServerGoalHandle
+    last_status_s: float
+    phase: str = "localizing"
+    turn_target_yaw: float | None = None     # odometry heading to reach while turning
+    previous_partition: frozenset[Coordinate] | None = None
+    travelled_m: float = 0.0
+    outcome: tuple[str, str] | None = None   # (succeeded | aborted | canceled, message) once concluded
+
+
+class PartitionNavigatorNode(Node):
+    def __init__(self, **node_options: Any) -> None:
+        """``node_options``: keyword arguments of rclpy's Node (``context``, ``parameter_overrides``), for tests."""
+        super().__init__("partition_navigator", **node_options)
+        self.params: PartitionNavigatorParameters = declare_parameters(self, PartitionNavigatorParameters)
+        robot_map = load_route_map(self.params.map_file)
+        if robot_map.deployment_area is None:
+            raise ConfigError(self.params.map_file, "deployment_area", "partition navigation needs the tagged area")
+        self.navigator = PartitionNavigator(self.params.settings(), robot_map.deployment_area)
+        self.active: ActiveGoal | None = None
+        self.odom_pose: tuple[float, float, float] | None = None
+        self.cmd_pub = self.create_publisher(Twist, "/cmd_vel", COMMAND_QOS)
+        self.path_pub = self.create_publisher(Path, "/planning/path", LATCHED_QOS)
+        self.partitions_pub = self.create_publisher(PartitionPath, "/planning/partitions", LATCHED_QOS)
+        self.create_subscription(LocalizationStatus, "/localization/status", self.on_status, SENSOR_QOS)
+        self.create_subscription(Odometry, "/odom", self.on_odom, SENSOR_QOS)
+        self.action_server = ActionServer(
+            self, NavigateToPoint, "/navigate_to_point", execute_callback=self.finish,
+            goal_callback=self.on_goal, handle_accepted_callback=self.on_accepted,
+            cancel_callback=lambda _: CancelResponse.ACCEPT)
+        self.create_timer(0.1, self.supervise)
+        self.get_logger().info(f"deployment area {list(robot_map.deployment_area)} m; "
+                               f"approximation level {self.params.approximation_level}")
+
+    def destroy_node(self) -> None:
+        self.action_server.destroy()
+        super().destroy_node()
+
+    def now_s(self) -> float:
+        return self.get_clock().now().nanoseconds * 1e-9
+
+    # ------------------------------------------------------------------------------------ goals
+    def on_goal(self, goal: NavigateToPoint.Goal) -> GoalResponse:
+        try:
+            if self.active is not None:
+                raise GoalRejected("another goal is being navigated to")
+            self.navigator.check_goal((goal.target.x, goal.target.y), goal.tolerance_m)
+        except GoalRejected as error:
+            self.get_logger().error(f"goal rejected: {error}")
+            return GoalResponse.REJECT
+        return GoalResponse.ACCEPT
+
+    def on_accepted(self, handle: ServerGoalHandle) -> None:
+        target = handle.request.target
+        self.navigator.start((target.x, target.y), handle.request.tolerance_m)
+        self.active = ActiveGoal(handle, self.now_s())
+        self.get_logger().info(f"navigating to ({target.x:.3f}, {target.y:.3f})")
+        self.drive(0.0, 0.0)
+
+    def conclude(self, state: str, message: str) -> None:
+        self.active.outcome = (state, message)
+        self.drive(0.0, 0.0)
+        self.active.handle.execute()
+
+    def finish(self, handle: ServerGoalHandle) -> NavigateToPoint.Result:
+        active, self.active = self.active, None
+        state, message = active.outcome
+        getattr(handle, {"succeeded": "succeed", "aborted": "abort", "canceled": "canceled"}[state])()
+        self.get_logger().info(f"navigation {state}: {message}")
+        navigation = self.navigator.state
+        return NavigateToPoint.Result(success=state == "succeeded", message=message,
+                                      path_length_m=float(active.travelled_m), replans=navigation.replans,
+                                      partitions_traversed=navigation.partitions_entered)
+
+    # ---------------------------------------------------------------------------------- sensing
+    def on_odom(self, msg: Odometry) -> None:
+        pose = msg.pose.pose
+        yaw = quaternion_to_yaw(pose.orientation.x, pose.orientation.y, pose.orientation.z, pose.orientation.w)
+        if not all(math.isfinite(v) for v in (pose.position.x, pose.position.y, yaw)):
+            self.get_logger().warning("dropped an odometry message with non-finite values", throttle_duration_sec=5.0)
+            return
+        previous, self.odom_pose = self.odom_pose, (pose.position.x, pose.position.y, yaw)
+        active = self.active
+        if active is None or active.outcome is not None:
+            return
+        if previous is not None:
+            active.travelled_m += math.dist(previous[:2], self.odom_pose[:2])
+        if active.turn_target_yaw is not None:
+            self.turn_step(active, yaw)
+
+    def turn_step(self, active: ActiveGoal, yaw: float) -> None:
+        remaining = wrap_angle(active.turn_target_yaw - yaw)
+        if abs(remaining) <= self.params.turn_tolerance_rad:
+            active.turn_target_yaw = None
+            self.apply(self.navigator.rotation_done())
+            return
+        rate = max(-self.params.turn_rate_radps, min(self.params.turn_rate_radps, self.params.turn_gain_per_s * remaining))
+        self.drive(0.0, rate)
+
+    def on_status(self, msg: LocalizationStatus) -> None:
+        active = self.active
+        if active is None or active.outcome is not None:
+            return
+        active.last_status_s = self.now_s()
+        if not all(math.isfinite(v) for v in (msg.x, msg.y, msg.yaw_rad, msg.yaw_lower_rad, msg.yaw_upper_rad)):
+            self.get_logger().warning("ignored a localization status with non-finite values", throttle_duration_sec=5.0)
+            return
+        estimate = estimate_from_status(msg, seconds_of(msg.header.stamp), active.previous_partition)
+        if estimate.partition:
+            active.previous_partition = estimate.partition
+        decision = self.navigator.on_estimate(estimate, active.travelled_m)
+        if active.turn_target_yaw is None or decision.finished:   # a turn in progress is finished by on_odom
+            self.apply(decision)
+        self.publish_feedback(active, decision.phase, estimate.position, estimate.yaw)
+
+    def apply(self, decision: Decision) -> None:
+        active = self.active
+        active.phase = decision.phase
+        if decision.new_plan is not None and self.navigator.state.plan is not None:
+            self.publish_plan(decision)
+        if decision.finished:
+            self.conclude("succeeded" if decision.success else "aborted", decision.message)
+        elif decision.motion.kind == ROTATE and self.odom_pose is not None:
+            active.turn_target_yaw = wrap_angle(self.odom_pose[2] + decision.motion.rotate_by_rad)
+            self.turn_step(active, self.odom_pose[2])
+        elif decision.motion.kind == FORWARD:
+            self.drive(self.params.forward_speed_mps, 0.0)
+        elif decision.motion.kind == STOP:
+            self.drive(0.0, 0.0)
+
+    # ------------------------------------------------------------------------------------ output
+    def drive(self, linear: float, angular: float) -> None:
+        twist = Twist()
+        twist.linear.x = float(linear)
+        twist.angular.z = float(angular)
+        self.cmd_pub.publish(twist)
+
+    def publish_plan(self, decision: Decision) -> None:
+        lattice = self.navigator.state.lattice
+        path, partitions = plan_messages(decision.new_plan, lattice, self.navigator.state.replans,
+                                         self.get_clock().now().to_msg(), "map")
+        self.path_pub.publish(path)
+        self.partitions_pub.publish(partitions)
+
+    def publish_feedback(self, active: ActiveGoal, phase: str, position: tuple[float, float] | None,
+                         yaw: float | None) -> None:
+        navigation = self.navigator.state
+        feedback = NavigateToPoint.Feedback(phase=phase, partitions_traversed=navigation.partitions_entered,
+                                            replans=navigation.replans)
+        if position is not None:
+            feedback.estimated_pose = Pose2D(x=float(position[0]), y=float(position[1]),
+                                             theta=float(yaw) if yaw is not None else 0.0)
+            feedback.distance_to_goal_m = float(math.dist(position, navigation.goal))
+        active.handle.publish_feedback(feedback)
+
+    def supervise(self) -> None:
+        """Cancel requests and a silent localizer are noticed here, as no status may arrive to notice them."""
+        active = self.active
+        if active is None or active.outcome is not None:
+            return
+        if active.handle.is_cancel_requested:
+            self.navigator.cancel("cancelled by the client")
+            self.conclude("canceled", "cancelled by the client")
+            return
+        silent_s = self.now_s() - active.last_status_s
+        if silent_s > self.params.unheard_timeout_s:
+            self.navigator.cancel("no localization status")
+            self.conclude("aborted", f"no /localization/status for {silent_s:.1f} s")
+
+
+def main(args: list[str] | None = None) -> int:
+    return run_node(PartitionNavigatorNode, args)
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
