@@ -378,4 +378,13 @@ def test_parameter_files_set_every_parameter_and_the_paper_file_equals_the_defau
     if name == "paper":
         assert parameters == PartitionLocalizerParameters()
     else:
-        assert dataclasses.replace(parameters, method="paper") == PartitionLocalizerParameters()
+        assert dataclasses.replace(parameters, method="paper", antenna=1, antenna_offset_m=0.0) == \
+            PartitionLocalizerParameters()
+    # The antenna the localizer listens to reads where the localizer thinks: the reader's file agrees.
+    from rfidnav_sim.parameters import ReaderParameters
+    reader_file = WORKSPACE / "config/params/reader_floor_lattice.yaml"
+    reader = ReaderParameters(**{**node_parameter_values(ReaderParameters, reader_file, "rfid_reader_sim"),
+                                 "world_file": "unused"})
+    antenna = reader.reader_model().antennas[parameters.antenna - 1]
+    assert not antenna.facing_up
+    assert antenna.position[:2] == pytest.approx((parameters.antenna_offset_m, 0.0))

@@ -3,11 +3,13 @@ DDS nodes driving an idealised robot, as the paper's simulation does, thousands 
 
 The robot is a point with a heading that drives straight at constant speed and turns on the spot exactly
 as the navigator asks (paper 000 section 6.2 studies the imprecision of partitions, not of motors). Its
-reader sees every partition it crosses: the simulation walks the straight motion partition boundary by
-partition boundary (:func:`rfidnav_common.tag_lattice.partitions_along_segment`, exact geometry) and
-hands the localizer one round on entering each partition and one every ``round_spacing_m`` inside it
-(a reader's inventory rounds). Odometry is the true motion, optionally with a relative error
-(``odometry_noise``), expressed in an odom frame that starts at the start pose.
+floor antenna reads at the centre or ``antenna_offset_m`` ahead of it, and sees every partition it
+crosses: the simulation walks the antenna's path (a straight line when driving, an arc in 2-degree chords
+when turning) partition boundary by partition boundary (:func:`rfidnav_common.tag_lattice.
+partitions_along_segment`, exact geometry) and hands the localizer one round on entering each partition
+and one every ``round_spacing_m`` of the antenna's path inside it (a reader's inventory rounds).
+Odometry is the true motion, optionally with a relative error (``odometry_noise``), expressed in an odom
+frame that starts at the start pose.
 
 Only ground truth knows the start pose and the deployment's tags; the localizer sees tag IDs and odometry,
 the navigator sees estimates, exactly as over DDS.
@@ -17,15 +19,18 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Callable
 
 import numpy as np
 
 from rfidnav_common.tag_lattice import Deployment, partitions_along_segment
 from rfidnav_localization.partition_localization import LocalizerSettings, PartitionLocalizer
-from rfidnav_planning.partition_navigation import FORWARD, ROTATE, NavigatorSettings, PartitionNavigator
+from rfidnav_planning.partition_navigation import FORWARD, ROTATE, Decision, NavigatorSettings, PartitionNavigator
 
 SPEED_MPS = 0.2                 # paper 001's speed; only the stamps depend on it
 INSIDE_M = 1e-7                 # how far past a boundary the round on entering a partition is taken
+TURN_CHORD_RAD = math.radians(2.0)
+DEFAULT_ROUND_SPACING_M = 0.02  # at most this far between rounds (a reader's 25 Hz at 0.2 m/s: 8 mm)
 
 
 @dataclass(frozen=True)
@@ -54,8 +59,10 @@ class NavigationRun:
 class IdealRobot:
     """True pose, odometry (relative to the start, with an optional relative error) and distance driven."""
 
-    def __init__(self, x: float, y: float, yaw: float, odometry_noise: float, rng: np.random.Generator) -> None:
+    def __init__(self, x: float, y: float, yaw: float, odometry_noise: float, rng: np.random.Generator,
+                 antenna_offset_m: float = 0.0) -> None:
         self.x, self.y, self.yaw = x, y, yaw
+        self.antenna_offset_m = antenna_offset_m
         self.start = (x, y, yaw)
         self.odom = [0.0, 0.0, 0.0]
         self.travelled_m = 0.0
@@ -82,20 +89,25 @@ class IdealRobot:
     def odometry(self) -> tuple[float, float, float]:
         return self.odom[0], self.odom[1], self.odom[2]
 
+    def antenna(self, yaw: float | None = None) -> tuple[float, float]:
+        yaw = self.yaw if yaw is None else yaw
+        return self.x + self.antenna_offset_m * math.cos(yaw), self.y + self.antenna_offset_m * math.sin(yaw)
+
 
 def run_navigation(deployment: Deployment, start: tuple[float, float, float], goal: tuple[float, float],
                    localizer_settings: LocalizerSettings, navigator_settings: NavigatorSettings,
                    rng: np.random.Generator, round_spacing_m: float | None = None,
                    odometry_noise: float = 0.0) -> NavigationRun:
-    """One navigation from ``start`` (x, y, yaw; ground truth) to ``goal``."""
-    robot = IdealRobot(*start, odometry_noise, rng)
+    """One navigation from ``start`` (x, y, yaw; ground truth) to ``goal``; the antenna offset is the
+    localizer's (the robot is built as the localizer believes)."""
+    robot = IdealRobot(*start, odometry_noise, rng, localizer_settings.antenna_offset_m)
     localizer = PartitionLocalizer(localizer_settings, rng)
     navigator = PartitionNavigator(navigator_settings, deployment.area)
     lattice = deployment.lattice
-    spacing = round_spacing_m or deployment.read_range_m / 2.0
+    spacing = round_spacing_m or min(deployment.read_range_m / 2.0, DEFAULT_ROUND_SPACING_M)
 
-    def observe() -> object:
-        tags = deployment.partition_at(robot.x, robot.y)
+    def observe() -> Decision:
+        tags = deployment.partition_at(*robot.antenna())
         estimate = localizer.update(robot.time_s, [lattice.tag_id(c) for c in tags], robot.odometry())
         return navigator.on_estimate(estimate, robot.travelled_m)
 
@@ -103,9 +115,10 @@ def run_navigation(deployment: Deployment, start: tuple[float, float, float], go
     decision = observe()
     while not decision.finished:
         if decision.motion.kind == ROTATE:
-            robot.turn(decision.motion.rotate_by_rad)
+            turn_observing(deployment, robot, decision.motion.rotate_by_rad, observe)
             decision = navigator.rotation_done()
-            decision = observe()          # the localizer sees the turn in the odometry
+            if decision.motion.kind == FORWARD:
+                decision = observe()      # the localizer sees the turn's end in the odometry
             continue
         assert decision.motion.kind == FORWARD
         decision = drive_until_decision(deployment, robot, spacing, observe)
@@ -116,13 +129,34 @@ def run_navigation(deployment: Deployment, start: tuple[float, float, float], go
                          np.array(robot.trajectory))
 
 
-def drive_until_decision(deployment: Deployment, robot: IdealRobot, spacing: float, observe) -> object:
+def turn_observing(deployment: Deployment, robot: IdealRobot, angle: float, observe: Callable[[], Decision]) -> None:
+    """Turn on the spot by ``angle``; an antenna off the axis crosses partitions on its arc, each observed
+    (the navigator finishes the turn whatever it answers meanwhile)."""
+    if robot.antenna_offset_m == 0.0:
+        robot.turn(angle)
+        return
+    chords = max(1, math.ceil(abs(angle) / TURN_CHORD_RAD))
+    step = angle / chords
+    for _ in range(chords):
+        start, end = robot.antenna(), robot.antenna(robot.yaw + step)
+        pieces = partitions_along_segment(deployment, start, end)
+        turned = 0.0
+        for piece in pieces[1:]:
+            robot.turn(piece.t_start * step - turned)   # the chord's parameter, as a fraction of the step
+            turned = piece.t_start * step
+            observe()
+        robot.turn(step - turned)
+
+
+def drive_until_decision(deployment: Deployment, robot: IdealRobot, spacing: float,
+                         observe: Callable[[], Decision]) -> Decision:
     """Drive straight, observing on entering each partition and every ``spacing`` inside one, until the
     navigator wants something other than driving on."""
     while True:
         start = (robot.x, robot.y)
-        end = (robot.x + spacing * math.cos(robot.yaw), robot.y + spacing * math.sin(robot.yaw))
-        pieces = partitions_along_segment(deployment, start, end)
+        antenna = robot.antenna()
+        end = (antenna[0] + spacing * math.cos(robot.yaw), antenna[1] + spacing * math.sin(robot.yaw))
+        pieces = partitions_along_segment(deployment, antenna, end)
         for piece in pieces[1:]:
             robot.drive(piece.t_start * spacing + INSIDE_M - math.dist(start, (robot.x, robot.y)))
             decision = observe()

@@ -20,7 +20,7 @@ class PartitionLocalizerParameters:
     # declared: parameter strings must be non-empty (rfidnav_common.config).
     map_file: str = param("robot map (unused: positions come from the tag ids)", "unused")
     method: str = param("paper (partition centre, sec. 4.2 orientation bounds) or filter (particle filter)", "paper")
-    antenna: int = param("reader port of the downward antenna that reads the floor tags", 3)
+    antenna: int = param("reader port of the downward antenna that reads the floor tags", 1)
     map_frame: str = param("frame of the published pose", "map")
     seed: int = param("run seed; the node draws its own random stream from it", 0)
     turn_threshold_rad: float = param(
@@ -36,6 +36,8 @@ class PartitionLocalizerParameters:
         "filter: chance that a tag's read or no-read contradicts the disc geometry (missed or spurious read)", 0.01)
     rogue_distance_factor: float = param(
         "tags read in one round lie within this factor times the read range of each other; others are rogue", 2.0)
+    antenna_offset_m: float = param(
+        "filter: how far ahead of the rotation axis the floor antenna reads [m] (paper method: 0 only)", 0.0)
 
     def validate(self) -> None:
         if not 1 <= self.antenna <= 65535:

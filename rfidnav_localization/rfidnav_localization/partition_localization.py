@@ -29,8 +29,11 @@ Paper method ("paper"):
   bound of the first partition change is often wider than what the robot already knew, and a partition
   bound is preferred only once it is tighter. The first stretch has nothing carried (the paper's case).
 
-Particle filter ("filter", beyond the paper): particles over (x, y, yaw) in the map frame, initialised
-uniformly in the first partition's region with a uniform yaw, predicted with the odometry increment in the
+Particle filter ("filter", beyond the paper): particles over (x, y, yaw) of the robot's centre in the map
+frame. The floor antenna may read ``antenna_offset_m`` ahead of the rotation axis: then a turn on the spot
+sweeps it over partition boundaries and reveals the heading without driving anywhere (the navigator's spin
+localization); the paper method keeps the antenna on the axis. Particles are initialised with their antennas
+uniformly in the first partition's region and a uniform yaw, predicted with the odometry increment in the
 robot frame (noise relative to the motion plus floors), weighted by a soft read model
 P(read | d) = eps + (1 - 2 eps) * sigmoid((r - d) / softness) for each tag of the observed partition (read)
 and for each tag near the particles that was not read, resampled (systematic, with a little roughening)
@@ -128,6 +131,7 @@ class LocalizerSettings:
     boundary_softness_m: float = 0.004       # width of the soft read/no-read edge of a disc in the filter's likelihood
     read_error_probability: float = 0.01     # filter: chance a tag's read/no-read contradicts the geometry
     rogue_distance_factor: float = 2.0       # tags read together lie within factor * r of each other
+    antenna_offset_m: float = 0.0            # floor antenna ahead of the rotation axis (filter only; see below)
 
     def validate(self) -> None:
         if self.method not in METHODS:
@@ -144,6 +148,9 @@ class LocalizerSettings:
                 raise ValueError(f"{name}: must be a non-negative number, got {value}")
         if not 0.0 < self.read_error_probability < 0.5:
             raise ValueError(f"read_error_probability: must lie in (0, 0.5), got {self.read_error_probability}")
+        if not math.isfinite(self.antenna_offset_m) or (self.method == "paper" and self.antenna_offset_m != 0.0):
+            raise ValueError("antenna_offset_m: the paper method reads at the rotation axis (0); the filter takes "
+                             f"any finite offset, got {self.antenna_offset_m}")
 
 
 @dataclass(frozen=True)
@@ -545,9 +552,11 @@ class ParticleFilter:
         self.resets = 0       # sensor resettings (see weigh)
 
     def initialise(self, origin: np.ndarray, region: Region) -> None:
+        """Antennas uniform in the partition's region, headings uniform; the centres behind the antennas."""
         count = self.settings.particles
         self.states[:2] = (origin + region.sample(self.rng, count)).T
         self.states[2] = self.rng.uniform(-math.pi, math.pi, count)
+        self.states[:2] -= self.settings.antenna_offset_m * np.vstack((np.cos(self.states[2]), np.sin(self.states[2])))
         self.weights.fill(1.0 / count)
         self.evidence = 0.0
 
@@ -568,9 +577,17 @@ class ParticleFilter:
         y += sin_yaw * dx + cos_yaw * dy
         yaw += rotation + rotation_sd * noise[2]
 
+    def antenna(self, states: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Where each state's floor antenna reads: ``antenna_offset_m`` ahead of the robot's centre."""
+        offset = self.settings.antenna_offset_m
+        if offset == 0.0:
+            return states[0], states[1]
+        return states[0] + offset * np.cos(states[2]), states[1] + offset * np.sin(states[2])
+
     def bounding_circle(self) -> tuple[float, float, float]:
-        """(x, y, radius) of a circle holding every particle: the centre and half-diagonal of their box."""
-        low, high = self.states[:2].min(axis=1), self.states[:2].max(axis=1)
+        """(x, y, radius) of a circle holding every particle's antenna: the centre and half-diagonal of their box."""
+        antenna = np.vstack(self.antenna(self.states))
+        low, high = antenna.min(axis=1), antenna.max(axis=1)
         centre = (low + high) / 2.0
         return float(centre[0]), float(centre[1]), float(np.hypot(*(high - low)) / 2.0)
 
@@ -580,7 +597,8 @@ class ParticleFilter:
         s = self.settings
         tags = np.concatenate((read, unread))
         sign = np.concatenate((np.ones(len(read)), -np.ones(len(unread))))
-        distance = np.hypot(states[0][:, None] - tags[:, 0], states[1][:, None] - tags[:, 1])
+        antenna_x, antenna_y = self.antenna(states)
+        distance = np.hypot(antenna_x[:, None] - tags[:, 0], antenna_y[:, None] - tags[:, 1])
         margin = sign * ((read_range_m - distance) / s.boundary_softness_m)
         # log(eps + (1 - 2 eps) * sigmoid(margin)); tanh keeps the sigmoid from overflowing.
         eps = s.read_error_probability
@@ -843,7 +861,7 @@ class PartitionLocalizer:
         else:
             yaw = self.rng.uniform(-math.pi, math.pi, count)
         crossed = arc[self.rng.integers(len(arc), size=count)]
-        travelled = self.rng.uniform(0.0, step_m, count)
+        travelled = self.rng.uniform(0.0, step_m, count) - self.settings.antenna_offset_m   # the arc is the antenna's
         return np.vstack((crossed[:, 0] + travelled * np.cos(yaw), crossed[:, 1] + travelled * np.sin(yaw), yaw))
 
     def _filter_tags(self, partition: frozenset[Coordinate],

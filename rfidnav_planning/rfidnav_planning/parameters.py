@@ -4,6 +4,7 @@ config/params/partition_navigator.yaml repeats the defaults and documents them."
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 from rfidnav_common.config import param
@@ -19,6 +20,16 @@ class PartitionNavigatorParameters:
     max_path_factor: float = param("give up after driving this many times the first planned distance (+1 m)", 5.0)
     lost_distance_m: float = param("give up after driving this far without reading a floor tag [m]", 1.0)
     max_replans: int = param("give up after this many re-plans", 500)
+    deviation_check: str = param(
+        "when to re-plan: partition (paper 000: on entering a partition off the plan) or pose (ours: when the "
+        "estimate would miss the goal by more than pose_miss_tolerance_r read ranges)", "partition")
+    pose_miss_tolerance_r: float = param("pose check: the allowed miss, in read ranges", 0.25)
+    spin_quarter_turns: int = param(
+        "ours: localize first by up to this many quarter turns on the spot (needs the antenna off the axis)", 0)
+    arrival: str = param("partition (paper 000: in the goal's partition) or position (ours: the estimate near the "
+                         "goal)", "partition")
+    position_tolerance_r: float = param("position arrival: the estimate within this many read ranges of the goal",
+                                        0.25)
     forward_speed_mps: float = param("speed when driving straight [m/s]", 0.2)
     turn_rate_radps: float = param("largest yaw rate when turning on the spot [rad/s]", 0.8)
     turn_gain_per_s: float = param("yaw rate per radian still to turn, near the end of a turn [1/s]", 3.0)
@@ -35,7 +46,5 @@ class PartitionNavigatorParameters:
         self.settings().validate()
 
     def settings(self) -> NavigatorSettings:
-        return NavigatorSettings(approximation_level=self.approximation_level,
-                                 localized_yaw_sd_rad=self.localized_yaw_sd_rad,
-                                 max_path_factor=self.max_path_factor, lost_distance_m=self.lost_distance_m,
-                                 max_replans=self.max_replans)
+        # Every navigator setting is a node parameter of the same name.
+        return NavigatorSettings(**{field.name: getattr(self, field.name) for field in dataclasses.fields(NavigatorSettings)})

@@ -23,6 +23,13 @@ Phases (paper 000 sections 5.2 and 6.3):
 
 The goal's partition is the set of tags that read the goal point; the robot computes it from the
 lattice the tags describe (layout and spacing in every ID), not from a map of tag positions.
+
+Ours, beside the particle filter (config/params/partition_navigator_filter.yaml), three settings change:
+``spin_quarter_turns`` localizes by turning on the spot first (an antenna ahead of the rotation axis sweeps
+partition boundaries, so the heading is learnt without driving in an unknown direction, which is what the
+paper's extra cost mostly pays for); ``deviation_check: pose`` re-plans when the pose estimate would miss the
+goal rather than on every partition off the plan; ``arrival: position`` stops when the estimated centre is
+near the goal rather than when the antenna reads the goal's partition.
 """
 
 from __future__ import annotations
@@ -38,6 +45,7 @@ from rfidnav_planning.partition_planner import PartitionPlan, plan_partition_pat
 LOCALIZING, ROTATING, FOLLOWING, REPLANNING, DONE = "localizing", "rotating", "following", "replanning", "done"
 FORWARD, ROTATE, STOP = "forward", "rotate", "stop"
 DEVIATION_CHECKS = ("partition", "pose")
+ARRIVALS = ("partition", "position")
 
 
 @dataclass(frozen=True)
@@ -49,6 +57,9 @@ class NavigatorSettings:
     max_replans: int = 500
     deviation_check: str = "partition"     # partition (paper: a partition off the plan) or pose (ours, see deviated)
     pose_miss_tolerance_r: float = 0.25    # pose check: re-plan when the estimate would miss the goal by this x r
+    spin_quarter_turns: int = 0            # ours: localize first by up to this many quarter turns on the spot
+    arrival: str = "partition"             # partition (paper: in the goal's partition) or position (ours, see arrived)
+    position_tolerance_r: float = 0.25     # position arrival: the estimate within this x r of the goal
 
     def validate(self) -> None:
         if not 1 <= self.approximation_level <= 64:
@@ -65,6 +76,12 @@ class NavigatorSettings:
             raise ValueError(f"deviation_check: '{self.deviation_check}' is not one of {', '.join(DEVIATION_CHECKS)}")
         if self.pose_miss_tolerance_r <= 0.0:
             raise ValueError(f"pose_miss_tolerance_r: must be positive, got {self.pose_miss_tolerance_r}")
+        if self.spin_quarter_turns < 0:
+            raise ValueError(f"spin_quarter_turns: must not be negative, got {self.spin_quarter_turns}")
+        if self.arrival not in ARRIVALS:
+            raise ValueError(f"arrival: '{self.arrival}' is not one of {', '.join(ARRIVALS)}")
+        if self.position_tolerance_r <= 0.0:
+            raise ValueError(f"position_tolerance_r: must be positive, got {self.position_tolerance_r}")
 
 
 @dataclass(frozen=True)
@@ -93,6 +110,8 @@ class NavigationState:
     current_partition: frozenset[Coordinate] | None = None
     previous_partition: frozenset[Coordinate] | None = None
     tolerated: frozenset[frozenset[Coordinate]] = frozenset()   # off-plan partitions that are no deviation
+    quarter_turns: int = 0                   # spin localization turns made
+    last_estimate: LocalizationEstimate | None = None
     plan: PartitionPlan | None = None
     goal_partition: frozenset[Coordinate] | None = None
     lattice: Lattice | None = None           # learnt from the tag IDs
@@ -149,26 +168,29 @@ class PartitionNavigator:
         elif travelled_m - state.last_read_travel_m > self.settings.lost_distance_m:
             return self.finish(False, f"lost: no floor tag read over the last {self.settings.lost_distance_m:g} m "
                                       "(off the deployment?)")
+        state.last_estimate = estimate
         if travelled_m > state.path_limit_m:
             return self.finish(False, f"gave up after driving {travelled_m:.2f} m "
                                       f"({self.settings.max_path_factor:g} x the planned distance)")
         if state.phase == ROTATING:
             return Decision(ROTATING, Motion(ROTATE, 0.0))     # the rotation in progress finishes first
-        if estimate.position is None:
-            return Decision(state.phase, Motion(FORWARD))
-        if not estimate.partition:
-            return self.left_deployment(estimate)
+        if estimate.position is None:      # nothing read yet
+            return self.localize(estimate) if state.phase == LOCALIZING else Decision(state.phase, Motion(FORWARD))
         if state.goal_partition is None and estimate.lattice is not None:
             state.lattice = estimate.lattice
             state.goal_partition = self.deployment(estimate).partition_at(*state.goal)
+        if not estimate.partition and (state.phase == LOCALIZING or self.settings.deviation_check == "partition"):
+            # With a pose estimate, following, an empty round is only an antenna past the tagged floor's edge.
+            return self.left_deployment(estimate)
         if self.arrived(estimate):
-            return self.finish(True, f"arrived in the goal's partition after {state.replans} re-plans")
+            where = "in the goal's partition" if self.settings.arrival == "partition" else "at the goal"
+            return self.finish(True, f"arrived {where} after {state.replans} re-plans")
         if state.phase == LOCALIZING:
-            if self.localized(estimate):
-                return self.plan_and_turn(estimate, LOCALIZING)
-            return Decision(LOCALIZING, Motion(FORWARD))
+            return self.localize(estimate)
         # following
-        if estimate.partition_changed and self.deviated(estimate):
+        # The paper checks on entering a partition; a pose estimate can be checked every round.
+        check = estimate.partition_changed or self.settings.deviation_check == "pose"
+        if check and self.deviated(estimate):
             if state.replans >= self.settings.max_replans:
                 return self.finish(False, f"gave up after {state.replans} re-plans")
             state.replans += 1
@@ -188,12 +210,29 @@ class PartitionNavigator:
         state.replans += 1
         return self.plan_and_turn(estimate, REPLANNING)
 
+    def localize(self, estimate: LocalizationEstimate) -> Decision:
+        """Localization phase: done once localized; else turn a quarter on the spot while spins are left (an
+        antenna off the rotation axis sweeps partition boundaries), else drive straight on (paper 000)."""
+        state = self.state
+        if estimate.partition and self.localized(estimate):
+            return self.plan_and_turn(estimate, LOCALIZING)
+        if state.quarter_turns < self.settings.spin_quarter_turns:
+            state.quarter_turns += 1
+            state.phase, state.resume_phase = ROTATING, LOCALIZING
+            return Decision(LOCALIZING, Motion(ROTATE, math.pi / 2.0))
+        state.phase = LOCALIZING
+        return Decision(LOCALIZING, Motion(FORWARD))
+
     def rotation_done(self) -> Decision:
-        """The robot has turned as asked; drive along the plan."""
-        if self.state is None or self.state.outcome is not None:
+        """The robot has turned as asked: go on localizing (with the estimate seen while turning), or drive
+        along the plan."""
+        state = self.state
+        if state is None or state.outcome is not None:
             raise RuntimeError("rotation_done without an active goal")
-        self.state.phase, self.state.resume_phase = self.state.resume_phase, FOLLOWING
-        return Decision(self.state.phase, Motion(FORWARD))
+        state.phase, state.resume_phase = state.resume_phase, FOLLOWING
+        if state.phase == LOCALIZING and state.last_estimate is not None:
+            return self.localize(state.last_estimate)
+        return Decision(state.phase, Motion(FORWARD))
 
     def cancel(self, message: str = "cancelled") -> Decision:
         return self.finish(False, message)
@@ -208,7 +247,19 @@ class PartitionNavigator:
         return sd_limit > 0.0 and estimate.yaw_std is not None and estimate.yaw_std <= sd_limit
 
     def arrived(self, estimate: LocalizationEstimate) -> bool:
+        """``partition`` (paper 000): the robot reads the goal's partition. ``position`` (ours, for an estimate
+        finer than a partition, e.g. with the antenna off the axis, where the partition read is not the
+        centre's): the estimated centre lies within ``position_tolerance_r`` read ranges of the goal."""
         state = self.state
+        if self.settings.arrival == "position":
+            if estimate.yaw is None:
+                return False
+            tolerance = max(state.tolerance_m, self.settings.position_tolerance_r * estimate.read_range_m)
+            ahead, aside = self.goal_offset(estimate)
+            # Within tolerance, or passing it now: the goal just behind and within tolerance to the side
+            # (rounds come a few millimetres apart, more than a fine tolerance).
+            return math.hypot(ahead, aside) <= tolerance or (ahead <= 0.0 and abs(aside) <= tolerance
+                                                              and state.phase == FOLLOWING)
         if state.goal_partition is not None and estimate.partition == state.goal_partition:
             return True
         if state.tolerance_m > 0.0 and estimate.position is not None:
@@ -218,16 +269,23 @@ class PartitionNavigator:
     def deviated(self, estimate: LocalizationEstimate) -> bool:
         """Time to re-plan. ``partition`` (paper 000 section 5.2): the robot entered a partition off the plan.
         ``pose`` (ours, for an estimate that is more than a partition, such as the particle filter's): the
-        estimated heading would miss the goal by more than ``pose_miss_tolerance_r`` read ranges."""
+        estimated heading would miss the goal by more than ``pose_miss_tolerance_r`` read ranges, and is off
+        the bearing to the goal by more than twice its own sd (turning on noise gains nothing)."""
         if self.settings.deviation_check == "partition":
             return self.unexpected(estimate.partition)
         if estimate.yaw is None:
             return False
-        goal = self.state.goal
-        remaining = math.dist(estimate.position, goal)
-        error = wrap_angle(math.atan2(goal[1] - estimate.position[1], goal[0] - estimate.position[0]) - estimate.yaw)
-        miss = remaining if abs(error) >= math.pi / 2.0 else remaining * abs(math.sin(error))
-        return miss > self.settings.pose_miss_tolerance_r * estimate.read_range_m
+        ahead, aside = self.goal_offset(estimate)
+        error = math.atan2(aside, ahead)
+        miss = abs(aside) if ahead > 0.0 else math.hypot(ahead, aside)
+        significant = estimate.yaw_std is None or abs(error) > 2.0 * estimate.yaw_std
+        return miss > self.settings.pose_miss_tolerance_r * estimate.read_range_m and significant
+
+    def goal_offset(self, estimate: LocalizationEstimate) -> tuple[float, float]:
+        """The goal in the estimated robot frame: (ahead, to the left) [m]."""
+        dx, dy = self.state.goal[0] - estimate.position[0], self.state.goal[1] - estimate.position[1]
+        cos_yaw, sin_yaw = math.cos(estimate.yaw), math.sin(estimate.yaw)
+        return cos_yaw * dx + sin_yaw * dy, -sin_yaw * dx + cos_yaw * dy
 
     def unexpected(self, partition: frozenset[Coordinate]) -> bool:
         """Off the plan. The partitions on both sides of the boundary where the robot last turned count as on
