@@ -41,6 +41,8 @@ from typing import Iterable
 
 import numpy as np
 
+from rfidnav_common.geometry import point_segment_distance
+
 LAYOUTS = ("grid", "triangular", "compressed")
 LAYOUT_CODES = {"grid": 1, "triangular": 2, "compressed": 3}
 HEADER = 0xA0
@@ -344,12 +346,8 @@ class Deployment:
         if not blocks:
             return np.empty((0, 2), dtype=int)
         candidates = np.concatenate(blocks).astype(int)
-        positions = self.lattice.positions(candidates)
-        a, b = np.array(start, dtype=float), np.array(end, dtype=float)
-        direction = b - a
-        length_sq = float(direction @ direction)
-        t = np.clip(((positions - a) @ direction) / length_sq, 0.0, 1.0) if length_sq > 0 else np.zeros(len(positions))
-        distance = np.linalg.norm(positions - (a + t[:, None] * direction), axis=1)
+        distance = point_segment_distance(self.lattice.positions(candidates), np.array(start, dtype=float),
+                                          np.array(end, dtype=float))
         return candidates[distance <= radius]
 
 
@@ -359,6 +357,25 @@ class SegmentPiece:
     t_start: float
     t_end: float
     tags: frozenset[Coordinate]
+
+
+def disc_intervals(lattice: Lattice, read_range_m: float, coordinates: np.ndarray, start: np.ndarray,
+                   end: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Where the segment start-end enters and leaves each tag's read disc, as fractions of its length
+    clipped to [0, 1], and whether it crosses the disc at all (a tangent does not). The segment walk and
+    the planner both use it, so they agree to the last bit."""
+    direction = end - start
+    relative = start - lattice.positions(coordinates)
+    # |a + t d - c|^2 = r^2  ->  t^2 |d|^2 + 2 t d.(a - c) + |a - c|^2 - r^2 = 0
+    qa = float(direction @ direction)
+    qb = 2.0 * relative @ direction
+    qc = np.einsum("ij,ij->i", relative, relative) - read_range_m * read_range_m
+    discriminant = qb * qb - 4.0 * qa * qc
+    crossed = discriminant > 0.0
+    root = np.sqrt(np.where(crossed, discriminant, 0.0))
+    t_in = np.clip((-qb - root) / (2.0 * qa), 0.0, 1.0)
+    t_out = np.clip((-qb + root) / (2.0 * qa), 0.0, 1.0)
+    return t_in, t_out, crossed & (t_out > t_in)
 
 
 def partitions_along_segment(deployment: Deployment, start: tuple[float, float],
@@ -374,18 +391,7 @@ def partitions_along_segment(deployment: Deployment, start: tuple[float, float],
     length = float(np.linalg.norm(direction))
     if length == 0.0:
         return [SegmentPiece(0.0, 0.0, deployment.partition_at(*start))]
-    centres = deployment.lattice.positions(candidates)
-    # |a + t d - c|^2 = r^2  ->  t^2 |d|^2 + 2 t d.(a - c) + |a - c|^2 - r^2 = 0
-    relative = a - centres
-    qa = float(direction @ direction)
-    qb = 2.0 * relative @ direction
-    qc = np.einsum("ij,ij->i", relative, relative) - r * r
-    disc = qb * qb - 4.0 * qa * qc
-    hit = disc > 0.0
-    root = np.sqrt(np.where(hit, disc, 0.0))
-    t_in = np.clip((-qb - root) / (2.0 * qa), 0.0, 1.0)
-    t_out = np.clip((-qb + root) / (2.0 * qa), 0.0, 1.0)
-    hit &= t_out > t_in
+    t_in, t_out, hit = disc_intervals(deployment.lattice, r, candidates, a, b)
     coords = [(int(i), int(j)) for i, j in candidates[hit]]
     t_in, t_out = t_in[hit], t_out[hit]
     # Sweep the interval ends in order, keeping the set of tags read; exits before entries at a tie.

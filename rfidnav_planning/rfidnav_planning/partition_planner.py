@@ -51,7 +51,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from rfidnav_common.tag_lattice import Coordinate, Deployment, Lattice, make_deployment, partition_centre
+from rfidnav_common.geometry import point_segment_distance
+from rfidnav_common.tag_lattice import (Coordinate, Deployment, Lattice, disc_intervals, make_deployment,
+                                       partition_centre)
 from rfidnav_planning.errors import PlanningError
 
 Point = tuple[float, float]
@@ -148,32 +150,6 @@ def _crossed_triangles(lattice: Lattice, start: np.ndarray, goal: np.ndarray) ->
     return entries, _triangle_vertices(lattice, start + middles[:, None] * (goal - start))
 
 
-def _disc_intervals(coordinates: np.ndarray, lattice: Lattice, read_range_m: float, start: np.ndarray,
-                    goal: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Entry and exit parameters of each tag's read disc along the segment and whether it is crossed;
-    the same arithmetic as partitions_along_segment, so both agree to the last bit."""
-    direction = goal - start
-    relative = start - lattice.positions(coordinates)
-    # |a + t d - c|^2 = r^2  ->  t^2 |d|^2 + 2 t d.(a - c) + |a - c|^2 - r^2 = 0
-    qa = float(direction @ direction)
-    qb = 2.0 * relative @ direction
-    qc = np.einsum("ij,ij->i", relative, relative) - read_range_m * read_range_m
-    discriminant = qb * qb - 4.0 * qa * qc
-    crossed = discriminant > 0.0
-    root = np.sqrt(np.where(crossed, discriminant, 0.0))
-    t_in = np.clip((-qb - root) / (2.0 * qa), 0.0, 1.0)
-    t_out = np.clip((-qb + root) / (2.0 * qa), 0.0, 1.0)
-    return t_in, t_out, crossed & (t_out > t_in)
-
-
-def _distances_to_segment(coordinates: np.ndarray, lattice: Lattice, start: np.ndarray,
-                          goal: np.ndarray) -> np.ndarray:
-    direction = goal - start
-    positions = lattice.positions(coordinates)
-    t = np.clip(((positions - start) @ direction) / float(direction @ direction), 0.0, 1.0)
-    return np.linalg.norm(positions - (start + t[:, None] * direction), axis=1)
-
-
 def _walk(deployment: Deployment, start: np.ndarray, goal: np.ndarray) -> _Walk:
     """Everything the iterations need, computed in vectorized form once per segment."""
     lattice = deployment.lattice
@@ -181,12 +157,12 @@ def _walk(deployment: Deployment, start: np.ndarray, goal: np.ndarray) -> _Walk:
     keys = vertices[:, :, 0] * _KEY_SHIFT + (vertices[:, :, 1] + _KEY_BIAS)
     unique_keys, tag_of_vertex = np.unique(keys.ravel(), return_inverse=True)
     coordinates = np.column_stack((unique_keys // _KEY_SHIFT, unique_keys % _KEY_SHIFT - _KEY_BIAS))
-    t_in, t_out, crossed = _disc_intervals(coordinates, lattice, deployment.read_range_m, start, goal)
+    t_in, t_out, crossed = disc_intervals(lattice, deployment.read_range_m, coordinates, start, goal)
     return _Walk(entries=entries.tolist(),
                  triangles=[tuple(tags) for tags in tag_of_vertex.reshape(-1, 3).tolist()],
                  coordinates=[(int(i), int(j)) for i, j in coordinates.tolist()],
                  t_in=t_in.tolist(), t_out=t_out.tolist(), crossed=crossed.tolist(),
-                 distance_m=_distances_to_segment(coordinates, lattice, start, goal).tolist())
+                 distance_m=point_segment_distance(lattice.positions(coordinates), start, goal).tolist())
 
 
 # -------------------------------------------------------------------------------------------- sweep
