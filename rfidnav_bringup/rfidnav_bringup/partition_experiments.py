@@ -55,6 +55,13 @@ class NavigationRun:
     def final_error_m(self) -> float:
         return math.dist(self.final_position, self.goal)
 
+    @property
+    def extra_cost_to_goal_pct(self) -> float:
+        """The extra cost had the robot gone on from where it stopped straight to the goal point: both arrival
+        rules stop short of the goal (in its partition, or within the tolerance), which the paper's cost
+        counts as saved distance; this one does not."""
+        return 100.0 * (self.path_length_m + self.final_error_m - self.straight_distance_m) / self.straight_distance_m
+
 
 class IdealRobot:
     """True pose, odometry (relative to the start, with an optional relative error) and distance driven."""

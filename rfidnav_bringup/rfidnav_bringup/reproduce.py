@@ -203,7 +203,7 @@ def _cm_sd(summary: Summary) -> str:
     return f"{summary.rmse_mean_m * 100:.2f}{sd}"
 
 
-def _table(header: list[str], rows: list[list[str]]) -> list[str]:
+def table(header: list[str], rows: list[list[str]]) -> list[str]:
     widths = [max(len(cell) for cell in column) for column in zip(header, *rows)]
     line = lambda cells: "  ".join(cell.ljust(width) for cell, width in zip(cells, widths)).rstrip()  # noqa: E731
     return [line(header), line(["-" * width for width in widths]), *(line(row) for row in rows)]
@@ -225,7 +225,7 @@ def rmse_table(summaries: dict[tuple[str, str], Summary]) -> list[str]:
         rows.append([scenario, _cm(paper_m), _cm_sd(summaries[("flc_paper", scenario)]), _cm_sd(tuned),
                      f"<= {_cm(target_m, 2)}", met])
     return ["tracking RMSE [cm], mean ± sd over successful runs",
-            *_table(["scenario", "paper", "flc_paper", "flc_tuned", "target flc_tuned (paper/2)", "met?"], rows)]
+            *table(["scenario", "paper", "flc_paper", "flc_tuned", "target flc_tuned (paper/2)", "met?"], rows)]
 
 
 def envelope_table(summaries: dict[tuple[str, str], Summary]) -> list[str]:
@@ -237,7 +237,7 @@ def envelope_table(summaries: dict[tuple[str, str], Summary]) -> list[str]:
                      *(f"{summaries[(params, scenario)].successes}/{summaries[(params, scenario)].runs}"
                        for params in PARAM_SETS)])
     return ["max |e| [cm] (mean over successful runs) beside the paper's error envelope; runs reaching every tag",
-            *_table(["scenario", "paper envelope", "flc_paper max|e|", "flc_tuned max|e|",
+            *table(["scenario", "paper envelope", "flc_paper max|e|", "flc_tuned max|e|",
                      "flc_paper success", "flc_tuned success"], rows)]
 
 
