@@ -9,3 +9,18 @@ import os
 os.environ.setdefault("ROS_DOMAIN_ID", str(1 + os.getpid() % 50))
 os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
 os.environ["ROS_PYTHON_CHECK_FIELDS"] = "1"
+
+
+import pytest  # noqa: E402
+
+from rfidnav_bringup.processes import DomainLease  # noqa: E402
+
+
+@pytest.fixture
+def domain():
+    """A DDS domain leased for one test (as ./rfidnav run leases one), so concurrent sessions never cross-talk."""
+    lease = DomainLease()
+    try:
+        yield lease.domain_id
+    finally:
+        lease.close()

@@ -30,7 +30,6 @@ from std_srvs.srv import Trigger
 
 from rfidnav_bringup.bags import message_definition
 from rfidnav_bringup.player_node import PlayerNode
-from rfidnav_bringup.processes import DomainLease
 from rfidnav_common.geometry import yaw_to_quaternion
 from rfidnav_common.ros import COMMAND_QOS, SENSOR_QOS, time_msg
 from rfidnav_control.heading_controller_node import HeadingControllerNode
@@ -91,14 +90,12 @@ class Graph:
 
 
 @pytest.fixture
-def graph() -> Iterator[Graph]:
-    lease = DomainLease()
-    graph = Graph(lease.domain_id)
+def graph(domain: int) -> Iterator[Graph]:
+    graph = Graph(domain)
     try:
         yield graph
     finally:
         graph.close()
-        lease.close()
 
 
 def reading(tag_id: str, antenna: int, phase: float, **bad: float) -> TagReading:

@@ -5,27 +5,24 @@ Each test leases its own DDS domain, as test_nodes.py does."""
 from __future__ import annotations
 
 import math
-import time
 from collections.abc import Callable, Iterator
 from typing import Any
 
 import numpy as np
 import pytest
-import rclpy
 from geometry_msgs.msg import PoseWithCovarianceStamped
 from nav_msgs.msg import Odometry
-from rclpy.context import Context
-from rclpy.executors import SingleThreadedExecutor
-from rclpy.node import Node
 from rclpy.parameter import Parameter
 
-from rfidnav_bringup.processes import DomainLease
-from rfidnav_common.geometry import quaternion_to_yaw, yaw_to_quaternion
+from rfidnav_common.geometry import quaternion_to_yaw
 from rfidnav_common.ros import SENSOR_QOS, time_msg
 from rfidnav_common.tag_lattice import make_deployment
 from rfidnav_localization.conversions import UNKNOWN_YAW_VARIANCE
 from rfidnav_localization.partition_localizer_node import PartitionLocalizerNode
 from rfidnav_msgs.msg import LocalizationStatus, TagReadArray, TagReading
+from rfidnav_sim.conversions import odometry_message
+from rfidnav_sim.kinematics import Pose2D
+from test_nodes import Graph
 
 WAIT_S = 10.0   # generous for a loaded machine; each wait normally takes milliseconds
 FLOOR_ANTENNA = 1                # the default port of the floor antenna (reader_floor_lattice.yaml)
@@ -44,18 +41,13 @@ def reading(tag: str, antenna: int = FLOOR_ANTENNA, **bad: float) -> TagReading:
     return read
 
 
-class Harness:
+class Harness(Graph):
     """partition_localizer with a probe publishing /odom and /rfid/reads and collecting its outputs."""
 
     def __init__(self, domain_id: int, **parameters: Any) -> None:
-        self.context = Context()
-        rclpy.init(context=self.context, domain_id=domain_id)
-        self.executor = SingleThreadedExecutor(context=self.context)
-        self.node = PartitionLocalizerNode(context=self.context, parameter_overrides=[
-            Parameter(name, value=value) for name, value in parameters.items()])
-        self.probe = Node("probe", context=self.context)
-        for node in (self.node, self.probe):
-            self.executor.add_node(node)
+        super().__init__(domain_id)
+        self.node = self.add(PartitionLocalizerNode(context=self.context, parameter_overrides=[
+            Parameter(name, value=value) for name, value in parameters.items()]))
         self.poses: list[PoseWithCovarianceStamped] = []
         self.statuses: list[LocalizationStatus] = []
         self.reads_pub = self.probe.create_publisher(TagReadArray, "/rfid/reads", SENSOR_QOS)
@@ -69,20 +61,8 @@ class Harness:
                         and all(s.get_publisher_count() > 0 for s in subscriptions), "partition_localizer's topics")
         self.stamp_s = 100.0
 
-    def spin_until(self, condition: Callable[[], bool], what: str) -> None:
-        deadline = time.monotonic() + WAIT_S
-        while not condition():
-            if time.monotonic() > deadline:
-                pytest.fail(f"timed out after {WAIT_S:.0f} s waiting for {what}")
-            self.executor.spin_once(timeout_sec=0.05)
-
     def send_odometry(self, x: float, y: float, yaw: float) -> None:
-        message = Odometry()
-        message.header.frame_id, message.child_frame_id = "odom", "base_link"
-        message.pose.pose.position.x, message.pose.pose.position.y = x, y
-        orientation = message.pose.pose.orientation
-        orientation.x, orientation.y, orientation.z, orientation.w = yaw_to_quaternion(yaw)
-        self.odom_pub.publish(message)
+        self.odom_pub.publish(odometry_message(Pose2D(x, y, yaw), (0.0, 0.0), time_msg(self.stamp_s), "odom"))
 
     def send_round(self, readings: list[TagReading]) -> LocalizationStatus:
         """Publish one inventory round and return the status the node answers it with."""
@@ -94,22 +74,6 @@ class Harness:
         self.reads_pub.publish(message)
         self.spin_until(lambda: len(self.statuses) > before, f"the status of round {self.stamp_s:.2f}")
         return self.statuses[before]
-
-    def close(self) -> None:
-        self.executor.shutdown()
-        self.node.destroy_node()
-        self.probe.destroy_node()
-        self.context.try_shutdown()
-        self.context.destroy()
-
-
-@pytest.fixture
-def domain() -> Iterator[int]:
-    lease = DomainLease()
-    try:
-        yield lease.domain_id
-    finally:
-        lease.close()
 
 
 @pytest.fixture

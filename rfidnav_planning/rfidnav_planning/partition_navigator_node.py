@@ -30,7 +30,8 @@ from rfidnav_msgs.action import NavigateToPoint
 from rfidnav_msgs.msg import LocalizationStatus, PartitionPath
 from rfidnav_planning.conversions import estimate_from_status, plan_messages
 from rfidnav_planning.parameters import PartitionNavigatorParameters
-from rfidnav_planning.partition_navigation import FORWARD, ROTATE, STOP, Decision, GoalRejected, PartitionNavigator
+from rfidnav_planning.partition_navigation import (FORWARD, REPLANNING, ROTATE, STOP, Decision, GoalRejected,
+                                                   PartitionNavigator)
 
 
 @dataclass
@@ -39,6 +40,7 @@ class ActiveGoal:
     last_status_s: float
     phase: str = "localizing"
     turn_target_yaw: float | None = None     # odometry heading to reach while turning
+    pending_turn_rad: float | None = None    # a turn asked for before any odometry: started by the first /odom
     previous_partition: frozenset[Coordinate] | None = None
     travelled_m: float = 0.0
     outcome: tuple[str, str] | None = None   # (succeeded | aborted | canceled, message) once concluded
@@ -121,6 +123,9 @@ class PartitionNavigatorNode(Node):
             return
         if previous is not None:
             active.travelled_m += math.dist(previous[:2], self.odom_pose[:2])
+        if active.pending_turn_rad is not None:
+            active.turn_target_yaw = wrap_angle(yaw + active.pending_turn_rad)
+            active.pending_turn_rad = None
         if active.turn_target_yaw is not None:
             self.turn_step(active, yaw)
 
@@ -145,9 +150,12 @@ class PartitionNavigatorNode(Node):
         if estimate.partition:
             active.previous_partition = estimate.partition
         decision = self.navigator.on_estimate(estimate, active.travelled_m)
-        if active.turn_target_yaw is None or decision.finished:   # a turn in progress is finished by on_odom
+        turning = active.turn_target_yaw is not None or active.pending_turn_rad is not None
+        if not turning or decision.finished:   # a turn in progress is finished by on_odom
             self.apply(decision)
-        self.publish_feedback(active, decision.phase, estimate.position, estimate.yaw)
+        # Re-planning is reported as such; otherwise the phase the navigator is in now (rotating once it turns).
+        phase = decision.phase if decision.phase == REPLANNING else self.navigator.state.phase
+        self.publish_feedback(active, phase, estimate.position, estimate.yaw)
 
     def apply(self, decision: Decision) -> None:
         active = self.active
@@ -156,7 +164,10 @@ class PartitionNavigatorNode(Node):
             self.publish_plan(decision)
         if decision.finished:
             self.conclude("succeeded" if decision.success else "aborted", decision.message)
-        elif decision.motion.kind == ROTATE and self.odom_pose is not None:
+        elif decision.motion.kind == ROTATE and self.odom_pose is None:
+            active.pending_turn_rad = decision.motion.rotate_by_rad
+            self.drive(0.0, 0.0)                # no heading to turn from yet: wait for /odom
+        elif decision.motion.kind == ROTATE:
             active.turn_target_yaw = wrap_angle(self.odom_pose[2] + decision.motion.rotate_by_rad)
             self.turn_step(active, self.odom_pose[2])
         elif decision.motion.kind == FORWARD:
