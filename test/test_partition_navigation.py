@@ -116,3 +116,13 @@ def test_runs_repeat_exactly_for_a_seed() -> None:
         start, goal = random_task(field, 3.0, rng)
         runs.append(run_navigation(field, start, goal, LocalizerSettings(method="filter"), NavigatorSettings(), rng))
     assert runs[0].path_length_m == runs[1].path_length_m and runs[0].replans == runs[1].replans
+
+
+def test_a_grid_deployment_ends_the_goal_with_the_planners_reason() -> None:
+    """Algorithm 1 needs a triangular lattice: on a grid the goal fails with that message, nothing raises."""
+    grid = make_deployment("grid", 0.2, FIELD)
+    navigator = PartitionNavigator(NavigatorSettings(approximation_level=1), FIELD)
+    navigator.start((4.0, 4.0))
+    decision = navigator.on_estimate(estimate(grid, 1.0, 1.0, 0.0, 1), 0.2)
+    assert decision.finished and not decision.success
+    assert "cannot plan" in decision.message and "triangular" in decision.message

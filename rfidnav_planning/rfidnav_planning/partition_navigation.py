@@ -40,6 +40,7 @@ from dataclasses import dataclass
 from rfidnav_common.geometry import wrap_angle
 from rfidnav_common.tag_lattice import Coordinate, Deployment, Lattice
 from rfidnav_localization.partition_localization import LocalizationEstimate
+from rfidnav_planning.errors import PlanningError
 from rfidnav_planning.partition_planner import PartitionPlan, plan_partition_path
 
 LOCALIZING, ROTATING, FOLLOWING, REPLANNING, DONE = "localizing", "rotating", "following", "replanning", "done"
@@ -301,7 +302,10 @@ class PartitionNavigator:
     def plan_and_turn(self, estimate: LocalizationEstimate, phase: str) -> Decision:
         state = self.state
         start = self.clamped(estimate.position)
-        plan = plan_partition_path(self.deployment(estimate), start, state.goal)
+        try:
+            plan = plan_partition_path(self.deployment(estimate), start, state.goal)
+        except PlanningError as error:      # e.g. a grid deployment: Algorithm 1 needs triangles
+            return self.finish(False, f"cannot plan: {error}")
         state.plan = plan
         state.tolerated = frozenset(p for p in (state.current_partition, state.previous_partition) if p)
         if state.path_limit_m == math.inf:
