@@ -126,3 +126,18 @@ def test_a_grid_deployment_ends_the_goal_with_the_planners_reason() -> None:
     decision = navigator.on_estimate(estimate(grid, 1.0, 1.0, 0.0, 1), 0.2)
     assert decision.finished and not decision.success
     assert "cannot plan" in decision.message and "triangular" in decision.message
+
+
+def test_a_floor_too_small_for_the_localization_phase_ends_the_goal() -> None:
+    """At r = 50 cm a 5 x 5 m floor may never give 8 partitions in one straight line: each edge turns the robot
+    back and restarts its stretch. The goal then fails with that reason instead of running for ever."""
+    field = make_deployment("triangular", 0.5, FIELD)
+    outcomes = []
+    for seed in range(12):
+        rng = np.random.default_rng(seed)
+        start, goal = random_task(field, 3.0, rng)
+        run = run_navigation(field, start, goal, LocalizerSettings(), NavigatorSettings(approximation_level=8), rng)
+        outcomes.append(run)
+        assert run.success or "could not localize" in run.message or "gave up" in run.message, run.message
+        assert run.path_length_m < 10.0 + 5.0 * 2 * 5.0 * 1.5
+    assert any(not run.success and "could not localize" in run.message for run in outcomes)

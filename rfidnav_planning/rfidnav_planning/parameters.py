@@ -18,6 +18,8 @@ class PartitionNavigatorParameters:
     localized_yaw_sd_rad: float = param(
         "also end the localization phase once the heading sd is below this [rad] (0 = paper: N partitions only)", 0.0)
     max_path_factor: float = param("give up after driving this many times the first planned distance (+1 m)", 5.0)
+    max_localization_m: float = param(
+        "give up localizing after driving this far without a heading estimate [m] (a floor too small for N)", 10.0)
     lost_distance_m: float = param("give up after driving this far without reading a floor tag [m]", 1.0)
     max_replans: int = param("give up after this many re-plans", 500)
     deviation_check: str = param(

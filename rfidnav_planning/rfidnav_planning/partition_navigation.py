@@ -54,6 +54,7 @@ class NavigatorSettings:
     approximation_level: int = 4           # N: partitions crossed in the localization phase (paper 000: 1..8)
     localized_yaw_sd_rad: float = 0.0      # > 0: also end the localization phase once the heading's sd is below this
     max_path_factor: float = 5.0           # give up after driving this many times the first planned distance (+ 1 m)
+    max_localization_m: float = 10.0       # give up localizing after driving this far without a heading estimate
     lost_distance_m: float = 1.0           # give up after driving this far without reading any tag
     max_replans: int = 500
     deviation_check: str = "partition"     # partition (paper: a partition off the plan) or pose (ours, see deviated)
@@ -67,6 +68,8 @@ class NavigatorSettings:
             raise ValueError(f"approximation_level: must be in 1..64, got {self.approximation_level}")
         if self.localized_yaw_sd_rad < 0.0:
             raise ValueError("localized_yaw_sd_rad: must not be negative")
+        if self.max_localization_m <= 0.0:
+            raise ValueError(f"max_localization_m: must be positive, got {self.max_localization_m}")
         if self.max_path_factor <= 1.0:
             raise ValueError(f"max_path_factor: must be above 1, got {self.max_path_factor}")
         if self.lost_distance_m <= 0.0:
@@ -170,6 +173,11 @@ class PartitionNavigator:
             return self.finish(False, f"lost: no floor tag read over the last {self.settings.lost_distance_m:g} m "
                                       "(off the deployment?)")
         state.last_estimate = estimate
+        if state.plan is None and travelled_m > self.settings.max_localization_m:
+            # Each edge of the tagged floor turns the robot back and restarts its straight stretch: a floor too
+            # small for N partitions in a line would keep it localizing for ever.
+            return self.finish(False, f"could not localize: no heading after driving {travelled_m:.1f} m "
+                                      f"(N = {self.settings.approximation_level} partitions in a straight line)")
         if travelled_m > state.path_limit_m:
             return self.finish(False, f"gave up after driving {travelled_m:.2f} m "
                                       f"({self.settings.max_path_factor:g} x the planned distance)")
