@@ -118,3 +118,13 @@ def test_reader_benchmark_reads_a_huge_described_floor() -> None:
     # At r = 2 cm and side r*sqrt(3) every point is read by 1 to 3 tags, about 1.2 on average.
     assert 1.0 <= figures["reader_tags_per_round"] <= 3.0
     assert figures["reader_round_us"] > 0.0
+
+
+def test_the_localizer_takes_the_tagged_area_from_the_robot_map() -> None:
+    """Positions come from the ids; the map's deployment_area only tells the filter where no tag can be."""
+    from rfidnav_localization.parameters import PartitionLocalizerParameters
+    assert PartitionLocalizerParameters().settings().deployment_area is None
+    with_map = PartitionLocalizerParameters(map_file=str(CONFIG / MAP))
+    assert with_map.settings().deployment_area == (0.0, 0.0, 5.0, 5.0)
+    with pytest.raises(ConfigError, match="not found"):
+        PartitionLocalizerParameters(map_file=str(CONFIG / "maps/nowhere.yaml")).settings()

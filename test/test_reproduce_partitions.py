@@ -15,7 +15,8 @@ from rfidnav_localization.partition_localization import LocalizerSettings
 
 def test_experiments_use_the_nodes_parameter_files() -> None:
     paper, ours = rp.localizer_settings("paper"), rp.localizer_settings("filter")
-    assert paper == LocalizerSettings()           # the paper file is the defaults
+    # The paper file is the defaults; the tagged area is the robot map's (partition_field's 5 x 5 m).
+    assert paper == LocalizerSettings(deployment_area=(0.0, 0.0, 5.0, 5.0))
     assert ours.method == "filter" and ours.antenna_offset_m == pytest.approx(0.25)
     assert rp.navigator_settings("paper", 3).approximation_level == 3
     assert rp.navigator_settings("paper", 3).deviation_check == "partition"

@@ -79,7 +79,8 @@ def localizer_settings(method: str) -> LocalizerSettings:
     the rotation axis; the filter's 25 cm ahead of it, as reader_floor_lattice.yaml has it)."""
     path = CONFIG_DIR / "params" / f"partition_localizer_{method}.yaml"
     values = node_parameter_values(PartitionLocalizerParameters, path, "partition_localizer")
-    return parameters_from_mapping(PartitionLocalizerParameters, values, str(path)).settings()
+    settings = parameters_from_mapping(PartitionLocalizerParameters, values, str(path)).settings()
+    return dataclasses.replace(settings, deployment_area=FIELD)   # the robot's map: where the floor is tagged
 
 
 @functools.cache

@@ -10,15 +10,19 @@ from __future__ import annotations
 import dataclasses
 from dataclasses import dataclass
 
+from pathlib import Path
+
 from rfidnav_common.config import param
+from rfidnav_common.robot_map import load_route_map
 from rfidnav_localization.partition_localization import LocalizerSettings
 
 
 @dataclass(frozen=True)
 class PartitionLocalizerParameters:
-    # The orchestrator gives every non-sim node a map_file. This node needs none, but an empty default cannot be
-    # declared: parameter strings must be non-empty (rfidnav_common.config).
-    map_file: str = param("robot map (unused: positions come from the tag ids)", "unused")
+    # The orchestrator gives every non-sim node a map_file. Positions need none (they come from the tag ids); an
+    # empty default cannot be declared, as parameter strings must be non-empty (rfidnav_common.config).
+    map_file: str = param("robot map: its deployment_area tells the filter where tags exist ('unused': no map)",
+                          "unused")
     method: str = param("paper (partition centre, sec. 4.2 orientation bounds) or filter (particle filter)", "paper")
     antenna: int = param("reader port of the downward antenna that reads the floor tags", 1)
     map_frame: str = param("frame of the published pose", "map")
@@ -49,6 +53,8 @@ class PartitionLocalizerParameters:
         self.settings().validate()
 
     def settings(self) -> LocalizerSettings:
-        # Every localizer setting is a node parameter of the same name.
-        return LocalizerSettings(**{field.name: getattr(self, field.name)
-                                    for field in dataclasses.fields(LocalizerSettings)})
+        # Every localizer setting is a node parameter of the same name, but the tagged area: the map's.
+        values = {field.name: getattr(self, field.name) for field in dataclasses.fields(LocalizerSettings)
+                  if field.name != "deployment_area"}
+        area = load_route_map(Path(self.map_file)).deployment_area if self.map_file != "unused" else None
+        return LocalizerSettings(**values, deployment_area=area)

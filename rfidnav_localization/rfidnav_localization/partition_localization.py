@@ -78,7 +78,7 @@ from typing import Callable, Sequence
 import numpy as np
 
 from rfidnav_common.geometry import wrap_angle
-from rfidnav_common.tag_lattice import Coordinate, DecodedTag, Lattice, TagIdError, decode_tag_id
+from rfidnav_common.tag_lattice import Coordinate, DecodedTag, Deployment, Lattice, TagIdError, decode_tag_id
 
 METHODS = ("paper", "filter")
 SPACING_PER_READ_RANGE = {"grid": math.sqrt(2.0), "triangular": math.sqrt(3.0), "compressed": 1.5}
@@ -132,6 +132,9 @@ class LocalizerSettings:
     read_error_probability: float = 0.01     # filter: chance a tag's read/no-read contradicts the geometry
     rogue_distance_factor: float = 2.0       # tags read together lie within factor * r of each other
     antenna_offset_m: float = 0.0            # floor antenna ahead of the rotation axis (filter only; see below)
+    # The tagged area from the robot map, when known: the filter then expects no read of a lattice vertex
+    # outside the deployment (there is no tag there). Positions still come from the ids alone.
+    deployment_area: tuple[float, float, float, float] | None = None
 
     def validate(self) -> None:
         if self.method not in METHODS:
@@ -674,6 +677,7 @@ class PartitionLocalizer:
         self.lattice: Lattice | None = None
         self.read_range_m: float | None = None
         self._geometry: PartitionGeometry | None = None
+        self._deployment: Deployment | None = None
         self._last_partition: frozenset[Coordinate] = frozenset()
         self._last_odom: tuple[float, float, float] | None = None
         self._stretch: _Stretch | None = None
@@ -715,6 +719,8 @@ class PartitionLocalizer:
             self.lattice = Lattice(layout, spacing)
             self.read_range_m = read_range_of(self.lattice)
             self._geometry = partition_geometry(self.lattice, self.read_range_m)
+            area = self.settings.deployment_area
+            self._deployment = Deployment(self.lattice, self.read_range_m, area) if area is not None else None
         by_coordinate: dict[Coordinate, str] = {}
         for tag_id, tag in decoded:
             if (tag.layout, tag.spacing_m) != (self.lattice.layout, self.lattice.spacing_m):
@@ -872,7 +878,8 @@ class PartitionLocalizer:
         # Any tag within r (plus the soft edge) of any particle could have been read. A cloud wider than a few r
         # is lost anyway (the collapse test will restart it): its far side is left out to bound the cost.
         radius = r + min(spread, 4.0 * r) + 4.0 * self.settings.boundary_softness_m
-        nearby = [c for c in self.lattice.within(x, y, radius) if c not in partition and c not in rejected]
+        nearby = [c for c in self.lattice.within(x, y, radius) if c not in partition and c not in rejected
+                  and (self._deployment is None or self._deployment.is_deployed(c))]
         read = self.lattice.positions(np.array(sorted(partition)))
         unread = self.lattice.positions(np.array(nearby)) if nearby else np.zeros((0, 2))
         return read, unread

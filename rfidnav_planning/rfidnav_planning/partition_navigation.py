@@ -197,6 +197,10 @@ class PartitionNavigator:
         if state.phase == LOCALIZING:
             return self.localize(estimate)
         # following
+        if self.lost_heading(estimate):
+            state.replans += 1
+            state.phase, state.quarter_turns = LOCALIZING, 0
+            return self.localize(estimate)
         # The paper checks on entering a partition; a pose estimate can be checked every round.
         check = estimate.partition_changed or self.settings.deviation_check == "pose"
         if check and self.deviated(estimate):
@@ -289,6 +293,14 @@ class PartitionNavigator:
         miss = abs(aside) if ahead > 0.0 else math.hypot(ahead, aside)
         significant = estimate.yaw_std is None or abs(error) > 2.0 * estimate.yaw_std
         return miss > self.settings.pose_miss_tolerance_r * estimate.read_range_m and significant
+
+    def lost_heading(self, estimate: LocalizationEstimate) -> bool:
+        """Pose mode: the estimate no longer knows the heading (a filter that re-initialised, e.g. at the edge
+        of the tagged floor), so following it would drive anywhere: localize again."""
+        limit = self.settings.localized_yaw_sd_rad
+        if self.settings.deviation_check != "pose" or limit <= 0.0:
+            return False
+        return estimate.yaw is None or (estimate.yaw_std is not None and estimate.yaw_std > 2.0 * limit)
 
     def goal_offset(self, estimate: LocalizationEstimate) -> tuple[float, float]:
         """The goal in the estimated robot frame: (ahead, to the left) [m]."""
