@@ -29,13 +29,18 @@ REFERENCED = (SCENARIO, "worlds/line_follow.yaml", "maps/line_follow.yaml", "par
               "params/reader_uhf_2ant.yaml", "params/flc_tuned.yaml", "params/flc_paper.yaml")
 
 
-@pytest.fixture
-def config(tmp_path: Path) -> Path:
+def copy_config(tmp_path: Path, referenced: tuple[str, ...]) -> Path:
+    """A private copy of the config files a scenario uses (paths relative to config/), for breaking."""
     root = tmp_path / "config"
-    for relative in REFERENCED:
+    for relative in referenced:
         (root / relative).parent.mkdir(parents=True, exist_ok=True)
         shutil.copyfile(CONFIG / relative, root / relative)
     return root
+
+
+@pytest.fixture
+def config(tmp_path: Path) -> Path:
+    return copy_config(tmp_path, REFERENCED)
 
 
 def edit(path: Path, old: str, new: str) -> None:

@@ -4,7 +4,6 @@ and the field, before anything starts; the reader simulator reads a described la
 from __future__ import annotations
 
 import math
-import shutil
 from pathlib import Path
 
 import numpy as np
@@ -16,7 +15,7 @@ from rfidnav_common.tag_lattice import decode_tag_id
 from rfidnav_sim.parameters import ReaderParameters
 from rfidnav_sim.rfid_model import ReaderSimulator
 from rfidnav_sim.world import load_world
-from test_config_errors import edit
+from test_config_errors import copy_config, edit
 from test_graph import run_cli
 
 WORKSPACE = Path(__file__).resolve().parents[1]
@@ -31,11 +30,7 @@ LATTICE = "{layout: triangular, read_range_m: 0.2, area: [0.0, 0.0, 5.0, 5.0]}"
 
 @pytest.fixture
 def config(tmp_path: Path) -> Path:
-    root = tmp_path / "config"
-    for relative in REFERENCED:
-        (root / relative).parent.mkdir(parents=True, exist_ok=True)
-        shutil.copyfile(CONFIG / relative, root / relative)
-    return root
+    return copy_config(tmp_path, REFERENCED)
 
 
 CASES = {

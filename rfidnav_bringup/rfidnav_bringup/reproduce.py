@@ -153,7 +153,7 @@ def progress(line: str, final: bool) -> None:
 
 # ----------------------------------------------------------------------------------------- aggregate
 
-def _mean(values: list[float]) -> float | None:
+def mean_or_none(values: list[float]) -> float | None:
     return statistics.fmean(values) if values else None
 
 
@@ -162,12 +162,12 @@ def summarise(params: str, scenario: str, runs: list[RouteRun]) -> Summary:
     rmse = [run.metrics.tracking_rmse_m for run in ok]
     return Summary(
         params=params, scenario=scenario, runs=len(runs), successes=sum(run.success for run in runs),
-        rmse_mean_m=_mean(rmse),
+        rmse_mean_m=mean_or_none(rmse),
         rmse_sd_m=statistics.stdev(rmse) if len(rmse) >= 2 else None,
-        max_abs_mean_m=_mean([run.metrics.tracking_max_abs_m for run in ok]),
+        max_abs_mean_m=mean_or_none([run.metrics.tracking_max_abs_m for run in ok]),
         first_tag_times_s=tuple(run.metrics.time_to_first_tag_s for run in runs
                                 if run.metrics.time_to_first_tag_s is not None),
-        first_arrival_mean_s=_mean([run.arrival_times_s[0] for run in runs if run.arrival_times_s]))
+        first_arrival_mean_s=mean_or_none([run.arrival_times_s[0] for run in runs if run.arrival_times_s]))
 
 
 def json_rows(summaries: dict[tuple[str, str], Summary], seeds: int) -> list[dict[str, Any]]:

@@ -41,7 +41,7 @@ from rfidnav_common.geometry import wrap_angle  # noqa: E402
 from rfidnav_common.seeding import rng_for  # noqa: E402
 from rfidnav_common.tag_lattice import LAYOUTS, Deployment, make_deployment, partitions_along_segment  # noqa: E402
 from rfidnav_bringup.partition_experiments import random_task, run_navigation  # noqa: E402
-from rfidnav_bringup.reproduce import progress, table  # noqa: E402
+from rfidnav_bringup.reproduce import mean_or_none, progress, table  # noqa: E402
 from rfidnav_bringup.scenario import CONFIG_DIR  # noqa: E402
 from rfidnav_localization.parameters import PartitionLocalizerParameters  # noqa: E402
 from rfidnav_localization.partition_localization import (LocalizerSettings, PartitionLocalizer,  # noqa: E402
@@ -191,12 +191,12 @@ def summarise_costs(results: list[NavigationResult]) -> dict[tuple[str, float, i
     summaries = {}
     for (method, r, level), group in groups.items():
         ok = [g for g in group if g.success]
-        by_distance = {d: _mean([g.extra_cost_pct for g in ok if g.job.distance_m == d]) for d in DISTANCES_M}
+        by_distance = {d: mean_or_none([g.extra_cost_pct for g in ok if g.job.distance_m == d]) for d in DISTANCES_M}
         costs = [g.extra_cost_pct for g in ok]
         summaries[(method, r, level)] = CostSummary(
-            method, r, level, len(group), len(ok), by_distance, _mean(costs),
-            statistics.median(costs) if costs else None, _mean([g.extra_cost_to_goal_pct for g in ok]),
-            _mean([g.final_error_m for g in ok]), statistics.fmean(g.replans for g in group))
+            method, r, level, len(group), len(ok), by_distance, mean_or_none(costs),
+            statistics.median(costs) if costs else None, mean_or_none([g.extra_cost_to_goal_pct for g in ok]),
+            mean_or_none([g.final_error_m for g in ok]), statistics.fmean(g.replans for g in group))
     return summaries
 
 
@@ -299,10 +299,6 @@ def accuracy_table_data(samples: int) -> dict[tuple[str, float], Accuracy]:
 
 
 # -------------------------------------------------------------------------------------------- reports
-
-def _mean(values: list[float]) -> float | None:
-    return statistics.fmean(values) if values else None
-
 
 def _pct(value: float | None) -> str:
     return "-" if value is None else f"{value:.1f}"

@@ -160,7 +160,7 @@ class PartitionNavigatorNode(Node):
     def apply(self, decision: Decision) -> None:
         active = self.active
         active.phase = decision.phase
-        if decision.new_plan is not None and self.navigator.state.plan is not None:
+        if decision.new_plan is not None:
             self.publish_plan(decision)
         if decision.finished:
             self.conclude("succeeded" if decision.success else "aborted", decision.message)
