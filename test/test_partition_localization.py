@@ -55,8 +55,9 @@ class Robot:
     and shifted from the map) with optional relative errors on each step."""
 
     def __init__(self, field: Deployment, rng: np.random.Generator, odometry_noise: float = 0.0,
-                 step_m: float = 0.004) -> None:
+                 step_m: float = 0.004, antenna_offset_m: float = 0.0) -> None:
         self.field = field
+        self.antenna_offset_m = antenna_offset_m
         self.rng = rng
         self.noise = odometry_noise
         self.step_m = step_m
@@ -67,7 +68,8 @@ class Robot:
         self.rounds: list[Round] = []
 
     def record(self) -> None:
-        self.rounds.append(Round(read_ids(self.field, self.x, self.y), tuple(self.odom), (self.x, self.y, self.yaw)))
+        antenna = (self.x + self.antenna_offset_m * math.cos(self.yaw), self.y + self.antenna_offset_m * math.sin(self.yaw))
+        self.rounds.append(Round(read_ids(self.field, *antenna), tuple(self.odom), (self.x, self.y, self.yaw)))
 
     def drive(self, distance_m: float) -> None:
         for _ in range(int(distance_m / self.step_m)):
@@ -326,6 +328,27 @@ def test_the_filter_ends_far_closer_than_the_paper_method_on_a_straight_then_tur
     assert filter_position < paper_position / 2.0, (filter_position, paper_position)
     assert filter_position < 0.25 * r
     assert math.degrees(np.mean([e[1] for e in filtered])) < 3.0
+
+
+@pytest.mark.parametrize("r, turn_deg", [(0.02, 180.0), (0.2, 360.0)])
+def test_turning_on_the_spot_with_the_antenna_ahead_of_the_axis_finds_the_heading(r: float, turn_deg: float) -> None:
+    """The antenna sweeps a circle of crossings; paired crossings fix the heading without driving."""
+    offset = 0.25
+    errors = []
+    for seed in range(4):
+        robot = Robot(deployment("triangular", r), np.random.default_rng(seed), antenna_offset_m=offset)
+        robot.record()
+        turn = math.radians(turn_deg)
+        robot.rotate(turn, steps=math.ceil(abs(turn) * offset / 0.004))
+        localizer = paper_localizer(seed, method="filter", antenna_offset_m=offset)
+        final = replay(localizer, robot.rounds)[-1]
+        x, y, yaw = robot.rounds[-1].truth
+        assert final.filter_reinitialisations == 0
+        assert final.yaw_std < math.radians(10.0)
+        assert angle_error(final.yaw, yaw) < math.radians(10.0)
+        assert math.dist(final.position, (x, y)) < r
+        errors.append(angle_error(final.yaw, yaw))
+    assert math.degrees(np.mean(errors)) < 3.0
 
 
 def test_the_filter_counts_partitions_per_stretch_and_knows_no_heading_before_a_crossing() -> None:

@@ -39,9 +39,11 @@ P(read | d) = eps + (1 - 2 eps) * sigmoid((r - d) / softness) for each tag of th
 and for each tag near the particles that was not read, resampled (systematic, with a little roughening)
 when the effective sample size falls below half. ``eps`` (``read_error_probability``) bounds what one
 missed or spurious read can cost. A partition change that no particle explains (too few particles where
-the robot is, typically while the heading is unknown at a large r) redraws the worst fifth of the
-particles on the crossing arc, headed within the paper's bounds when the stretch has them (sensor
-resetting). When no particle has explained the recent rounds (the best one keeps contradicting tags: a
+the robot is, typically while the heading is unknown) redraws the worst fifth of the particles (sensor
+resetting): as poses that explain this crossing and an earlier one together (the odometry's displacement
+between them fitted onto the two crossing arcs, which fixes the heading: see ``_paired_proposals``), or,
+without an earlier crossing far enough away, on this crossing's arc headed within the paper's bounds when
+the stretch has them. When no particle has explained the recent rounds (the best one keeps contradicting tags: a
 kidnapped robot, or persistently bad reads) the filter re-initialises from the current partition, counts
 it, and starts a new stretch (the heading is unknown again). An empty round is a prediction step only
 (the robot moved; a missed round says nothing about where).
@@ -71,6 +73,7 @@ first few.
 from __future__ import annotations
 
 import math
+from collections import deque
 from dataclasses import dataclass, replace
 from functools import lru_cache, partial
 from typing import Callable, Sequence
@@ -102,6 +105,12 @@ COLLAPSE_MEMORY = 0.7
 # true pose gives each changed tag at least about 1/2), the worst fifth of the particles are redrawn on it.
 RESET_LOG_LIKELIHOOD = math.log(0.25)
 RESET_FRACTION = 0.2
+# Paired proposals (see PartitionLocalizer._paired_proposals): the crossings remembered since the filter
+# started (about a turn on the spot at r = 2 cm), the shortest odometry baseline paired with, in r, and how
+# many of the longest baselines the proposals spread over (one bad crossing cannot capture them all).
+CROSSING_MEMORY = 64
+PAIR_MIN_BASELINE_R = 1.0
+PAIR_CHOICES = 8
 DECODE_CACHE_LIMIT = 200_000
 BOUNDS_CACHE_LIMIT = 200_000     # orientation bounds kept per lattice (keyed by shapes and their offset)
 
@@ -511,6 +520,19 @@ def consistent_group(positions: Sequence[tuple[float, float]], limit_m: float,
 
 # ---------------------------------------------------------------------------------------- the localizer
 
+@dataclass(frozen=True)
+class _Crossing:
+    """A partition boundary crossed: where in the map (the crossing arc) and where in the odometry frame
+    (the antenna at the round before and at the round that saw the new partition: it crossed in between)."""
+    arc: np.ndarray
+    antenna_before: np.ndarray
+    antenna_after: np.ndarray
+
+    def antenna_at(self, fractions: np.ndarray) -> np.ndarray:
+        """Odometry-frame antenna positions (count x 2) at these fractions of the round's motion."""
+        return self.antenna_before + fractions[:, None] * (self.antenna_after - self.antenna_before)
+
+
 @dataclass
 class _Stretch:
     """A straight stretch: the partitions entered (in order) and the odometry headings seen during it."""
@@ -687,6 +709,7 @@ class PartitionLocalizer:
         self._carried: _Heading | None = None      # paper: the estimate carried into the current stretch
         self._filter: ParticleFilter | None = None
         self._changes_since_filter_start = 0
+        self._crossings: deque[_Crossing] = deque(maxlen=CROSSING_MEMORY)   # filter: since it started
         self.rogue_count = 0
         self.undecodable_count = 0
         self.filter_reinitialisations = 0
@@ -822,6 +845,7 @@ class PartitionLocalizer:
             self._filter = ParticleFilter(self.settings, self.rng)
         self._filter.initialise(*self._geometry.region(partition))
         self._changes_since_filter_start = 0
+        self._crossings.clear()
         self._stretch = _Stretch(odom_yaw, [partition])
 
     def _filter_update(self, observation: _Observation, changed: bool,
@@ -844,7 +868,9 @@ class PartitionLocalizer:
                     self._changes_since_filter_start += 1
                     arc = self._geometry.crossing_arc(self._last_partition, partition)
                     if arc is not None:
-                        proposals = partial(self._crossing_proposals, arc, math.hypot(dx, dy), odom[2])
+                        crossing = _Crossing(arc, self._odom_antenna(previous), self._odom_antenna(odom))
+                        proposals = partial(self._crossing_proposals, crossing, math.hypot(dx, dy), odom)
+                        self._crossings.append(crossing)
                 read, unread = self._filter_tags(partition, observation.rejected)
                 if not particle_filter.weigh(read, unread, self.read_range_m, proposals):
                     self.filter_reinitialisations += 1
@@ -855,7 +881,67 @@ class PartitionLocalizer:
             return None    # a uniform heading has no meaningful mean until a partition boundary is crossed
         return yaw, (yaw - 2.0 * yaw_sd, yaw + 2.0 * yaw_sd), yaw_sd
 
-    def _crossing_proposals(self, arc: np.ndarray, step_m: float, odom_yaw: float, count: int) -> np.ndarray:
+    def _odom_antenna(self, odom: tuple[float, float, float]) -> np.ndarray:
+        offset = self.settings.antenna_offset_m
+        return np.array((odom[0] + offset * math.cos(odom[2]), odom[1] + offset * math.sin(odom[2])))
+
+    def _crossing_proposals(self, crossing: _Crossing, step_m: float, odom: tuple[float, float, float],
+                            count: int) -> np.ndarray:
+        """States (3 x count) of a robot that has just crossed ``crossing``: paired with earlier crossings where
+        it can be, the rest from this crossing alone."""
+        paired = self._paired_proposals(crossing, odom, count)
+        if paired.shape[1] == count:
+            return paired
+        return np.hstack((paired, self._single_crossing_proposals(crossing.arc, step_m, odom[2], count - paired.shape[1])))
+
+    def _paired_proposals(self, crossing: _Crossing, odom: tuple[float, float, float], count: int) -> np.ndarray:
+        """Up to ``count`` states (3 x n) that explain this crossing and an earlier one together.
+
+        The odometry knows the antenna's displacement between the two crossings in its own frame; the map
+        frame differs from it by a rotation and a translation only. So a point p_then on the earlier arc and
+        a point p_now on this arc at the odometry's distance from it fix the whole pose: the rotation turns
+        the odometry's displacement onto p_now - p_then. Sampling p_then along its arc leaves one degree of
+        freedom where a single crossing leaves two (a point on the arc and any heading), which is what finds
+        the heading of a robot turning on the spot: its antenna's crossings lie up to twice the antenna
+        offset apart. Crossings are paired with the ones furthest away by odometry (a longer baseline
+        gives a finer heading), at least PAIR_MIN_BASELINE_R * r."""
+        earlier = list(self._crossings)
+        if not earlier:
+            return np.zeros((3, 0))
+        baselines = np.array([math.dist(c.antenna_after, crossing.antenna_after) for c in earlier])
+        usable = np.flatnonzero(baselines >= PAIR_MIN_BASELINE_R * self.read_range_m)
+        if not len(usable):
+            return np.zeros((3, 0))
+        chosen = usable[np.argsort(baselines[usable])[-PAIR_CHOICES:]]
+        picks = self.rng.choice(chosen, size=count)
+        rng = self.rng
+        now_odom = crossing.antenna_at(rng.random(count))
+        then_odom = np.empty((count, 2))
+        then_map = np.empty((count, 2))
+        for index in np.unique(picks):
+            rows = np.flatnonzero(picks == index)
+            then = earlier[index]
+            then_odom[rows] = then.antenna_at(rng.random(len(rows)))
+            then_map[rows] = then.arc[rng.integers(len(then.arc), size=len(rows))]
+        baseline = np.linalg.norm(now_odom - then_odom, axis=1)
+        # Points of this arc at the baseline's distance from p_then, within the arc's sampling step.
+        arc = crossing.arc
+        mismatch = np.abs(np.linalg.norm(arc[None, :, :] - then_map[:, None, :], axis=2) - baseline[:, None])
+        tolerance = 2.0 * math.pi / CIRCLE_SAMPLES * self.read_range_m
+        keys = np.where(mismatch <= tolerance, rng.random(mismatch.shape), -1.0)
+        found = keys.max(axis=1) >= 0.0
+        now_map = arc[keys.argmax(axis=1)[found]]
+        then_map, then_odom, now_odom = then_map[found], then_odom[found], now_odom[found]
+        map_chord, odom_chord = now_map - then_map, now_odom - then_odom
+        rotation = np.arctan2(map_chord[:, 1], map_chord[:, 0]) - np.arctan2(odom_chord[:, 1], odom_chord[:, 0])
+        # The robot's centre now, carried from the odometry frame into the map by that rotation about p_now.
+        from_antenna = np.array(odom[:2]) - now_odom
+        cos_r, sin_r = np.cos(rotation), np.sin(rotation)
+        x = now_map[:, 0] + cos_r * from_antenna[:, 0] - sin_r * from_antenna[:, 1]
+        y = now_map[:, 1] + sin_r * from_antenna[:, 0] + cos_r * from_antenna[:, 1]
+        return np.vstack((x, y, odom[2] + rotation))
+
+    def _single_crossing_proposals(self, arc: np.ndarray, step_m: float, odom_yaw: float, count: int) -> np.ndarray:
         """States (3 x count) of a robot that crossed ``arc`` during its last step of ``step_m``: the heading
         within the paper's bounds for the current stretch when it has them (turned by the odometry since),
         else any."""
