@@ -574,6 +574,7 @@ class ParticleFilter:
         self.states = np.zeros((3, settings.particles))   # rows x, y, yaw: contiguous per coordinate
         self.weights = np.full(settings.particles, 1.0 / settings.particles)
         self.evidence = 0.0   # the best particle's recent log-likelihood (see COLLAPSE_MEMORY)
+        self._antennas: np.ndarray | None = None
         self.resets = 0       # sensor resettings (see weigh)
 
     def initialise(self, origin: np.ndarray, region: Region) -> None:
@@ -582,6 +583,7 @@ class ParticleFilter:
         self.states[:2] = (origin + region.sample(self.rng, count)).T
         self.states[2] = self.rng.uniform(-math.pi, math.pi, count)
         self.states[:2] -= self.settings.antenna_offset_m * np.vstack((np.cos(self.states[2]), np.sin(self.states[2])))
+        self._antennas = None
         self.weights.fill(1.0 / count)
         self.evidence = 0.0
 
@@ -601,29 +603,37 @@ class ParticleFilter:
         x += cos_yaw * dx - sin_yaw * dy
         y += sin_yaw * dx + cos_yaw * dy
         yaw += rotation + rotation_sd * noise[2]
+        self._antennas = None
 
-    def antenna(self, states: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Where each state's floor antenna reads: ``antenna_offset_m`` ahead of the robot's centre."""
+    def antenna(self, states: np.ndarray) -> np.ndarray:
+        """Where each state's floor antenna reads (2 x count): ``antenna_offset_m`` ahead of the robot's centre."""
         offset = self.settings.antenna_offset_m
         if offset == 0.0:
-            return states[0], states[1]
-        return states[0] + offset * np.cos(states[2]), states[1] + offset * np.sin(states[2])
+            return states[:2]
+        return states[:2] + offset * np.vstack((np.cos(states[2]), np.sin(states[2])))
+
+    def antennas(self) -> np.ndarray:
+        """The particles' antennas, computed once per change of the states (several uses a round)."""
+        if self._antennas is None:
+            self._antennas = self.antenna(self.states)
+        return self._antennas
 
     def bounding_circle(self) -> tuple[float, float, float]:
         """(x, y, radius) of a circle holding every particle's antenna: the centre and half-diagonal of their box."""
-        antenna = np.vstack(self.antenna(self.states))
-        low, high = antenna.min(axis=1), antenna.max(axis=1)
+        antennas = self.antennas()
+        low, high = antennas.min(axis=1), antennas.max(axis=1)
         centre = (low + high) / 2.0
         return float(centre[0]), float(centre[1]), float(np.hypot(*(high - low)) / 2.0)
 
-    def log_likelihood(self, states: np.ndarray, read: np.ndarray, unread: np.ndarray,
+    def log_likelihood(self, antennas: np.ndarray, read: np.ndarray, unread: np.ndarray,
                        read_range_m: float) -> np.ndarray:
-        """log P(this round's reads | particle) of each column of ``states`` under the soft read model."""
+        """log P(this round's reads | particle) for antennas (2 x count) under the soft read model."""
         s = self.settings
         tags = np.concatenate((read, unread))
         sign = np.concatenate((np.ones(len(read)), -np.ones(len(unread))))
-        antenna_x, antenna_y = self.antenna(states)
-        distance = np.hypot(antenna_x[:, None] - tags[:, 0], antenna_y[:, None] - tags[:, 1])
+        dx = antennas[0][:, None] - tags[:, 0]
+        dy = antennas[1][:, None] - tags[:, 1]
+        distance = np.sqrt(dx * dx + dy * dy)    # not np.hypot: its overflow care costs twice the rest here
         margin = sign * ((read_range_m - distance) / s.boundary_softness_m)
         # log(eps + (1 - 2 eps) * sigmoid(margin)); tanh keeps the sigmoid from overflowing.
         eps = s.read_error_probability
@@ -639,13 +649,14 @@ class ParticleFilter:
         typically while the heading is still unknown), the worst RESET_FRACTION are replaced by proposals
         (sensor resetting, Lenser and Veloso 2000). A filter that tracks well is left alone."""
         eps = self.settings.read_error_probability
-        log_likelihood = self.log_likelihood(self.states, read, unread, read_range_m)
+        log_likelihood = self.log_likelihood(self.antennas(), read, unread, read_range_m)
         if proposals is not None and log_likelihood.max() < RESET_LOG_LIKELIHOOD:
             count = round(RESET_FRACTION * len(self.weights))
             worst = np.argpartition(log_likelihood, count)[:count]
             self.states[:, worst] = proposals(count)
+            self._antennas = None
             self.weights[worst] = 1.0 / len(self.weights)
-            log_likelihood[worst] = self.log_likelihood(self.states[:, worst], read, unread, read_range_m)
+            log_likelihood[worst] = self.log_likelihood(self.antennas()[:, worst], read, unread, read_range_m)
             self.resets += 1
         best = float(log_likelihood.max())
         self.evidence = COLLAPSE_MEMORY * self.evidence + best
@@ -669,6 +680,7 @@ class ParticleFilter:
         yaw_offsets = np.remainder(yaw - yaw_mean + math.pi, 2.0 * math.pi) - math.pi
         spread = np.array((np.ptp(self.states[0]), np.ptp(self.states[1]), np.ptp(yaw_offsets)))
         self.states += self.rng.standard_normal((3, count)) * (ROUGHENING * count ** (-1.0 / 3.0) * spread)[:, None]
+        self._antennas = None
         self.weights.fill(1.0 / count)
 
     def estimate(self) -> tuple[tuple[float, float], tuple[float, float, float], float, float]:
