@@ -12,6 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from rfidnav_common.config import param
+from rfidnav_sim.compass_model import CompassModel
 from rfidnav_sim.rfid_model import Antenna, ReaderModel
 
 @dataclass(frozen=True)
@@ -108,3 +109,20 @@ class ReaderParameters:
                            hop_dwell_s=self.hop_dwell_s, phase_noise_rad_per_m=self.phase_noise_rad_per_m,
                            miss_probability=self.miss_probability, rssi_at_1m_dbm=self.rssi_at_1m_dbm,
                            sensitivity_dbm=self.sensitivity_dbm, pattern_exponent=self.pattern_exponent)
+
+
+@dataclass(frozen=True)
+class CompassParameters:
+    seed: int = param("run seed; the compass noise stream derives from it", 0)
+    rate_hz: float = param("readings per second [Hz, sim time]", 10.0)
+    frame_id: str = param("frame of the compass", "base_link")
+    noise_sd_deg: float = param("reading-to-reading noise, standard deviation [deg]", 2.0)
+    bias_deg: float = param("constant heading offset for the whole run [deg]", 0.0)
+
+    def validate(self) -> None:
+        if not (math.isfinite(self.rate_hz) and self.rate_hz > 0.0):
+            raise ValueError(f"rate_hz: must be positive, got {self.rate_hz}")
+        self.model().validate()
+
+    def model(self) -> CompassModel:
+        return CompassModel(noise_sd_rad=math.radians(self.noise_sd_deg), bias_rad=math.radians(self.bias_deg))

@@ -1,0 +1,61 @@
+"""compass_sim: an e-compass on the simulated robot, publishing /compass (sensor_msgs/Imu, orientation only).
+
+Readings are taken from /sim/ground_truth at ``rate_hz`` (sim time), like the reader: they depend on the
+poses and the seed only. Only the orientation is measured; the angular velocity and linear acceleration
+covariances are -1 (sensor_msgs/Imu: "not provided"). Roll and pitch are reported as zero with a large
+variance: a planar robot's compass gives the heading alone.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+from nav_msgs.msg import Odometry
+from rclpy.node import Node
+from sensor_msgs.msg import Imu
+
+from rfidnav_common.geometry import quaternion_to_yaw, yaw_to_quaternion
+from rfidnav_common.ros import SENSOR_QOS, declare_parameters, run_node, seconds_of
+from rfidnav_common.seeding import rng_for
+from rfidnav_sim.parameters import CompassParameters
+
+UNKNOWN_ANGLE_VARIANCE = math.pi ** 2     # roll and pitch: not measured
+
+
+class CompassSimNode(Node):
+    def __init__(self, **node_options: Any) -> None:
+        super().__init__("compass_sim", **node_options)
+        self.params: CompassParameters = declare_parameters(self, CompassParameters)
+        self.model = self.params.model()
+        self.rng = rng_for(self.params.seed, "compass_sim")
+        self.period_s = 1.0 / self.params.rate_hz
+        self.next_reading_s = 0.0
+        self.publisher = self.create_publisher(Imu, "/compass", SENSOR_QOS)
+        self.create_subscription(Odometry, "/sim/ground_truth", self.on_ground_truth, SENSOR_QOS)
+
+    def on_ground_truth(self, msg: Odometry) -> None:
+        now_s = seconds_of(msg.header.stamp)
+        if now_s + 1e-9 < self.next_reading_s:
+            return
+        self.next_reading_s = (math.floor(now_s / self.period_s + 1e-6) + 1) * self.period_s
+        q = msg.pose.pose.orientation
+        heading = self.model.measure(quaternion_to_yaw(q.x, q.y, q.z, q.w), self.rng)
+        reading = Imu()
+        reading.header.stamp = msg.header.stamp
+        reading.header.frame_id = self.params.frame_id
+        reading.orientation.x, reading.orientation.y, reading.orientation.z, reading.orientation.w = \
+            yaw_to_quaternion(heading)
+        reading.orientation_covariance = [UNKNOWN_ANGLE_VARIANCE, 0.0, 0.0, 0.0, UNKNOWN_ANGLE_VARIANCE, 0.0,
+                                          0.0, 0.0, max(self.model.noise_sd_rad ** 2, 1e-12)]
+        reading.angular_velocity_covariance[0] = -1.0
+        reading.linear_acceleration_covariance[0] = -1.0
+        self.publisher.publish(reading)
+
+
+def main(args: list[str] | None = None) -> int:
+    return run_node(CompassSimNode, args)
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
