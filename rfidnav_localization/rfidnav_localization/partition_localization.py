@@ -904,7 +904,8 @@ class PartitionLocalizer:
         paired = self._paired_proposals(crossing, odom, count)
         if paired.shape[1] == count:
             return paired
-        return np.hstack((paired, self._single_crossing_proposals(crossing.arc, step_m, odom[2], count - paired.shape[1])))
+        single = self._single_crossing_proposals(crossing.arc, step_m, odom[2], count - paired.shape[1])
+        return np.hstack((paired, single))
 
     def _paired_proposals(self, crossing: _Crossing, odom: tuple[float, float, float], count: int) -> np.ndarray:
         """Up to ``count`` states (3 x n) that explain this crossing and an earlier one together.
