@@ -13,9 +13,11 @@ setup(
     install_requires=["setuptools"],
     zip_safe=True,
     maintainer="rfidnav developers",
-    description="Localizers of rfidnav: the RFID space-partition localizer (paper 000).",
+    description=("Localizers of rfidnav: the RFID space-partition localizer (paper 000), the WiFi/RFID location "
+                 "server (paper 003)."),
     license="Apache-2.0",
     entry_points={"console_scripts": [
         "partition_localizer = rfidnav_localization.partition_localizer_node:main",
+        "location_server = rfidnav_localization.location_server_node:main",
     ]},
 )

@@ -67,22 +67,27 @@ def _package_share(package: str) -> Path | None:
 
 
 def _package_types(package: str, share: Path) -> dict:
-    """Parse every message and action definition an installed interface package ships."""
+    """Parse every message, service and action definition an installed interface package ships."""
     types: dict = {}
     source = share
     try:
         for source in sorted((share / "msg").glob("*.msg")):
             types.update(get_types_from_msg(source.read_text(encoding="utf-8"), f"{package}/msg/{source.stem}"))
+        for source in sorted((share / "srv").glob("*.idl")):     # requests and responses (and service events)
+            types.update(get_types_from_idl(_without_includes(source)))
         for source in sorted((share / "action").glob("*.idl")):
-            # rosbags' IDL parser takes no #include lines; the included types are in the typestore already.
-            text = re.sub(r"^#include .*$", "", source.read_text(encoding="utf-8"), flags=re.MULTILINE)
-            types.update(get_types_from_idl(text))
+            types.update(get_types_from_idl(_without_includes(source)))
             action = f"{package}/action/{source.stem}"
             for suffix, text in _ACTION_DERIVED.items():
                 types.update(get_types_from_msg(text.format(action=action), action + suffix))
     except (TypesysError, OSError, UnicodeDecodeError) as error:
         raise BagError(f"{source}: cannot parse this interface definition: {error}") from error
     return types
+
+
+def _without_includes(source: Path) -> str:
+    # rosbags' IDL parser takes no #include lines; the included types are in the typestore already.
+    return re.sub(r"^#include .*$", "", source.read_text(encoding="utf-8"), flags=re.MULTILINE)
 
 
 def _register(store: Typestore, types: dict, origin: str) -> None:

@@ -22,10 +22,10 @@ from rfidnav_bringup.processes import UnknownExecutableError, resolve_executable
 from rfidnav_common.config import Section, node_parameter_section, parameters_from_mapping, typed_values
 from rfidnav_common.errors import ConfigError
 from rfidnav_control.parameters import HeadingControllerParameters
-from rfidnav_localization.parameters import PartitionLocalizerParameters
+from rfidnav_localization.parameters import LocationServerParameters, PartitionLocalizerParameters
 from rfidnav_planning.parameters import PartitionNavigatorParameters
 from rfidnav_common.robot_map import RouteMap, load_route_map
-from rfidnav_sim.parameters import ReaderParameters, RobotSimParameters
+from rfidnav_sim.parameters import CompassParameters, ReaderParameters, RobotSimParameters, WifiSimParameters
 from rfidnav_sim.world import World, load_world
 
 CONFIG_DIR = Path(__file__).resolve().parents[2] / "config"
@@ -39,6 +39,9 @@ KNOWN_NODES: dict[tuple[str, str], tuple[str, type]] = {
     ("rfidnav_control", "heading_controller"): ("heading_controller", HeadingControllerParameters),
     ("rfidnav_localization", "partition_localizer"): ("partition_localizer", PartitionLocalizerParameters),
     ("rfidnav_planning", "partition_navigator"): ("partition_navigator", PartitionNavigatorParameters),
+    ("rfidnav_sim", "compass_sim"): ("compass_sim", CompassParameters),
+    ("rfidnav_sim", "wifi_sim"): ("wifi_sim", WifiSimParameters),
+    ("rfidnav_localization", "location_server"): ("location_server", LocationServerParameters),
 }
 METRIC_GROUPS = ("tracking", "partition")
 

@@ -6,6 +6,8 @@ They hold no tag positions: the robot never knows where tags are. A map has any 
   ceiling tag;
 * ``deployment_area`` (paper 000): the rectangle covered by floor tags. Layout, spacing and read range
   the robot learns from the tags' own IDs; the area lets a navigator refuse a goal off the deployment.
+* ``tag_groups`` (paper 003): the location server's tag map, floor tag groups whose tags and positions are
+  registered (the paper's landmarks). Worlds describe their groups with the same schema.
 
 Schema::
 
@@ -14,14 +16,20 @@ Schema::
       C1: F1
       C2: F2
     deployment_area: [0.0, 0.0, 5.0, 5.0]   # x_min, y_min, x_max, y_max [m], map frame
+    tag_groups:            # tags GROUP-00, GROUP-01, ... along the outline (rfidnav_common.tag_groups)
+      - {id: G1, shape: cross, centre: [1.0, 2.0], size_m: 0.30, rotation_deg: 0.0, tag_spacing_m: 0.05}
+        # shape: cross | circle | triangle | square; size_m: cross bar length, circle diameter, side
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from pathlib import Path
 
 from rfidnav_common.config import Section
+from rfidnav_common.errors import ConfigError
+from rfidnav_common.tag_groups import TagGroup
 
 
 @dataclass(frozen=True)
@@ -29,6 +37,7 @@ class RouteMap:
     name: str
     arrival_tags: dict[str, str]
     deployment_area: tuple[float, float, float, float] | None = None
+    tag_groups: tuple[TagGroup, ...] = ()
 
     def unknown_tags(self, route: list[str]) -> list[str]:
         return [tag for tag in route if tag not in self.arrival_tags]
@@ -36,7 +45,7 @@ class RouteMap:
 
 def load_route_map(path: Path) -> RouteMap:
     section = Section.from_file(Path(path))
-    section.reject_unknown(("name", "description", "arrival_tags", "deployment_area"))
+    section.reject_unknown(("name", "description", "arrival_tags", "deployment_area", "tag_groups"))
     arrival = _arrival_tags(section) if section.has("arrival_tags") else {}
     area = None
     if section.has("deployment_area"):
@@ -44,9 +53,30 @@ def load_route_map(path: Path) -> RouteMap:
         if not (x_max > x_min and y_max > y_min):
             raise section.error("deployment_area", "expected [x_min, y_min, x_max, y_max] with max > min")
         area = (x_min, y_min, x_max, y_max)
-    if not arrival and area is None:
-        raise section.error("arrival_tags", "a map needs arrival_tags or a deployment_area (none given)")
-    return RouteMap(name=section.string("name"), arrival_tags=arrival, deployment_area=area)
+    groups = tag_groups_of(section)
+    if not arrival and area is None and not groups:
+        raise section.error("arrival_tags", "a map needs arrival_tags, a deployment_area or tag_groups (none given)")
+    return RouteMap(name=section.string("name"), arrival_tags=arrival, deployment_area=area, tag_groups=groups)
+
+
+def tag_groups_of(section: Section) -> tuple[TagGroup, ...]:
+    """The ``tag_groups`` list of a map or world file (schema above); group ids unique."""
+    groups: list[TagGroup] = []
+    seen: dict[str, str] = {}
+    for entry in section.sections("tag_groups", []):
+        entry.reject_unknown(("id", "shape", "centre", "size_m", "rotation_deg", "tag_spacing_m"))
+        group_id = entry.string("id")
+        if group_id in seen:
+            raise entry.error("id", f"duplicate tag group '{group_id}' (also at {seen[group_id]})")
+        seen[group_id] = entry.prefix
+        centre = entry.numbers("centre", length=2)
+        try:
+            groups.append(TagGroup(group_id, entry.string("shape"), (centre[0], centre[1]),
+                                   entry.number("size_m", 0.30), math.radians(entry.number("rotation_deg", 0.0)),
+                                   entry.number("tag_spacing_m", 0.05)))
+        except ValueError as error:          # the message names the field: "... size_m: expected ..."
+            raise ConfigError(entry.source, entry.prefix, str(error)) from None
+    return tuple(groups)
 
 
 def _arrival_tags(section: Section) -> dict[str, str]:

@@ -1,4 +1,5 @@
-"""LocalizationEstimate -> ROS messages (geometry_msgs/PoseWithCovarianceStamped, rfidnav_msgs/LocalizationStatus)."""
+"""Localization domain objects <-> ROS messages: estimates (PoseWithCovarianceStamped, LocalizationStatus),
+WiFi scans and floor tags of the location server."""
 
 from __future__ import annotations
 
@@ -7,7 +8,8 @@ from geometry_msgs.msg import PoseWithCovarianceStamped
 
 from rfidnav_common.geometry import yaw_to_quaternion
 from rfidnav_localization.partition_localization import LocalizationEstimate
-from rfidnav_msgs.msg import LocalizationStatus
+from rfidnav_localization.location_store import TagRecord
+from rfidnav_msgs.msg import FloorTag, LocalizationStatus, WifiScan
 
 # Yaw variance published while the heading is unknown: no consumer should mistake it for information.
 UNKNOWN_YAW_VARIANCE = 1e6
@@ -60,3 +62,17 @@ def status_message(estimate: LocalizationEstimate, stamp: Time, frame_id: str) -
     message.rogue_count = int(estimate.rogue_count)
     message.undecodable_count = int(estimate.undecodable_count)
     return message
+
+
+def scan_rss(scan: WifiScan) -> dict[str, float]:
+    """A WifiScan as the matcher takes it: bssid -> RSS [dBm] (the strongest when an AP is listed twice)."""
+    rss: dict[str, float] = {}
+    for access_point in scan.access_points:
+        value = float(access_point.rssi_dbm)
+        rss[access_point.bssid] = max(value, rss.get(access_point.bssid, value))
+    return rss
+
+
+def floor_tag_message(tag: TagRecord) -> FloorTag:
+    return FloorTag(tag_id=tag.tag_id, x=float(tag.position[0]), y=float(tag.position[1]), group_id=tag.group_id,
+                    shape=tag.shape)

@@ -1,8 +1,9 @@
-"""Parameters of the partition_localizer node: typed, with defaults and descriptions, importable without
-rclpy so the orchestrator and the in-process runner validate parameter files against the same class.
+"""Parameters of the localization nodes (partition_localizer, location_server): typed, with defaults and
+descriptions, importable without rclpy so the orchestrator and the in-process runner validate parameter files
+against the same class.
 
-Defaults are the paper-000 set; config/params/partition_localizer_paper.yaml repeats them and
-config/params/partition_localizer_filter.yaml selects the particle filter.
+The partition localizer's defaults are the paper-000 set; config/params/partition_localizer_paper.yaml repeats
+them and config/params/partition_localizer_filter.yaml selects the particle filter.
 """
 
 from __future__ import annotations
@@ -14,6 +15,7 @@ from pathlib import Path
 
 from rfidnav_common.config import param
 from rfidnav_common.robot_map import load_route_map
+from rfidnav_localization.fingerprint import LocateSettings
 from rfidnav_localization.partition_localization import LocalizerSettings
 
 
@@ -58,3 +60,28 @@ class PartitionLocalizerParameters:
                   if field.name != "deployment_area"}
         area = load_route_map(Path(self.map_file)).deployment_area if self.map_file != "unused" else None
         return LocalizerSettings(**values, deployment_area=area)
+
+
+@dataclass(frozen=True)
+class LocationServerParameters:
+    """The location server of paper 003: radio map and tag map in an SQLite database file."""
+
+    database_file: str = param("the location database (SQLite): radio map and tag map", "location.db")
+    create_database: bool = param("create the database when the file is missing (else: one error at start)",
+                                  False)
+    map_file: str = param("robot map: its tag_groups are loaded into the tag map at start ('unused': none)",
+                          "unused")
+    k: int = param("neighbours averaged by the fingerprint matcher (k-nearest neighbours, RADAR)", 3)
+    missing_rss_dbm: float = param(
+        "RSS substituted for an AP heard on one side only (scan or fingerprint) [dBm]: below any sensitivity", -100.0)
+    min_common_aps: int = param("a fingerprint sharing fewer APs with the scan is not a candidate", 1)
+    weighting: str = param("inverse_distance (1 / signal distance) or uniform", "inverse_distance")
+
+    def validate(self) -> None:
+        if not self.database_file:
+            raise ValueError("database_file: required")
+        self.locate_settings().validate()
+
+    def locate_settings(self) -> LocateSettings:
+        return LocateSettings(k=self.k, missing_rss_dbm=self.missing_rss_dbm, min_common_aps=self.min_common_aps,
+                              weighting=self.weighting)

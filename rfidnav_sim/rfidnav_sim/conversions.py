@@ -10,9 +10,10 @@ from visualization_msgs.msg import Marker, MarkerArray
 
 from rfidnav_common.geometry import yaw_to_quaternion
 from rfidnav_common.tag_lattice import Deployment
-from rfidnav_msgs.msg import TagReadArray, TagReading
+from rfidnav_msgs.msg import AccessPointRss, TagReadArray, TagReading, WifiScan
 from rfidnav_sim.kinematics import Pose2D
 from rfidnav_sim.rfid_model import Read
+from rfidnav_sim.wifi_model import RssReading
 from rfidnav_sim.world import World
 
 TAG_COLOURS = {"ceiling": ColorRGBA(r=1.0, g=0.55, b=0.0, a=1.0), "floor": ColorRGBA(r=0.1, g=0.4, b=1.0, a=1.0)}
@@ -40,6 +41,16 @@ def reads_message(reads: list[Read], stamp: Time, frame_id: str) -> TagReadArray
     msg.readings = [TagReading(stamp=stamp, tag_id=read.tag_id, antenna=read.antenna, rssi_dbm=read.rssi_dbm,
                                phase_rad=read.phase_rad, i=read.i, q=read.q, frequency_hz=read.frequency_hz)
                     for read in reads]
+    return msg
+
+
+def wifi_scan_message(readings: list[RssReading], stamp: Time, frame_id: str, interface: str) -> WifiScan:
+    msg = WifiScan()
+    msg.header.stamp = stamp
+    msg.header.frame_id = frame_id
+    msg.interface = interface
+    msg.access_points = [AccessPointRss(bssid=r.bssid.lower(), ssid=r.ssid, channel=r.channel,
+                                        frequency_hz=r.frequency_hz, rssi_dbm=r.rssi_dbm) for r in readings]
     return msg
 
 

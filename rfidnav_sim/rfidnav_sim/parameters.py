@@ -126,3 +126,24 @@ class CompassParameters:
 
     def model(self) -> CompassModel:
         return CompassModel(noise_sd_rad=math.radians(self.noise_sd_deg), bias_rad=math.radians(self.bias_deg))
+
+
+@dataclass(frozen=True)
+class WifiSimParameters:
+    world_file: str = param("world YAML (ground truth: access points, walls, the building's propagation)", "")
+    seed: int = param("run seed; the scan noise stream derives from it (the building's shadowing does not)", 0)
+    scan_period_s: float = param("time between scans [s, sim time]; a real full-channel scan takes 2-4 s", 2.0)
+    frame_id: str = param("frame of the WiFi antenna", "base_link")
+    interface: str = param("interface name reported in each scan", "sim")
+    scan_noise_sd_db: float = param("per-reading noise of the receiver, standard deviation [dB]", 2.0)
+    sensitivity_dbm: float = param("weakest RSS the receiver reports [dBm]", -90.0)
+
+    def validate(self) -> None:
+        if not self.world_file:
+            raise ValueError("world_file: required (the world YAML to simulate)")
+        if not (math.isfinite(self.scan_period_s) and self.scan_period_s > 0.0):
+            raise ValueError(f"scan_period_s: must be positive, got {self.scan_period_s}")
+        if not (math.isfinite(self.scan_noise_sd_db) and self.scan_noise_sd_db >= 0.0):
+            raise ValueError(f"scan_noise_sd_db: must be a finite non-negative number, got {self.scan_noise_sd_db}")
+        if not math.isfinite(self.sensitivity_dbm):
+            raise ValueError(f"sensitivity_dbm: must be finite, got {self.sensitivity_dbm}")

@@ -18,6 +18,16 @@ Schema::
         # the lattice vertices whose read disc reaches into the area, tag (0, 0) at the map origin, each
         # with its self-describing EPC (rfidnav_common.tag_lattice); a downward antenna reads them within
         # read_range_m (horizontally), so worlds with hundreds of thousands of tags cost nothing to load.
+    tag_groups:                        # optional, floor tag groups (paper 003): their tags are floor tags
+      - {id: G1, shape: cross, centre: [1.0, 2.0], size_m: 0.30}   # schema: rfidnav_common.robot_map
+    access_points:                     # optional, WiFi access points (paper 003), bssids unique
+      - {bssid: "02:00:00:00:00:01", ssid: home, position: [1.0, 2.0], tx_power_dbm: 20.0, channel: 6}
+    wifi:                              # optional, how this building attenuates WiFi (rfidnav_sim.wifi_model)
+      path_loss_exponent: 2.0          # between walls (walls are counted separately)
+      wall_loss_db: 5.0                # per wall the straight ray crosses
+      shadowing_sd_db: 4.0             # spatially correlated shadowing, fixed for the world...
+      shadowing_correlation_m: 2.0     # ...with this correlation length...
+      shadowing_seed: 1                # ...and this seed (the building, not the run: fingerprints stay put)
 """
 
 from __future__ import annotations
@@ -28,6 +38,9 @@ from pathlib import Path
 import numpy as np
 
 from rfidnav_common.config import Section, check_number
+from rfidnav_common.robot_map import tag_groups_of
+from rfidnav_common.tag_groups import TagGroup
+from rfidnav_sim.wifi_model import AccessPoint, PropagationSettings
 from rfidnav_common.tag_lattice import Deployment, DeploymentError, make_deployment
 from rfidnav_common.errors import ConfigError
 
@@ -49,6 +62,10 @@ class World:
     tags: tuple[Tag, ...]
     walls: tuple[tuple[float, float, float, float], ...]
     deployments: tuple[Deployment, ...] = ()
+    tag_groups: tuple[TagGroup, ...] = ()
+    access_points: tuple[AccessPoint, ...] = ()
+    wifi: PropagationSettings = PropagationSettings()   # the building's part; a receiver adds noise, sensitivity
+    wifi_seed: int = 1
 
     def tag(self, tag_id: str) -> Tag:
         for tag in self.tags:
@@ -61,7 +78,8 @@ class World:
 
 
 def world_from_section(section: Section) -> World:
-    section.reject_unknown(("name", "frame_id", "tags", "walls", "lattices", "description"))
+    section.reject_unknown(("name", "frame_id", "tags", "walls", "lattices", "tag_groups", "access_points", "wifi",
+                            "description"))
     tags: list[Tag] = []
     seen: dict[str, str] = {}
     for tag_section in section.sections("tags", []):
@@ -86,10 +104,54 @@ def world_from_section(section: Section) -> World:
         x1, y1, x2, y2 = (check_number(value, section.source, f"{field}[{i}]") for i, value in enumerate(wall))
         walls.append((x1, y1, x2, y2))
     deployments = tuple(_deployment(entry) for entry in section.sections("lattices", []))
+    groups = tag_groups_of(section)
+    for group in groups:
+        for tag_id, (x, y) in group.tags():
+            if tag_id in seen:
+                raise section.error("tag_groups",
+                                    f"tag group {group.group_id}'s tag id '{tag_id}' is also at {seen[tag_id]}")
+            seen[tag_id] = f"tag group {group.group_id}"
+            tags.append(Tag(tag_id=tag_id, position=(x, y, 0.0), kind="floor"))
     if not tags and not deployments:
         raise section.error("tags", "a world needs tags or lattices (none given)")
+    wifi, wifi_seed = _wifi(section.section("wifi", {}))
     return World(name=section.string("name"), frame_id=section.string("frame_id", "map"),
-                 tags=tuple(tags), walls=tuple(walls), deployments=deployments)
+                 tags=tuple(tags), walls=tuple(walls), deployments=deployments, tag_groups=groups,
+                 access_points=_access_points(section), wifi=wifi, wifi_seed=wifi_seed)
+
+
+def _access_points(section: Section) -> tuple[AccessPoint, ...]:
+    access_points: list[AccessPoint] = []
+    seen: dict[str, str] = {}
+    for entry in section.sections("access_points", []):
+        entry.reject_unknown(("bssid", "ssid", "position", "tx_power_dbm", "channel"))
+        bssid = entry.string("bssid")
+        if bssid.lower() in seen:
+            raise entry.error("bssid", f"duplicate bssid '{bssid}' (also at {seen[bssid.lower()]})")
+        seen[bssid.lower()] = entry.prefix
+        position = entry.numbers("position", length=2)
+        ssid = entry.raw("ssid", "")
+        if not isinstance(ssid, str):
+            raise entry.error("ssid", "expected a string (may be empty: a hidden network)")
+        try:
+            access_points.append(AccessPoint(bssid, ssid, (position[0], position[1]),
+                                             entry.number("tx_power_dbm", 20.0), entry.integer("channel", 6)))
+        except ValueError as error:          # the message names the field: "channel: 15 is not ..."
+            raise ConfigError(entry.source, entry.prefix, str(error)) from None
+    return tuple(access_points)
+
+
+def _wifi(entry: Section) -> tuple[PropagationSettings, int]:
+    names = ("path_loss_exponent", "wall_loss_db", "shadowing_sd_db", "shadowing_correlation_m")
+    entry.reject_unknown((*names, "shadowing_seed"))
+    defaults = PropagationSettings()
+    settings = PropagationSettings(**{name: entry.number(name, getattr(defaults, name)) for name in names})
+    try:
+        settings.validate()
+    except ValueError as error:
+        field, _, problem = str(error).partition(": ")
+        raise entry.error(field, problem) from None
+    return settings, entry.integer("shadowing_seed", 1)
 
 
 def _deployment(entry: Section) -> Deployment:

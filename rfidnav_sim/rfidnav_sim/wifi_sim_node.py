@@ -1,0 +1,61 @@
+"""wifi_sim: the robot's WiFi interface in a simulated building, publishing /wifi/scan (WifiScan).
+
+The building (access points, walls, path loss, the shadowing fixed per world) comes from the world file;
+the receiver (noise, sensitivity) from this node's parameters. Scans are driven by /sim/ground_truth: the
+first pose at or after each scan's due time (``scan_period_s`` apart in sim time) is where the scan is
+taken, so scans depend on the poses and the seed only, as the RFID reader's rounds do.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from typing import Any
+
+import numpy as np
+from nav_msgs.msg import Odometry
+from rclpy.node import Node
+
+from rfidnav_common.ros import SENSOR_QOS, declare_parameters, run_node, seconds_of
+from rfidnav_common.seeding import rng_for
+from rfidnav_msgs.msg import WifiScan
+from rfidnav_sim.conversions import wifi_scan_message
+from rfidnav_sim.parameters import WifiSimParameters
+from rfidnav_sim.wifi_model import WifiModel
+from rfidnav_sim.world import load_world
+
+
+class WifiSimNode(Node):
+    def __init__(self, **node_options: Any) -> None:
+        super().__init__("wifi_sim", **node_options)
+        self.params: WifiSimParameters = declare_parameters(self, WifiSimParameters)
+        world = load_world(self.params.world_file)
+        receiver = dataclasses.replace(world.wifi, scan_noise_sd_db=self.params.scan_noise_sd_db,
+                                       sensitivity_dbm=self.params.sensitivity_dbm)
+        walls = np.array(world.walls, dtype=float).reshape(-1, 4)
+        self.model = WifiModel(world.access_points, walls, receiver, world.wifi_seed)
+        self.rng = rng_for(self.params.seed, "wifi_sim")
+        self.next_scan_s = 0.0
+        self.publisher = self.create_publisher(WifiScan, "/wifi/scan", SENSOR_QOS)
+        self.create_subscription(Odometry, "/sim/ground_truth", self.on_ground_truth, SENSOR_QOS)
+        self.get_logger().info(f"{len(world.access_points)} access points, {len(world.walls)} walls, "
+                               f"a scan every {self.params.scan_period_s:g} s")
+
+    def on_ground_truth(self, msg: Odometry) -> None:
+        now_s = seconds_of(msg.header.stamp)
+        if now_s + 1e-9 < self.next_scan_s:
+            return
+        period = self.params.scan_period_s
+        self.next_scan_s = (math.floor(now_s / period + 1e-6) + 1) * period
+        position = msg.pose.pose.position
+        readings = self.model.scan(position.x, position.y, self.rng)
+        self.publisher.publish(wifi_scan_message(readings, msg.header.stamp, self.params.frame_id,
+                                                 self.params.interface))
+
+
+def main(args: list[str] | None = None) -> int:
+    return run_node(WifiSimNode, args)
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
