@@ -1,0 +1,151 @@
+"""In-process two-tier navigation (paper 003): the navigator core of the DDS node driving an idealised robot
+through a simulated flat, for the paper's statistics.
+
+The robot is a unicycle stepped at ``STEP_S`` with the commanded velocities (no motor dynamics). What the
+navigator sees is simulated as the nodes simulate it: wheel odometry whose distance is off by
+``odometry_scale_error`` (paper 003: about 1 m per 20 m with a load), the e-compass (rfidnav_sim.compass_model),
+the HF floor reader (every tag within its range of the robot's centre) and the location server (the WiFi
+model's scan at the true position matched against a radio map). Only the simulation knows the true pose.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from rfidnav_common.tag_groups import HF_READ_RANGE_M
+from rfidnav_localization.errors import LocateError
+from rfidnav_localization.fingerprint import Fingerprint, LocateSettings, RadioMap
+from rfidnav_planning.two_tier_navigation import LOCATE, MapTag, Request, TwoTierNavigator, TwoTierSettings
+from rfidnav_sim.compass_model import CompassModel
+from rfidnav_sim.wifi_model import WifiModel
+from rfidnav_sim.world import World
+
+STEP_S = 0.05                      # control and simulation step (20 Hz)
+COMPASS = CompassModel(noise_sd_rad=math.radians(2.0), bias_rad=math.radians(3.0))
+
+
+@dataclass(frozen=True)
+class Site:
+    """A world as the experiments use it: its WiFi, its floor tags, and the location server's two maps."""
+    world: World
+    wifi: WifiModel
+    tag_ids: tuple[str, ...]
+    tag_positions: np.ndarray             # N x 2
+    tag_map: tuple[MapTag, ...]           # what the server serves (every tag of every group)
+    radio_map: RadioMap
+
+    @classmethod
+    def of(cls, world: World, radio_map: RadioMap) -> Site:
+        walls = np.array(world.walls, dtype=float).reshape(-1, 4)
+        tags = [MapTag(tag_id, position, group.group_id, group.shape)
+                for group in world.tag_groups for tag_id, position in group.tags()]
+        return cls(world, WifiModel(world.access_points, walls, world.wifi, world.wifi_seed),
+                   tuple(tag.tag_id for tag in tags), np.array([tag.position for tag in tags], dtype=float),
+                   tuple(tags), radio_map)
+
+    def tags_near(self, centre: tuple[float, float], radius_m: float) -> list[MapTag]:
+        return [tag for tag in self.tag_map if math.dist(tag.position, centre) <= radius_m]
+
+
+def grid_radio_map(world: World, spacing_m: float, rng: np.random.Generator, scans_per_point: int = 3) -> RadioMap:
+    """A site survey on a regular grid at known positions (the usual manual way): each fingerprint is the mean
+    of a few scans, as surveyors average."""
+    walls = np.array(world.walls, dtype=float).reshape(-1, 4)
+    wifi = WifiModel(world.access_points, walls, world.wifi, world.wifi_seed)
+    xs = np.arange(spacing_m / 2.0, _extent(world)[0], spacing_m)
+    ys = np.arange(spacing_m / 2.0, _extent(world)[1], spacing_m)
+    fingerprints = []
+    for x in xs:
+        for y in ys:
+            scans = [wifi.scan(float(x), float(y), rng) for _ in range(scans_per_point)]
+            heard: dict[str, list[float]] = {}
+            for scan in scans:
+                for reading in scan:
+                    heard.setdefault(reading.bssid, []).append(reading.rssi_dbm)
+            if heard:
+                fingerprints.append(Fingerprint((float(x), float(y)), {b: float(np.mean(v)) for b, v in heard.items()},
+                                                "grid"))
+    return RadioMap(fingerprints)
+
+
+def _extent(world: World) -> tuple[float, float]:
+    walls = np.array(world.walls, dtype=float).reshape(-1, 4)
+    return float(max(walls[:, 0].max(), walls[:, 2].max())), float(max(walls[:, 1].max(), walls[:, 3].max()))
+
+
+@dataclass(frozen=True)
+class TwoTierRun:
+    success: bool
+    message: str
+    final_position: tuple[float, float]    # true
+    target: tuple[float, float]
+    path_length_m: float
+    fix_errors_m: tuple[float, ...]        # true distance from each tier-two fix's position (at the fix)
+    tier_one_errors_m: tuple[float, ...]   # true distance from each tier-one answer
+    searches: int
+    search_length_m: float
+    visited: tuple[str, ...]
+    duration_s: float
+
+    @property
+    def final_error_m(self) -> float:
+        return math.dist(self.final_position, self.target)
+
+
+def run_two_tier(site: Site, start: tuple[float, float, float], target: tuple[float, float],
+                 settings: TwoTierSettings, rng: np.random.Generator, odometry_scale_error: float = 0.05,
+                 compass: CompassModel = COMPASS, locate: LocateSettings = LocateSettings(),
+                 max_time_s: float = 1800.0) -> TwoTierRun:
+    x, y, yaw = start
+    odom = [0.0, 0.0, 0.0]
+    navigator = TwoTierNavigator(settings)
+    decision = navigator.start(target)
+    fix_errors: list[float] = []
+    tier_one_errors: list[float] = []
+    fixes_seen = 0
+    time_s = path_m = 0.0
+    while not decision.finished and time_s < max_time_s:
+        if decision.request is not None:
+            decision = answer(site, navigator, decision.request, (x, y), rng, locate, tier_one_errors)
+            continue
+        linear, angular = decision.command
+        x += linear * STEP_S * math.cos(yaw + 0.5 * angular * STEP_S)
+        y += linear * STEP_S * math.sin(yaw + 0.5 * angular * STEP_S)
+        yaw += angular * STEP_S
+        measured = linear * STEP_S * (1.0 + odometry_scale_error)
+        odom[0] += measured * math.cos(odom[2] + 0.5 * angular * STEP_S)
+        odom[1] += measured * math.sin(odom[2] + 0.5 * angular * STEP_S)
+        odom[2] += angular * STEP_S
+        path_m += abs(linear) * STEP_S
+        time_s += STEP_S
+        reads = [site.tag_ids[i] for i in np.flatnonzero(
+            np.hypot(site.tag_positions[:, 0] - x, site.tag_positions[:, 1] - y) <= HF_READ_RANGE_M)]
+        decision = navigator.step((odom[0], odom[1], odom[2]), compass.measure(yaw, rng), reads)
+        fixes = navigator.progress.fixes
+        for fix in fixes[fixes_seen:]:
+            if fix.tag_id:
+                fix_errors.append(math.dist(fix.position, (x, y)))
+        fixes_seen = len(fixes)
+    if not decision.finished:
+        decision = navigator.finish(False, f"timed out after {max_time_s:g} s")
+    progress = navigator.progress
+    return TwoTierRun(decision.success, decision.message, (x, y), target, path_m, tuple(fix_errors),
+                      tuple(tier_one_errors), progress.searches, progress.search_length_m, tuple(progress.visited),
+                      time_s)
+
+
+def answer(site: Site, navigator: TwoTierNavigator, request: Request, true_position: tuple[float, float],
+           rng: np.random.Generator, locate: LocateSettings, tier_one_errors: list[float]):
+    """The location server's answer to ``request``, as the node gets it over DDS."""
+    if request.kind == LOCATE:
+        scan = {reading.bssid: reading.rssi_dbm for reading in site.wifi.scan(*true_position, rng)}
+        try:
+            result = site.radio_map.locate(scan, locate)
+        except LocateError as error:
+            return navigator.on_located(None, 0.0, str(error))
+        tier_one_errors.append(math.dist(result.position, true_position))
+        return navigator.on_located(result.position, result.uncertainty_m)
+    return navigator.on_tag_map(site.tags_near(request.centre, request.radius_m))

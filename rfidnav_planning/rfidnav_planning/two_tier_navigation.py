@@ -1,0 +1,321 @@
+"""Self-guided navigation of paper 003 (Fig. 2, steps A1-A7) as a decision core without motion or ROS.
+
+The core is fed the robot's sensors one control step at a time (odometry, compass, the floor tags the HF
+reader reads) and the location server's answers, and answers with a velocity command and, when it needs
+one, a request to the location server. The DDS node turns requests into service calls and commands into
+/cmd_vel; the in-process experiments answer from a radio map and drive an idealised robot. Both run this code.
+
+Flow (paper 003 section 3.2):
+
+* A6, tier one: ask the server to locate the latest WiFi scan (metre level); A1: download the tag map around
+  that estimate (the landmarks: floor tag groups).
+* A7, tier two: drive to the nearest landmark by dead reckoning (odometry distance, compass heading); a tag
+  read fixes the position to centimetres. Arriving where the landmark should be without a read starts an
+  Archimedean spiral search (rfidnav_control.spiral) sized so the group must be crossed, out to a radius
+  of ``search_radius_sigmas`` times the position's standard deviation; an exhausted spiral asks tier one
+  again.
+* A2/A3, the route: through intermediate landmarks chosen by geographic forwarding (Fig. 4): the next one is
+  the landmark within ``landmark_spacing_m`` of the current position that is nearest to the target, if it is
+  nearer to the target than the robot is; the target itself when it is within reach or no landmark helps.
+* A5, calibration: after ``calibration_distance_m`` without a fix, tier one checks the dead-reckoned
+  position; a deviation over ``deviation_threshold_m`` sends the robot to the landmark nearest the tier-one
+  estimate to fix itself again.
+* A4, arrival: a target that is a landmark is reached when one of its tags is read; any other target when the
+  dead-reckoned position is within ``arrival_tolerance_m`` of it.
+
+Any known tag read on the way is a fix (it is free); unknown tags are counted and ignored.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from rfidnav_control.go_to import GoToSettings, go_to_command
+from rfidnav_control.spiral import SpiralSearch, separation_for_group
+from rfidnav_localization.dead_reckoning import TIER_TAG, TIER_WIFI, DeadReckoning, DeadReckoningEstimate, Fix
+
+LOCATING, MAPPING, TO_LANDMARK, SEARCHING, TO_TARGET, DONE = (
+    "locating", "mapping", "to_landmark", "searching", "to_target", "done")
+LOCATE, TAG_MAP = "locate", "tag_map"
+# Standard deviation of the entry point (see TwoTierNavigator.entry_point) in read ranges: over u uniform in
+# [-r, r] the along-track error sqrt(r^2 - u^2) - pi r / 4 and the across-track error u give sqrt(1 - pi^2/16 + 1/3).
+ENTRY_SPREAD = math.sqrt(1.0 - math.pi ** 2 / 16.0 + 1.0 / 3.0)
+
+
+@dataclass(frozen=True)
+class TwoTierSettings:
+    landmark_spacing_m: float = 4.0        # geographic forwarding: the tolerable distance to the next landmark
+    calibration_distance_m: float = 6.0    # A5: a tier-one check after driving this far without a fix
+    deviation_threshold_m: float = 2.0     # A5: re-fix at a landmark when tier one disagrees by more
+    tag_map_radius_m: float = 30.0         # A1: the local tag map around the tier-one estimate
+    search_radius_sigmas: float = 3.0      # spiral out to this many position standard deviations...
+    search_min_radius_m: float = 0.5       # ...but at least this far
+    max_searches: int = 10                 # give up after this many exhausted spirals
+    read_range_m: float = 0.05             # the floor reader's range: a tag fix is this good
+    arrival_tolerance_m: float = 0.05      # a target that is not a landmark: arrived within this
+    drift_per_m: float = 0.05              # dead reckoning: position sd growth per metre (paper 003: 1 m per 20 m)
+    go_to: GoToSettings = field(default_factory=GoToSettings)
+
+    def validate(self) -> None:
+        for name in ("landmark_spacing_m", "calibration_distance_m", "deviation_threshold_m", "tag_map_radius_m",
+                     "search_radius_sigmas", "search_min_radius_m", "read_range_m", "arrival_tolerance_m"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value > 0.0):
+                raise ValueError(f"{name}: must be a positive number, got {value}")
+        if self.max_searches < 1:
+            raise ValueError(f"max_searches: must be at least 1, got {self.max_searches}")
+        if not (math.isfinite(self.drift_per_m) and self.drift_per_m >= 0.0):
+            raise ValueError(f"drift_per_m: must not be negative, got {self.drift_per_m}")
+        self.go_to.validate()
+
+
+@dataclass(frozen=True)
+class MapTag:
+    tag_id: str
+    position: tuple[float, float]
+    group_id: str
+    shape: str
+
+
+@dataclass(frozen=True)
+class Landmark:
+    """A tag group as the robot knows it from the tag map."""
+    group_id: str
+    shape: str
+    centre: tuple[float, float]
+    size_m: float          # cross bar, circle diameter, triangle side or square side, from the tags' extent
+
+    @classmethod
+    def of(cls, tags: list[MapTag]) -> Landmark:
+        points = np.array([tag.position for tag in tags], dtype=float)
+        extent = float(np.max(np.linalg.norm(points[:, None, :] - points[None, :, :], axis=2)))
+        size = extent / math.sqrt(2.0) if tags[0].shape == "square" else extent   # a square's extent is its diagonal
+        centre = points.mean(axis=0)
+        return cls(tags[0].group_id, tags[0].shape, (float(centre[0]), float(centre[1])), size)
+
+
+@dataclass(frozen=True)
+class Request:
+    kind: str                               # LOCATE (the latest WiFi scan) or TAG_MAP
+    centre: tuple[float, float] = (0.0, 0.0)
+    radius_m: float = 0.0
+
+
+@dataclass(frozen=True)
+class Decision:
+    phase: str
+    command: tuple[float, float]            # (linear m/s, angular rad/s)
+    request: Request | None = None
+    finished: bool = False
+    success: bool = False
+    message: str = ""
+
+
+@dataclass
+class Progress:
+    fixes: list[Fix] = field(default_factory=list)
+    searches: int = 0                       # spirals started
+    failed_searches: int = 0
+    search_length_m: float = 0.0            # driven while searching
+    tier_one_requests: int = 0
+    unknown_tags: int = 0
+    visited: list[str] = field(default_factory=list)   # landmarks fixed at, in order
+
+
+class TwoTierNavigator:
+    def __init__(self, settings: TwoTierSettings) -> None:
+        settings.validate()
+        self.settings = settings
+        self.reckoning = DeadReckoning(settings.drift_per_m)
+        self.tags: dict[str, MapTag] = {}
+        self.landmarks: dict[str, Landmark] = {}
+        self.target: tuple[float, float] | None = None
+        self.phase = DONE
+        self.waypoint: Landmark | None = None
+        self.search: SpiralSearch | None = None
+        self.search_start_m = 0.0
+        self.checked_at_m = 0.0               # odometry distance at the last fix or tier-one check
+        self.pending: Request | None = None
+        self.progress = Progress()
+        self.outcome: Decision | None = None
+
+    # ---------------------------------------------------------------------------------------- mission
+    def start(self, target: tuple[float, float]) -> Decision:
+        if not all(math.isfinite(v) for v in target):
+            raise ValueError(f"target ({target[0]}, {target[1]}) is not a finite point")
+        self.target = (float(target[0]), float(target[1]))
+        self.progress = Progress()
+        self.outcome = None
+        return self.ask(Request(LOCATE), LOCATING)
+
+    def estimate(self) -> DeadReckoningEstimate:
+        return self.reckoning.estimate()
+
+    @property
+    def travelled_m(self) -> float:
+        return self.reckoning.travelled_m
+
+    def fixed(self, fix: Fix) -> None:
+        self.reckoning.on_fix(fix)
+        self.progress.fixes.append(fix)
+        self.checked_at_m = self.travelled_m
+
+    def ask(self, request: Request, phase: str) -> Decision:
+        self.phase, self.pending = phase, request
+        if request.kind == LOCATE:
+            self.progress.tier_one_requests += 1
+        return Decision(phase, (0.0, 0.0), request)
+
+    def finish(self, success: bool, message: str) -> Decision:
+        self.phase = DONE
+        self.outcome = Decision(DONE, (0.0, 0.0), finished=True, success=success, message=message)
+        return self.outcome
+
+    # ------------------------------------------------------------------------------ location server
+    def on_located(self, position: tuple[float, float] | None, uncertainty_m: float, reason: str = "") -> Decision:
+        """The answer to LOCATE: a position (None when the server could not locate, with the reason)."""
+        self.pending = None
+        if position is None:          # e.g. an empty scan: scan again
+            return self.ask(Request(LOCATE), self.phase)
+        estimate = self.reckoning.estimate()
+        if self.reckoning.position is None or estimate.last_fix is None:
+            self.fixed(Fix(position, uncertainty_m, TIER_WIFI))
+            return self.ask(Request(TAG_MAP, position, self.settings.tag_map_radius_m), MAPPING)
+        deviation = math.dist(position, estimate.position)
+        if self.phase == SEARCHING or deviation > self.settings.deviation_threshold_m:
+            # Tier two failed or dead reckoning drifted: trust tier one and fix at the landmark nearest to it.
+            self.fixed(Fix(position, uncertainty_m, TIER_WIFI))
+            return self.head_for(self.nearest_landmark(position))
+        self.checked_at_m = self.travelled_m        # A5 passed: the position holds; check again later
+        return self.resume()
+
+    def on_tag_map(self, tags: list[MapTag]) -> Decision:
+        self.pending = None
+        groups: dict[str, list[MapTag]] = {}
+        for tag in tags:
+            self.tags[tag.tag_id] = tag
+            groups.setdefault(tag.group_id, []).append(tag)
+        self.landmarks.update({group_id: Landmark.of(members) for group_id, members in groups.items()})
+        if not self.landmarks:
+            return self.finish(False, f"no landmark within {self.settings.tag_map_radius_m:g} m of the tier-one "
+                                      "estimate: tier two cannot fix the position")
+        return self.head_for(self.nearest_landmark(self.reckoning.position))
+
+    # ------------------------------------------------------------------------------------ control step
+    def step(self, odom: tuple[float, float, float], compass_yaw: float | None, tag_ids: list[str]) -> Decision:
+        """One control step: the odometry pose, the latest compass heading and the floor tags read."""
+        if self.outcome is not None:
+            return self.outcome
+        if compass_yaw is not None:
+            self.reckoning.on_compass(compass_yaw)
+        self.reckoning.on_odometry(odom)
+        if self.pending is not None:
+            return Decision(self.phase, (0.0, 0.0))          # waiting for the server: stand still
+        known = [self.tags[t] for t in tag_ids if t in self.tags]
+        self.progress.unknown_tags += len(tag_ids) - len(known)
+        if known:
+            decision = self.on_tag(known[0])
+            if decision is not None:
+                return decision
+        return self.drive()
+
+    def on_tag(self, tag: MapTag) -> Decision | None:
+        """A fix: the reader has just come within range of ``tag``. At the landmark headed for, the next leg
+        starts."""
+        last = self.reckoning.last_fix
+        if last is not None and last.tier == TIER_TAG and last.tag_id == tag.tag_id and self.phase != SEARCHING:
+            return None                 # still over the tag of the last fix: nothing new
+        self.fixed(Fix(self.entry_point(tag), self.settings.read_range_m * ENTRY_SPREAD, TIER_TAG, tag.tag_id))
+        if self.phase == SEARCHING:
+            self.progress.search_length_m += self.travelled_m - self.search_start_m
+            self.search = None
+        if self.phase == SEARCHING or (self.waypoint is not None and tag.group_id == self.waypoint.group_id):
+            self.progress.visited.append(tag.group_id)
+            if self.target_is(self.landmarks[tag.group_id]):   # the rest of the way from this fix
+                self.waypoint, self.phase = None, TO_TARGET
+                return self.drive()
+            return self.next_leg()
+        return None
+
+    def entry_point(self, tag: MapTag) -> tuple[float, float]:
+        """Where the robot most likely is on first reading ``tag``: on the edge of its read disc, behind it.
+
+        Crossing a disc of radius r at a lateral offset u (uniform: the robot aims at a group, not at a tag),
+        the first read comes sqrt(r^2 - u^2) before the tag's closest approach, pi r / 4 on average; the tag
+        position itself would be off by that much along the heading, every time."""
+        yaw = self.reckoning.yaw
+        if yaw is None:
+            return tag.position
+        back = math.pi / 4.0 * self.settings.read_range_m
+        return tag.position[0] - back * math.cos(yaw), tag.position[1] - back * math.sin(yaw)
+
+    def drive(self) -> Decision:
+        estimate = self.reckoning.estimate()
+        if estimate.yaw is None:
+            return Decision(self.phase, (0.0, 0.0))          # no compass reading yet
+        if self.phase == SEARCHING:
+            command = self.search.command(self.travelled_m - self.search_start_m)
+            if command is None:
+                self.progress.failed_searches += 1
+                self.progress.search_length_m += self.travelled_m - self.search_start_m
+                if self.progress.failed_searches >= self.settings.max_searches:
+                    return self.finish(False, f"{self.progress.failed_searches} spiral searches found no tag")
+                return self.ask(Request(LOCATE), SEARCHING)
+            return Decision(SEARCHING, command)
+        if self.travelled_m - self.checked_at_m > self.settings.calibration_distance_m:
+            return self.ask(Request(LOCATE), self.phase)     # A5
+        goal = self.waypoint.centre if self.phase == TO_LANDMARK else self.target
+        command = go_to_command(estimate.position, estimate.yaw, goal, self.settings.go_to)
+        if command is not None:
+            return Decision(self.phase, command)
+        if self.phase == TO_TARGET:
+            return self.finish(True, f"arrived within {self.settings.go_to.tolerance_m:g} m of the target "
+                                     f"by dead reckoning, {estimate.distance_since_fix_m:.2f} m after the last fix")
+        return self.start_search(estimate)
+
+    def start_search(self, estimate: DeadReckoningEstimate) -> Decision:
+        """A7: the landmark is not where dead reckoning says: spiral out from here until a tag is read."""
+        landmark = self.waypoint
+        radius = max(self.settings.search_min_radius_m, self.settings.search_radius_sigmas * estimate.sd_m)
+        d = separation_for_group(landmark.shape, max(landmark.size_m, self.settings.read_range_m))
+        self.search = SpiralSearch(d, self.settings.go_to.speed_mps, radius, estimate.position, estimate.yaw)
+        self.search_start_m = self.travelled_m
+        self.progress.searches += 1
+        self.phase = SEARCHING
+        return Decision(SEARCHING, self.search.command(0.0))
+
+    # ------------------------------------------------------------------------------------------ route
+    def next_leg(self) -> Decision:
+        """Geographic forwarding (Fig. 4) from the fix just made."""
+        here = self.reckoning.position
+        remaining = math.dist(here, self.target)
+        spacing = self.settings.landmark_spacing_m
+        candidates = [landmark for landmark in self.landmarks.values()
+                      if math.dist(here, landmark.centre) <= spacing
+                      and math.dist(landmark.centre, self.target) < remaining - self.settings.read_range_m
+                      and landmark.group_id not in self.progress.visited[-1:]]
+        target_landmark = next((l for l in self.landmarks.values() if self.target_is(l)), None)
+        if remaining <= spacing or not candidates:
+            if target_landmark is not None:
+                return self.head_for(target_landmark)
+            self.waypoint, self.phase = None, TO_TARGET
+            return self.drive()
+        return self.head_for(min(candidates, key=lambda landmark: math.dist(landmark.centre, self.target)))
+
+    def head_for(self, landmark: Landmark) -> Decision:
+        self.waypoint, self.phase, self.search = landmark, TO_LANDMARK, None
+        return self.drive()
+
+    def resume(self) -> Decision:
+        self.phase = TO_LANDMARK if self.waypoint is not None else TO_TARGET
+        return self.drive()
+
+    def nearest_landmark(self, position: tuple[float, float]) -> Landmark:
+        return min(self.landmarks.values(), key=lambda landmark: math.dist(landmark.centre, position))
+
+    def target_is(self, landmark: Landmark) -> bool:
+        """The target is this landmark: within half the group's size of its centre."""
+        return math.dist(landmark.centre, self.target) <= max(landmark.size_m / 2.0, self.settings.read_range_m)

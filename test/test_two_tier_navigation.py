@@ -1,0 +1,110 @@
+"""Paper 003's two-tier navigation core: dead reckoning, go-to, geographic forwarding, and seeded in-process
+runs through the simulated flat (config/worlds/two_tier_home.yaml) whose fixes stay within bounds."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from rfidnav_bringup.scenario import CONFIG_DIR
+from rfidnav_bringup.two_tier_experiments import Site, grid_radio_map, run_two_tier
+from rfidnav_control.go_to import GoToSettings, go_to_command
+from rfidnav_localization.dead_reckoning import TIER_TAG, TIER_WIFI, DeadReckoning, Fix
+from rfidnav_planning.two_tier_navigation import (DONE, LOCATE, MAPPING, TAG_MAP, TO_LANDMARK, Landmark, MapTag,
+                                                  TwoTierNavigator, TwoTierSettings)
+from rfidnav_sim.world import load_world
+
+WORLD = CONFIG_DIR / "worlds" / "two_tier_home.yaml"
+
+
+def test_dead_reckoning_moves_by_odometry_distance_along_the_compass_and_grows_its_sd() -> None:
+    reckoning = DeadReckoning(drift_per_m=0.05)
+    reckoning.on_odometry((0.0, 0.0, 1.0))            # the odometry frame's own heading is irrelevant
+    reckoning.on_compass(math.pi / 2.0)
+    reckoning.on_fix(Fix((2.0, 3.0), 0.05, TIER_TAG, "G1-00"))
+    reckoning.on_odometry((math.cos(1.0), math.sin(1.0), 1.0))      # 1 m forward
+    reckoning.on_odometry((math.cos(1.0) - 0.5 * math.cos(1.0), math.sin(1.0) - 0.5 * math.sin(1.0), 1.0))
+    estimate = reckoning.estimate()                   # 1 m forward then 0.5 m back: 0.5 m north, 1.5 m driven
+    assert estimate.position == pytest.approx((2.0, 3.5))
+    assert estimate.distance_since_fix_m == pytest.approx(1.5)
+    assert estimate.sd_m == pytest.approx(0.05 + 0.05 * 1.5)
+    with pytest.raises(ValueError, match="odometry"):
+        reckoning.on_odometry((math.nan, 0.0, 0.0))
+
+
+def test_go_to_turns_on_the_spot_first_then_drives_and_stops_within_tolerance() -> None:
+    settings = GoToSettings(tolerance_m=0.02)
+    linear, angular = go_to_command((0.0, 0.0), 0.0, (0.0, 1.0), settings)
+    assert linear == 0.0 and angular == pytest.approx(settings.turn_rate_radps)
+    linear, angular = go_to_command((0.0, 0.0), math.pi / 2.0 - 0.1, (0.0, 1.0), settings)
+    assert linear > 0.0 and angular > 0.0
+    assert go_to_command((0.0, 0.99), math.pi / 2.0, (0.0, 1.0), settings) is None
+
+
+def cross_tags(group_id: str, centre: tuple[float, float]) -> list[MapTag]:
+    arm = [(-0.15, 0.0), (-0.1, 0.0), (0.1, 0.0), (0.15, 0.0), (0.0, -0.15), (0.0, 0.15), (0.0, 0.0)]
+    return [MapTag(f"{group_id}-{k:02d}", (centre[0] + dx, centre[1] + dy), group_id, "cross")
+            for k, (dx, dy) in enumerate(arm)]
+
+
+def test_a_landmark_is_known_from_its_tags() -> None:
+    landmark = Landmark.of(cross_tags("G", (1.0, 2.0)))
+    assert landmark.centre == pytest.approx((1.0, 2.0)) and landmark.size_m == pytest.approx(0.3)
+
+
+def test_the_flow_locates_downloads_the_map_then_forwards_through_the_landmark_nearest_the_target() -> None:
+    navigator = TwoTierNavigator(TwoTierSettings(landmark_spacing_m=4.0))
+    decision = navigator.start((9.0, 0.0))
+    assert decision.request.kind == LOCATE and decision.command == (0.0, 0.0)
+    decision = navigator.on_located((0.3, 0.2), 1.0)
+    assert decision.phase == MAPPING and decision.request.kind == TAG_MAP
+    assert decision.request.centre == (0.3, 0.2)
+    tags = [*cross_tags("A", (0.0, 0.0)), *cross_tags("B", (3.0, 1.0)), *cross_tags("C", (3.4, -1.8)),
+            *cross_tags("D", (6.0, 0.0)), *cross_tags("E", (9.0, 0.0))]
+    decision = navigator.on_tag_map(tags)
+    assert decision.phase == TO_LANDMARK and navigator.waypoint.group_id == "A"    # nearest to the estimate
+    navigator.step((0.0, 0.0, 0.0), 0.0, [])
+    navigator.step((0.01, 0.0, 0.0), 0.0, ["A-06"])              # reads A's centre tag: a fix
+    assert navigator.reckoning.last_fix.tier == TIER_TAG and navigator.progress.visited == ["A"]
+    # Within 4 m of the fix: B (3.2 m) and C (3.9 m); C is nearer to the target (5.9 m against 6.1 m).
+    assert navigator.waypoint.group_id == "C"
+    assert navigator.progress.fixes[0].tier == TIER_WIFI
+
+
+def test_a_target_without_landmarks_near_the_estimate_fails_with_the_reason() -> None:
+    navigator = TwoTierNavigator(TwoTierSettings())
+    navigator.start((1.0, 1.0))
+    navigator.on_located((0.0, 0.0), 1.0)
+    decision = navigator.on_tag_map([])
+    assert decision.finished and not decision.success and "no landmark" in decision.message
+    assert navigator.phase == DONE
+
+
+@pytest.fixture(scope="module")
+def site() -> Site:
+    world = load_world(WORLD)
+    return Site.of(world, grid_radio_map(world, 1.0, np.random.default_rng(1)))
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_a_seeded_run_through_the_flat_arrives_and_its_fixes_stay_within_bounds(site: Site, seed: int) -> None:
+    run = run_two_tier(site, (1.0, 1.0, 0.3), (10.8, 6.8), TwoTierSettings(), np.random.default_rng(seed))
+    assert run.success, run.message
+    assert run.final_error_m < 0.10
+    assert run.fix_errors_m and max(run.fix_errors_m) < 0.10      # a tag fix: within the 5 cm reader range, plus
+    assert float(np.median(run.fix_errors_m)) < 0.05               # the motion between reads
+    assert run.visited[-1] == "T5" and run.searches >= 1
+    assert all(error < 5.0 for error in run.tier_one_errors_m)
+
+
+def test_without_intermediate_landmarks_dead_reckoning_drifts_further(site: Site) -> None:
+    """Fig. 11 of paper 003 in one pair: direct moving accumulates more error than indirect moving."""
+    rng_seed = 7
+    direct = run_two_tier(site, (1.0, 1.0, 0.3), (11.0, 1.0), TwoTierSettings(landmark_spacing_m=0.5,
+                          calibration_distance_m=100.0), np.random.default_rng(rng_seed))
+    indirect = run_two_tier(site, (1.0, 1.0, 0.3), (11.0, 1.0), TwoTierSettings(landmark_spacing_m=4.0,
+                            calibration_distance_m=100.0), np.random.default_rng(rng_seed))
+    assert direct.success and indirect.success
+    assert indirect.final_error_m < direct.final_error_m
