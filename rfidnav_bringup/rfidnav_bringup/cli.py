@@ -75,10 +75,11 @@ def parser() -> argparse.ArgumentParser:
     report.add_argument("run", type=Path)
     report.add_argument("--json", action="store_true")
     reproduce = verbs.add_parser("reproduce", help="the papers' experiments in-process, beside the papers' figures")
-    reproduce.add_argument("name", choices=["flc", "partitions"],
-                           help="flc: paper 001 sec. V; partitions: paper 000 sec. 6")
+    reproduce.add_argument("name", choices=["flc", "partitions", "two_tier"],
+                           help="flc: paper 001 sec. V; partitions: paper 000 sec. 6; two_tier: paper 003 sec. 4.2")
     reproduce.add_argument("--seeds", type=int, default=10, help="flc: seeds per setting")
-    reproduce.add_argument("--runs", type=int, default=250, help="partitions: runs per (read range, level, method)")
+    reproduce.add_argument("--runs", type=int, help="partitions: runs per (read range, level, method), default 250; "
+                                                    "two_tier: runs per route, default 20")
     reproduce.add_argument("--out", type=Path, default=WORKSPACE / "bags" / "reproduce")
     reproduce.add_argument("--json", action="store_true")
     bench = verbs.add_parser("bench", help="performance benchmarks (JSON figures)")
@@ -209,9 +210,13 @@ def verb_report(args) -> int:
 
 def verb_reproduce(args) -> int:
     if args.name == "partitions":
-        from rfidnav_bringup.reproduce_partitions import reproduce_partitions
+        from rfidnav_bringup.reproduce_partitions import RUNS_PER_CURVE, reproduce_partitions
 
-        return reproduce_partitions(runs=args.runs, out_dir=args.out, as_json=args.json)
+        return reproduce_partitions(runs=args.runs or RUNS_PER_CURVE, out_dir=args.out, as_json=args.json)
+    if args.name == "two_tier":
+        from rfidnav_bringup.reproduce_two_tier import RUNS, reproduce_two_tier
+
+        return reproduce_two_tier(runs=args.runs or RUNS, out_dir=args.out, as_json=args.json)
     from rfidnav_bringup.reproduce import reproduce_flc
 
     return reproduce_flc(seeds=args.seeds, out_dir=args.out, as_json=args.json)

@@ -24,6 +24,7 @@ from rfidnav_sim.wifi_model import WifiModel
 from rfidnav_sim.world import World
 
 STEP_S = 0.05                      # control and simulation step (20 Hz)
+SURVEY_FRESH_M = 2.0               # survey only within this odometry distance of a tag fix (sd ~ 10 cm)
 COMPASS = CompassModel(noise_sd_rad=math.radians(2.0), bias_rad=math.radians(3.0))
 
 
@@ -89,6 +90,7 @@ class TwoTierRun:
     search_length_m: float
     visited: tuple[str, ...]
     duration_s: float
+    survey: tuple[tuple[tuple[float, float], dict[str, float]], ...] = ()   # (estimated position, scan)
 
     @property
     def final_error_m(self) -> float:
@@ -98,8 +100,13 @@ class TwoTierRun:
 def run_two_tier(site: Site, start: tuple[float, float, float], target: tuple[float, float],
                  settings: TwoTierSettings, rng: np.random.Generator, odometry_scale_error: float = 0.05,
                  compass: CompassModel = COMPASS, locate: LocateSettings = LocateSettings(),
-                 max_time_s: float = 1800.0) -> TwoTierRun:
+                 max_time_s: float = 1800.0, survey_spacing_m: float | None = None) -> TwoTierRun:
+    """One navigation from ``start`` (true pose) to ``target``. With ``survey_spacing_m`` the robot also surveys
+    (paper 003's automatic radio map construction): a scan every that many metres while its position is fresh
+    from a tag fix (within SURVEY_FRESH_M), recorded at the position it believes (never the true one)."""
     x, y, yaw = start
+    survey: list[tuple[tuple[float, float], dict[str, float]]] = []
+    surveyed_at_m = -math.inf
     odom = [0.0, 0.0, 0.0]
     navigator = TwoTierNavigator(settings)
     decision = navigator.start(target)
@@ -129,12 +136,18 @@ def run_two_tier(site: Site, start: tuple[float, float, float], target: tuple[fl
             if fix.tag_id:
                 fix_errors.append(math.dist(fix.position, (x, y)))
         fixes_seen = len(fixes)
+        estimate = navigator.estimate()
+        if (survey_spacing_m is not None and estimate.last_fix is not None and estimate.last_fix.tag_id
+                and estimate.distance_since_fix_m <= SURVEY_FRESH_M
+                and navigator.travelled_m - surveyed_at_m >= survey_spacing_m):
+            surveyed_at_m = navigator.travelled_m
+            survey.append((estimate.position, {r.bssid: r.rssi_dbm for r in site.wifi.scan(x, y, rng)}))
     if not decision.finished:
         decision = navigator.finish(False, f"timed out after {max_time_s:g} s")
     progress = navigator.progress
     return TwoTierRun(decision.success, decision.message, (x, y), target, path_m, tuple(fix_errors),
                       tuple(tier_one_errors), progress.searches, progress.search_length_m, tuple(progress.visited),
-                      time_s)
+                      time_s, tuple(survey))
 
 
 def answer(site: Site, navigator: TwoTierNavigator, request: Request, true_position: tuple[float, float],
