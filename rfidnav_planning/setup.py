@@ -13,9 +13,11 @@ setup(
     install_requires=["setuptools"],
     zip_safe=True,
     maintainer="rfidnav developers",
-    description="Planners and navigators of rfidnav: the partition path planner and navigator (paper 000).",
+    description=("Planners and navigators of rfidnav: the partition path planner and navigator (paper 000), the "
+                 "two-tier navigator (paper 003)."),
     license="Apache-2.0",
     entry_points={"console_scripts": [
         "partition_navigator = rfidnav_planning.partition_navigator_node:main",
+        "two_tier_navigator = rfidnav_planning.two_tier_navigator_node:main",
     ]},
 )

@@ -82,6 +82,15 @@ def parser() -> argparse.ArgumentParser:
                                                     "two_tier: runs per route, default 20")
     reproduce.add_argument("--out", type=Path, default=WORKSPACE / "bags" / "reproduce")
     reproduce.add_argument("--json", action="store_true")
+    survey = verbs.add_parser("survey", help="paper 003: build a radio map file for a scenario's world (in-process)")
+    survey.add_argument("scenario", help="a scenario name or file; its world has the access points")
+    how = survey.add_mutually_exclusive_group(required=True)
+    how.add_argument("--grid", type=float, metavar="SPACING_M",
+                     help="a site survey at known positions on a grid this many metres apart")
+    how.add_argument("--robot", action="store_true",
+                     help="the robot's own survey: it visits the map's landmarks and scans near its tag fixes")
+    survey.add_argument("--seed", type=int, default=1)
+    survey.add_argument("--out", type=Path, required=True, help="the radio map file to write (YAML)")
     bench = verbs.add_parser("bench", help="performance benchmarks (JSON figures)")
     bench.add_argument("name", choices=["flc", "rtf", "planner", "partitions"],
                        help="flc: fuzzy fast path vs scikit-fuzzy; rtf: a scenario over DDS at rising RTF; "
@@ -222,6 +231,18 @@ def verb_reproduce(args) -> int:
     return reproduce_flc(seeds=args.seeds, out_dir=args.out, as_json=args.json)
 
 
+def verb_survey(args) -> int:
+    from rfidnav_bringup.scenario import load_scenario
+    from rfidnav_bringup.two_tier_experiments import survey
+    from rfidnav_localization.radio_map_file import write_radio_map
+
+    scenario = load_scenario(args.scenario)
+    fingerprints, description = survey(scenario.world, scenario.route_map, args.grid, args.seed)
+    write_radio_map(args.out, fingerprints, description)
+    print(f"{len(fingerprints)} fingerprints ({description}) -> {args.out}")
+    return 0
+
+
 def verb_bench(args) -> int:
     if args.name == "rtf":
         return bench_rtf(args)
@@ -270,7 +291,8 @@ def bench_rtf(args) -> int:
 
 
 VERBS = {"setup": verb_setup, "demo": verb_demo, "test": verb_test, "run": verb_run, "replay": verb_replay,
-         "bag": verb_bag, "report": verb_report, "reproduce": verb_reproduce, "bench": verb_bench}
+         "bag": verb_bag, "report": verb_report, "reproduce": verb_reproduce, "survey": verb_survey,
+         "bench": verb_bench}
 
 
 if __name__ == "__main__":

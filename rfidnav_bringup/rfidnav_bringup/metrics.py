@@ -109,3 +109,46 @@ def partition_metrics(trajectory: Trajectory, mission_start_s: float, mission_en
     extra = 100.0 * (path_length - straight) / straight if straight > 0.0 else None
     return PartitionMetrics(extra, float(np.linalg.norm(run.xy[-1] - np.asarray(goal))), path_length, straight,
                             replans)
+
+
+@dataclass(frozen=True)
+class Fix:
+    """A tier-two fix as the navigator reported it (/localization/status): when, which tag, where it thought."""
+    time_s: float
+    tag_id: str
+    estimate: tuple[float, float]
+
+
+@dataclass(frozen=True)
+class TwoTierMetrics:
+    """Paper 003: the error of each tier-two fix (the estimate against ground truth at that instant), the
+    worst, where the robot stopped, the distance driven, the spiral searches and their length."""
+    fix_error_m: list[float]
+    fix_error_median_m: float | None
+    max_error_m: float | None
+    final_error_m: float | None
+    path_length_m: float
+    searches: int
+    search_length_m: float
+
+    def as_dict(self) -> dict[str, float | int | list[float] | None]:
+        return dict(self.__dict__)
+
+
+def two_tier_metrics(trajectory: Trajectory, mission_start_s: float, mission_end_s: float, target: tuple[float, float],
+                     fixes: list[Fix], searching: list[tuple[float, float]]) -> TwoTierMetrics:
+    """``searching``: the (start, end) times of each spiral search, from the mission's feedback."""
+    run = trajectory.between(mission_start_s, mission_end_s)
+    if len(run.xy) == 0:
+        return TwoTierMetrics([], None, None, None, 0.0, len(searching), 0.0)
+    errors = []
+    for fix in fixes:
+        truth = (np.interp(fix.time_s, run.times_s, run.xy[:, 0]), np.interp(fix.time_s, run.times_s, run.xy[:, 1]))
+        errors.append(float(np.hypot(fix.estimate[0] - truth[0], fix.estimate[1] - truth[1])))
+    steps = np.linalg.norm(np.diff(run.xy, axis=0), axis=1)
+    in_search = np.zeros(len(steps), dtype=bool)
+    for start_s, end_s in searching:
+        in_search |= (run.times_s[1:] > start_s) & (run.times_s[1:] <= end_s)
+    return TwoTierMetrics(errors, float(np.median(errors)) if errors else None, max(errors, default=None),
+                          float(np.linalg.norm(run.xy[-1] - np.asarray(target))), float(steps.sum()),
+                          len(searching), float(steps[in_search].sum()))

@@ -147,7 +147,7 @@ class Orchestrator:
         if spec.package is None:
             return list(spec.command)
         command = [*spec.command, "--ros-args"]
-        parameters = node_parameters(self.scenario, spec, self.options.seed, self.options.rtf)
+        parameters = node_parameters(self.scenario, spec, self.options.seed, self.options.rtf, self.run_dir)
         if parameters is not None:
             node_name = KNOWN_NODES[(spec.package, spec.executable)][0]
             values = dict(parameters.__dict__)

@@ -21,7 +21,7 @@ import yaml  # noqa: E402
 
 from rfidnav_bringup.bags import bag_info, read_messages  # noqa: E402
 from rfidnav_bringup.errors import BagError  # noqa: E402
-from rfidnav_bringup.metrics import (Trajectory, partition_metrics, tracking_error,  # noqa: E402
+from rfidnav_bringup.metrics import (Fix, Trajectory, partition_metrics, tracking_error, two_tier_metrics,  # noqa: E402
                                      tracking_metrics)
 from rfidnav_sim.world import World, load_world  # noqa: E402
 
@@ -121,7 +121,40 @@ def record_metrics(record: RunRecord) -> dict[str, float | int | None]:
         metrics.update(partition_metrics(record.ground_truth, record.mission_start_s, record.mission_end_s,
                                          (float(target.get("x", 0.0)), float(target.get("y", 0.0))),
                                          replans).as_dict())
+    if "two_tier" in record.metric_groups:
+        target = record.goal.get("target", {})
+        fixes, searching = two_tier_events(record)
+        metrics.update(two_tier_metrics(record.ground_truth, record.mission_start_s, record.mission_end_s,
+                                        (float(target.get("x", 0.0)), float(target.get("y", 0.0))), fixes,
+                                        searching).as_dict())
     return metrics
+
+
+def two_tier_events(record: RunRecord) -> tuple[list[Fix], list[tuple[float, float]]]:
+    """The tier-two fixes the navigator reported on /localization/status (a new last_fix_tag_id) and the spans
+    its feedback said it was searching, during the mission."""
+    action = yaml.safe_load((record.run_dir / "scenario.yaml").read_text())["mission"]["action"].rstrip("/")
+    fixes: list[Fix] = []
+    searching: list[tuple[float, float]] = []
+    search_start = None
+    last_tag = ""
+    for topic, stamp_ns, msg in read_messages(record.bag, ["/localization/status", f"{action}/_action/feedback"]):
+        now_s = stamp_ns * 1e-9
+        if not record.mission_start_s <= now_s <= record.mission_end_s:
+            continue
+        if topic == "/localization/status":
+            if msg.last_fix_tier == 2 and msg.last_fix_tag_id != last_tag:
+                fixes.append(Fix(msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9, msg.last_fix_tag_id,
+                                 (msg.x, msg.y)))
+            last_tag = msg.last_fix_tag_id
+        elif msg.feedback.phase == "searching" and search_start is None:
+            search_start = now_s
+        elif msg.feedback.phase != "searching" and search_start is not None:
+            searching.append((search_start, now_s))
+            search_start = None
+    if search_start is not None:
+        searching.append((search_start, record.mission_end_s))
+    return fixes, searching
 
 
 def write_report(path: Path) -> tuple[dict[str, float | int | None], list[Path]]:

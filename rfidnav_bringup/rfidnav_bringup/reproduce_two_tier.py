@@ -35,13 +35,13 @@ import numpy as np  # noqa: E402
 
 from rfidnav_bringup.reproduce import table  # noqa: E402
 from rfidnav_bringup.scenario import CONFIG_DIR  # noqa: E402
-from rfidnav_bringup.two_tier_experiments import Site, grid_radio_map, run_two_tier  # noqa: E402
+from rfidnav_bringup.two_tier_experiments import Site, grid_radio_map, robot_survey, run_two_tier  # noqa: E402
 from rfidnav_common.errors import ConfigError  # noqa: E402
 from rfidnav_common.robot_map import load_route_map  # noqa: E402
 from rfidnav_common.seeding import rng_for  # noqa: E402
 from rfidnav_common.tag_groups import HF_READ_RANGE_M, TagGroup  # noqa: E402
 from rfidnav_control.spiral import expected_search_length, separation_for_group, simulate_search  # noqa: E402
-from rfidnav_localization.fingerprint import Fingerprint, RadioMap  # noqa: E402
+from rfidnav_localization.fingerprint import RadioMap  # noqa: E402
 from rfidnav_planning.two_tier_navigation import TwoTierSettings  # noqa: E402
 from rfidnav_sim.world import World, load_world  # noqa: E402
 
@@ -57,7 +57,6 @@ ROUTES = {"route 1": ((1.0, 1.0, 0.3), ("T1", "T2", "T3", "T4", "T5")),
 LONG_ROUTE = ((1.0, 1.0, 0.0), (11.0, 1.0))
 RUNS = 20
 GRID_SPACING_M = 1.0
-SURVEY_SPACING_M = 0.5
 TEST_POINTS = 300
 
 
@@ -148,19 +147,6 @@ def fig11(site: Site, runs: int, seed: int) -> dict[str, list[float]]:
     return errors
 
 
-def survey_radio_map(site: Site, seed: int) -> RadioMap:
-    """The robot's own survey: it visits every landmark in turn and scans every SURVEY_SPACING_M while its
-    position is fresh from a tag fix, recording the position it believes (no ground truth)."""
-    rng = rng_for(seed, "survey")
-    fingerprints = []
-    pose = (1.0, 1.0, 0.0)
-    for group in load_route_map(MAP_FILE).tag_groups:
-        run = run_two_tier(site, pose, group.centre, TwoTierSettings(), rng, survey_spacing_m=SURVEY_SPACING_M)
-        fingerprints.extend(Fingerprint(position, scan, "survey") for position, scan in run.survey if scan)
-        pose = (run.final_position[0], run.final_position[1], 0.0)
-    return RadioMap(fingerprints)
-
-
 def tier_one_errors(site: Site, radio_map: RadioMap, seed: int) -> list[float]:
     rng = rng_for(seed, "test points")
     width, height = 12.0, 8.0
@@ -189,7 +175,7 @@ def reproduce_two_tier(runs: int, out_dir: Path, as_json: bool, seed: int = 1, f
     theorem = theorem1(fig10_runs, seed)
     moving = fig11(site, runs, seed)
     routes = fig12(site, runs, seed)
-    survey_map = survey_radio_map(site, seed)
+    survey_map = RadioMap(robot_survey(Site.of(world, RadioMap()), load_route_map(MAP_FILE), seed))
     radio = {"grid": tier_one_errors(site, grid_map, seed), "survey": tier_one_errors(site, survey_map, seed)}
     rows = json_rows(spiral, theorem, moving, routes, radio)
     (out_dir / "two_tier_rows.json").write_text(json.dumps(rows, indent=1) + "\n")

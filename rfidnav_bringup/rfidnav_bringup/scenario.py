@@ -23,7 +23,7 @@ from rfidnav_common.config import Section, node_parameter_section, parameters_fr
 from rfidnav_common.errors import ConfigError
 from rfidnav_control.parameters import HeadingControllerParameters
 from rfidnav_localization.parameters import LocationServerParameters, PartitionLocalizerParameters
-from rfidnav_planning.parameters import PartitionNavigatorParameters
+from rfidnav_planning.parameters import PartitionNavigatorParameters, TwoTierNavigatorParameters
 from rfidnav_common.robot_map import RouteMap, load_route_map
 from rfidnav_sim.parameters import CompassParameters, ReaderParameters, RobotSimParameters, WifiSimParameters
 from rfidnav_sim.world import World, load_world
@@ -42,8 +42,9 @@ KNOWN_NODES: dict[tuple[str, str], tuple[str, type]] = {
     ("rfidnav_sim", "compass_sim"): ("compass_sim", CompassParameters),
     ("rfidnav_sim", "wifi_sim"): ("wifi_sim", WifiSimParameters),
     ("rfidnav_localization", "location_server"): ("location_server", LocationServerParameters),
+    ("rfidnav_planning", "two_tier_navigator"): ("two_tier_navigator", TwoTierNavigatorParameters),
 }
-METRIC_GROUPS = ("tracking", "partition")
+METRIC_GROUPS = ("tracking", "partition", "two_tier")
 
 
 @dataclass(frozen=True)
@@ -248,9 +249,13 @@ def _check_goal_area(scenario: Scenario, mission: Section) -> None:
         raise mission.error("goal", f"target ({x}, {y}) is outside the map's deployment_area {list(area)}")
 
 
-def injected_parameters(scenario: Scenario, spec: NodeSpec, seed: int, rtf: float) -> dict[str, Any]:
-    """What the orchestrator gives each node on top of its files: the world only to simulator nodes."""
+def injected_parameters(scenario: Scenario, spec: NodeSpec, seed: int, rtf: float,
+                        run_dir: Path | None = None) -> dict[str, Any]:
+    """What the orchestrator gives each node on top of its files: the world only to simulator nodes, the run's
+    folder to nodes that declare ``run_dir`` (where they keep files, e.g. the location server's database)."""
     injected: dict[str, Any] = {"seed": seed}
+    if run_dir is not None:
+        injected["run_dir"] = str(run_dir)
     if not spec.clock_source:
         injected["use_sim_time"] = True
     if spec.sim:
@@ -263,7 +268,8 @@ def injected_parameters(scenario: Scenario, spec: NodeSpec, seed: int, rtf: floa
     return injected
 
 
-def node_parameters(scenario: Scenario, spec: NodeSpec, seed: int, rtf: float) -> Any | None:
+def node_parameters(scenario: Scenario, spec: NodeSpec, seed: int, rtf: float,
+                    run_dir: Path | None = None) -> Any | None:
     """Validate a known node's parameter files, overrides and injected values; None for nodes we do not know.
 
     Later files override earlier ones and the scenario's overrides override the files; a bad value is reported
@@ -281,7 +287,7 @@ def node_parameters(scenario: Scenario, spec: NodeSpec, seed: int, rtf: float) -
         values.update(layer_values)
         origins.update(dict.fromkeys(layer_values, (layer.source, layer.prefix)))
     declared = {name for name in cls.__dataclass_fields__}
-    values.update({k: v for k, v in injected_parameters(scenario, spec, seed, rtf).items() if k in declared})
+    values.update({k: v for k, v in injected_parameters(scenario, spec, seed, rtf, run_dir).items() if k in declared})
     # A problem no single value explains: the one file that gave values, else the scenario entry naming them.
     given = set(origins.values())
     source, prefix = given.pop() if len(given) == 1 else (str(scenario.path), f"nodes.{spec.role}")

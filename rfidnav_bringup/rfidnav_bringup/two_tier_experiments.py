@@ -15,9 +15,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from rfidnav_common.errors import ConfigError
+from rfidnav_common.seeding import rng_for
 from rfidnav_common.tag_groups import HF_READ_RANGE_M
 from rfidnav_localization.errors import LocateError
 from rfidnav_localization.fingerprint import Fingerprint, LocateSettings, RadioMap
+from rfidnav_common.robot_map import RouteMap
+from rfidnav_localization.dead_reckoning import TIER_TAG, Fix
 from rfidnav_planning.two_tier_navigation import LOCATE, MapTag, Request, TwoTierNavigator, TwoTierSettings
 from rfidnav_sim.compass_model import CompassModel
 from rfidnav_sim.wifi_model import WifiModel
@@ -100,16 +104,18 @@ class TwoTierRun:
 def run_two_tier(site: Site, start: tuple[float, float, float], target: tuple[float, float],
                  settings: TwoTierSettings, rng: np.random.Generator, odometry_scale_error: float = 0.05,
                  compass: CompassModel = COMPASS, locate: LocateSettings = LocateSettings(),
-                 max_time_s: float = 1800.0, survey_spacing_m: float | None = None) -> TwoTierRun:
+                 max_time_s: float = 1800.0, survey_spacing_m: float | None = None,
+                 known_start: Fix | None = None) -> TwoTierRun:
     """One navigation from ``start`` (true pose) to ``target``. With ``survey_spacing_m`` the robot also surveys
     (paper 003's automatic radio map construction): a scan every that many metres while its position is fresh
-    from a tag fix (within SURVEY_FRESH_M), recorded at the position it believes (never the true one)."""
+    from a tag fix (within SURVEY_FRESH_M), recorded at the position it believes (never the true one) and added
+    to the site's radio map at once, as the add_fingerprint service does."""
     x, y, yaw = start
     survey: list[tuple[tuple[float, float], dict[str, float]]] = []
     surveyed_at_m = -math.inf
     odom = [0.0, 0.0, 0.0]
     navigator = TwoTierNavigator(settings)
-    decision = navigator.start(target)
+    decision = navigator.start(target, known_start)
     fix_errors: list[float] = []
     tier_one_errors: list[float] = []
     fixes_seen = 0
@@ -141,7 +147,10 @@ def run_two_tier(site: Site, start: tuple[float, float, float], target: tuple[fl
                 and estimate.distance_since_fix_m <= SURVEY_FRESH_M
                 and navigator.travelled_m - surveyed_at_m >= survey_spacing_m):
             surveyed_at_m = navigator.travelled_m
-            survey.append((estimate.position, {r.bssid: r.rssi_dbm for r in site.wifi.scan(x, y, rng)}))
+            scan = {r.bssid: r.rssi_dbm for r in site.wifi.scan(x, y, rng)}
+            if scan:
+                survey.append((estimate.position, scan))
+                site.radio_map.add(Fingerprint(estimate.position, scan, "survey"))
     if not decision.finished:
         decision = navigator.finish(False, f"timed out after {max_time_s:g} s")
     progress = navigator.progress
@@ -162,3 +171,35 @@ def answer(site: Site, navigator: TwoTierNavigator, request: Request, true_posit
         tier_one_errors.append(math.dist(result.position, true_position))
         return navigator.on_located(result.position, result.uncertainty_m)
     return navigator.on_tag_map(site.tags_near(request.centre, request.radius_m))
+
+
+def robot_survey(site: Site, robot_map: RouteMap, seed: int, spacing_m: float = 0.5) -> list[Fingerprint]:
+    """The robot's own survey into ``site``'s (empty) radio map: docked on the map's first landmark (a known
+    start), it visits every landmark in turn and scans every ``spacing_m`` while fresh from a tag fix; its
+    tier-one checks on the way use the map built so far."""
+    rng = rng_for(seed, "robot survey")
+    first = robot_map.tag_groups[0].centre
+    pose = (first[0], first[1], 0.0)
+    known = Fix(first, HF_READ_RANGE_M, TIER_TAG, f"{robot_map.tag_groups[0].group_id} (dock)")
+    for group in robot_map.tag_groups[1:]:
+        run = run_two_tier(site, pose, group.centre, TwoTierSettings(), rng, survey_spacing_m=spacing_m,
+                           known_start=known)
+        pose = (run.final_position[0], run.final_position[1], 0.0)
+        known = None if not run.success else Fix(group.centre, HF_READ_RANGE_M, TIER_TAG, group.group_id)
+    return list(site.radio_map.fingerprints)
+
+
+def survey(world: World, robot_map: RouteMap, grid_spacing_m: float | None,
+           seed: int) -> tuple[list[Fingerprint], str]:
+    """``./rfidnav survey``: a grid site survey at known positions, or the robot's own survey of the map's
+    landmarks (grid_spacing_m None). Returns the fingerprints and a one-line description."""
+    if grid_spacing_m is not None:
+        if not grid_spacing_m > 0.0:
+            raise ConfigError("--grid", "", f"must be a positive spacing, got {grid_spacing_m}")
+        fingerprints = list(grid_radio_map(world, grid_spacing_m, rng_for(seed, "grid survey")).fingerprints)
+        return fingerprints, f"site survey of {world.name} on a {grid_spacing_m:g} m grid, seed {seed}"
+    if not robot_map.tag_groups:
+        raise ConfigError(str(robot_map.name), "tag_groups", "the robot's survey visits the map's landmarks: none")
+    fingerprints = robot_survey(Site.of(world, RadioMap()), robot_map, seed)
+    return fingerprints, (f"the robot's own survey of {world.name} through {len(robot_map.tag_groups)} landmarks, "
+                          f"seed {seed}")

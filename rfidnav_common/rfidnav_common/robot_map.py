@@ -8,6 +8,8 @@ They hold no tag positions: the robot never knows where tags are. A map has any 
   the robot learns from the tags' own IDs; the area lets a navigator refuse a goal off the deployment.
 * ``tag_groups`` (paper 003): the location server's tag map, floor tag groups whose tags and positions are
   registered (the paper's landmarks). Worlds describe their groups with the same schema.
+* ``radio_map`` (paper 003): a file of WiFi fingerprints (``./rfidnav survey`` writes one) the location server
+  starts from when its database holds none; relative to the map file.
 
 Schema::
 
@@ -19,6 +21,7 @@ Schema::
     tag_groups:            # tags GROUP-00, GROUP-01, ... along the outline (rfidnav_common.tag_groups)
       - {id: G1, shape: cross, centre: [1.0, 2.0], size_m: 0.30, rotation_deg: 0.0, tag_spacing_m: 0.05}
         # shape: cross | circle | triangle | square; size_m: cross bar length, circle diameter, side
+    radio_map: two_tier_home_radio_map.yaml
 """
 
 from __future__ import annotations
@@ -38,6 +41,7 @@ class RouteMap:
     arrival_tags: dict[str, str]
     deployment_area: tuple[float, float, float, float] | None = None
     tag_groups: tuple[TagGroup, ...] = ()
+    radio_map_file: Path | None = None
 
     def unknown_tags(self, route: list[str]) -> list[str]:
         return [tag for tag in route if tag not in self.arrival_tags]
@@ -45,7 +49,7 @@ class RouteMap:
 
 def load_route_map(path: Path) -> RouteMap:
     section = Section.from_file(Path(path))
-    section.reject_unknown(("name", "description", "arrival_tags", "deployment_area", "tag_groups"))
+    section.reject_unknown(("name", "description", "arrival_tags", "deployment_area", "tag_groups", "radio_map"))
     arrival = _arrival_tags(section) if section.has("arrival_tags") else {}
     area = None
     if section.has("deployment_area"):
@@ -54,9 +58,15 @@ def load_route_map(path: Path) -> RouteMap:
             raise section.error("deployment_area", "expected [x_min, y_min, x_max, y_max] with max > min")
         area = (x_min, y_min, x_max, y_max)
     groups = tag_groups_of(section)
+    radio_map = None
+    if section.has("radio_map"):
+        radio_map = (Path(path).parent / section.string("radio_map")).resolve()
+        if not radio_map.is_file():
+            raise section.error("radio_map", f"no such file: {radio_map}")
     if not arrival and area is None and not groups:
         raise section.error("arrival_tags", "a map needs arrival_tags, a deployment_area or tag_groups (none given)")
-    return RouteMap(name=section.string("name"), arrival_tags=arrival, deployment_area=area, tag_groups=groups)
+    return RouteMap(name=section.string("name"), arrival_tags=arrival, deployment_area=area, tag_groups=groups,
+                    radio_map_file=radio_map)
 
 
 def tag_groups_of(section: Section) -> tuple[TagGroup, ...]:

@@ -11,7 +11,8 @@ answers three services:
   map (paper 003's automatic radio map construction: the robot contributes samples at its tier-two fixes).
 
 A missing database (unless ``create_database``), a corrupt one or one of an unknown schema is one error at
-start (exit 2). The tag groups of ``map_file`` are loaded into the tag map at start, once.
+start (exit 2). The tag groups of ``map_file`` are loaded into the tag map at start, once, and its radio map
+file into an empty radio map.
 """
 
 from __future__ import annotations
@@ -22,13 +23,14 @@ from typing import Any
 
 from rclpy.node import Node
 
-from rfidnav_common.robot_map import load_route_map
+from rfidnav_common.robot_map import RouteMap, load_route_map
 from rfidnav_common.ros import declare_parameters, run_node, seconds_of
 from rfidnav_localization.conversions import floor_tag_message, scan_rss
 from rfidnav_localization.errors import LocateError, StoreError
 from rfidnav_localization.fingerprint import Fingerprint, RadioMap
 from rfidnav_localization.location_store import LocationStore, TagGroupRecord
 from rfidnav_localization.parameters import LocationServerParameters
+from rfidnav_localization.radio_map_file import load_radio_map
 from rfidnav_msgs.srv import AddFingerprint, GetTagMap, Locate
 
 
@@ -37,20 +39,23 @@ class LocationServerNode(Node):
         super().__init__("location_server", **node_options)
         self.params: LocationServerParameters = declare_parameters(self, LocationServerParameters)
         self.settings = self.params.locate_settings()
-        self.store = LocationStore.open(self.params.database_file, create=self.params.create_database)
+        self.store = LocationStore.open(self.params.database_path(), create=self.params.create_database)
         if self.params.map_file != "unused":
-            self.load_tag_map(Path(self.params.map_file))
+            self.load_map(load_route_map(Path(self.params.map_file)))
         self.radio_map = RadioMap(self.store.fingerprints())
         self.create_service(Locate, "/location_server/locate", self.on_locate)
         self.create_service(GetTagMap, "/location_server/tag_map", self.on_tag_map)
         self.create_service(AddFingerprint, "/location_server/add_fingerprint", self.on_add_fingerprint)
-        self.get_logger().info(f"{self.params.database_file}: {len(self.radio_map)} fingerprints, "
+        self.get_logger().info(f"{self.params.database_path()}: {len(self.radio_map)} fingerprints, "
                                f"{len(self.store.tag_groups())} tag groups")
 
-    def load_tag_map(self, map_file: Path) -> None:
-        """The map's tag groups that the database does not hold yet (a restart finds them already there)."""
+    def load_map(self, robot_map: RouteMap) -> None:
+        """The map's tag groups that the database does not hold yet (a restart finds them already there), and its
+        radio map file when the database has no fingerprints."""
+        if robot_map.radio_map_file is not None and self.store.fingerprint_count() == 0:
+            self.store.add_fingerprints(load_radio_map(robot_map.radio_map_file))
         known = {group.group_id for group in self.store.tag_groups()}
-        for group in load_route_map(map_file).tag_groups:
+        for group in robot_map.tag_groups:
             if group.group_id not in known:
                 self.store.add_tag_group(TagGroupRecord(group.group_id, group.shape, group.centre, group.size_m,
                                                         group.rotation_rad, dict(group.tags())))

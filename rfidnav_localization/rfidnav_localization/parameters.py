@@ -66,11 +66,13 @@ class PartitionLocalizerParameters:
 class LocationServerParameters:
     """The location server of paper 003: radio map and tag map in an SQLite database file."""
 
-    database_file: str = param("the location database (SQLite): radio map and tag map", "location.db")
+    database_file: str = param("the location database (SQLite): radio map and tag map; a relative path is taken "
+                               "from run_dir", "location.db")
+    run_dir: str = param("where a relative database_file lives (the orchestrator sets the run's folder)", ".")
     create_database: bool = param("create the database when the file is missing (else: one error at start)",
                                   False)
-    map_file: str = param("robot map: its tag_groups are loaded into the tag map at start ('unused': none)",
-                          "unused")
+    map_file: str = param("robot map: its tag_groups, and its radio_map when the database has no fingerprints, are "
+                          "loaded at start ('unused': none)", "unused")
     k: int = param("neighbours averaged by the fingerprint matcher (k-nearest neighbours, RADAR)", 3)
     missing_rss_dbm: float = param(
         "RSS substituted for an AP heard on one side only (scan or fingerprint) [dBm]: below any sensitivity", -100.0)
@@ -81,6 +83,9 @@ class LocationServerParameters:
         if not self.database_file:
             raise ValueError("database_file: required")
         self.locate_settings().validate()
+
+    def database_path(self) -> Path:
+        return Path(self.run_dir) / self.database_file     # an absolute database_file stays as it is
 
     def locate_settings(self) -> LocateSettings:
         return LocateSettings(k=self.k, missing_rss_dbm=self.missing_rss_dbm, min_common_aps=self.min_common_aps,

@@ -1,14 +1,17 @@
-"""Parameters of the partition_navigator node: typed, with defaults and descriptions, importable without
-rclpy so the orchestrator and the in-process runner validate parameter files against the same class.
-config/params/partition_navigator.yaml repeats the defaults and documents them."""
+"""Parameters of the navigator nodes (partition_navigator, two_tier_navigator): typed, with defaults and
+descriptions, importable without rclpy so the orchestrator and the in-process runner validate parameter files
+against the same class. config/params/partition_navigator.yaml and two_tier_navigator.yaml document them."""
 
 from __future__ import annotations
 
 import dataclasses
+import math
 from dataclasses import dataclass
 
 from rfidnav_common.config import param
+from rfidnav_control.go_to import GoToSettings
 from rfidnav_planning.partition_navigation import NavigatorSettings
+from rfidnav_planning.two_tier_navigation import TwoTierSettings
 
 
 @dataclass(frozen=True)
@@ -50,3 +53,42 @@ class PartitionNavigatorParameters:
     def settings(self) -> NavigatorSettings:
         # Every navigator setting is a node parameter of the same name.
         return NavigatorSettings(**{field.name: getattr(self, field.name) for field in dataclasses.fields(NavigatorSettings)})
+
+
+@dataclass(frozen=True)
+class TwoTierNavigatorParameters:
+    """two_tier_navigator (paper 003); config/params/two_tier_navigator.yaml documents them."""
+
+    map_file: str = param("robot map (unused: the tag map comes from the location server)", "unused")
+    floor_antenna: int = param("reader port of the HF floor antenna that reads the tag groups", 1)
+    control_rate_hz: float = param("control steps per second [Hz, sim time]", 20.0)
+    service_timeout_s: float = param("a location server call unanswered this long is sent again [s]", 2.0)
+    map_frame: str = param("frame of the published pose", "map")
+    landmark_spacing_m: float = param("geographic forwarding: the tolerable distance to the next landmark [m]", 4.0)
+    calibration_distance_m: float = param("A5: a tier-one check after driving this far without a fix [m]", 6.0)
+    deviation_threshold_m: float = param("A5: re-fix at a landmark when tier one disagrees by more than this [m]",
+                                         2.0)
+    tag_map_radius_m: float = param("A1: the tag map downloaded around the tier-one estimate [m]", 30.0)
+    search_radius_sigmas: float = param("spiral search out to this many position standard deviations", 3.0)
+    search_min_radius_m: float = param("spiral search out to at least this radius [m]", 0.5)
+    max_searches: int = param("give up after this many spiral searches found nothing", 10)
+    read_range_m: float = param("the floor reader's range [m]: a tag fix is this good", 0.05)
+    drift_per_m: float = param("dead reckoning: position sd growth per metre driven", 0.05)
+    speed_mps: float = param("driving speed [m/s]", 0.2)
+    turn_rate_radps: float = param("largest yaw rate [rad/s]", 0.8)
+    heading_gain_per_s: float = param("yaw rate per radian of heading error [1/s]", 2.0)
+    goal_tolerance_m: float = param("go-to: a waypoint or the target is reached within this [m]", 0.02)
+
+    def validate(self) -> None:
+        if not 1 <= self.floor_antenna <= 65535:
+            raise ValueError(f"floor_antenna: a reader port is 1..65535, got {self.floor_antenna}")
+        for name in ("control_rate_hz", "service_timeout_s"):
+            if not (math.isfinite(getattr(self, name)) and getattr(self, name) > 0.0):
+                raise ValueError(f"{name}: must be positive, got {getattr(self, name)}")
+        self.settings().validate()
+
+    def settings(self) -> TwoTierSettings:
+        go_to = GoToSettings(speed_mps=self.speed_mps, turn_rate_radps=self.turn_rate_radps,
+                             heading_gain_per_s=self.heading_gain_per_s, tolerance_m=self.goal_tolerance_m)
+        names = {field.name for field in dataclasses.fields(TwoTierSettings)} - {"go_to"}
+        return TwoTierSettings(**{name: getattr(self, name) for name in names}, go_to=go_to)

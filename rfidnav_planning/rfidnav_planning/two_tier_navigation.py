@@ -20,8 +20,8 @@ Flow (paper 003 section 3.2):
 * A5, calibration: after ``calibration_distance_m`` without a fix, tier one checks the dead-reckoned
   position; a deviation over ``deviation_threshold_m`` sends the robot to the landmark nearest the tier-one
   estimate to fix itself again.
-* A4, arrival: a target that is a landmark is reached when one of its tags is read; any other target when the
-  dead-reckoned position is within ``arrival_tolerance_m`` of it.
+* A4, arrival: the dead-reckoned position within the go-to tolerance of the target; a target at a landmark is
+  approached from a fix on one of its tags.
 
 Any known tag read on the way is a fix (it is free); unknown tags are counted and ignored.
 """
@@ -55,13 +55,12 @@ class TwoTierSettings:
     search_min_radius_m: float = 0.5       # ...but at least this far
     max_searches: int = 10                 # give up after this many exhausted spirals
     read_range_m: float = 0.05             # the floor reader's range: a tag fix is this good
-    arrival_tolerance_m: float = 0.05      # a target that is not a landmark: arrived within this
     drift_per_m: float = 0.05              # dead reckoning: position sd growth per metre (paper 003: 1 m per 20 m)
     go_to: GoToSettings = field(default_factory=GoToSettings)
 
     def validate(self) -> None:
         for name in ("landmark_spacing_m", "calibration_distance_m", "deviation_threshold_m", "tag_map_radius_m",
-                     "search_radius_sigmas", "search_min_radius_m", "read_range_m", "arrival_tolerance_m"):
+                     "search_radius_sigmas", "search_min_radius_m", "read_range_m"):
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0.0):
                 raise ValueError(f"{name}: must be a positive number, got {value}")
@@ -143,13 +142,18 @@ class TwoTierNavigator:
         self.outcome: Decision | None = None
 
     # ---------------------------------------------------------------------------------------- mission
-    def start(self, target: tuple[float, float]) -> Decision:
+    def start(self, target: tuple[float, float], known_start: Fix | None = None) -> Decision:
+        """Navigate to ``target``: from tier one (A6), or from ``known_start`` when the robot knows where it
+        starts (a dock on a landmark: how a robot surveys a site whose radio map is still empty)."""
         if not all(math.isfinite(v) for v in target):
             raise ValueError(f"target ({target[0]}, {target[1]}) is not a finite point")
         self.target = (float(target[0]), float(target[1]))
         self.progress = Progress()
         self.outcome = None
-        return self.ask(Request(LOCATE), LOCATING)
+        if known_start is None:
+            return self.ask(Request(LOCATE), LOCATING)
+        self.fixed(known_start)
+        return self.ask(Request(TAG_MAP, known_start.position, self.settings.tag_map_radius_m), MAPPING)
 
     def estimate(self) -> DeadReckoningEstimate:
         return self.reckoning.estimate()

@@ -1,0 +1,245 @@
+"""two_tier_navigator: action server /navigate_to_point for paper 003's two-tier navigation.
+
+A thin adapter around TwoTierNavigator. A timer at ``control_rate_hz`` (sim time) steps the core with the
+latest /odom pose, the latest /compass heading and the floor tags read on the HF antenna since the last step,
+and publishes its velocity command on /cmd_vel, the dead-reckoned pose on /localization/pose and the tier of
+the last fix on /localization/status. When the core asks the location server something, the latest
+/wifi/scan goes to /location_server/locate, or the tag-map query to /location_server/tag_map; an unanswered
+call (a server restarting, say) is sent again after ``service_timeout_s`` while the robot stands still.
+
+As partition_navigator does, the goal is followed from its acceptance and its execute callback runs only once
+the outcome is known, so the node stays on rclpy's EventsExecutor with no coroutine waiting.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+from geometry_msgs.msg import Pose2D, PoseWithCovarianceStamped, Twist
+from nav_msgs.msg import Odometry
+from rclpy.action import ActionServer, CancelResponse, GoalResponse
+from rclpy.action.server import ServerGoalHandle
+from rclpy.node import Node
+from rclpy.task import Future
+from sensor_msgs.msg import Imu
+
+from rfidnav_common.geometry import quaternion_to_yaw, yaw_to_quaternion
+from rfidnav_common.ros import COMMAND_QOS, SENSOR_QOS, declare_parameters, run_node
+from rfidnav_msgs.action import NavigateToPoint
+from rfidnav_msgs.msg import LocalizationStatus, TagReadArray, WifiScan
+from rfidnav_msgs.srv import GetTagMap, Locate
+from rfidnav_planning.parameters import TwoTierNavigatorParameters
+from rfidnav_planning.two_tier_navigation import LOCATE, Decision, MapTag, Request, TwoTierNavigator
+
+
+@dataclass
+class ActiveGoal:
+    handle: ServerGoalHandle
+    outcome: tuple[str, str] | None = None   # (succeeded | aborted | canceled, message) once concluded
+
+
+@dataclass
+class PendingCall:
+    request: Request
+    sent_s: float | None = None              # None: not sent yet (no scan, or the service is not up)
+    future: Future | None = None
+
+
+class TwoTierNavigatorNode(Node):
+    def __init__(self, **node_options: Any) -> None:
+        super().__init__("two_tier_navigator", **node_options)
+        self.params: TwoTierNavigatorParameters = declare_parameters(self, TwoTierNavigatorParameters)
+        self.navigator = TwoTierNavigator(self.params.settings())
+        self.active: ActiveGoal | None = None
+        self.call: PendingCall | None = None
+        self.odom: tuple[float, float, float] | None = None
+        self.compass_yaw: float | None = None
+        self.scan: WifiScan | None = None
+        self.reads: list[str] = []
+        self.cmd_pub = self.create_publisher(Twist, "/cmd_vel", COMMAND_QOS)
+        self.pose_pub = self.create_publisher(PoseWithCovarianceStamped, "/localization/pose", SENSOR_QOS)
+        self.status_pub = self.create_publisher(LocalizationStatus, "/localization/status", SENSOR_QOS)
+        self.create_subscription(Odometry, "/odom", self.on_odom, SENSOR_QOS)
+        self.create_subscription(Imu, "/compass", self.on_compass, SENSOR_QOS)
+        self.create_subscription(TagReadArray, "/rfid/reads", self.on_reads, SENSOR_QOS)
+        self.create_subscription(WifiScan, "/wifi/scan", self.on_scan, SENSOR_QOS)
+        self.locate_client = self.create_client(Locate, "/location_server/locate")
+        self.tag_map_client = self.create_client(GetTagMap, "/location_server/tag_map")
+        self.action_server = ActionServer(
+            self, NavigateToPoint, "/navigate_to_point", execute_callback=self.finish,
+            goal_callback=self.on_goal, handle_accepted_callback=self.on_accepted,
+            cancel_callback=lambda _: CancelResponse.ACCEPT)
+        self.create_timer(1.0 / self.params.control_rate_hz, self.control_step)
+
+    def destroy_node(self) -> None:
+        self.action_server.destroy()
+        super().destroy_node()
+
+    def now_s(self) -> float:
+        return self.get_clock().now().nanoseconds * 1e-9
+
+    # ------------------------------------------------------------------------------------ sensing
+    def on_odom(self, msg: Odometry) -> None:
+        pose = msg.pose.pose
+        yaw = quaternion_to_yaw(pose.orientation.x, pose.orientation.y, pose.orientation.z, pose.orientation.w)
+        if all(math.isfinite(v) for v in (pose.position.x, pose.position.y, yaw)):
+            self.odom = (pose.position.x, pose.position.y, yaw)
+        else:
+            self.get_logger().warning("dropped an odometry message with non-finite values", throttle_duration_sec=5.0)
+
+    def on_compass(self, msg: Imu) -> None:
+        q = msg.orientation
+        yaw = quaternion_to_yaw(q.x, q.y, q.z, q.w)
+        if math.isfinite(yaw):
+            self.compass_yaw = yaw
+        else:
+            self.get_logger().warning("dropped a compass reading with a non-finite heading", throttle_duration_sec=5.0)
+
+    def on_reads(self, msg: TagReadArray) -> None:
+        self.reads.extend(r.tag_id for r in msg.readings if r.antenna == self.params.floor_antenna)
+
+    def on_scan(self, msg: WifiScan) -> None:
+        self.scan = msg
+
+    # -------------------------------------------------------------------------------------- goals
+    def on_goal(self, goal: NavigateToPoint.Goal) -> GoalResponse:
+        if self.active is not None:
+            self.get_logger().error("goal rejected: another goal is being navigated to")
+            return GoalResponse.REJECT
+        if not (math.isfinite(goal.target.x) and math.isfinite(goal.target.y)):
+            self.get_logger().error(f"goal rejected: target ({goal.target.x}, {goal.target.y}) is not finite")
+            return GoalResponse.REJECT
+        return GoalResponse.ACCEPT
+
+    def on_accepted(self, handle: ServerGoalHandle) -> None:
+        target = handle.request.target
+        self.active = ActiveGoal(handle)
+        self.get_logger().info(f"navigating to ({target.x:.3f}, {target.y:.3f})")
+        self.apply(self.navigator.start((target.x, target.y)))
+
+    def conclude(self, state: str, message: str) -> None:
+        self.active.outcome = (state, message)
+        self.call = None
+        self.drive(0.0, 0.0)
+        self.active.handle.execute()
+
+    def finish(self, handle: ServerGoalHandle) -> NavigateToPoint.Result:
+        active, self.active = self.active, None
+        state, message = active.outcome
+        getattr(handle, {"succeeded": "succeed", "aborted": "abort", "canceled": "canceled"}[state])()
+        self.get_logger().info(f"navigation {state}: {message}")
+        progress = self.navigator.progress
+        return NavigateToPoint.Result(
+            success=state == "succeeded", message=message, path_length_m=float(self.navigator.travelled_m),
+            searches=progress.searches, search_length_m=float(progress.search_length_m),
+            tag_fixes=sum(1 for fix in progress.fixes if fix.tag_id), tier_one_requests=progress.tier_one_requests)
+
+    # ------------------------------------------------------------------------------------ control
+    def control_step(self) -> None:
+        active = self.active
+        if active is None or active.outcome is not None:
+            return
+        if active.handle.is_cancel_requested:
+            self.conclude("canceled", "cancelled by the client")
+            return
+        if self.call is not None:
+            self.serve(self.call)
+        elif self.odom is not None:
+            reads, self.reads = self.reads, []
+            self.apply(self.navigator.step(self.odom, self.compass_yaw, reads))
+        self.publish_estimate()
+
+    def apply(self, decision: Decision) -> None:
+        if decision.finished:
+            self.conclude("succeeded" if decision.success else "aborted", decision.message)
+            return
+        if decision.request is not None:
+            self.call = PendingCall(decision.request)
+            self.serve(self.call)
+        self.drive(*decision.command)
+        self.publish_feedback(decision.phase)
+
+    def serve(self, call: PendingCall) -> None:
+        """Send the call if it is not out, or again once it has gone unanswered for ``service_timeout_s``."""
+        if call.sent_s is not None and self.now_s() - call.sent_s < self.params.service_timeout_s:
+            return
+        if call.sent_s is not None:
+            self.get_logger().warning(f"location server: no answer to {call.request.kind} in "
+                                      f"{self.params.service_timeout_s:g} s, asking again")
+        client = self.locate_client if call.request.kind == LOCATE else self.tag_map_client
+        if not client.service_is_ready() or (call.request.kind == LOCATE and self.scan is None):
+            call.sent_s = self.now_s()          # try again after the timeout
+            return
+        if call.request.kind == LOCATE:
+            request = Locate.Request(scan=self.scan)
+        else:
+            request = GetTagMap.Request(x=float(call.request.centre[0]), y=float(call.request.centre[1]),
+                                        radius_m=float(call.request.radius_m))
+        call.sent_s = self.now_s()
+        call.future = client.call_async(request)
+        call.future.add_done_callback(lambda future, sent=call: self.on_answer(sent, future))
+
+    def on_answer(self, call: PendingCall, future: Future) -> None:
+        if self.call is not call or self.active is None or self.active.outcome is not None:
+            return                               # a stale answer (re-sent, or the goal ended)
+        self.call = None
+        response = future.result()
+        if call.request.kind == LOCATE:
+            position = (response.x, response.y) if response.success else None
+            if not response.success:
+                self.get_logger().warning(f"tier one failed: {response.message}")
+            decision = self.navigator.on_located(position, response.uncertainty_m, response.message)
+        else:
+            tags = [MapTag(t.tag_id, (t.x, t.y), t.group_id, t.shape) for t in response.tags]
+            decision = self.navigator.on_tag_map(tags)
+        self.apply(decision)
+
+    # ------------------------------------------------------------------------------------- output
+    def drive(self, linear: float, angular: float) -> None:
+        twist = Twist()
+        twist.linear.x, twist.angular.z = float(linear), float(angular)
+        self.cmd_pub.publish(twist)
+
+    def publish_feedback(self, phase: str) -> None:
+        estimate = self.navigator.estimate()
+        feedback = NavigateToPoint.Feedback(phase=phase)
+        if estimate.position is not None:
+            feedback.estimated_pose = Pose2D(x=float(estimate.position[0]), y=float(estimate.position[1]),
+                                             theta=float(estimate.yaw or 0.0))
+            feedback.distance_to_goal_m = float(math.dist(estimate.position, self.navigator.target))
+        self.active.handle.publish_feedback(feedback)
+
+    def publish_estimate(self) -> None:
+        estimate = self.navigator.estimate()
+        if estimate.position is None:
+            return
+        stamp = self.get_clock().now().to_msg()
+        pose = PoseWithCovarianceStamped()
+        pose.header.stamp, pose.header.frame_id = stamp, self.params.map_frame
+        pose.pose.pose.position.x, pose.pose.pose.position.y = map(float, estimate.position)
+        x, y, z, w = yaw_to_quaternion(estimate.yaw or 0.0)
+        orientation = pose.pose.pose.orientation
+        orientation.x, orientation.y, orientation.z, orientation.w = x, y, z, w
+        variance = float(estimate.sd_m ** 2)
+        pose.pose.covariance[0] = pose.pose.covariance[7] = variance
+        pose.pose.covariance[35] = 1e6 if estimate.yaw is None else math.radians(2.0) ** 2   # the compass's
+        self.pose_pub.publish(pose)
+        fix = estimate.last_fix
+        status = LocalizationStatus(method="two_tier", position_valid=True, x=pose.pose.pose.position.x,
+                                    y=pose.pose.pose.position.y, orientation_valid=estimate.yaw is not None,
+                                    yaw_rad=float(estimate.yaw or 0.0), read_range_m=self.params.read_range_m,
+                                    last_fix_tier=fix.tier if fix else 0, last_fix_tag_id=fix.tag_id if fix else "",
+                                    distance_since_fix_m=float(estimate.distance_since_fix_m))
+        status.header = pose.header
+        status.yaw_lower_rad = status.yaw_upper_rad = status.yaw_rad
+        self.status_pub.publish(status)
+
+
+def main(args: list[str] | None = None) -> int:
+    return run_node(TwoTierNavigatorNode, args)
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
