@@ -1,0 +1,109 @@
+"""two_tier_navigator as a node: it waits for a location server that is not up, asks again, and carries on when
+the server comes (as after a restart mid-mission); a bad goal is refused."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+from geometry_msgs.msg import Twist
+from nav_msgs.msg import Odometry
+from rclpy.action import ActionClient
+from rclpy.parameter import Parameter
+from sensor_msgs.msg import Imu
+
+from rfidnav_common.geometry import yaw_to_quaternion
+from rfidnav_common.ros import COMMAND_QOS, SENSOR_QOS
+from rfidnav_localization.fingerprint import Fingerprint
+from rfidnav_localization.location_server_node import LocationServerNode
+from rfidnav_localization.location_store import LocationStore
+from rfidnav_msgs.action import NavigateToPoint
+from rfidnav_msgs.msg import AccessPointRss, WifiScan
+from rfidnav_planning.two_tier_navigator_node import TwoTierNavigatorNode
+from test_nodes import Graph
+
+RSS = {"02:00:00:00:00:01": -40.0, "02:00:00:00:00:02": -60.0}
+
+
+@pytest.fixture
+def graph(domain: int) -> Iterator[Graph]:
+    graph = Graph(domain)
+    try:
+        yield graph
+    finally:
+        graph.close()
+
+
+@pytest.fixture
+def server_files(tmp_path: Path) -> tuple[Path, Path]:
+    database = tmp_path / "site.db"
+    with LocationStore.open(database, create=True) as store:
+        store.add_fingerprints([Fingerprint((1.0, 1.0), RSS, "grid"),
+                                Fingerprint((5.0, 5.0), {b: v - 20.0 for b, v in RSS.items()}, "grid")])
+    map_file = tmp_path / "home.yaml"
+    map_file.write_text("name: home\ntag_groups:\n  - {id: G1, shape: cross, centre: [2.0, 1.0]}\n")
+    return database, map_file
+
+
+def sensors(graph: Graph):
+    odom_pub = graph.probe.create_publisher(Odometry, "/odom", SENSOR_QOS)
+    compass_pub = graph.probe.create_publisher(Imu, "/compass", SENSOR_QOS)
+    scan_pub = graph.probe.create_publisher(WifiScan, "/wifi/scan", SENSOR_QOS)
+
+    def publish() -> None:
+        odom = Odometry()
+        odom.pose.pose.orientation.w = 1.0
+        odom_pub.publish(odom)
+        compass = Imu()
+        compass.orientation.x, compass.orientation.y, compass.orientation.z, compass.orientation.w = \
+            yaw_to_quaternion(0.0)
+        compass_pub.publish(compass)
+        scan_pub.publish(WifiScan(access_points=[AccessPointRss(bssid=b, rssi_dbm=v) for b, v in RSS.items()]))
+    return publish
+
+
+def test_the_navigator_asks_again_until_the_location_server_answers_then_drives(
+        graph: Graph, server_files: tuple[Path, Path]) -> None:
+    navigator = graph.add(TwoTierNavigatorNode(context=graph.context, parameter_overrides=[
+        Parameter("service_timeout_s", value=0.3)]))
+    publish = sensors(graph)
+    commands: list[Twist] = []
+    graph.probe.create_subscription(Twist, "/cmd_vel", commands.append, COMMAND_QOS)
+    feedback: list[str] = []
+    client = ActionClient(graph.probe, NavigateToPoint, "/navigate_to_point")
+    graph.clients.append(client)
+    graph.spin_until(client.server_is_ready, "the action server")
+    publish()
+    goal = NavigateToPoint.Goal()
+    goal.target.x, goal.target.y = 2.0, 1.0
+    sent = client.send_goal_async(goal, feedback_callback=lambda msg: feedback.append(msg.feedback.phase))
+    graph.spin_until(sent.done, "the goal's acceptance")
+    assert sent.result().accepted
+    graph.spin_until(lambda: graph.logged("two_tier_navigator", "asking again"), "a retried locate")
+    assert set(feedback) <= {"locating"} and all(c.linear.x == 0.0 for c in commands)
+    database, map_file = server_files
+    graph.add(LocationServerNode(context=graph.context, parameter_overrides=[
+        Parameter("database_file", value=str(database)), Parameter("map_file", value=str(map_file)),
+        Parameter("k", value=1)]))
+
+    def driving() -> bool:
+        publish()
+        return any(abs(c.angular.z) > 0.0 or c.linear.x > 0.0 for c in commands)
+    graph.spin_until(driving, "the navigator to drive towards the landmark")
+    assert "to_landmark" in feedback
+    assert navigator.navigator.estimate().position == pytest.approx((1.0, 1.0))   # the server's answer (k = 1)
+    assert navigator.navigator.waypoint.group_id == "G1"
+
+
+def test_a_target_that_is_not_finite_is_refused(graph: Graph) -> None:
+    graph.add(TwoTierNavigatorNode(context=graph.context))
+    client = ActionClient(graph.probe, NavigateToPoint, "/navigate_to_point")
+    graph.clients.append(client)
+    graph.spin_until(client.server_is_ready, "the action server")
+    goal = NavigateToPoint.Goal()
+    goal.target.x = math.nan
+    sent = client.send_goal_async(goal)
+    graph.spin_until(sent.done, "the goal's answer")
+    assert not sent.result().accepted
