@@ -11,9 +11,15 @@ os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
 os.environ["ROS_PYTHON_CHECK_FIELDS"] = "1"
 
 
+from collections.abc import Iterator  # noqa: E402
+from typing import TYPE_CHECKING  # noqa: E402
+
 import pytest  # noqa: E402
 
 from rfidnav_bringup.processes import DomainLease  # noqa: E402
+
+if TYPE_CHECKING:
+    from test_nodes import Graph
 
 
 @pytest.fixture
@@ -24,3 +30,15 @@ def domain():
         yield lease.domain_id
     finally:
         lease.close()
+
+
+@pytest.fixture
+def graph(domain: int) -> Iterator["Graph"]:
+    """Nodes under test and a probe on one private context and executor (test_nodes.Graph), closed after."""
+    from test_nodes import Graph    # here, not at the top: the environment above must be set before rclpy loads
+
+    graph = Graph(domain)
+    try:
+        yield graph
+    finally:
+        graph.close()

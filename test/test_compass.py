@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import math
-from collections.abc import Iterator
 
 import numpy as np
 import pytest
@@ -35,15 +34,6 @@ def test_readings_carry_the_bias_and_the_noise_and_stay_wrapped() -> None:
 def test_bad_parameters_name_the_field(field: str, value: float) -> None:
     with pytest.raises(ValueError, match=field.replace("_deg", "")):
         CompassParameters(**{field: value}).validate()
-
-
-@pytest.fixture
-def graph(domain: int) -> Iterator[Graph]:
-    graph = Graph(domain)
-    try:
-        yield graph
-    finally:
-        graph.close()
 
 
 def test_compass_sim_publishes_the_heading_at_its_rate_on_the_ground_truth_clock(graph: Graph) -> None:

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
@@ -44,15 +43,6 @@ def map_file(tmp_path: Path) -> Path:
     path = tmp_path / "home.yaml"
     path.write_text("name: home\ntag_groups:\n  - {id: G1, shape: cross, centre: [2.0, 3.0], size_m: 0.3}\n")
     return path
-
-
-@pytest.fixture
-def graph(domain: int) -> Iterator[Graph]:
-    graph = Graph(domain)
-    try:
-        yield graph
-    finally:
-        graph.close()
 
 
 def start_server(graph: Graph, database: Path, map_file: Path) -> LocationServerNode:

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -87,15 +87,6 @@ class Graph:
             node.destroy_node()
         self.context.try_shutdown()
         self.context.destroy()
-
-
-@pytest.fixture
-def graph(domain: int) -> Iterator[Graph]:
-    graph = Graph(domain)
-    try:
-        yield graph
-    finally:
-        graph.close()
 
 
 def reading(tag_id: str, antenna: int, phase: float, **bad: float) -> TagReading:

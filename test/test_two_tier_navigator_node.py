@@ -4,7 +4,6 @@ the server comes (as after a restart mid-mission); a bad goal is refused."""
 from __future__ import annotations
 
 import math
-from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
@@ -25,15 +24,6 @@ from rfidnav_planning.two_tier_navigator_node import TwoTierNavigatorNode
 from test_nodes import Graph
 
 RSS = {"02:00:00:00:00:01": -40.0, "02:00:00:00:00:02": -60.0}
-
-
-@pytest.fixture
-def graph(domain: int) -> Iterator[Graph]:
-    graph = Graph(domain)
-    try:
-        yield graph
-    finally:
-        graph.close()
 
 
 @pytest.fixture

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import re
-from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
@@ -60,15 +59,6 @@ def test_a_bad_entry_names_its_field(tmp_path: Path, replace: str, where: str) -
     path.write_text(WORLD.replace(replace, broken))
     with pytest.raises(ConfigError, match=re.escape(f"broken.yaml: {where}")):
         load_world(path)
-
-
-@pytest.fixture
-def graph(domain: int) -> Iterator[Graph]:
-    graph = Graph(domain)
-    try:
-        yield graph
-    finally:
-        graph.close()
 
 
 def test_wifi_sim_scans_at_its_period_with_the_worlds_radio_and_drops_what_it_cannot_hear(

@@ -9,6 +9,7 @@ import typing
 from typing import Any, Callable
 
 import rclpy
+from rclpy.action.server import ServerGoalHandle
 from rclpy.context import Context
 from builtin_interfaces.msg import Time
 from rcl_interfaces.msg import ParameterDescriptor
@@ -104,6 +105,16 @@ def run_node(make_node: Callable[[], Node], args: list[str] | None = None,
         executor.shutdown()
         rclpy.try_shutdown()
     return code
+
+
+def close_goal(node: Node, handle: ServerGoalHandle, outcome: tuple[str, str], what: str) -> tuple[bool, str]:
+    """End an action goal with its outcome (succeeded | aborted | canceled, message) and log it; returns
+    (success, message) for the result. The rfidnav action servers decide the outcome while following a goal
+    and let its execute callback run only then (no coroutine waits on the EventsExecutor)."""
+    state, message = outcome
+    getattr(handle, {"succeeded": "succeed", "aborted": "abort", "canceled": "canceled"}[state])()
+    node.get_logger().info(f"{what} {state}: {message}")
+    return state == "succeeded", message
 
 
 def time_msg(seconds: float) -> Time:

@@ -20,7 +20,7 @@ from rclpy.action import ActionServer, CancelResponse, GoalResponse
 from rclpy.action.server import ServerGoalHandle
 from rclpy.node import Node
 
-from rfidnav_common.ros import COMMAND_QOS, SENSOR_QOS, declare_parameters, run_node, seconds_of
+from rfidnav_common.ros import close_goal, COMMAND_QOS, SENSOR_QOS, declare_parameters, run_node, seconds_of
 from rfidnav_control.fuzzy import FuzzyHeadingController
 from rfidnav_control.parameters import HeadingControllerParameters
 from rfidnav_common.robot_map import load_route_map
@@ -95,10 +95,8 @@ class HeadingControllerNode(Node):
 
     def finish(self, handle: ServerGoalHandle) -> FollowTagRoute.Result:
         active, self.active = self.active, None
-        state, message = active.outcome
-        getattr(handle, {"succeeded": "succeed", "aborted": "abort", "canceled": "canceled"}[state])()
-        self.get_logger().info(f"route {state}: {message}")
-        return FollowTagRoute.Result(success=state == "succeeded", message=message,
+        success, message = close_goal(self, handle, active.outcome, "route")
+        return FollowTagRoute.Result(success=success, message=message,
                                      tags_reached=active.tags_reached, elapsed_s=self.now_s() - active.started_s)
 
     def on_reads(self, msg: TagReadArray) -> None:

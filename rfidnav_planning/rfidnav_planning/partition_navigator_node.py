@@ -24,7 +24,7 @@ from rclpy.node import Node
 from rfidnav_common.errors import ConfigError
 from rfidnav_common.geometry import quaternion_to_yaw, wrap_angle
 from rfidnav_common.robot_map import load_route_map
-from rfidnav_common.ros import COMMAND_QOS, LATCHED_QOS, SENSOR_QOS, declare_parameters, run_node, seconds_of
+from rfidnav_common.ros import close_goal, COMMAND_QOS, LATCHED_QOS, SENSOR_QOS, declare_parameters, run_node, seconds_of
 from rfidnav_common.tag_lattice import Coordinate
 from rfidnav_msgs.action import NavigateToPoint
 from rfidnav_msgs.msg import LocalizationStatus, PartitionPath
@@ -102,11 +102,9 @@ class PartitionNavigatorNode(Node):
 
     def finish(self, handle: ServerGoalHandle) -> NavigateToPoint.Result:
         active, self.active = self.active, None
-        state, message = active.outcome
-        getattr(handle, {"succeeded": "succeed", "aborted": "abort", "canceled": "canceled"}[state])()
-        self.get_logger().info(f"navigation {state}: {message}")
+        success, message = close_goal(self, handle, active.outcome, "navigation")
         navigation = self.navigator.state
-        return NavigateToPoint.Result(success=state == "succeeded", message=message,
+        return NavigateToPoint.Result(success=success, message=message,
                                       path_length_m=float(active.travelled_m), replans=navigation.replans,
                                       partitions_traversed=navigation.partitions_entered)
 

@@ -26,7 +26,7 @@ from rclpy.task import Future
 from sensor_msgs.msg import Imu
 
 from rfidnav_common.geometry import quaternion_to_yaw, yaw_to_quaternion
-from rfidnav_common.ros import COMMAND_QOS, SENSOR_QOS, declare_parameters, run_node
+from rfidnav_common.ros import close_goal, COMMAND_QOS, SENSOR_QOS, declare_parameters, run_node
 from rfidnav_msgs.action import NavigateToPoint
 from rfidnav_msgs.msg import LocalizationStatus, TagReadArray, WifiScan
 from rfidnav_msgs.srv import GetTagMap, Locate
@@ -127,12 +127,10 @@ class TwoTierNavigatorNode(Node):
 
     def finish(self, handle: ServerGoalHandle) -> NavigateToPoint.Result:
         active, self.active = self.active, None
-        state, message = active.outcome
-        getattr(handle, {"succeeded": "succeed", "aborted": "abort", "canceled": "canceled"}[state])()
-        self.get_logger().info(f"navigation {state}: {message}")
+        success, message = close_goal(self, handle, active.outcome, "navigation")
         progress = self.navigator.progress
         return NavigateToPoint.Result(
-            success=state == "succeeded", message=message, path_length_m=float(self.navigator.travelled_m),
+            success=success, message=message, path_length_m=float(self.navigator.travelled_m),
             searches=progress.searches, search_length_m=float(progress.search_length_m),
             tag_fixes=sum(1 for fix in progress.fixes if fix.tag_id), tier_one_requests=progress.tier_one_requests)
 
