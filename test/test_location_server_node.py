@@ -120,3 +120,12 @@ def test_a_missing_or_corrupt_database_is_one_error_naming_the_file(graph: Graph
     corrupt.write_bytes(b"not a database at all" * 100)
     with pytest.raises(StoreError, match=str(corrupt)):
         start_server(graph, corrupt, map_file)
+
+
+def test_the_latency_bench_runs_the_server_in_its_own_process_and_reports_percentiles() -> None:
+    from rfidnav_bringup.bench_location import benchmark
+
+    figures = benchmark(requests=20)
+    assert figures["requests"] == 20 and figures["fingerprints"] == 96
+    assert 0.0 < figures["p50_ms"] <= figures["p99_ms"] <= figures["max_ms"]
+    assert figures["matcher_ms"] > 0.0

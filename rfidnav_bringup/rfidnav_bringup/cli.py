@@ -92,10 +92,10 @@ def parser() -> argparse.ArgumentParser:
     survey.add_argument("--seed", type=int, default=1)
     survey.add_argument("--out", type=Path, required=True, help="the radio map file to write (YAML)")
     bench = verbs.add_parser("bench", help="performance benchmarks (JSON figures)")
-    bench.add_argument("name", choices=["flc", "rtf", "planner", "partitions"],
+    bench.add_argument("name", choices=["flc", "rtf", "planner", "partitions", "location_server"],
                        help="flc: fuzzy fast path vs scikit-fuzzy; rtf: a scenario over DDS at rising RTF; "
                             "planner: Algorithm 1 and a reader round in a 30 x 30 m field at r = 2 cm; partitions: the navigations of "
-                            "paper 000 Figs. 12-14 in-process")
+                            "paper 000 Figs. 12-14 in-process; location_server: paper 003's tier-one locate over DDS")
     bench.add_argument("--json", action="store_true")
     bench.add_argument("--evaluations", type=int, default=2000, help="flc: evaluations per timing")
     bench.add_argument("--plans", type=int, default=200, help="planner: random segments planned")
@@ -246,6 +246,15 @@ def verb_survey(args) -> int:
 def verb_bench(args) -> int:
     if args.name == "rtf":
         return bench_rtf(args)
+    if args.name == "location_server":
+        from rfidnav_bringup.bench_location import benchmark as location_benchmark
+
+        figures = location_benchmark()
+        print(json.dumps(figures) if args.json else
+              f"tier-one locate over DDS, {figures['requests']} requests on a {figures['fingerprints']}-fingerprint "
+              f"map: p50 {figures['p50_ms']:.2f} ms, p99 {figures['p99_ms']:.2f} ms (the matcher alone "
+              f"{figures['matcher_ms']:.3f} ms)")
+        return 0
     if args.name in ("planner", "partitions"):
         return bench_partitions(args)
     from rfidnav_control.fuzzy import benchmark

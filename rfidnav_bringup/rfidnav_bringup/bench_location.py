@@ -1,0 +1,107 @@
+"""``./rfidnav bench location_server``: tier-one latency of paper 003 over DDS.
+
+The location server runs in its own process (as in a run) on a leased domain, its database filled from the
+two_tier_home map (96 grid fingerprints, 12 tag groups); this process sends it scans the WiFi simulator takes at
+random points of the flat, one request at a time, and times each service round trip. Beside it, the matcher
+alone in-process, so the DDS share is visible.
+"""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+import rclpy
+from rclpy.context import Context
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.node import Node
+
+from rfidnav_bringup.errors import ReadinessError
+from rfidnav_bringup.orchestrator import child_environment
+from rfidnav_bringup.processes import DomainLease
+from rfidnav_bringup.scenario import CONFIG_DIR
+from rfidnav_common.robot_map import load_route_map
+from rfidnav_localization.fingerprint import RadioMap
+from rfidnav_localization.radio_map_file import load_radio_map
+from rfidnav_msgs.msg import AccessPointRss, WifiScan
+from rfidnav_msgs.srv import Locate
+from rfidnav_sim.wifi_model import WifiModel
+from rfidnav_sim.world import load_world
+
+MAP_FILE = CONFIG_DIR / "maps" / "two_tier_home.yaml"
+WORLD_FILE = CONFIG_DIR / "worlds" / "two_tier_home.yaml"
+READY_TIMEOUT_S = 30.0
+ANSWER_TIMEOUT_S = 10.0
+
+
+def scans(count: int, seed: int) -> list[dict[str, float]]:
+    world = load_world(WORLD_FILE)
+    wifi = WifiModel(world.access_points, np.array(world.walls, dtype=float).reshape(-1, 4), world.wifi,
+                     world.wifi_seed)
+    rng = np.random.default_rng(seed)
+    points = rng.uniform((0.2, 0.2), (11.8, 7.8), (count, 2))
+    return [{r.bssid: r.rssi_dbm for r in wifi.scan(float(x), float(y), rng)} for x, y in points]
+
+
+def benchmark(requests: int = 500, seed: int = 1) -> dict[str, float]:
+    samples = scans(requests, seed)
+    radio_map = RadioMap(load_radio_map(load_route_map(MAP_FILE).radio_map_file))
+    started = time.perf_counter()
+    for scan in samples:
+        radio_map.locate(scan)
+    matcher_ms = 1e3 * (time.perf_counter() - started) / requests
+    lease = DomainLease()
+    with tempfile.TemporaryDirectory() as folder:
+        server = subprocess.Popen(
+            [sys.executable, "-m", "rfidnav_localization.location_server_node", "--ros-args",
+             "-p", f"database_file:={Path(folder) / 'location.db'}", "-p", "create_database:=true",
+             "-p", f"map_file:={MAP_FILE}"], env=child_environment(lease.domain_id),
+            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+        context = Context()
+        rclpy.init(context=context, domain_id=lease.domain_id)
+        node = Node("bench_location_client", context=context)
+        executor = SingleThreadedExecutor(context=context)
+        executor.add_node(node)
+        try:
+            round_trips_ms = _round_trips(node, executor, server, samples)
+        finally:
+            node.destroy_node()
+            executor.shutdown()
+            context.try_shutdown()
+            server.terminate()
+            server.wait(timeout=10)
+            lease.close()
+    trips = np.array(round_trips_ms)
+    return {"requests": requests, "fingerprints": len(radio_map), "p50_ms": round(float(np.percentile(trips, 50)), 3),
+            "p99_ms": round(float(np.percentile(trips, 99)), 3), "max_ms": round(float(trips.max()), 3),
+            "matcher_ms": round(matcher_ms, 3)}
+
+
+def _round_trips(node: Node, executor: SingleThreadedExecutor, server: subprocess.Popen,
+                 samples: list[dict[str, float]]) -> list[float]:
+    client = node.create_client(Locate, "/location_server/locate")
+    deadline = time.monotonic() + READY_TIMEOUT_S
+    while not client.service_is_ready():
+        if server.poll() is not None:
+            raise ReadinessError(f"location_server exited ({server.returncode}): {server.stderr.read().strip()}")
+        if time.monotonic() > deadline:
+            raise ReadinessError(f"location_server: no /location_server/locate after {READY_TIMEOUT_S:g} s")
+        executor.spin_once(timeout_sec=0.1)
+    round_trips = []
+    for scan in samples:
+        request = Locate.Request(scan=WifiScan(access_points=[AccessPointRss(bssid=b, rssi_dbm=v)
+                                                              for b, v in scan.items()]))
+        started = time.perf_counter()
+        future = client.call_async(request)
+        while not future.done():
+            if time.perf_counter() - started > ANSWER_TIMEOUT_S:
+                raise ReadinessError(f"location_server: no answer in {ANSWER_TIMEOUT_S:g} s")
+            executor.spin_once(timeout_sec=0.05)
+        round_trips.append(1e3 * (time.perf_counter() - started))
+        if not future.result().success:
+            raise ReadinessError(f"location_server: locate failed: {future.result().message}")
+    return round_trips
