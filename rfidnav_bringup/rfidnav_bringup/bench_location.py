@@ -24,12 +24,12 @@ from rfidnav_bringup.errors import ReadinessError
 from rfidnav_bringup.orchestrator import child_environment
 from rfidnav_bringup.processes import DomainLease
 from rfidnav_bringup.scenario import CONFIG_DIR
+from rfidnav_bringup.two_tier_experiments import wifi_model
 from rfidnav_common.robot_map import load_route_map
 from rfidnav_localization.fingerprint import RadioMap
 from rfidnav_localization.radio_map_file import load_radio_map
 from rfidnav_msgs.msg import AccessPointRss, WifiScan
 from rfidnav_msgs.srv import Locate
-from rfidnav_sim.wifi_model import WifiModel
 from rfidnav_sim.world import load_world
 
 MAP_FILE = CONFIG_DIR / "maps" / "two_tier_home.yaml"
@@ -39,9 +39,7 @@ ANSWER_TIMEOUT_S = 10.0
 
 
 def scans(count: int, seed: int) -> list[dict[str, float]]:
-    world = load_world(WORLD_FILE)
-    wifi = WifiModel(world.access_points, np.array(world.walls, dtype=float).reshape(-1, 4), world.wifi,
-                     world.wifi_seed)
+    wifi = wifi_model(load_world(WORLD_FILE))
     rng = np.random.default_rng(seed)
     points = rng.uniform((0.2, 0.2), (11.8, 7.8), (count, 2))
     return [{r.bssid: r.rssi_dbm for r in wifi.scan(float(x), float(y), rng)} for x, y in points]

@@ -10,11 +10,14 @@ model's scan at the true position matched against a radio map). Only the simulat
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
 import numpy as np
 
+from rfidnav_bringup.scenario import CONFIG_DIR
+from rfidnav_common.config import node_parameter_values, parameters_from_mapping
 from rfidnav_common.errors import ConfigError
 from rfidnav_common.seeding import rng_for
 from rfidnav_common.tag_groups import HF_READ_RANGE_M
@@ -24,6 +27,7 @@ from rfidnav_common.robot_map import RouteMap
 from rfidnav_localization.dead_reckoning import TIER_TAG, Fix
 from rfidnav_planning.two_tier_navigation import LOCATE, MapTag, Request, TwoTierNavigator, TwoTierSettings
 from rfidnav_sim.compass_model import CompassModel
+from rfidnav_sim.parameters import WifiSimParameters
 from rfidnav_sim.wifi_model import WifiModel
 from rfidnav_sim.world import World
 
@@ -44,10 +48,9 @@ class Site:
 
     @classmethod
     def of(cls, world: World, radio_map: RadioMap) -> Site:
-        walls = np.array(world.walls, dtype=float).reshape(-1, 4)
         tags = [MapTag(tag_id, position, group.group_id, group.shape)
                 for group in world.tag_groups for tag_id, position in group.tags()]
-        return cls(world, WifiModel(world.access_points, walls, world.wifi, world.wifi_seed),
+        return cls(world, wifi_model(world),
                    tuple(tag.tag_id for tag in tags), np.array([tag.position for tag in tags], dtype=float),
                    tuple(tags), radio_map)
 
@@ -55,11 +58,21 @@ class Site:
         return [tag for tag in self.tag_map if math.dist(tag.position, centre) <= radius_m]
 
 
+def wifi_model(world: World) -> WifiModel:
+    """The world's WiFi heard by the receiver of config/params/wifi_sim.yaml (its noise and sensitivity), as the
+    wifi_sim node hears it."""
+    path = CONFIG_DIR / "params" / "wifi_sim.yaml"
+    values = {**node_parameter_values(WifiSimParameters, path, "wifi_sim"), "world_file": "unused"}
+    receiver = parameters_from_mapping(WifiSimParameters, values, str(path))
+    settings = dataclasses.replace(world.wifi, scan_noise_sd_db=receiver.scan_noise_sd_db,
+                                   sensitivity_dbm=receiver.sensitivity_dbm)
+    return WifiModel(world.access_points, np.array(world.walls, dtype=float).reshape(-1, 4), settings, world.wifi_seed)
+
+
 def grid_radio_map(world: World, spacing_m: float, rng: np.random.Generator, scans_per_point: int = 3) -> RadioMap:
     """A site survey on a regular grid at known positions (the usual manual way): each fingerprint is the mean
     of a few scans, as surveyors average."""
-    walls = np.array(world.walls, dtype=float).reshape(-1, 4)
-    wifi = WifiModel(world.access_points, walls, world.wifi, world.wifi_seed)
+    wifi = wifi_model(world)
     xs = np.arange(spacing_m / 2.0, _extent(world)[0], spacing_m)
     ys = np.arange(spacing_m / 2.0, _extent(world)[1], spacing_m)
     fingerprints = []
