@@ -1,0 +1,501 @@
+"""The topological map of paper 004 (sections 3-5): junctions joined by hallways, named by compass points.
+
+The robot knows neither tag positions nor hallway lengths; it follows the left wall until it reads a tag. A tag
+tells it which junction it is coming upon and from which side, because each tag is listed under the node and
+the compass side it announces (Fig. 5(b)). Routing is a graph search; the turn at a junction follows from the
+side the robot came in by and the side the next hallway leaves by. Compass points rather than a clockwise list
+of hallways keep the map easy to trace from a floor plan (section 3).
+
+YAML format (``config/maps/*.yaml``, robot knowledge)::
+
+    name: building_fig5
+    north_deg: 90            # bearing of compass North in the map frame, degrees CCW from the map x axis
+                             # (default 90: North is the map's +y); used for drawing and position checks
+    nodes:                   # node name -> its sides; every node must be reachable from the first one
+      c:
+        position: [8.0, 8.0]               # optional, map frame [m]: drawing and default hallway lengths
+        N: {node: d, tags: [8]}            # leaving c northwards leads to d; tag 8 is read when
+                                           #   ARRIVING at c FROM the north (coming from d)
+        E: {node: h, tags: [9], length_m: 8.0}
+        S: {node: b, tags: [10]}
+        W: {node: a, tags: [7]}
+      d:
+        N: {node: "?", tags: [12]}         # a hallway whose far end is not mapped yet: never routed through
+        E: {node: e, tags: [13]}
+        S: {node: c, tags: [11]}
+        W: {node: "-"}                     # no hallway; the same as leaving W out, and takes no tags
+
+Rules (``check_map`` lists every break, ``load_topological_map`` raises the first, each naming file and field):
+
+* sides are ``N``, ``E``, ``S``, ``W`` (plus ``position``); a side's fields are ``node`` (a node name, ``?`` or
+  ``-``), ``tags`` (default none) and ``length_m`` (positive, optional);
+* tag ids are unique over the whole map; they are text, so a YAML number ``8`` is the id ``'8'``;
+* every hallway is listed at both ends with opposite sides: ``c.N = d`` requires ``d.S = c``; lengths given at
+  both ends agree;
+* where both ends have positions, the far end lies within 45 degrees of the side's compass direction, so a
+  drawing (and a person reading the map) sees the turns the robot will make;
+* every node is reachable from the first through mapped hallways (``?`` does not count).
+
+Hallway length for ``route(..., weight="length")``: ``length_m`` from either end, else the straight distance
+between the two positions, else 1 m (the topology alone then decides, as with ``weight="edges"``).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, NamedTuple
+
+import networkx as nx
+
+from rfidnav_common.config import Section, type_name
+from rfidnav_common.errors import ConfigError
+from rfidnav_planning.errors import PlanningError
+
+DIRECTIONS: tuple[str, ...] = ("N", "E", "S", "W")   # clockwise, so one step along the tuple is a right turn
+UNKNOWN = "?"
+NO_HALLWAY = "-"
+WEIGHTS = ("edges", "length")
+DEFAULT_NORTH_DEG = 90.0
+DEFAULT_LENGTH_M = 1.0
+
+_OPPOSITE = {"N": "S", "E": "W", "S": "N", "W": "E"}
+_DEGREES_CCW_FROM_NORTH = {"N": 0.0, "E": -90.0, "S": 180.0, "W": 90.0}
+_TURNS = ("straight", "right", "back", "left")        # by clockwise quarter turns from the arrival heading
+_SIDE_FIELDS = ("node", "tags", "length_m")
+_POSITION_TOLERANCE_DEG = 45.0                        # beyond this a hallway points to another compass side
+_LENGTH_TOLERANCE_M = 1e-6
+
+
+class RouteError(PlanningError, ValueError):
+    """No route: an unknown node or tag, or no mapped hallways between start and goal."""
+
+
+@dataclass(frozen=True)
+class Hallway:
+    """One side of a node that has a hallway: where it leads, and the tags announcing the node to a robot
+    arriving from it."""
+
+    neighbour: str                  # a node name, or UNKNOWN
+    tags: tuple[str, ...] = ()
+    length_m: float | None = None
+
+
+@dataclass(frozen=True)
+class Node:
+    name: str
+    hallways: dict[str, Hallway]    # by direction; a side without a hallway is absent
+    position: tuple[float, float] | None = None
+
+
+@dataclass(frozen=True)
+class Edge:
+    """A hallway between two mapped nodes, listed once: it leaves ``node_a`` by ``side_a`` and enters
+    ``node_b`` by ``side_b``."""
+
+    node_a: str
+    side_a: str
+    node_b: str
+    side_b: str
+    length_m: float
+
+
+class NextAction(NamedTuple):
+    action: str                     # "left" | "right" | "straight" | "back" | "stop"
+    direction: str | None           # compass side to leave the node by; None on "stop"
+    node: str                       # the node the tag announced
+
+
+@dataclass(frozen=True)
+class TopologicalMap:
+    """A consistent map (build it with ``load_topological_map``, which checks the rules above)."""
+
+    name: str
+    nodes: dict[str, Node]
+    north_deg: float = DEFAULT_NORTH_DEG
+    _tag_places: dict[str, tuple[str, str]] = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        # Every read goes through locate_tag, so index the tags once.
+        places = {tag: (node.name, side) for node in self.nodes.values()
+                  for side, hallway in node.hallways.items() for tag in hallway.tags}
+        object.__setattr__(self, "_tag_places", places)
+
+    def locate_tag(self, tag_id: str | int) -> tuple[str, str] | None:
+        """The node a tag announces and the side the robot arrived from (tag 9 of Fig. 5: ``('c', 'E')``,
+        so the robot is heading West); None for a tag not in the map."""
+        return self._tag_places.get(str(tag_id))
+
+    def direction_angle_rad(self, direction: str) -> float:
+        """The map-frame angle (CCW from the map x axis) of a compass direction."""
+        return math.radians(self.north_deg + _DEGREES_CCW_FROM_NORTH[_check_direction(direction)])
+
+    def hallway_length_m(self, node: str, side: str) -> float:
+        """Length of the mapped hallway leaving ``node`` by ``side`` (see the module docstring)."""
+        hallway = self.nodes[node].hallways[side]
+        far_end = self.nodes[hallway.neighbour]
+        mirror = far_end.hallways.get(_OPPOSITE[side])
+        for length in (hallway.length_m, mirror.length_m if mirror else None):
+            if length is not None:
+                return length
+        here, there = self.nodes[node].position, far_end.position
+        if here is not None and there is not None:
+            return math.dist(here, there)
+        return DEFAULT_LENGTH_M
+
+    def edges(self) -> list[Edge]:
+        """Every hallway between two mapped nodes, once."""
+        found = []
+        for node in self.nodes.values():
+            for side, hallway in node.hallways.items():
+                if hallway.neighbour != UNKNOWN and (node.name, side) < (hallway.neighbour, _OPPOSITE[side]):
+                    found.append(Edge(node.name, side, hallway.neighbour, _OPPOSITE[side],
+                                      self.hallway_length_m(node.name, side)))
+        return found
+
+    def route(self, start: str, goal: str, weight: str = "edges") -> list[str]:
+        """The nodes from ``start`` to ``goal`` (both included) along the fewest hallways (``weight="edges"``,
+        all the paper's robot knows) or the shortest length (``weight="length"``)."""
+        _check_weight(weight)
+        for name in (start, goal):
+            if name not in self.nodes:
+                raise RouteError(f"map '{self.name}': unknown node '{name}' (nodes: {', '.join(self.nodes)})")
+        try:
+            return nx.shortest_path(self._graph(weight), start, goal, weight="weight")
+        except nx.NetworkXNoPath:
+            raise RouteError(f"map '{self.name}': no route from '{start}' to '{goal}' through mapped hallways "
+                             f"('{UNKNOWN}' hallways are not routable)") from None
+
+    def departure_direction(self, node: str, next_node: str, weight: str = "edges") -> str:
+        """The side of ``node`` to leave by for the adjacent ``next_node`` (the cheapest, if several lead
+        there)."""
+        _check_weight(weight)
+        sides = [side for side in DIRECTIONS
+                 if side in self.nodes[node].hallways and self.nodes[node].hallways[side].neighbour == next_node]
+        if not sides:
+            raise RouteError(f"map '{self.name}': no hallway from '{node}' to '{next_node}'")
+        return min(sides, key=lambda side: self._weight(node, side, weight))
+
+    def _weight(self, node: str, side: str, weight: str) -> float:
+        return 1.0 if weight == "edges" else self.hallway_length_m(node, side)
+
+    def _graph(self, weight: str) -> nx.Graph:
+        graph = nx.Graph()
+        graph.add_nodes_from(self.nodes)
+        for edge in self.edges():
+            cost = self._weight(edge.node_a, edge.side_a, weight)
+            # Of parallel hallways between the same two nodes only the cheapest can be on a shortest route.
+            if not graph.has_edge(edge.node_a, edge.node_b) or graph[edge.node_a][edge.node_b]["weight"] > cost:
+                graph.add_edge(edge.node_a, edge.node_b, weight=cost)
+        return graph
+
+
+def opposite(direction: str) -> str:
+    return _OPPOSITE[_check_direction(direction)]
+
+
+def turn(arrival_side: str, departure_direction: str) -> str:
+    """The turn at a junction: "left", "right", "straight" or "back" (a U-turn).
+
+    Arriving from side X the robot heads opposite X; it leaves heading ``departure_direction``. Paper 004,
+    section 3: arriving at c from the East (tag 9) and leaving North is a right turn."""
+    heading = DIRECTIONS.index(opposite(arrival_side))
+    quarter_turns = (DIRECTIONS.index(_check_direction(departure_direction)) - heading) % 4
+    return _TURNS[quarter_turns]
+
+
+def next_action(topological_map: TopologicalMap, tag_id: str | int, goal: str,
+                weight: str = "edges") -> NextAction:
+    """What to do on reading ``tag_id`` on the way to ``goal``: stop there, or turn and leave by a side."""
+    located = topological_map.locate_tag(tag_id)
+    if located is None:
+        raise RouteError(f"map '{topological_map.name}': tag '{tag_id}' is not in the map")
+    node, arrival_side = located
+    path = topological_map.route(node, goal, weight)
+    if len(path) == 1:
+        return NextAction("stop", None, node)
+    direction = topological_map.departure_direction(node, path[1], weight)
+    return NextAction(turn(arrival_side, direction), direction, node)
+
+
+def load_topological_map(path: Path | str) -> TopologicalMap:
+    """Read and check a map file; the first problem is raised as a ConfigError naming file and field."""
+    topological_map, problems = _read(Path(path))
+    if topological_map is None:                      # None exactly when there are problems
+        raise problems[0]
+    return topological_map
+
+
+def check_map(path: Path | str) -> list[str]:
+    """Every problem of a map file, one line each (``file: field: problem``); empty for a good map."""
+    return [str(problem) for problem in _read(Path(path))[1]]
+
+
+def draw_map(topological_map: TopologicalMap, path_png: Path | str) -> None:
+    """Draw the map to a PNG: nodes, hallways labelled at each end with the side and its arrival tags,
+    unmapped (``?``) hallways as dashed stubs, and a north arrow.
+
+    Nodes stand at their positions when every node has one, else one unit step per hallway in its compass
+    direction (relaxed by a spring layout where steps would stack nodes)."""
+    # matplotlib is imported here so that nodes that only route do not pay for it at start-up.
+    from matplotlib.figure import Figure
+
+    positions = _layout(topological_map)
+    edges = topological_map.edges()
+    drawn_lengths = sorted(math.dist(positions[e.node_a], positions[e.node_b]) for e in edges)
+    stub = 0.35 * (drawn_lengths[len(drawn_lengths) // 2] if drawn_lengths else 1.0)
+
+    figure = Figure(figsize=(10.0, 8.0))
+    axes = figure.add_subplot()
+    label_style = {"fontsize": 7, "ha": "center", "va": "center",
+                   "bbox": {"boxstyle": "round,pad=0.2", "facecolor": "white", "edgecolor": "none", "alpha": 0.85}}
+
+    def end_label(node: str, side: str, at: tuple[float, float]) -> None:
+        tags = topological_map.nodes[node].hallways[side].tags
+        axes.text(at[0], at[1], f"{side} {','.join(tags) or '-'}", **label_style)
+
+    for edge in edges:
+        (xa, ya), (xb, yb) = positions[edge.node_a], positions[edge.node_b]
+        axes.plot([xa, xb], [ya, yb], color="0.35", linewidth=2.0, zorder=1)
+        end_label(edge.node_a, edge.side_a, (xa + 0.3 * (xb - xa), ya + 0.3 * (yb - ya)))
+        end_label(edge.node_b, edge.side_b, (xb + 0.3 * (xa - xb), yb + 0.3 * (ya - yb)))
+    for node in topological_map.nodes.values():
+        for side, hallway in node.hallways.items():
+            if hallway.neighbour == UNKNOWN:
+                angle = topological_map.direction_angle_rad(side)
+                x, y = positions[node.name]
+                tip = (x + stub * math.cos(angle), y + stub * math.sin(angle))
+                axes.plot([x, tip[0]], [y, tip[1]], color="0.35", linewidth=1.5, linestyle="--", zorder=1)
+                axes.text(tip[0], tip[1], f"{side} ? {','.join(hallway.tags)}", **label_style)
+    for name, (x, y) in positions.items():
+        axes.scatter([x], [y], s=300, color="tab:blue", zorder=2)
+        axes.text(x, y, name, color="white", fontsize=8, fontweight="bold", ha="center", va="center", zorder=3)
+
+    north = math.radians(topological_map.north_deg)
+    axes.annotate("N", xy=(0.93, 0.08), xycoords="axes fraction", textcoords="offset points",
+                  xytext=(30.0 * math.cos(north), 30.0 * math.sin(north)), ha="center", va="center",
+                  fontweight="bold", arrowprops={"arrowstyle": "<-", "linewidth": 1.5})
+    axes.set_aspect("equal", adjustable="datalim")
+    axes.margins(0.12)
+    axes.set_title(f"{topological_map.name}: topological map (labels: side and arrival tags at each end)")
+    if all(node.position is not None for node in topological_map.nodes.values()):
+        axes.set_xlabel("x [m]")
+        axes.set_ylabel("y [m]")
+    else:
+        axes.set_axis_off()
+    figure.savefig(Path(path_png), dpi=110)
+
+
+def _layout(topological_map: TopologicalMap) -> dict[str, tuple[float, float]]:
+    nodes = topological_map.nodes.values()
+    if all(node.position is not None for node in nodes):
+        return {node.name: node.position for node in nodes if node.position is not None}
+    # One unit step per hallway in its compass direction keeps the map's turns in the drawing; only where those
+    # steps put two nodes on one spot (hallways of very different lengths) do springs pull the layout apart.
+    graph = topological_map._graph("edges")
+    steps: dict[str, tuple[float, float]] = {}
+    for first in topological_map.nodes:
+        if first in steps:
+            continue
+        steps[first] = (2.0 * len(steps), 0.0)
+        for parent, child in nx.bfs_edges(graph, first):
+            angle = topological_map.direction_angle_rad(topological_map.departure_direction(parent, child))
+            steps[child] = (steps[parent][0] + math.cos(angle), steps[parent][1] + math.sin(angle))
+    spots = {(round(x, 6), round(y, 6)) for x, y in steps.values()}
+    if len(spots) == len(steps):
+        return steps
+    layout = nx.spring_layout(graph, pos=steps, seed=0)
+    return {name: (float(x), float(y)) for name, (x, y) in layout.items()}
+
+
+def _check_weight(weight: str) -> None:
+    if weight not in WEIGHTS:
+        raise ValueError(f"weight must be one of {', '.join(WEIGHTS)}, got '{weight}'")
+
+
+def _check_direction(direction: str) -> str:
+    if direction not in _OPPOSITE:
+        raise ValueError(f"a direction is one of {', '.join(DIRECTIONS)}, got '{direction}'")
+    return direction
+
+
+# ---------------------------------------------------------------- reading and checking
+
+def _read(path: Path) -> tuple[TopologicalMap | None, list[ConfigError]]:
+    try:
+        document = Section.from_file(path)
+    except ConfigError as error:
+        return None, [error]
+    return _Reader(document).read()
+
+
+class _Reader:
+    """Parses a map file, collecting every problem rather than stopping at the first."""
+
+    def __init__(self, document: Section) -> None:
+        self.document = document
+        self.problems: list[ConfigError] = []
+        self.tag_fields: dict[str, str] = {}
+
+    def attempt(self, getter: Any, *args: Any, **kwargs: Any) -> Any:
+        try:
+            return getter(*args, **kwargs)
+        except ConfigError as error:
+            self.problems.append(error)
+            return None
+
+    def read(self) -> tuple[TopologicalMap | None, list[ConfigError]]:
+        document = self.document
+        for key in document.keys():
+            if key not in ("name", "description", "north_deg", "nodes"):
+                self.problems.append(document.error(str(key), "unknown field (expected one of: description, "
+                                                              "name, nodes, north_deg)"))
+        name = self.attempt(document.string, "name")
+        north_deg = self.attempt(document.number, "north_deg", DEFAULT_NORTH_DEG)
+        nodes_section = self.attempt(document.section, "nodes")
+        if nodes_section is None:
+            return None, self.problems
+        if not nodes_section.keys():
+            self.problems.append(document.error("nodes", "the map has no nodes"))
+            return None, self.problems
+        nodes: dict[str, Node] = {}
+        for key in nodes_section.keys():
+            node = self.node(nodes_section, key)
+            if node is not None:
+                nodes[node.name] = node
+        names = {key for key in nodes_section.keys() if isinstance(key, str)}
+        self.check_hallways(nodes_section, nodes, names, DEFAULT_NORTH_DEG if north_deg is None else north_deg)
+        self.check_reachable(nodes_section, nodes)
+        if self.problems:
+            return None, self.problems
+        return TopologicalMap(name=name, nodes=nodes, north_deg=north_deg), []
+
+    def node(self, nodes_section: Section, key: Any) -> Node | None:
+        if not isinstance(key, str) or key in (UNKNOWN, NO_HALLWAY):
+            self.problems.append(nodes_section.error(str(key), f"a node name must be text other than "
+                                                               f"'{UNKNOWN}' and '{NO_HALLWAY}'"))
+            return None
+        section = self.attempt(nodes_section.section, key)
+        if section is None:
+            return None
+        position = None
+        hallways: dict[str, Hallway] = {}
+        for side in section.keys():
+            if side == "position":
+                coordinates = self.attempt(section.numbers, "position", length=2)
+                position = None if coordinates is None else (coordinates[0], coordinates[1])
+            elif side in _OPPOSITE:
+                hallway = self.hallway(section, side)
+                if hallway is not None:
+                    hallways[side] = hallway
+            else:
+                self.problems.append(section.error(str(side), "unknown direction (expected N, E, S, W or "
+                                                              "position)"))
+        return Node(key, {side: hallways[side] for side in DIRECTIONS if side in hallways}, position)
+
+    def hallway(self, node_section: Section, side: str) -> Hallway | None:
+        section = self.attempt(node_section.section, side)
+        if section is None:
+            return None
+        for key in section.keys():
+            if key not in _SIDE_FIELDS:
+                self.problems.append(section.error(str(key), f"unknown field (expected one of: "
+                                                             f"{', '.join(_SIDE_FIELDS)})"))
+        neighbour = self.attempt(section.string, "node")
+        tags = self.tags(section)
+        length_m = self.attempt(section.number, "length_m", positive=True) if section.has("length_m") else None
+        if neighbour == NO_HALLWAY:
+            if tags:
+                self.problems.append(section.error("tags", f"'{NO_HALLWAY}' (no hallway) cannot have tags: a "
+                                                           "robot never arrives from this side"))
+            if section.has("length_m"):
+                self.problems.append(section.error("length_m", f"'{NO_HALLWAY}' (no hallway) has no length"))
+            return None
+        if neighbour is None:
+            return None
+        return Hallway(neighbour, tags, length_m)
+
+    def tags(self, section: Section) -> tuple[str, ...]:
+        items = section.raw("tags", [])
+        if not isinstance(items, list):
+            self.problems.append(section.error("tags", f"expected a list of tag ids, got {type_name(items)}"))
+            return ()
+        tags = []
+        for index, item in enumerate(items):
+            where = f"{section.field('tags')}[{index}]"
+            if isinstance(item, bool) or not isinstance(item, (str, int)) or item == "":
+                self.problems.append(ConfigError(section.source, where,
+                                                 f"expected a tag id (text or integer), got {type_name(item)}"))
+                continue
+            tag = str(item)
+            if tag in self.tag_fields:
+                self.problems.append(ConfigError(section.source, where,
+                                                 f"duplicate tag '{tag}' (also at {self.tag_fields[tag]})"))
+                continue
+            self.tag_fields[tag] = where
+            tags.append(tag)
+        return tuple(tags)
+
+    def check_hallways(self, nodes_section: Section, nodes: dict[str, Node], names: set[str],
+                       north_deg: float) -> None:
+        source = nodes_section.source
+        for node in nodes.values():
+            for side, hallway in node.hallways.items():
+                where = f"{nodes_section.field(node.name)}.{side}.node"
+                if hallway.neighbour == UNKNOWN:
+                    continue
+                if hallway.neighbour not in names:
+                    self.problems.append(ConfigError(source, where,
+                                                     f"unknown node '{hallway.neighbour}'"))
+                    continue
+                far_end = nodes.get(hallway.neighbour)
+                if far_end is None:          # its own problem is reported already
+                    continue
+                back_side = _OPPOSITE[side]
+                mirror = far_end.hallways.get(back_side)
+                if mirror is None or mirror.neighbour != node.name:
+                    found = "missing" if mirror is None else f"'{mirror.neighbour}'"
+                    self.problems.append(ConfigError(
+                        source, where,
+                        f"leads to '{far_end.name}', but {nodes_section.field(far_end.name)}.{back_side}.node is "
+                        f"{found} (expected '{node.name}': a hallway is listed at both ends, on opposite sides)"))
+                    continue
+                if (node.name, side) < (far_end.name, back_side):     # each pair once
+                    self.check_pair(source, where, node, side, hallway, far_end, mirror, north_deg)
+
+    def check_pair(self, source: str, where: str, node: Node, side: str, hallway: Hallway, far_end: Node,
+                   mirror: Hallway, north_deg: float) -> None:
+        if (hallway.length_m is not None and mirror.length_m is not None
+                and abs(hallway.length_m - mirror.length_m) > _LENGTH_TOLERANCE_M):
+            self.problems.append(ConfigError(
+                source, where, f"length_m {hallway.length_m:g} here but {mirror.length_m:g} at "
+                               f"'{far_end.name}'.{_OPPOSITE[side]}: the two ends of a hallway must agree"))
+        if node.position is None or far_end.position is None:
+            return
+        dx, dy = far_end.position[0] - node.position[0], far_end.position[1] - node.position[1]
+        if dx == 0.0 and dy == 0.0:
+            self.problems.append(ConfigError(source, where, f"'{node.name}' and '{far_end.name}' have the same "
+                                                            "position"))
+            return
+        expected = north_deg + _DEGREES_CCW_FROM_NORTH[side]
+        actual = math.degrees(math.atan2(dy, dx))
+        off = abs((actual - expected + 180.0) % 360.0 - 180.0)
+        if off > _POSITION_TOLERANCE_DEG:
+            self.problems.append(ConfigError(
+                source, where, f"'{far_end.name}' lies {off:.0f} deg off the {side} of '{node.name}' by their "
+                               f"positions (north_deg {north_deg:g}): positions and compass sides disagree"))
+
+    def check_reachable(self, nodes_section: Section, nodes: dict[str, Node]) -> None:
+        if not nodes:
+            return
+        graph = nx.Graph()
+        graph.add_nodes_from(nodes)
+        graph.add_edges_from((node.name, hallway.neighbour) for node in nodes.values()
+                             for hallway in node.hallways.values() if hallway.neighbour in nodes)
+        first = next(iter(nodes))
+        reached = nx.node_connected_component(graph, first)
+        for name in nodes:
+            if name not in reached:
+                self.problems.append(nodes_section.error(name, f"not reachable from '{first}' (the first node) "
+                                                               "through mapped hallways"))
