@@ -1,0 +1,148 @@
+"""Ultrasonic rangefinders (paper 004 section 4): seven sonars at the front of a ~35 cm robot, range up to 5 m.
+
+A sonar sends a burst into a cone and times the first echo, so a beam reports the nearest wall anywhere in its
+cone, not the wall straight ahead: that is why a beam is cast as ``rays_per_beam`` rays spread evenly over the
+cone, edges included, and the shortest wins. Specular loss (a wall hit at a grazing angle that reflects the
+burst away and gives no echo) and multipath are not modelled: the model errs towards seeing walls, which keeps
+the wall follower's emergency stops conservative.
+
+Readings follow sensor_msgs/Range: an echo beyond ``max_range_m`` (or none) is +inf, "no detection within
+range" (REP 117); an echo closer than ``min_range_m`` is reported as ``min_range_m``, as a sonar's blanking
+interval does (it cannot time an echo that returns while the transducer still rings, but something is there).
+Gaussian noise with sd ``noise_sd_m + noise_fraction * range`` (timing jitter plus a speed-of-sound error that
+grows with the distance) is added to echoes within range, and the result is clipped back into [min, max].
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+ON_WALL_TOLERANCE_M = 1e-9      # a ray origin this far "behind" a wall is on it (rotated mounting points round off)
+NAME_PATTERN = re.compile(r"[A-Za-z][A-Za-z0-9_]*")      # a valid last token of a ROS topic name
+ROBOT_HALF_SIZE_M = 0.175       # paper 004: the platform is approx. 35 cm square; base_link at its centre
+
+
+@dataclass(frozen=True)
+class Rangefinder:
+    name: str                                 # topic suffix: /sonar/<name>, frame sonar_<name>
+    position: tuple[float, float]             # in base_link [m]
+    bearing_rad: float                        # boresight, CCW from the robot's forward (+x) axis
+    beam_half_angle_rad: float = math.radians(12.5)   # Polaroid 6500-style 25 deg cone
+    max_range_m: float = 5.0                  # paper 004: "sensitivity range is up to 5 meters"
+    min_range_m: float = 0.15                 # blanking distance of a Polaroid-style transducer
+
+    def __post_init__(self) -> None:
+        if not NAME_PATTERN.fullmatch(self.name):
+            raise ValueError(f"name: {self.name!r} is not a valid topic name token (letter, then [A-Za-z0-9_])")
+        if len(self.position) != 2 or not all(math.isfinite(v) for v in self.position):
+            raise ValueError(f"{self.name}: position: {self.position} is not a finite (x, y)")
+        if not math.isfinite(self.bearing_rad):
+            raise ValueError(f"{self.name}: bearing_rad: {self.bearing_rad} is not finite")
+        if not 0.0 <= self.beam_half_angle_rad < math.pi / 2.0:
+            raise ValueError(f"{self.name}: beam_half_angle_rad: {self.beam_half_angle_rad} is not in [0, pi/2)")
+        if not (math.isfinite(self.max_range_m) and 0.0 <= self.min_range_m < self.max_range_m):
+            raise ValueError(f"{self.name}: ranges: need 0 <= min_range_m < max_range_m finite, got "
+                             f"{self.min_range_m}, {self.max_range_m}")
+
+
+# Paper 004 Fig. 8(a) shows seven sonars at the front "for forward and lateral sensing"; it gives no angles. The
+# paper measures the wall angle with ONE lateral sonar read at two points L apart along the path (Fig. 8(b)),
+# so one sonar per side at 90 deg suffices: they sit just behind the front corners, looking straight out. Front
+# (0), the +-45 pair and the +-60 pair at the bevelled corners cover the way ahead for obstacle stops and see
+# the far wall of a junction early when the robot turns; 45 and 60 with 25 deg cones overlap, so nothing
+# between 32.5 and 72.5 deg off the axis is missed on either side.
+PAPER_LAYOUT: tuple[Rangefinder, ...] = (
+    Rangefinder("front", (ROBOT_HALF_SIZE_M, 0.0), 0.0),
+    Rangefinder("front_left_45", (ROBOT_HALF_SIZE_M, 0.10), math.radians(45.0)),
+    Rangefinder("front_right_45", (ROBOT_HALF_SIZE_M, -0.10), math.radians(-45.0)),
+    Rangefinder("left_60", (0.16, 0.16), math.radians(60.0)),
+    Rangefinder("right_60", (0.16, -0.16), math.radians(-60.0)),
+    Rangefinder("left", (0.15, ROBOT_HALF_SIZE_M), math.radians(90.0)),
+    Rangefinder("right", (0.15, -ROBOT_HALF_SIZE_M), math.radians(-90.0)),
+)
+
+
+def cast_rays(origins: np.ndarray, directions: np.ndarray, walls: np.ndarray) -> np.ndarray:
+    """Distance along each ray (K origins, K unit directions, K x 2 each) to the nearest wall (N x 4 rows
+    x1, y1, x2, y2) it hits, inf where it hits none; distances are in multiples of the directions' lengths.
+
+    Ray o + t d meets wall a + s (b - a) where t = ((a - o) x w) / (d x w) and s = ((a - o) x d) / (d x w), w = b - a;
+    a hit needs t >= 0 and 0 <= s <= 1 (a wall's ends belong to it, so a ray through the joint of two walls
+    hits). A ray parallel to a wall (d x w = 0) misses it, even one running inside it: that wall shows the
+    sonar no face to echo from. A ray whose origin lies on a wall hits that wall at 0 whichever way it points
+    (t down to -ON_WALL_TOLERANCE_M counts, reported as 0): a transducer against a wall, or a robot overlapping
+    one, reads the minimum range rather than seeing through it.
+    """
+    origins = np.asarray(origins, dtype=float).reshape(-1, 2)
+    directions = np.asarray(directions, dtype=float).reshape(-1, 2)
+    walls = np.asarray(walls, dtype=float).reshape(-1, 4)
+    if len(walls) == 0:
+        return np.full(len(origins), np.inf)
+    ax, ay = walls[:, 0], walls[:, 1]                                         # N
+    wx, wy = walls[:, 2] - ax, walls[:, 3] - ay                               # N
+    ox, oy = origins[:, 0:1] - ax, origins[:, 1:2] - ay                       # K x N: o - a
+    dx, dy = directions[:, 0:1], directions[:, 1:2]                           # K x 1
+    denominator = dx * wy - dy * wx                                           # K x N: d x w
+    parallel = denominator == 0.0
+    safe = np.where(parallel, 1.0, denominator)
+    t = (wx * oy - wy * ox) / safe                                            # (a - o) x w / (d x w)
+    s = (dx * oy - dy * ox) / safe                                            # (a - o) x d / (d x w)
+    hit = ~parallel & (t >= -ON_WALL_TOLERANCE_M) & (s >= 0.0) & (s <= 1.0)
+    return np.where(hit, np.maximum(t, 0.0), np.inf).min(axis=1)
+
+
+class SonarModel:
+    """Readings of a set of rangefinders on a robot among fixed walls."""
+
+    def __init__(self, rangefinders: Sequence[Rangefinder], walls: np.ndarray, noise_sd_m: float = 0.01,
+                 noise_fraction: float = 0.01, rays_per_beam: int = 5) -> None:
+        names = [r.name for r in rangefinders]
+        if len(set(names)) != len(names):
+            raise ValueError(f"rangefinders: names must be unique, got {names}")
+        for field, value in (("noise_sd_m", noise_sd_m), ("noise_fraction", noise_fraction)):
+            if not (math.isfinite(value) and value >= 0.0):
+                raise ValueError(f"{field}: {value} is not a finite non-negative number")
+        if rays_per_beam < 1:
+            raise ValueError(f"rays_per_beam: {rays_per_beam} must be at least 1")
+        walls = np.asarray(walls, dtype=float)
+        if walls.size == 0:
+            walls = walls.reshape(0, 4)
+        if walls.ndim != 2 or walls.shape[1] != 4 or not np.all(np.isfinite(walls)):
+            raise ValueError(f"walls: expected finite N x 4 rows [x1, y1, x2, y2], got shape {walls.shape}")
+        self.rangefinders = tuple(rangefinders)
+        self.walls = walls
+        self.noise_sd_m = noise_sd_m
+        self.noise_fraction = noise_fraction
+        self.rays_per_beam = rays_per_beam
+        # Every ray of every beam, beam-major (K = beams x rays_per_beam): base_link origin and bearing.
+        spread = np.linspace(-1.0, 1.0, rays_per_beam) if rays_per_beam > 1 else np.zeros(1)
+        self.ray_origins = np.repeat(np.array([r.position for r in self.rangefinders], dtype=float).reshape(-1, 2),
+                                     rays_per_beam, axis=0)
+        self.ray_bearings = np.concatenate([r.bearing_rad + r.beam_half_angle_rad * spread
+                                            for r in self.rangefinders] or [np.empty(0)])
+        self.min_range_m = np.array([r.min_range_m for r in self.rangefinders])
+        self.max_range_m = np.array([r.max_range_m for r in self.rangefinders])
+
+    def echo_distances(self, x: float, y: float, yaw: float) -> np.ndarray:
+        """Noise-free distance of the first echo of each beam (nearest wall in its cone), inf for none, in order."""
+        c, s = math.cos(yaw), math.sin(yaw)
+        local = self.ray_origins
+        origins = np.column_stack((x + c * local[:, 0] - s * local[:, 1], y + s * local[:, 0] + c * local[:, 1]))
+        bearings = yaw + self.ray_bearings
+        distances = cast_rays(origins, np.column_stack((np.cos(bearings), np.sin(bearings))), self.walls)
+        return distances.reshape(len(self.rangefinders), self.rays_per_beam).min(axis=1)
+
+    def ranges(self, x: float, y: float, yaw: float, rng: np.random.Generator) -> dict[str, float]:
+        """One reading per rangefinder, by name, with the robot at (x, y, yaw): metres in [min, max], or +inf."""
+        echo = self.echo_distances(x, y, yaw)
+        in_range = echo <= self.max_range_m
+        true_range = np.where(in_range, np.maximum(echo, self.min_range_m), self.max_range_m)
+        # Noise is drawn for every beam, echo or not, so the stream consumed does not depend on the pose.
+        noise = rng.standard_normal(len(echo)) * (self.noise_sd_m + self.noise_fraction * true_range)
+        reading = np.where(in_range, np.clip(true_range + noise, self.min_range_m, self.max_range_m), np.inf)
+        return {r.name: float(value) for r, value in zip(self.rangefinders, reading)}

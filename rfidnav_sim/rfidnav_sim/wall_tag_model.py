@@ -1,0 +1,95 @@
+"""The 2.45 GHz RFID tag sensor of paper 004 (section 2) reading tag plates on the hallway walls.
+
+Paper 004 pastes each tag (in a 12 cm square plastic plate) on the LEFT wall near a junction, and the robot,
+following that wall at about 0.8 m, reads it with a sensor whose induction area is "40 cm wide and 100 cm depth
+from the antenna" (Fig. 3). The area is modelled as exactly that rectangle: it starts at the antenna and reaches
+``depth_m`` along the antenna's bearing, ``width_m`` across, edges included. Inside it a tag is read when its
+face is towards the antenna (a plate on the far side of a wall has its normal pointing away, and the wall is in
+the way), unless the read misses (probability ``miss_probability``, independent per tag and round). Tag height
+is ignored: the area is a footprint in the floor plane, as the paper's sensitivity map is.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+UNIT_TOLERANCE = 1e-6
+
+
+@dataclass(frozen=True)
+class WallTag:
+    tag_id: str
+    position: tuple[float, float]           # on a wall, world frame [m]
+    normal: tuple[float, float]             # unit, out of the wall into the hallway the plate faces
+
+    def __post_init__(self) -> None:
+        if len(self.position) != 2 or not all(math.isfinite(v) for v in self.position):
+            raise ValueError(f"{self.tag_id}: position: {self.position} is not a finite (x, y)")
+        if len(self.normal) != 2 or not abs(math.hypot(*self.normal) - 1.0) <= UNIT_TOLERANCE:
+            raise ValueError(f"{self.tag_id}: normal: {self.normal} is not a unit (x, y)")
+
+
+@dataclass(frozen=True)
+class InductionArea:
+    """Where the sensor reads a tag: a width_m x depth_m rectangle reaching out from the antenna along its bearing.
+
+    The default antenna sits at the platform's centre looking left, so the area reaches 1 m from the robot's
+    centre: the paper's "the robot must move along the wall at a distance of less than 1 m".
+    """
+
+    position: tuple[float, float] = (0.0, 0.0)     # antenna in base_link [m]
+    bearing_rad: float = math.pi / 2.0             # CCW from forward: left, towards the followed wall
+    width_m: float = 0.40
+    depth_m: float = 1.00
+
+    def __post_init__(self) -> None:
+        if len(self.position) != 2 or not all(math.isfinite(v) for v in self.position):
+            raise ValueError(f"position: {self.position} is not a finite (x, y)")
+        if not math.isfinite(self.bearing_rad):
+            raise ValueError(f"bearing_rad: {self.bearing_rad} is not finite")
+        for name in ("width_m", "depth_m"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value > 0.0):
+                raise ValueError(f"{name}: {value} is not a finite positive number")
+
+
+class WallTagReader:
+    """Which wall tags one antenna reads per inventory round, with the robot at a pose."""
+
+    def __init__(self, area: InductionArea, tags: Sequence[WallTag], miss_probability: float = 0.0) -> None:
+        if not 0.0 <= miss_probability <= 1.0:
+            raise ValueError(f"miss_probability: {miss_probability} is not in [0, 1]")
+        ids = [tag.tag_id for tag in tags]
+        if len(set(ids)) != len(ids):
+            raise ValueError(f"tags: tag_id must be unique, got {ids}")
+        self.area = area
+        self.tags = tuple(tags)
+        self.miss_probability = miss_probability
+        self.positions = np.array([tag.position for tag in self.tags], dtype=float).reshape(-1, 2)
+        self.normals = np.array([tag.normal for tag in self.tags], dtype=float).reshape(-1, 2)
+
+    def antenna_pose(self, x: float, y: float, yaw: float) -> tuple[float, float, float]:
+        """World (x, y, bearing) of the antenna for a robot pose."""
+        c, s = math.cos(yaw), math.sin(yaw)
+        ax, ay = self.area.position
+        return x + c * ax - s * ay, y + s * ax + c * ay, yaw + self.area.bearing_rad
+
+    def in_reach(self, x: float, y: float, yaw: float) -> np.ndarray:
+        """Per tag, whether it lies in the induction area and faces the antenna: what a reader without misses reads."""
+        antenna_x, antenna_y, bearing = self.antenna_pose(x, y, yaw)
+        to_tag_x, to_tag_y = self.positions[:, 0] - antenna_x, self.positions[:, 1] - antenna_y
+        c, s = math.cos(bearing), math.sin(bearing)
+        depth = c * to_tag_x + s * to_tag_y                      # along the bearing
+        across = -s * to_tag_x + c * to_tag_y
+        facing = self.normals[:, 0] * -to_tag_x + self.normals[:, 1] * -to_tag_y > 0.0    # normal . (antenna - tag)
+        return (depth >= 0.0) & (depth <= self.area.depth_m) & (np.abs(across) <= self.area.width_m / 2.0) & facing
+
+    def read(self, x: float, y: float, yaw: float, rng: np.random.Generator) -> list[str]:
+        """Ids of the tags read in one round with the robot at (x, y, yaw), in tag order."""
+        # A draw for every tag, read or not, so the stream consumed does not depend on the pose.
+        kept = rng.random(len(self.tags)) >= self.miss_probability
+        return [self.tags[i].tag_id for i in np.flatnonzero(self.in_reach(x, y, yaw) & kept)]
