@@ -1,0 +1,338 @@
+"""Sonar wall following and junction handling of paper 004 (sections 4-5), as a decision core without ROS.
+
+The robot follows the LEFT wall of a hallway (the RFID tags are on the left walls) and is fed one set of sonar
+ranges with the odometry pose per control step; it answers with a velocity command and, at most, one event.
+The DDS node turns the answer into /cmd_vel; the in-process experiments apply it to an idealised robot.
+
+Measuring the wall (Fig. 8(b)). The left sonar looks perpendicular to the heading. Driving a straight stretch
+of length ``L`` at a constant angle ``a`` to the wall, it reads ``d = p / cos(a)`` for a perpendicular distance
+``p`` that grows by ``L sin(a)``, so ``d2 - d1 = L tan(a)`` and ``atan2(d2 - d1, L)`` is exactly ``a``, and
+``d2 cos(a)`` is exactly the perpendicular distance at the end. Sign convention: the angle is POSITIVE when the
+robot heads AWAY from the left wall (it has turned clockwise from the wall's direction), so the wall runs at
+``yaw + angle`` in the odometry frame and rotating counter-clockwise by ``angle`` makes the robot parallel.
+
+Realigning (Fig. 9). The paper realigns every metre: it rotates parallel to the wall, then drives to the set
+distance. Here one realignment sets a single new heading, the wall's direction plus an approach angle
+proportional to the distance error (``distance_gain`` rad per metre, capped), which the robot holds over the
+next stretch with odometry; small heading changes are steered while driving, large ones (turns) on the spot.
+The next stretch is then measured at that constant heading, so every measurement satisfies the formula's
+straight-travel assumption, and the distance error shrinks by about ``distance_gain * L`` per stretch.
+
+Junctions. A side whose wall was seen and then reads beyond ``opening_threshold_m`` for ``opening_confirm_m``
+of travel has an opening: the junction is entered (the edge is where the reading first jumped). Its centre
+along the hallway is midway between that edge and where the same side's wall resumes; when no wall resumes
+within ``junction_half_width_m`` the centre is that far past the edge (half the paper's 1.6 m hallway: a
+crossing corridor of the expected width). A wall resuming earlier means the robot has passed the centre
+of a narrow opening, and it backs up to it. At the centre a commanded turn is made if the side (or, straight on,
+the front) is open; otherwise ``no_opening`` is reported and the robot stops there, never turning into a
+wall, until the next command. Without a command it drives straight on. A U-turn (``back``) needs no junction.
+
+Distances are from the robot's reference point (a driver adds each sonar's mounting offset). Corridors are
+assumed to meet at right angles, as on the paper's compass-point map.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+
+from rfidnav_common.geometry import wrap_angle
+
+FOLLOWING, JUNCTION, CENTRE, TURNING, HALTED = "following", "junction", "centre", "turning", "halted"
+LEFT, RIGHT, STRAIGHT, BACK = "left", "right", "straight", "back"
+ACTIONS = (LEFT, RIGHT, STRAIGHT, BACK)
+TURN_ANGLES = {LEFT: math.pi / 2.0, RIGHT: -math.pi / 2.0, STRAIGHT: 0.0, BACK: math.pi}
+OBSTACLE, JUNCTION_ENTERED, JUNCTION_CENTRE = "obstacle", "junction_entered", "junction_centre"
+TURN_DONE, NO_OPENING = "turn_done", "no_opening"
+
+
+def wall_angle(d1: float, d2: float, travel_m: float) -> float:
+    """Angle [rad] between the heading and the left wall from two lateral ranges ``travel_m`` apart (Fig. 8(b)).
+
+    Positive when the robot heads away from the wall (``d2 > d1``). Exact for a straight stretch at constant
+    heading beside a straight wall (see the module docstring)."""
+    if not all(math.isfinite(v) for v in (d1, d2, travel_m)):
+        raise ValueError(f"wall_angle: d1 {d1}, d2 {d2} and travel_m {travel_m} must be finite")
+    if travel_m <= 0.0:
+        raise ValueError(f"wall_angle: travel_m must be positive, got {travel_m}")
+    return math.atan2(d2 - d1, travel_m)
+
+
+def wall_distance(d2: float, angle: float) -> float:
+    """Perpendicular distance [m] to the wall from a lateral range ``d2`` read at ``angle`` to it."""
+    if not (math.isfinite(d2) and math.isfinite(angle)):
+        raise ValueError(f"wall_distance: d2 {d2} and angle {angle} must be finite")
+    return d2 * math.cos(angle)
+
+
+@dataclass(frozen=True)
+class WallFollowerSettings:
+    wall_distance_m: float = 0.8          # set distance to the left wall (paper: 0.8 m; tags read within 1 m)
+    speed_mps: float = 0.2                # forward speed (paper 001's speed; the paper gives none)
+    realign_every_m: float = 1.0          # L: length of a measuring stretch (paper: every 1 m)
+    stop_distance_m: float = 0.4          # emergency stop when the front sonar reads closer than this
+    diagonal_stop_distance_m: float = 0.25   # ... or a front-left/right one this close (lower: the followed wall,
+                                             # seen obliquely while approaching it, reads 0.4 m at 0.33 m and 10 deg)
+    resume_margin_m: float = 0.1          # drive on once the front is clear by this much more (no chatter)
+    opening_threshold_m: float = 1.5      # a side range beyond this is no wall; must exceed the far wall's range
+    opening_confirm_m: float = 0.1        # an opening must last this far (a lost echo is not a junction)
+    junction_half_width_m: float = 0.8    # centre this far past an edge when no wall resumes (1.6 m hallways)
+    turn_rate_radps: float = 0.8          # angular speed limit
+    heading_gain_per_s: float = 2.0       # yaw rate per radian of heading error (odometry heading hold)
+    distance_gain: float = 0.5            # approach angle [rad] per metre of distance error; < 1 / L: no overshoot
+    max_approach_rad: float = math.radians(20.0)   # cap on the approach angle to the set distance
+    turn_in_place_rad: float = math.radians(30.0)  # turn on the spot while the heading is further off
+    settled_rad: float = math.radians(0.5)         # a stretch starts (and a turn ends) within this heading error
+    position_tolerance_m: float = 0.01    # at the junction centre within this distance (slowing down to it)
+
+    def validate(self) -> None:
+        for name in ("wall_distance_m", "speed_mps", "realign_every_m", "stop_distance_m", "diagonal_stop_distance_m",
+                     "opening_threshold_m",
+                     "opening_confirm_m", "junction_half_width_m", "turn_rate_radps", "heading_gain_per_s",
+                     "distance_gain", "max_approach_rad", "turn_in_place_rad", "settled_rad",
+                     "position_tolerance_m"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value > 0.0):
+                raise ValueError(f"{name}: must be a positive number, got {value}")
+        if not (math.isfinite(self.resume_margin_m) and self.resume_margin_m >= 0.0):
+            raise ValueError(f"resume_margin_m: must be a non-negative number, got {self.resume_margin_m}")
+        if self.opening_threshold_m <= self.wall_distance_m:
+            raise ValueError(f"opening_threshold_m ({self.opening_threshold_m}) must exceed wall_distance_m "
+                             f"({self.wall_distance_m}): the followed wall would read as an opening")
+        if self.opening_confirm_m >= self.junction_half_width_m:
+            raise ValueError(f"opening_confirm_m ({self.opening_confirm_m}) must be below junction_half_width_m "
+                             f"({self.junction_half_width_m})")
+        if self.max_approach_rad >= self.turn_in_place_rad:
+            raise ValueError("max_approach_rad must be below turn_in_place_rad (an approach is steered, not spun)")
+
+
+@dataclass(frozen=True)
+class Sonar:
+    """One reading of the rangefinders [m], from the robot's reference point. ``inf`` is no echo; REP 117's
+    ``-inf`` (closer than the minimum range) is kept and counts as an obstacle or a wall. NaN is refused."""
+    front: float
+    left: float
+    right: float
+    front_left: float = math.inf
+    front_right: float = math.inf
+
+    def __post_init__(self) -> None:
+        for name in ("front", "left", "right", "front_left", "front_right"):
+            if math.isnan(getattr(self, name)):
+                raise ValueError(f"Sonar.{name}: NaN is not a range (use inf for no echo)")
+
+
+@dataclass(frozen=True)
+class OdomPose:
+    """Odometry pose (odom frame, REP 103) at the time of the sonar reading."""
+    x: float
+    y: float
+    yaw: float
+
+    def __post_init__(self) -> None:
+        if not all(math.isfinite(v) for v in (self.x, self.y, self.yaw)):
+            raise ValueError(f"OdomPose: ({self.x}, {self.y}, {self.yaw}) must be finite")
+
+
+@dataclass(frozen=True)
+class Command:
+    linear: float                         # m/s, forward positive
+    angular: float                        # rad/s, CCW positive
+    event: str | None = None              # obstacle | junction_entered | junction_centre | turn_done | no_opening
+
+
+@dataclass(frozen=True)
+class Stretch:
+    """The start of a measuring stretch: where and at which yaw the first left range ``d1`` was read."""
+    x: float
+    y: float
+    yaw: float
+    d1: float
+
+
+@dataclass(frozen=True)
+class Junction:
+    """An opening being crossed: its first edge (odometry), the side it is on, the hallway axis, and the centre's
+    distance past the edge along that axis (updated once when the wall on that side resumes)."""
+    edge_x: float
+    edge_y: float
+    side: str
+    axis_yaw: float
+    centre_s: float
+    resumed: bool = False
+
+    def along(self, odom: OdomPose) -> float:
+        """Distance [m] of the robot past the edge along the hallway (negative before it)."""
+        return (odom.x - self.edge_x) * math.cos(self.axis_yaw) + (odom.y - self.edge_y) * math.sin(self.axis_yaw)
+
+
+class WallFollower:
+    """Left-wall follower (state machine). Call :meth:`step` once per sonar reading; :meth:`command_turn` queues
+    the action for the next junction centre (``back`` turns at once). States: following, junction (driving to
+    its centre), centre (stopped for one step; the next decides), turning, halted (after ``no_opening``, until
+    the next command)."""
+
+    def __init__(self, settings: WallFollowerSettings = WallFollowerSettings()) -> None:
+        settings.validate()
+        self.settings = settings
+        self.state = FOLLOWING
+        self.pending: str | None = None          # commanded action for the next junction centre
+        self.wall_yaw: float | None = None       # the hallway's direction in the odom frame, as last measured
+        self.target_yaw: float | None = None     # heading held by odometry
+        self.stretch: Stretch | None = None
+        self.wall_seen = {LEFT: False, RIGHT: False}          # a wall was read since the last reset
+        self.gap_start: dict[str, tuple[float, float] | None] = {LEFT: None, RIGHT: None}
+        self.junction: Junction | None = None
+        self.blocked = False                     # emergency stop in force
+        self.last_measurement: tuple[float, float] | None = None   # (wall angle, wall distance) of the last stretch
+
+    # ------------------------------------------------------------------------------------ commands
+    def command_turn(self, action: str) -> None:
+        """Queue ``action`` (left, right, straight, back) for the next junction centre; the latest command wins.
+
+        ``back`` starts a U-turn at the next step. Halted at a centre after ``no_opening``, any action is
+        tried there at the next step."""
+        if action not in ACTIONS:
+            raise ValueError(f"command_turn: '{action}' is not one of {', '.join(ACTIONS)}")
+        self.pending = action
+
+    # --------------------------------------------------------------------------------------- steps
+    def step(self, sonar: Sonar, odom: OdomPose) -> Command:
+        """One control step: the velocity to apply until the next reading, and at most one event."""
+        if self.target_yaw is None:
+            self.target_yaw = self.wall_yaw = odom.yaw
+        if self.pending == BACK and self.state != TURNING:
+            return self.start_turn(BACK, odom)
+        if self.state == CENTRE or (self.state == HALTED and self.pending is not None):
+            return self.decide(sonar, odom)
+        if self.state == HALTED:
+            return Command(0.0, 0.0)
+        if self.state == TURNING:
+            return self.turning(odom)
+        command = self.junction_step(sonar, odom) if self.state == JUNCTION else self.following(sonar, odom)
+        return self.guard(command, sonar)
+
+    def guard(self, command: Command, sonar: Sonar) -> Command:
+        """Emergency stop (linear and angular zero) of a forward command while an obstacle is too close ahead;
+        once stopped, the front must clear by ``resume_margin_m`` more before the robot drives on."""
+        s = self.settings
+        margin = s.resume_margin_m if self.blocked else 0.0
+        too_close = (sonar.front < s.stop_distance_m + margin
+                     or min(sonar.front_left, sonar.front_right) < s.diagonal_stop_distance_m + margin)
+        if command.linear > 0.0 and too_close:
+            event = command.event if self.blocked else OBSTACLE
+            self.blocked = True
+            return Command(0.0, 0.0, event)
+        if command.linear > 0.0:
+            self.blocked = False
+        return command
+
+    def following(self, sonar: Sonar, odom: OdomPose) -> Command:
+        entered = self.detect_opening(sonar, odom)
+        if entered is not None:
+            self.stretch = None
+            self.state = JUNCTION
+            self.junction = entered
+            self.target_yaw = self.wall_yaw
+            return self.junction_step(sonar, odom, JUNCTION_ENTERED)
+        self.measure(sonar.left, odom)
+        return self.hold_heading(odom)
+
+    def detect_opening(self, sonar: Sonar, odom: OdomPose) -> Junction | None:
+        """The junction once a side wall that was seen has read as open for ``opening_confirm_m``; else None."""
+        s = self.settings
+        for side, reading in ((LEFT, sonar.left), (RIGHT, sonar.right)):
+            if reading <= s.opening_threshold_m:
+                self.wall_seen[side], self.gap_start[side] = True, None
+            elif self.wall_seen[side] and self.gap_start[side] is None:
+                self.gap_start[side] = (odom.x, odom.y)
+        for side in (LEFT, RIGHT):
+            start = self.gap_start[side]
+            if start is not None and math.hypot(odom.x - start[0], odom.y - start[1]) >= s.opening_confirm_m:
+                return Junction(start[0], start[1], side, self.wall_yaw, s.junction_half_width_m)
+        return None
+
+    def measure(self, left: float, odom: OdomPose) -> None:
+        """Fig. 8(b): d1 once the heading has settled, d2 after ``realign_every_m``; then realign."""
+        s = self.settings
+        if not (0.0 <= left <= s.opening_threshold_m):
+            self.stretch = None                  # no wall beside the robot: nothing to measure against
+            return
+        if self.stretch is None:
+            if abs(wrap_angle(self.target_yaw - odom.yaw)) <= s.settled_rad:
+                self.stretch = Stretch(odom.x, odom.y, odom.yaw, left)
+            return
+        travel = math.hypot(odom.x - self.stretch.x, odom.y - self.stretch.y)
+        if travel < s.realign_every_m:
+            return
+        mean_yaw = self.stretch.yaw + wrap_angle(odom.yaw - self.stretch.yaw) / 2.0
+        angle = wall_angle(self.stretch.d1, left, travel)
+        self.wall_yaw = wrap_angle(mean_yaw + angle)
+        distance = wall_distance(left, wrap_angle(self.wall_yaw - odom.yaw))
+        approach = max(-s.max_approach_rad, min(s.max_approach_rad, s.distance_gain * (distance - s.wall_distance_m)))
+        self.target_yaw = wrap_angle(self.wall_yaw + approach)    # CCW (towards the left wall) when too far
+        self.last_measurement = (angle, distance)
+        self.stretch = None
+
+    def junction_step(self, sonar: Sonar, odom: OdomPose, event: str | None = None) -> Command:
+        """Drive along the hallway axis (backwards if past it) to the junction's centre, then stop there.
+
+        ``event`` is the entry step's ``junction_entered``; the centre is at least ``junction_half_width_m -
+        opening_confirm_m`` further on, so arrival is checked only from the next step."""
+        junction = self.junction
+        along = junction.along(odom)
+        reading = sonar.left if junction.side == LEFT else sonar.right
+        if not junction.resumed and reading <= self.settings.opening_threshold_m and along < junction.centre_s:
+            junction = self.junction = replace(junction, centre_s=along / 2.0, resumed=True)
+        error = junction.centre_s - along
+        if event is None and abs(error) <= self.settings.position_tolerance_m:
+            self.state, self.junction = CENTRE, None
+            return Command(0.0, 0.0, JUNCTION_CENTRE)
+        linear = math.copysign(min(self.settings.speed_mps, abs(error) * self.settings.heading_gain_per_s), error)
+        return Command(linear, self.heading_rate(odom), event)
+
+    def decide(self, sonar: Sonar, odom: OdomPose) -> Command:
+        """At a junction's centre: make the commanded turn if that way is open, report ``no_opening`` and stay
+        (halted) if it is not, or, without a command, drive straight on."""
+        action, self.pending = self.pending, None
+        if action is None:
+            self.resume_following(self.wall_yaw)
+            return self.guard(self.following(sonar, odom), sonar)
+        reading = {LEFT: sonar.left, RIGHT: sonar.right, STRAIGHT: sonar.front}.get(action, math.inf)
+        if reading <= self.settings.opening_threshold_m:
+            self.state = HALTED
+            return Command(0.0, 0.0, NO_OPENING)
+        return self.start_turn(action, odom)
+
+    def start_turn(self, action: str, odom: OdomPose) -> Command:
+        """Turn on the spot by the action's angle from the hallway's direction (not from the current heading, so
+        the approach angle of the last realignment does not carry into the new hallway)."""
+        self.pending = None
+        self.state, self.junction, self.stretch, self.blocked = TURNING, None, None, False
+        self.wall_yaw = wrap_angle(self.wall_yaw + TURN_ANGLES[action])
+        self.target_yaw = self.wall_yaw
+        return self.turning(odom)
+
+    def turning(self, odom: OdomPose) -> Command:
+        if abs(wrap_angle(self.target_yaw - odom.yaw)) <= self.settings.settled_rad:
+            self.resume_following(self.target_yaw)
+            return Command(0.0, 0.0, TURN_DONE)
+        return Command(0.0, self.heading_rate(odom))
+
+    def resume_following(self, yaw: float) -> None:
+        """Follow again along ``yaw``; walls count only once seen again (the junction's openings are no new one)."""
+        self.state, self.target_yaw, self.stretch = FOLLOWING, yaw, None
+        self.wall_seen = {LEFT: False, RIGHT: False}
+        self.gap_start = {LEFT: None, RIGHT: None}
+
+    # ------------------------------------------------------------------------------------- heading
+    def heading_rate(self, odom: OdomPose) -> float:
+        s = self.settings
+        error = wrap_angle(self.target_yaw - odom.yaw)
+        return max(-s.turn_rate_radps, min(s.turn_rate_radps, s.heading_gain_per_s * error))
+
+    def hold_heading(self, odom: OdomPose) -> Command:
+        """Forward at speed on the held heading; on the spot while it is more than ``turn_in_place_rad`` off."""
+        error = wrap_angle(self.target_yaw - odom.yaw)
+        linear = 0.0 if abs(error) > self.settings.turn_in_place_rad else self.settings.speed_mps
+        return Command(linear, self.heading_rate(odom))
