@@ -370,3 +370,26 @@ def test_large_map_is_clean_and_big_enough() -> None:
     assert all(hallway.length_m is not None for node in large.nodes.values() for hallway in node.hallways.values()
                if hallway.neighbour != UNKNOWN)
     assert large.route("A1", "E5", weight="length")[-1] == "E5"
+
+
+def test_the_map_verbs_check_and_draw_with_exit_codes(tmp_path: Path) -> None:
+    import subprocess
+    import sys
+
+    workspace = Path(__file__).resolve().parents[1]
+
+    def cli(*args: str) -> subprocess.CompletedProcess:
+        return subprocess.run([sys.executable, "-m", "rfidnav_bringup.cli", "map", *args], capture_output=True,
+                              text=True, cwd=workspace, timeout=120)
+
+    good = cli("check", str(workspace / "config/maps/building_fig5.yaml"))
+    assert good.returncode == 0 and "no problems" in good.stdout
+    broken = tmp_path / "broken.yaml"
+    broken.write_text("name: x\nnodes:\n  a: {N: {node: b, tags: [1]}}\n  b: {S: {node: c, tags: [1]}}\n")
+    bad = cli("check", str(broken))
+    assert bad.returncode == 2
+    assert len(bad.stderr.strip().splitlines()) == 3 and "duplicate tag '1'" in bad.stderr
+    png = tmp_path / "fig5.png"
+    drawn = cli("draw", str(workspace / "config/maps/building_fig5.yaml"), "--out", str(png))
+    assert drawn.returncode == 0 and png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert cli("draw", str(broken)).returncode == 2

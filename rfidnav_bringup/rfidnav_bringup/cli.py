@@ -71,6 +71,13 @@ def parser() -> argparse.ArgumentParser:
     info = bag_verbs.add_parser("info", help="topics, types, counts, duration")
     info.add_argument("bag", type=Path)
     info.add_argument("--json", action="store_true")
+    map_parser = verbs.add_parser("map", help="paper 004: topological map tools")
+    map_verbs = map_parser.add_subparsers(dest="map_verb", required=True)
+    check = map_verbs.add_parser("check", help="every problem of a topological map, one line each")
+    check.add_argument("map", type=Path)
+    draw = map_verbs.add_parser("draw", help="a PNG of a topological map: compass-placed edges and tag ids")
+    draw.add_argument("map", type=Path)
+    draw.add_argument("--out", type=Path, help="the PNG to write (default: beside the map, .png)")
     report = verbs.add_parser("report", help="plots and recomputed metrics of a run")
     report.add_argument("run", type=Path)
     report.add_argument("--json", action="store_true")
@@ -243,6 +250,24 @@ def verb_survey(args) -> int:
     return 0
 
 
+def verb_map(args) -> int:
+    from rfidnav_planning.topological_map import check_map, draw_map, load_topological_map
+
+    problems = check_map(args.map)
+    for problem in problems:
+        print(problem, file=sys.stderr)
+    if args.map_verb == "check":
+        if not problems:
+            print(f"{args.map}: no problems")
+        return 2 if problems else 0
+    if problems:
+        return 2
+    out = args.out or args.map.with_suffix(".png")
+    draw_map(load_topological_map(args.map), out)
+    print(f"{args.map} -> {out}")
+    return 0
+
+
 def verb_bench(args) -> int:
     if args.name == "rtf":
         return bench_rtf(args)
@@ -301,7 +326,7 @@ def bench_rtf(args) -> int:
 
 VERBS = {"setup": verb_setup, "demo": verb_demo, "test": verb_test, "run": verb_run, "replay": verb_replay,
          "bag": verb_bag, "report": verb_report, "reproduce": verb_reproduce, "survey": verb_survey,
-         "bench": verb_bench}
+         "map": verb_map, "bench": verb_bench}
 
 
 if __name__ == "__main__":
