@@ -346,3 +346,24 @@ def test_no_tags_no_reads():
     model = two_antenna_model()
     sim = ReaderSimulator(model, [], np.empty((0, 3)), np.empty(0), np.random.default_rng(0))
     assert sim.inventory(0.0, 0.0, 0.0, 0.0) == []
+
+
+def test_a_side_antenna_reads_the_wall_tags_in_its_induction_area_and_nothing_else() -> None:
+    from rfidnav_sim.wall_tag_model import WallTag
+
+    left = Antenna(1, (0.0, 0.0, 0.5), False, 1.0, math.radians(90.0), side_bearing_rad=math.pi / 2)
+    model = ReaderModel(antennas=(left,
+                                  Antenna(2, (0.0, 0.0, 0.3), True, 12.0, math.radians(85.0))),
+                        channels_hz=(2.45e9,), side_area_width_m=0.4)
+    wall = (WallTag("8", (0.1, 0.8), (0.0, -1.0)), WallTag("9", (0.5, 0.8), (0.0, -1.0)),
+            WallTag("10", (0.0, -0.8), (0.0, 1.0)))
+    sim = ReaderSimulator(model, ["C1"], np.array([[0.0, 0.0, 3.0]]), np.zeros(1), np.random.default_rng(1),
+                          wall_tags=wall)
+    reads = sim.inventory(0.0, 0.0, 0.0, 0.0)          # heading +x: the left antenna looks at +y
+    by_antenna = {(r.tag_id, r.antenna) for r in reads}
+    assert ("8", 1) in by_antenna                       # 0.8 m to the left, inside the 40 cm band
+    assert ("9", 1) not in by_antenna                   # 0.5 m ahead: outside the band
+    assert ("10", 1) not in by_antenna                  # on the right wall
+    assert ("C1", 2) in by_antenna and ("C1", 1) not in by_antenna   # ceiling tags: the up antenna only
+    read = next(r for r in reads if r.tag_id == "8")
+    assert read.rssi_dbm == pytest.approx(-40.0 - 40.0 * math.log10(math.hypot(0.1, 0.8)))

@@ -85,3 +85,18 @@ def test_wifi_sim_scans_at_its_period_with_the_worlds_radio_and_drops_what_it_ca
         assert [heard["02:00:00:00:00:01"], heard["02:00:00:00:00:02"]] == pytest.approx(expected[:2])
     channel_36 = next(ap for ap in scans[0].access_points if ap.bssid.endswith("02"))
     assert channel_36.channel == 36 and channel_36.frequency_hz == pytest.approx(5.18e9)
+
+
+def test_wall_tags_are_read_from_the_world_with_unit_normals_and_unique_ids(tmp_path: Path) -> None:
+    path = tmp_path / "floor.yaml"
+    path.write_text("name: floor\nwalls: [[0, 0.8, 8, 0.8]]\n"
+                    "wall_tags:\n  - {id: 8, position: [7.0, 0.8], normal: [0, -2]}\n")
+    world = load_world(path)
+    assert world.wall_tags[0].tag_id == "8" and world.wall_tags[0].normal == (0.0, -1.0)
+    path.write_text("name: floor\nwall_tags:\n  - {id: 8, position: [7.0, 0.8], normal: [0, 0]}\n")
+    with pytest.raises(ConfigError, match=re.escape("wall_tags[0].normal")):
+        load_world(path)
+    path.write_text("name: floor\nwall_tags:\n  - {id: A, position: [1, 0], normal: [0, 1]}\n"
+                    "  - {id: A, position: [2, 0], normal: [0, 1]}\n")
+    with pytest.raises(ConfigError, match=re.escape("wall_tags[1].id: duplicate tag id 'A'")):
+        load_world(path)

@@ -47,7 +47,8 @@ class RobotSimParameters:
 
 
 
-FACINGS = ("up", "down")
+FACINGS = ("up", "down", "left", "right")
+SIDE_BEARINGS = {"left": math.pi / 2.0, "right": -math.pi / 2.0}
 
 
 @dataclass(frozen=True)
@@ -59,9 +60,10 @@ class ReaderParameters:
     antenna_positions: list[float] = param(
         "x, y, z of each antenna in the reader frame [m], concatenated; antenna ports are 1, 2, ... in order",
         [0.0, 0.03, 0.30, 0.0, -0.03, 0.30, 0.0, 0.0, 0.05])
-    antenna_facing: list[str] = param("boresight of each antenna: up (ceiling tags) or down (floor tags)",
-                                      ["up", "up", "down"])
-    antenna_max_range_m: list[float] = param("read range of each antenna [m]", [12.0, 12.0, 0.10])
+    antenna_facing: list[str] = param("boresight of each antenna: up (ceiling tags), down (floor tags), or left / "
+                                      "right (wall tags, in an induction area)", ["up", "up", "down"])
+    antenna_max_range_m: list[float] = param("read range of each antenna [m]; side antennas: the induction "
+                                             "area's depth", [12.0, 12.0, 0.10])
     antenna_half_angle_deg: list[float] = param("beam cone half-angle of each antenna [deg]", [85.0, 85.0, 60.0])
     antenna_phase_offset_rad: list[float] = param("phase delay of each antenna port and cable [rad]",
                                                   [0.0, 0.0, 0.0])
@@ -72,6 +74,7 @@ class ReaderParameters:
     rssi_at_1m_dbm: float = param("RSSI of a tag 1 m away on boresight [dBm]", -40.0)
     sensitivity_dbm: float = param("weakest RSSI the reader decodes [dBm]", -90.0)
     pattern_exponent: float = param("antenna gain pattern cos(angle)^n, one way", 1.0)
+    side_area_width_m: float = param("side antennas: width of the induction area [m] (paper 004: 40 cm)", 0.40)
 
     def validate(self) -> None:
         if not self.world_file:
@@ -87,7 +90,7 @@ class ReaderParameters:
                 raise ValueError(f"{name}: expected one value per antenna ({count}), got {len(getattr(self, name))}")
         for facing in self.antenna_facing:
             if facing not in FACINGS:
-                raise ValueError(f"antenna_facing: '{facing}' is not up or down")
+                raise ValueError(f"antenna_facing: '{facing}' is not one of {', '.join(FACINGS)}")
         if self.rate_hz <= 0.0 or self.hop_dwell_s <= 0.0:
             raise ValueError("rate_hz and hop_dwell_s must be positive")
         if not self.channels_mhz or min(self.channels_mhz) <= 0.0:
@@ -101,14 +104,16 @@ class ReaderParameters:
         positions = np.reshape(self.antenna_positions, (-1, 3))
         antennas = tuple(
             Antenna(port=index + 1, position=(float(p[0]), float(p[1]), float(p[2])), facing_up=facing == "up",
-                    max_range_m=rng, half_angle_rad=math.radians(angle), phase_offset_rad=offset)
+                    max_range_m=rng, half_angle_rad=math.radians(angle), phase_offset_rad=offset,
+                    side_bearing_rad=SIDE_BEARINGS.get(facing))
             for index, (p, facing, rng, angle, offset) in enumerate(zip(
                 positions, self.antenna_facing, self.antenna_max_range_m, self.antenna_half_angle_deg,
                 self.antenna_phase_offset_rad)))
         return ReaderModel(antennas=antennas, channels_hz=tuple(f * 1e6 for f in self.channels_mhz),
                            hop_dwell_s=self.hop_dwell_s, phase_noise_rad_per_m=self.phase_noise_rad_per_m,
                            miss_probability=self.miss_probability, rssi_at_1m_dbm=self.rssi_at_1m_dbm,
-                           sensitivity_dbm=self.sensitivity_dbm, pattern_exponent=self.pattern_exponent)
+                           sensitivity_dbm=self.sensitivity_dbm, pattern_exponent=self.pattern_exponent,
+                           side_area_width_m=self.side_area_width_m)
 
 
 @dataclass(frozen=True)

@@ -12,7 +12,8 @@ path loss (exponent 4: 40 dB per decade) plus the antenna pattern on both ways. 
 antenna when it lies within the antenna's range and beam cone, its RSSI is above the reader's
 sensitivity, and the read does not miss (probability ``miss_probability``). Floor tags of a lattice
 deployment (paper 000) are read by the downward antennas within the deployment's read range r,
-measured horizontally: the read disc of paper 000 section 3.1 is the ground truth of those tags. Both receiving antennas
+measured horizontally: the read disc of paper 000 section 3.1 is the ground truth of those tags. Side antennas
+(paper 004) read the world's wall tags in their induction area (rfidnav_sim.wall_tag_model). Both receiving antennas
 of one round see the same backscatter (the paper's reader receives on two antennas at once), so the
 phase difference is free of motion between antenna switches.
 """
@@ -26,6 +27,7 @@ import numpy as np
 
 from rfidnav_common.rf import round_trip_phase
 from rfidnav_common.tag_lattice import Deployment
+from rfidnav_sim.wall_tag_model import InductionArea, WallTag, WallTagReader
 from rfidnav_sim.world import World
 
 @dataclass(frozen=True)
@@ -36,6 +38,8 @@ class Antenna:
     max_range_m: float
     half_angle_rad: float                    # beam cone half-angle about the boresight
     phase_offset_rad: float = 0.0            # cable and port delay, identical for every tag
+    side_bearing_rad: float | None = None    # a side antenna (paper 004): reads wall tags in an induction area
+                                             # along this bearing (CCW from forward), max_range_m deep
 
 
 @dataclass(frozen=True)
@@ -48,6 +52,7 @@ class ReaderModel:
     rssi_at_1m_dbm: float = -40.0
     sensitivity_dbm: float = -90.0
     pattern_exponent: float = 1.0            # one-way gain cos(theta)^n off boresight
+    side_area_width_m: float = 0.40          # side antennas: the induction area's width (paper 004 Fig. 3)
 
 
 @dataclass(frozen=True)
@@ -66,16 +71,23 @@ class ReaderSimulator:
 
     @classmethod
     def for_world(cls, model: ReaderModel, world: World, rng: np.random.Generator) -> ReaderSimulator:
-        """A reader among the world's listed tags and its lattice floor deployments."""
+        """A reader among the world's listed tags, its lattice floor deployments and its wall tags."""
         return cls(model, [t.tag_id for t in world.tags], world.tag_positions(),
-                   np.array([t.phase_offset_rad for t in world.tags]), rng, world.deployments)
+                   np.array([t.phase_offset_rad for t in world.tags]), rng, world.deployments, world.wall_tags)
 
     def __init__(self, model: ReaderModel, tag_ids: list[str], tag_positions: np.ndarray,
                  tag_phase_offsets: np.ndarray, rng: np.random.Generator,
-                 floor_deployments: tuple[Deployment, ...] = ()) -> None:
+                 floor_deployments: tuple[Deployment, ...] = (), wall_tags: tuple[WallTag, ...] = ()) -> None:
         self.model = model
         self.floor_deployments = floor_deployments
-        self.down_antennas = [index for index, antenna in enumerate(model.antennas) if not antenna.facing_up]
+        self.down_antennas = [index for index, antenna in enumerate(model.antennas)
+                              if not antenna.facing_up and antenna.side_bearing_rad is None]
+        # Side antennas read only wall tags, in their induction areas (rfidnav_sim.wall_tag_model).
+        self.wall_readers = [(index, WallTagReader(InductionArea(antenna.position[:2], antenna.side_bearing_rad,
+                                                                 model.side_area_width_m, antenna.max_range_m),
+                                                   wall_tags, model.miss_probability))
+                             for index, antenna in enumerate(model.antennas)
+                             if antenna.side_bearing_rad is not None and wall_tags]
         self.tag_ids = list(tag_ids)
         self.tag_positions = np.asarray(tag_positions, dtype=float).reshape(-1, 3)
         self.tag_phase_offsets = np.asarray(tag_phase_offsets, dtype=float)
@@ -103,7 +115,23 @@ class ReaderSimulator:
         reads = self.listed_tag_reads(antenna_world, frequency) if self.tag_ids else []
         if self.floor_deployments:
             reads += self.lattice_reads(antenna_world, frequency)
+        for index, reader in self.wall_readers:
+            reads += self.wall_reads(index, reader, x, y, yaw, frequency)
         return reads
+
+    def wall_reads(self, index: int, reader: WallTagReader, x: float, y: float, yaw: float,
+                   frequency: float) -> list[Read]:
+        """Reads of the wall tags in one side antenna's induction area (misses drawn by the area's reader)."""
+        tag_ids = reader.read(x, y, yaw, self.rng)
+        if not tag_ids:
+            return []
+        antenna_x, antenna_y, _ = reader.antenna_pose(x, y, yaw)
+        by_id = {tag.tag_id: tag for tag in reader.tags}
+        positions = np.array([by_id[tag_id].position for tag_id in tag_ids])
+        distance = np.maximum(np.hypot(positions[:, 0] - antenna_x, positions[:, 1] - antenna_y), 1e-3)
+        rssi = self.model.rssi_at_1m_dbm - 40.0 * np.log10(distance)
+        return self.reads_of(tag_ids, np.full(len(tag_ids), index), distance,
+                             np.full(len(tag_ids), self.model.antennas[index].phase_offset_rad), rssi, frequency)
 
     def lattice_reads(self, antenna_world: np.ndarray, frequency: float) -> list[Read]:
         """Reads of the lattice floor tags within r (horizontally) of each downward antenna."""
@@ -149,7 +177,8 @@ class ReaderSimulator:
         min_cos = np.cos(np.array([a.half_angle_rad for a in model.antennas]))[:, None]
         gain_db = 20.0 * model.pattern_exponent * np.log10(np.clip(cos_off_axis, 1e-6, 1.0))
         rssi = model.rssi_at_1m_dbm - 40.0 * np.log10(distance) + gain_db
-        readable = (distance <= max_range) & (cos_off_axis >= min_cos) & (rssi >= model.sensitivity_dbm)
+        listing = np.array([a.side_bearing_rad is None for a in model.antennas])[:, None]   # side: wall tags only
+        readable = listing & (distance <= max_range) & (cos_off_axis >= min_cos) & (rssi >= model.sensitivity_dbm)
         if model.miss_probability > 0.0:
             readable &= self.rng.random(readable.shape) >= model.miss_probability
         antenna_index, tag_index = np.nonzero(readable)

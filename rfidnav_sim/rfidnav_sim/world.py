@@ -20,6 +20,8 @@ Schema::
         # read_range_m (horizontally), so worlds with hundreds of thousands of tags cost nothing to load.
     tag_groups:                        # optional, floor tag groups (paper 003): their tags are floor tags
       - {id: G1, shape: cross, centre: [1.0, 2.0], size_m: 0.30}   # schema: rfidnav_common.robot_map
+    wall_tags:                         # optional, tag plates on walls (paper 004), read by side antennas
+      - {id: "8", position: [7.2, 9.0], normal: [0.0, -1.0]}   # normal: out of the wall, into the hallway
     access_points:                     # optional, WiFi access points (paper 003), bssids unique
       - {bssid: "02:00:00:00:00:01", ssid: home, position: [1.0, 2.0], tx_power_dbm: 20.0, channel: 6}
     wifi:                              # optional, how this building attenuates WiFi (rfidnav_sim.wifi_model)
@@ -40,6 +42,7 @@ import numpy as np
 from rfidnav_common.config import Section, check_number
 from rfidnav_common.robot_map import tag_groups_of
 from rfidnav_common.tag_groups import TagGroup
+from rfidnav_sim.wall_tag_model import WallTag
 from rfidnav_sim.wifi_model import AccessPoint, PropagationSettings
 from rfidnav_common.tag_lattice import Deployment, DeploymentError, make_deployment
 from rfidnav_common.errors import ConfigError
@@ -63,6 +66,7 @@ class World:
     walls: tuple[tuple[float, float, float, float], ...]
     deployments: tuple[Deployment, ...] = ()
     tag_groups: tuple[TagGroup, ...] = ()
+    wall_tags: tuple[WallTag, ...] = ()
     access_points: tuple[AccessPoint, ...] = ()
     wifi: PropagationSettings = PropagationSettings()   # the building's part; a receiver adds noise, sensitivity
     wifi_seed: int = 1
@@ -78,8 +82,8 @@ class World:
 
 
 def world_from_section(section: Section) -> World:
-    section.reject_unknown(("name", "frame_id", "tags", "walls", "lattices", "tag_groups", "access_points", "wifi",
-                            "description"))
+    section.reject_unknown(("name", "frame_id", "tags", "walls", "lattices", "tag_groups", "wall_tags", "access_points",
+                            "wifi", "description"))
     tags: list[Tag] = []
     seen: dict[str, str] = {}
     for tag_section in section.sections("tags", []):
@@ -112,12 +116,32 @@ def world_from_section(section: Section) -> World:
                                     f"tag group {group.group_id}'s tag id '{tag_id}' is also at {seen[tag_id]}")
             seen[tag_id] = f"tag group {group.group_id}"
             tags.append(Tag(tag_id=tag_id, position=(x, y, 0.0), kind="floor"))
-    if not tags and not deployments:
-        raise section.error("tags", "a world needs tags or lattices (none given)")
+    wall_tags = _wall_tags(section, seen)
+    if not tags and not deployments and not wall_tags:
+        raise section.error("tags", "a world needs tags, lattices or wall_tags (none given)")
     wifi, wifi_seed = _wifi(section.section("wifi", {}))
     return World(name=section.string("name"), frame_id=section.string("frame_id", "map"),
-                 tags=tuple(tags), walls=tuple(walls), deployments=deployments, tag_groups=groups,
+                 tags=tuple(tags), walls=tuple(walls), deployments=deployments, tag_groups=groups, wall_tags=wall_tags,
                  access_points=_access_points(section), wifi=wifi, wifi_seed=wifi_seed)
+
+
+def _wall_tags(section: Section, seen: dict[str, str]) -> tuple[WallTag, ...]:
+    """The ``wall_tags`` list; ids unique among all the world's tags (``seen``: id -> where)."""
+    wall_tags = []
+    for entry in section.sections("wall_tags", []):
+        entry.reject_unknown(("id", "position", "normal"))
+        raw_id = entry.raw("id")
+        tag_id = str(raw_id) if isinstance(raw_id, (str, int)) and not isinstance(raw_id, bool) else entry.string("id")
+        if tag_id in seen:
+            raise entry.error("id", f"duplicate tag id '{tag_id}' (also at {seen[tag_id]})")
+        seen[tag_id] = entry.prefix
+        position = entry.numbers("position", length=2)
+        nx, ny = entry.numbers("normal", length=2)
+        length = (nx * nx + ny * ny) ** 0.5
+        if length == 0.0:
+            raise entry.error("normal", "must not be zero (it points out of the wall into the hallway)")
+        wall_tags.append(WallTag(tag_id, (position[0], position[1]), (nx / length, ny / length)))
+    return tuple(wall_tags)
 
 
 def _access_points(section: Section) -> tuple[AccessPoint, ...]:
