@@ -13,12 +13,13 @@ setup(
     install_requires=["setuptools"],
     zip_safe=True,
     maintainer="rfidnav developers",
-    description="Simulator nodes of rfidnav: differential-drive robot base, UHF RFID reader with per-antenna phase, e-compass, WiFi RSS scans.",
+    description="Simulator nodes of rfidnav: differential-drive robot base, UHF RFID reader with per-antenna phase, e-compass, WiFi RSS scans, sonar.",
     license="Apache-2.0",
     entry_points={"console_scripts": [
         "robot_sim = rfidnav_sim.robot_sim_node:main",
         "rfid_reader_sim = rfidnav_sim.rfid_reader_sim_node:main",
         "compass_sim = rfidnav_sim.compass_sim_node:main",
         "wifi_sim = rfidnav_sim.wifi_sim_node:main",
+        "sonar_sim = rfidnav_sim.sonar_sim_node:main",
     ]},
 )

@@ -25,7 +25,8 @@ from rfidnav_control.parameters import HeadingControllerParameters
 from rfidnav_localization.parameters import LocationServerParameters, PartitionLocalizerParameters
 from rfidnav_planning.parameters import PartitionNavigatorParameters, TwoTierNavigatorParameters
 from rfidnav_common.robot_map import RouteMap, load_route_map
-from rfidnav_sim.parameters import CompassParameters, ReaderParameters, RobotSimParameters, WifiSimParameters
+from rfidnav_sim.parameters import (CompassParameters, ReaderParameters, RobotSimParameters, SonarParameters,
+                                    WifiSimParameters)
 from rfidnav_sim.world import World, load_world
 
 CONFIG_DIR = Path(__file__).resolve().parents[2] / "config"
@@ -41,6 +42,7 @@ KNOWN_NODES: dict[tuple[str, str], tuple[str, type]] = {
     ("rfidnav_planning", "partition_navigator"): ("partition_navigator", PartitionNavigatorParameters),
     ("rfidnav_sim", "compass_sim"): ("compass_sim", CompassParameters),
     ("rfidnav_sim", "wifi_sim"): ("wifi_sim", WifiSimParameters),
+    ("rfidnav_sim", "sonar_sim"): ("sonar_sim", SonarParameters),
     ("rfidnav_localization", "location_server"): ("location_server", LocationServerParameters),
     ("rfidnav_planning", "two_tier_navigator"): ("two_tier_navigator", TwoTierNavigatorParameters),
 }

@@ -152,3 +152,26 @@ class WifiSimParameters:
             raise ValueError(f"scan_noise_sd_db: must be a finite non-negative number, got {self.scan_noise_sd_db}")
         if not math.isfinite(self.sensitivity_dbm):
             raise ValueError(f"sensitivity_dbm: must be finite, got {self.sensitivity_dbm}")
+
+
+@dataclass(frozen=True)
+class SonarParameters:
+    world_file: str = param("world YAML (ground truth: the walls the sonar echoes from)", "")
+    seed: int = param("run seed; the sonar noise stream derives from it", 0)
+    rate_hz: float = param("sonar sweeps per second: every rangefinder fires once a sweep [Hz, sim time]", 10.0)
+    frame_prefix: str = param("frame of rangefinder NAME: PREFIX + NAME (its pose in base_link: sonar_model)",
+                              "sonar_")
+    noise_sd_m: float = param("range noise, constant part [m]", 0.01)
+    noise_fraction: float = param("range noise, part proportional to the range", 0.01)
+    rays_per_beam: int = param("rays spread over each 25-degree cone; the nearest echo is reported", 5)
+
+    def validate(self) -> None:
+        if not self.world_file:
+            raise ValueError("world_file: required (the world YAML whose walls echo)")
+        if not (math.isfinite(self.rate_hz) and self.rate_hz > 0.0):
+            raise ValueError(f"rate_hz: must be positive, got {self.rate_hz}")
+        for name in ("noise_sd_m", "noise_fraction"):
+            if not (math.isfinite(getattr(self, name)) and getattr(self, name) >= 0.0):
+                raise ValueError(f"{name}: must be a finite non-negative number, got {getattr(self, name)}")
+        if self.rays_per_beam < 1:
+            raise ValueError(f"rays_per_beam: must be at least 1, got {self.rays_per_beam}")

@@ -1,0 +1,64 @@
+"""sonar_sim: paper 004's seven ultrasonic rangefinders, each on /sonar/<name> (sensor_msgs/Range).
+
+Sweeps are driven by /sim/ground_truth, like the reader's rounds: the first pose at or after each sweep's due time
+(``1/rate_hz`` apart in sim time); the model (rfidnav_sim.sonar_model) casts each cone's rays against the world's
+walls, vectorized, and reports the nearest echo with noise, +inf when nothing echoes within range.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+from nav_msgs.msg import Odometry
+from rclpy.node import Node
+from sensor_msgs.msg import Range
+
+from rfidnav_common.geometry import quaternion_to_yaw
+from rfidnav_common.ros import SENSOR_QOS, declare_parameters, run_node, seconds_of
+from rfidnav_common.seeding import rng_for
+from rfidnav_sim.parameters import SonarParameters
+from rfidnav_sim.sonar_model import PAPER_LAYOUT, SonarModel
+from rfidnav_sim.world import load_world
+
+
+class SonarSimNode(Node):
+    def __init__(self, **node_options: Any) -> None:
+        super().__init__("sonar_sim", **node_options)
+        self.params: SonarParameters = declare_parameters(self, SonarParameters)
+        world = load_world(self.params.world_file)
+        self.model = SonarModel(PAPER_LAYOUT, np.array(world.walls, dtype=float).reshape(-1, 4),
+                                self.params.noise_sd_m, self.params.noise_fraction, self.params.rays_per_beam)
+        self.rng = rng_for(self.params.seed, "sonar_sim")
+        self.period_s = 1.0 / self.params.rate_hz
+        self.next_sweep_s = 0.0
+        self.publishers_by_name = {r.name: self.create_publisher(Range, f"/sonar/{r.name}", SENSOR_QOS)
+                                   for r in PAPER_LAYOUT}
+        self.create_subscription(Odometry, "/sim/ground_truth", self.on_ground_truth, SENSOR_QOS)
+        self.get_logger().info(f"{len(PAPER_LAYOUT)} rangefinders, {len(world.walls)} walls, "
+                               f"{self.params.rate_hz:g} sweeps/s")
+
+    def on_ground_truth(self, msg: Odometry) -> None:
+        now_s = seconds_of(msg.header.stamp)
+        if now_s + 1e-9 < self.next_sweep_s:
+            return
+        self.next_sweep_s = (math.floor(now_s / self.period_s + 1e-6) + 1) * self.period_s
+        pose = msg.pose.pose
+        yaw = quaternion_to_yaw(pose.orientation.x, pose.orientation.y, pose.orientation.z, pose.orientation.w)
+        readings = self.model.ranges(pose.position.x, pose.position.y, yaw, self.rng)
+        for rangefinder in PAPER_LAYOUT:
+            reading = Range(radiation_type=Range.ULTRASOUND, field_of_view=2.0 * rangefinder.beam_half_angle_rad,
+                            min_range=rangefinder.min_range_m, max_range=rangefinder.max_range_m,
+                            range=readings[rangefinder.name])
+            reading.header.stamp = msg.header.stamp
+            reading.header.frame_id = self.params.frame_prefix + rangefinder.name
+            self.publishers_by_name[rangefinder.name].publish(reading)
+
+
+def main(args: list[str] | None = None) -> int:
+    return run_node(SonarSimNode, args)
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
