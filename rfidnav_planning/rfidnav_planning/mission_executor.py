@@ -1,0 +1,275 @@
+"""Mission execution on the topological map of paper 004 (sections 3-5), as a decision core without ROS.
+
+The robot follows the left wall (rfidnav_control.wall_following) and reads the tags on it. The executor is fed
+those reads and the wall follower's events and answers what to command: a turn (``left``, ``right``,
+``straight``, ``back``) for ``WallFollower.command_turn``, ``follow`` (no command: keep following the wall, and
+drive straight on at a junction), or ``stop``. The mission_executor node turns the answers into commands and
+the NavigateToNode action's feedback and result; the tests script the reads and events. Both run this code.
+
+The paper's loop (section 3): a tag names the node being approached and the side the robot arrives from; the
+route from there to the goal names the side to leave by; arrival and departure give the turn (arriving at c
+from the East and leaving North is a right turn). The tag is read just before the junction, so the turn it
+decides is queued and made at the junction's centre; a ``back`` is a U-turn made at once, in the hallway.
+Reading the goal's tag stops the robot. Until the first tag the robot does not know where it is and follows.
+
+Beyond the paper (ours):
+
+* A missed tag. Every decision leaves an expectation: the next node and the side the robot arrives from.
+  A junction centre reached with no decision waiting for it means the tag announcing that junction was not
+  read; the executor then ASSUMES the robot is at the expected node, arriving from the expected side, and
+  decides there as if the tag had been read (stopping if it is the goal). The assumption holds as long as
+  hallways have no untagged junctions the map does not know; the next tag read re-localizes the robot and,
+  if the assumption was wrong, counts a re-plan and plans from where the robot really is. Without an
+  expectation (before the first tag, or after being lost) the robot follows on.
+* Off the route. Every tag plans again from its node, so a tag of an unexpected node (a missed turn, a wrong
+  assumption) needs nothing special; it is counted as a re-plan when an expectation existed and was wrong.
+* ``no_opening``: the junction cannot be left the way decided, so it is taken to be an opening the map does
+  not have (a doorway, an alcove) before the decided node: the decided turn waits for the next junction and
+  the robot goes straight on. If straight on is blocked too (a dead end), the robot turns back and is lost
+  until the next tag. Each ``no_opening`` counts as a re-plan.
+* ``?`` hallways. When no mapped route reaches the goal, the robot heads for the nearest node (fewest
+  hallways) with an unexplored ``?`` side and leaves by it. The next tag names the far end: if its arrival
+  side is ``?`` too, the hallway is learned at both ends (the executor's own copy of the map; the given map
+  is not changed) and routed through from then on. A far end mapped otherwise leaves the hallway unlearned
+  and marked explored, so it is not tried again; a missed tag at the far end leaves the robot lost (it follows
+  until the next tag) and the hallway unexplored, so a later decision may try it again.
+
+Tags are read many times while the robot passes; a repeat of the last tag before the next junction centre
+(or after a U-turn next to it) is the same read and changes nothing.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+
+from rfidnav_planning.topological_map import (DIRECTIONS, UNKNOWN, WEIGHTS, RouteError, TopologicalMap,
+                                              opposite, turn)
+
+LEFT, RIGHT, STRAIGHT, BACK, STOP, FOLLOW = "left", "right", "straight", "back", "stop", "follow"
+TURNS = (LEFT, RIGHT, STRAIGHT, BACK)                 # the actions WallFollower.command_turn takes
+JUNCTION_ENTERED, JUNCTION_CENTRE, TURN_DONE = "junction_entered", "junction_centre", "turn_done"
+NO_OPENING, OBSTACLE = "no_opening", "obstacle"
+EVENTS = (JUNCTION_ENTERED, JUNCTION_CENTRE, TURN_DONE, NO_OPENING, OBSTACLE)
+
+
+@dataclass(frozen=True)
+class Decision:
+    action: str                     # left | right | straight | back (command them) | stop | follow (no command)
+    finished: bool = False
+    success: bool = False
+    message: str = ""
+
+
+@dataclass(frozen=True)
+class LearnedEdge:
+    """A ``?`` hallway found to leave ``node_a`` by ``side_a`` and enter ``node_b`` by ``side_b``."""
+
+    node_a: str
+    side_a: str
+    node_b: str
+    side_b: str
+
+
+@dataclass
+class MissionState:
+    goal: str
+    current_node: str | None = None         # where the robot was last localized (by a tag or an assumption)
+    arrival_side: str | None = None
+    last_tag: str | None = None
+    expected_node: str | None = None        # the next node the route leads to, and the side it is entered by
+    expected_side: str | None = None
+    nodes_visited: list[str] = field(default_factory=list)
+    tags_missed: int = 0
+    unknown_tags: int = 0
+    replans: int = 0
+    learned_edges: tuple[LearnedEdge, ...] = ()
+    awaiting: str | None = None             # the turn decided by a tag, for the junction just ahead
+    exploring: tuple[str, str] | None = None    # the (node, side) of the ? hallway being driven along
+    junction_since_tag: bool = True         # False while a repeat of last_tag is still the same read
+    commanded: str | None = None            # the last turn answered, to know what no_opening refused
+    outcome: Decision | None = None
+
+
+class MissionExecutor:
+    def __init__(self, topological_map: TopologicalMap, weight: str = "edges") -> None:
+        if weight not in WEIGHTS:
+            raise ValueError(f"weight must be one of {', '.join(WEIGHTS)}, got '{weight}'")
+        self.map = topological_map          # replaced by a copy with each learned hallway
+        self.weight = weight
+        self.learned: tuple[LearnedEdge, ...] = ()
+        self.explored: set[tuple[str, str]] = set()   # ? sides tried without learning them
+        self.state: MissionState | None = None
+
+    # ---------------------------------------------------------------------------------------- inputs
+    def start(self, goal_node: str) -> Decision:
+        """Begin a mission to ``goal_node`` (RouteError for a node not in the map). What was learned on earlier
+        missions is kept; where the robot is is not: the first tag localizes it."""
+        if goal_node not in self.map.nodes:
+            raise RouteError(f"map '{self.map.name}': unknown goal node '{goal_node}' "
+                             f"(nodes: {', '.join(self.map.nodes)})")
+        self.state = MissionState(goal=goal_node, learned_edges=self.learned)
+        return Decision(FOLLOW, message=f"to '{goal_node}': following the wall until a tag is read")
+
+    def on_tag(self, tag_id: str | int) -> Decision:
+        """A wall tag read: localize, learn an explored hallway, and decide the turn at the junction ahead."""
+        state = self._mission()
+        tag = str(tag_id)
+        if state.outcome is not None:
+            return state.outcome
+        if tag == state.last_tag and not state.junction_since_tag:
+            return self._current()
+        located = self.map.locate_tag(tag)
+        if located is None:
+            state.unknown_tags += 1
+            return replace(self._current(), message=f"tag {tag} is not in the map: ignored")
+        node, side = located
+        state.last_tag, state.junction_since_tag = tag, False
+        if state.exploring is not None:
+            self._learn(state.exploring, node, side)
+        elif state.expected_node is not None and (node, side) != (state.expected_node, state.expected_side):
+            state.replans += 1
+        decision = self._arrive(node, side, f"tag {tag}")
+        state.awaiting = decision.action if decision.action in (LEFT, RIGHT, STRAIGHT) else None
+        return decision
+
+    def on_junction(self, event: str) -> Decision:
+        """A wall follower event. ``junction_centre``: make the turn the last tag decided or, with none waiting,
+        a tag was missed (see the module docstring); ``no_opening``: the decided way is blocked; the others
+        (``junction_entered``, ``turn_done``, ``obstacle``, which the wall follower handles) change nothing."""
+        if event not in EVENTS:
+            raise ValueError(f"on_junction: '{event}' is not one of {', '.join(EVENTS)}")
+        state = self._mission()
+        if state.outcome is not None:
+            return state.outcome
+        if event == JUNCTION_CENTRE:
+            return self._junction_centre()
+        if event == NO_OPENING:
+            return self._no_opening()
+        return Decision(FOLLOW)
+
+    # -------------------------------------------------------------------------------------- deciding
+    def _junction_centre(self) -> Decision:
+        state = self._mission()
+        state.junction_since_tag = True
+        if state.awaiting is not None:
+            action, state.awaiting = state.awaiting, None
+            return self._answer(Decision(action, message=f"at '{state.current_node}': {action}"))
+        if state.exploring is not None:
+            state.exploring = None
+            return Decision(FOLLOW, message="junction at the end of an explored hallway without a tag: lost; "
+                                            "the hallway stays unexplored")
+        if state.expected_node is None:
+            return Decision(FOLLOW, message="junction without a tag read and no expectation: following on")
+        state.tags_missed += 1
+        decision = self._arrive(state.expected_node, state.expected_side, "missed tag, assumed by the route")
+        return self._answer(decision)
+
+    def _no_opening(self) -> Decision:
+        state = self._mission()
+        state.replans += 1
+        refused = state.commanded
+        if refused is not None and refused != STRAIGHT:
+            state.awaiting = refused
+            return self._answer(Decision(STRAIGHT, message=f"no opening for '{refused}': taken for a junction "
+                                                           "not on the map; the turn waits for the next one"))
+        state.awaiting = state.expected_node = state.expected_side = state.exploring = None
+        return self._answer(Decision(BACK, message="no way on: turning back, lost until the next tag"))
+
+    def _arrive(self, node: str, side: str, how: str) -> Decision:
+        """Localized at ``node``, entered by ``side``: stop at the goal, or turn to leave by the route's side."""
+        state = self._mission()
+        state.current_node, state.arrival_side = node, side
+        state.nodes_visited.append(node)
+        state.expected_node = state.expected_side = state.exploring = None
+        if node == state.goal:
+            state.outcome = Decision(STOP, finished=True, success=True,
+                                     message=f"{how}: at the goal '{node}' after {len(state.nodes_visited)} nodes")
+            return state.outcome
+        departure = self._departure(node)
+        if departure is None:
+            state.outcome = Decision(STOP, finished=True, success=False,
+                                     message=f"{how}: at '{node}', no mapped route to '{state.goal}' and no "
+                                             f"unexplored '{UNKNOWN}' hallway to look for one")
+            return state.outcome
+        action = turn(side, departure)
+        neighbour = self.map.nodes[node].hallways[departure].neighbour
+        if neighbour == UNKNOWN:
+            state.exploring = (node, departure)
+            goes = f"exploring the '{UNKNOWN}' hallway {departure}"
+        else:
+            state.expected_node, state.expected_side = neighbour, self._far_side(node, departure)
+            goes = f"for '{neighbour}'"
+        return self._answer(Decision(action, message=f"{how}: at '{node}' from {side}; {action}, leaving {departure} "
+                                                     f"{goes}"))
+
+    def _departure(self, node: str) -> str | None:
+        """The side to leave ``node`` by: along the route to the goal; without one, towards (or into) the nearest
+        unexplored ``?`` hallway; None when there is neither."""
+        goal = self._mission().goal
+        try:
+            path = self.map.route(node, goal, self.weight)
+            return self.map.departure_direction(node, path[1], self.weight)
+        except RouteError:
+            pass
+        best: list[str] | None = None
+        for name in self.map.nodes:
+            if not self._unexplored(name):
+                continue
+            try:
+                path = self.map.route(node, name, self.weight)
+            except RouteError:
+                continue
+            if best is None or len(path) < len(best):
+                best = path
+        if best is None:
+            return None
+        if len(best) > 1:
+            return self.map.departure_direction(node, best[1], self.weight)
+        return self._unexplored(node)[0]
+
+    def _unexplored(self, node: str) -> list[str]:
+        """The ``?`` sides of ``node`` not yet tried in vain, clockwise from North."""
+        hallways = self.map.nodes[node].hallways
+        return [side for side in DIRECTIONS
+                if side in hallways and hallways[side].neighbour == UNKNOWN and (node, side) not in self.explored]
+
+    def _far_side(self, node: str, side: str) -> str:
+        """The side of the hallway's far end that leads back: the opposite one on a checked map; a learned
+        hallway may bend."""
+        far_end = self.map.nodes[self.map.nodes[node].hallways[side].neighbour]
+        back = far_end.hallways.get(opposite(side))
+        if back is not None and back.neighbour == node:
+            return opposite(side)
+        return next(s for s, h in far_end.hallways.items() if h.neighbour == node)
+
+    def _learn(self, exploring: tuple[str, str], node: str, side: str) -> None:
+        """Map the explored ``?`` hallway at both ends if the far end's arrival side is unmapped too."""
+        state = self._mission()
+        origin, origin_side = exploring
+        far_end = self.map.nodes[node].hallways.get(side)
+        if far_end is None or far_end.neighbour != UNKNOWN:
+            self.explored.add(exploring)
+            return
+        nodes = dict(self.map.nodes)
+        for name, name_side, other in ((origin, origin_side, node), (node, side, origin)):
+            hallways = dict(nodes[name].hallways)
+            hallways[name_side] = replace(hallways[name_side], neighbour=other)
+            nodes[name] = replace(nodes[name], hallways=hallways)
+        self.map = TopologicalMap(self.map.name, nodes, self.map.north_deg)
+        self.learned = state.learned_edges = (*self.learned, LearnedEdge(origin, origin_side, node, side))
+
+    # --------------------------------------------------------------------------------------- helpers
+    def _answer(self, decision: Decision) -> Decision:
+        if decision.action in TURNS:
+            self._mission().commanded = decision.action
+        return decision
+
+    def _current(self) -> Decision:
+        """What stands while nothing new is known: the turn waiting for the junction ahead, else following."""
+        awaiting = self._mission().awaiting
+        return Decision(awaiting) if awaiting is not None else Decision(FOLLOW)
+
+    def _mission(self) -> MissionState:
+        if self.state is None:
+            raise RuntimeError("no mission: call start(goal_node) first")
+        return self.state

@@ -1,0 +1,396 @@
+"""The mission executor of paper 004 (sections 3-5): turns from tag reads, missed tags, re-plans, ? hallways."""
+
+from __future__ import annotations
+
+import random
+from collections.abc import Callable
+from dataclasses import replace
+from pathlib import Path
+
+import pytest
+
+from rfidnav_planning.mission_executor import (BACK, FOLLOW, JUNCTION_CENTRE, LEFT, NO_OPENING, RIGHT, STOP,
+                                               STRAIGHT, TURN_DONE, TURNS, Decision, LearnedEdge,
+                                               MissionExecutor)
+from rfidnav_planning.topological_map import (DIRECTIONS, UNKNOWN, Hallway, Node, RouteError, TopologicalMap,
+                                              load_topological_map, opposite)
+
+MAPS = Path(__file__).resolve().parents[1] / "config" / "maps"
+_QUARTER_TURNS = {STRAIGHT: 0, RIGHT: 1, BACK: 2, LEFT: 3}
+
+
+@pytest.fixture(scope="module")
+def fig5() -> TopologicalMap:
+    return load_topological_map(MAPS / "building_fig5.yaml")
+
+
+@pytest.fixture(scope="module")
+def large() -> TopologicalMap:
+    return load_topological_map(MAPS / "building_large.yaml")
+
+
+class Floor:
+    """The real floor, replaying what the wall follower and the reader would report: the robot approaches
+    ``node`` from ``side``, passes the tag announcing it (unless ``drop`` says the read failed), reaches the
+    junction's centre and leaves by the commanded way (straight on without a command), or U-turns at once on
+    ``back``."""
+
+    def __init__(self, floor: TopologicalMap, node: str, side: str,
+                 drop: Callable[[str], bool] = lambda tag: False) -> None:
+        self.floor, self.node, self.side, self.drop = floor, node, side, drop
+        self.command: str | None = None
+        self.tags_read: list[str] = []
+
+    def run(self, executor: MissionExecutor, goal: str, max_junctions: int = 200) -> Decision:
+        decision = executor.start(goal)
+        for _ in range(max_junctions):
+            tag = self.floor.nodes[self.node].hallways[self.side].tags[0]
+            if not self.drop(tag):
+                self.tags_read.append(tag)
+                decision = self.obey(executor.on_tag(tag))
+                if decision.finished:
+                    return decision
+                if self.command == BACK:
+                    self.leave(self.side)
+                    self.obey(executor.on_junction(TURN_DONE))
+                    continue
+            decision = self.obey(executor.on_junction(JUNCTION_CENTRE))
+            if decision.finished:
+                return decision
+            while True:
+                heading = DIRECTIONS.index(opposite(self.side))
+                departure = DIRECTIONS[(heading + _QUARTER_TURNS[self.command or STRAIGHT]) % 4]
+                if departure in self.floor.nodes[self.node].hallways:
+                    break
+                decision = self.obey(executor.on_junction(NO_OPENING))
+            self.leave(departure)
+            self.obey(executor.on_junction(TURN_DONE))
+        raise AssertionError(f"no arrival after {max_junctions} junctions")
+
+    def obey(self, decision: Decision) -> Decision:
+        if decision.action in TURNS:
+            self.command = decision.action
+        return decision
+
+    def leave(self, departure: str) -> None:
+        neighbour = self.floor.nodes[self.node].hallways[departure].neighbour
+        assert neighbour != UNKNOWN, f"the robot left the floor at {self.node}.{departure}"
+        self.node, self.side, self.command = neighbour, opposite(departure), None
+
+
+def test_the_papers_run_from_tag_23_to_tag_19(fig5: TopologicalMap) -> None:
+    executor = MissionExecutor(fig5)
+    assert executor.start("g").action == FOLLOW
+    assert executor.on_tag(23).action == RIGHT                  # at h from the West, leaving South
+    assert executor.state.expected_node == "g" and executor.state.expected_side == "N"
+    assert executor.on_junction(JUNCTION_CENTRE).action == RIGHT
+    assert executor.on_junction(TURN_DONE).action == FOLLOW
+    done = executor.on_tag("19")
+    assert (done.action, done.finished, done.success) == (STOP, True, True)
+    assert executor.state.nodes_visited == ["h", "g"]
+    assert executor.state.last_tag == "19" and executor.state.current_node == "g"
+    assert executor.state.arrival_side == "N" and executor.state.replans == 0
+
+
+def test_the_papers_example_tag_9_at_c_from_the_east_to_d_is_a_right_turn(fig5: TopologicalMap) -> None:
+    executor = MissionExecutor(fig5)
+    executor.start("d")
+    decision = executor.on_tag(9)
+    assert decision.action == RIGHT and not decision.finished
+    assert (executor.state.current_node, executor.state.arrival_side) == ("c", "E")
+    assert (executor.state.expected_node, executor.state.expected_side) == ("d", "S")
+
+
+@pytest.mark.parametrize("tags, goal, actions, visited", [
+    (["1", "7", "23", "17"], "f", [BACK, STRAIGHT, STRAIGHT, STOP], ["a", "c", "h", "f"]),
+    (["20", "25", "17"], "f", [LEFT, RIGHT, STOP], ["g", "h", "f"]),
+    (["13", "8", "1"], "a", [LEFT, RIGHT, STOP], ["d", "c", "a"]),
+])
+def test_every_action_of_a_scripted_route(fig5: TopologicalMap, tags: list[str], goal: str, actions: list[str],
+                                          visited: list[str]) -> None:
+    executor = MissionExecutor(fig5)
+    executor.start(goal)
+    for tag, action in zip(tags, actions):
+        decision = executor.on_tag(tag)
+        assert decision.action == action, (tag, decision.message)
+        if action in (LEFT, RIGHT, STRAIGHT):
+            assert executor.on_tag(tag) == Decision(action)                      # a re-read changes nothing
+            assert executor.on_junction(JUNCTION_CENTRE).action == action       # made at the junction ahead
+        executor.on_junction(TURN_DONE)
+    assert decision.finished and decision.success
+    assert executor.state.nodes_visited == visited
+    assert executor.state.tags_missed == executor.state.replans == 0
+
+
+def test_the_floor_replay_agrees_with_the_script(fig5: TopologicalMap) -> None:
+    floor = Floor(fig5, "a", "E")
+    assert floor.run(MissionExecutor(fig5), "f").success
+    assert floor.tags_read == ["1", "7", "23", "17"]
+
+
+def test_an_unknown_tag_is_ignored(fig5: TopologicalMap) -> None:
+    executor = MissionExecutor(fig5)
+    executor.start("g")
+    assert executor.on_tag("999").action == FOLLOW                # not localized yet
+    assert executor.on_tag(23).action == RIGHT
+    assert executor.on_tag("998").action == RIGHT                 # the turn ahead still stands
+    assert executor.state.unknown_tags == 2 and executor.state.last_tag == "23"
+    assert executor.on_junction(JUNCTION_CENTRE).action == RIGHT
+    assert executor.on_tag(19).success
+
+
+def test_a_junction_before_any_tag_is_followed_through(fig5: TopologicalMap) -> None:
+    executor = MissionExecutor(fig5)
+    executor.start("g")
+    assert executor.on_junction(JUNCTION_CENTRE).action == FOLLOW
+    assert executor.state.tags_missed == 0 and executor.state.current_node is None
+
+
+def test_a_missed_tag_keeps_the_routes_expectation(fig5: TopologicalMap) -> None:
+    executor = MissionExecutor(fig5)
+    executor.start("f")
+    assert executor.on_tag(20).action == LEFT                     # g from the West, leaving North for h
+    assert executor.on_junction(JUNCTION_CENTRE).action == LEFT
+    executor.on_junction(TURN_DONE)
+    # tag 25 (h from the South) is not read: the junction centre comes without it
+    assumed = executor.on_junction(JUNCTION_CENTRE)
+    assert assumed.action == RIGHT and "missed" in assumed.message
+    assert executor.state.tags_missed == 1
+    assert (executor.state.current_node, executor.state.arrival_side) == ("h", "S")
+    assert (executor.state.expected_node, executor.state.expected_side) == ("f", "W")
+    executor.on_junction(TURN_DONE)
+    done = executor.on_tag(17)                                    # the next tag confirms the assumption
+    assert done.success and executor.state.replans == 0
+    assert executor.state.nodes_visited == ["g", "h", "f"]
+
+
+def test_a_missed_goal_tag_stops_at_the_goal_junction(fig5: TopologicalMap) -> None:
+    executor = MissionExecutor(fig5)
+    executor.start("g")
+    executor.on_tag(23)
+    executor.on_junction(JUNCTION_CENTRE)
+    executor.on_junction(TURN_DONE)
+    done = executor.on_junction(JUNCTION_CENTRE)
+    assert (done.action, done.success, executor.state.tags_missed) == (STOP, True, 1)
+    assert executor.on_tag(19) == done and executor.on_junction(JUNCTION_CENTRE) == done    # finished stays
+
+
+def test_a_wrong_node_counts_a_replan_and_still_reaches_the_goal(fig5: TopologicalMap) -> None:
+    executor = MissionExecutor(fig5)
+    executor.start("g")
+    assert executor.on_tag(23).action == RIGHT
+    executor.on_junction(JUNCTION_CENTRE)
+    executor.on_junction(TURN_DONE)
+    # the robot went straight on instead and reads f's tag from the West: off the route
+    assert executor.on_tag(17).action == BACK                     # back to h
+    assert executor.state.replans == 1
+    assert (executor.state.expected_node, executor.state.expected_side) == ("h", "E")
+    executor.on_junction(TURN_DONE)
+    assert executor.on_tag(24).action == LEFT                     # h from the East, leaving South
+    executor.on_junction(JUNCTION_CENTRE)
+    assert executor.on_tag(19).success
+    assert executor.state.replans == 1 and executor.state.nodes_visited == ["h", "f", "h", "g"]
+
+
+def test_a_wrong_assumption_after_a_missed_tag_is_corrected_by_the_next_tag(fig5: TopologicalMap) -> None:
+    executor = MissionExecutor(fig5)
+    executor.start("f")
+    executor.on_tag(20)                                            # g from the West: left, for h
+    executor.on_junction(JUNCTION_CENTRE)
+    executor.on_junction(TURN_DONE)
+    executor.on_junction(JUNCTION_CENTRE)                          # assumed h (from the South): right, for f
+    executor.on_junction(TURN_DONE)
+    assert executor.on_tag(14).action == RIGHT                     # really at e from the West: re-localized
+    assert executor.state.replans == 1 and executor.state.tags_missed == 1
+
+
+def test_no_opening_takes_the_junction_for_one_off_the_map(fig5: TopologicalMap) -> None:
+    executor = MissionExecutor(fig5)
+    executor.start("g")
+    executor.on_tag(23)
+    assert executor.on_junction(JUNCTION_CENTRE).action == RIGHT
+    assert executor.on_junction(NO_OPENING).action == STRAIGHT     # a doorway before h: the right turn waits
+    assert executor.on_junction(JUNCTION_CENTRE).action == RIGHT   # h itself
+    assert executor.on_junction(NO_OPENING).action == STRAIGHT
+    assert executor.on_junction(NO_OPENING).action == BACK         # blocked straight on too: lost
+    assert executor.state.replans == 3 and executor.state.expected_node is None
+    assert executor.on_junction(JUNCTION_CENTRE).action == FOLLOW
+    assert executor.on_tag(24).action == LEFT                      # the next tag re-localizes
+    assert executor.on_tag(19).success
+
+
+# The true floor: a -- b along the bottom, c -- d above, and a hallway a.N -- c.S joining them.
+TRUE_FLOOR = """\
+name: explore
+nodes:
+  a:
+    E: {node: b, tags: [1]}
+    N: {node: c, tags: [2]}
+  b:
+    W: {node: a, tags: [3]}
+  c:
+    S: {node: a, tags: [4]}
+    E: {node: d, tags: [5]}
+  d:
+    W: {node: c, tags: [6]}
+"""
+
+
+def forget(floor: TopologicalMap, node: str, side: str) -> TopologicalMap:
+    """The floor with one hallway unmapped at both ends (``?``). Built in code: a checked map file has every
+    node connected through mapped hallways, so no goal in it ever needs a ``?`` hallway."""
+    far_end, far_side = floor.nodes[node].hallways[side].neighbour, opposite(side)
+    nodes = dict(floor.nodes)
+    for name, name_side in ((node, side), (far_end, far_side)):
+        hallways = dict(nodes[name].hallways)
+        hallways[name_side] = replace(hallways[name_side], neighbour=UNKNOWN)
+        nodes[name] = replace(nodes[name], hallways=hallways)
+    return TopologicalMap(floor.name, nodes, floor.north_deg)
+
+
+@pytest.fixture
+def true_floor(tmp_path: Path) -> TopologicalMap:
+    path = tmp_path / "explore.yaml"
+    path.write_text(TRUE_FLOOR)
+    return load_topological_map(path)
+
+
+def test_a_question_mark_hallway_is_explored_and_learned(true_floor: TopologicalMap) -> None:
+    known = forget(true_floor, "a", "N")
+    with pytest.raises(RouteError):
+        known.route("a", "d")
+    executor = MissionExecutor(known)
+    executor.start("d")
+    assert executor.on_tag(1).action == RIGHT                      # a from the East: into its ? side (North)
+    assert executor.state.expected_node is None
+    executor.on_junction(JUNCTION_CENTRE)
+    executor.on_junction(TURN_DONE)
+    assert executor.on_tag(4).action == RIGHT                      # c from the South: learned, then East for d
+    assert executor.state.learned_edges == (LearnedEdge("a", "N", "c", "S"),)
+    assert executor.map.route("a", "d") == ["a", "c", "d"]
+    assert known.nodes["a"].hallways["N"].neighbour == UNKNOWN     # the given map is not changed
+    executor.on_junction(JUNCTION_CENTRE)
+    assert executor.on_tag(6).success
+    assert executor.state.nodes_visited == ["a", "c", "d"]
+
+    executor.start("a")                                            # the next mission routes through it
+    assert executor.on_tag(5).action == LEFT                       # c from the East: left, South for a
+    assert executor.state.expected_node == "a" and executor.state.expected_side == "N"
+    assert executor.state.learned_edges == executor.learned
+
+
+def test_a_question_mark_hallway_is_found_from_afar_on_the_true_floor(true_floor: TopologicalMap) -> None:
+    executor = MissionExecutor(forget(true_floor, "a", "N"))
+    floor = Floor(true_floor, "b", "W")                            # at b from the West, away from the ? side
+    assert floor.run(executor, "d").success
+    assert floor.tags_read == ["3", "1", "4", "6"]
+    assert executor.state.nodes_visited == ["b", "a", "c", "d"]
+    assert executor.learned == (LearnedEdge("a", "N", "c", "S"),)
+
+
+def test_an_explored_hallway_whose_far_end_tag_is_missed_is_tried_again(true_floor: TopologicalMap) -> None:
+    executor = MissionExecutor(forget(true_floor, "a", "N"))
+    reads = {"4": 0}
+
+    def drop(tag: str) -> bool:                  # tag 4 (c from the South) fails the first time only
+        reads[tag] = reads.get(tag, 0) + 1
+        return tag == "4" and reads[tag] == 1
+
+    floor = Floor(true_floor, "a", "E", drop)
+    assert floor.run(executor, "d").success
+    # lost at c: straight on and then back are blocked or taken, the robot returns to a and reads tag 2;
+    # the hallway north is still unexplored, so it turns back into it and reads tag 4 this time
+    assert floor.tags_read == ["1", "2", "4", "6"]
+    assert executor.learned == (LearnedEdge("a", "N", "c", "S"),)
+    assert executor.state.replans == 2                              # the two no_opening at c
+
+
+def test_a_far_end_mapped_otherwise_is_not_learned(true_floor: TopologicalMap) -> None:
+    # Only a.N is unmapped in the robot's map; its far end c.S is mapped (to b, wrongly): nothing to learn.
+    known = forget(true_floor, "a", "N")
+    nodes = dict(known.nodes)
+    nodes["c"] = replace(nodes["c"], hallways={**nodes["c"].hallways,
+                                               "S": replace(nodes["c"].hallways["S"], neighbour="b")})
+    executor = MissionExecutor(TopologicalMap("wrong", nodes))
+    executor.start("d")
+    assert executor.on_tag(1).action == RIGHT                       # into the ? hallway north
+    executor.on_junction(JUNCTION_CENTRE)
+    executor.on_tag(4)
+    assert executor.learned == () and executor.explored == {("a", "N")}
+
+
+def test_a_goal_beyond_the_map_without_question_marks_fails() -> None:
+    # Built directly (the map check would refuse a floor whose nodes are not all connected).
+    split = TopologicalMap("split", {"a": Node("a", {"E": Hallway("b", ("1",))}),
+                                     "b": Node("b", {"W": Hallway("a", ("2",))}),
+                                     "c": Node("c", {})})
+    executor = MissionExecutor(split)
+    executor.start("c")
+    failed = executor.on_tag(2)
+    assert (failed.action, failed.finished, failed.success) == (STOP, True, False)
+    assert "no mapped route" in failed.message
+
+
+def test_bad_goals_events_and_weights_are_refused(fig5: TopologicalMap) -> None:
+    executor = MissionExecutor(fig5)
+    with pytest.raises(RouteError):
+        executor.start("nowhere")
+    with pytest.raises(RuntimeError):
+        executor.on_tag(1)
+    executor.start("g")
+    with pytest.raises(ValueError):
+        executor.on_junction("teleported")
+    with pytest.raises(ValueError):
+        MissionExecutor(fig5, weight="time")
+
+
+def assert_shortest(floor: TopologicalMap, visited: list[str], start: str, goal: str) -> None:
+    """``visited`` is a route from start to goal along hallways, as short as the map's (ties may differ)."""
+    assert visited[0] == start and visited[-1] == goal
+    assert len(visited) == len(floor.route(start, goal))
+    for here, there in zip(visited, visited[1:]):
+        floor.departure_direction(here, there)                     # RouteError if not adjacent
+
+
+def _random_missions(large: TopologicalMap, seed: int) -> list[tuple[str, str, str, str]]:
+    rng = random.Random(seed)
+    starts = [(tag, node.name, side) for node in large.nodes.values() for side, hallway in node.hallways.items()
+              if hallway.neighbour != UNKNOWN for tag in hallway.tags]
+    missions = []
+    while len(missions) < 100:
+        tag, node, side = rng.choice(starts)
+        goal = rng.choice(list(large.nodes))
+        if goal != node:
+            missions.append((tag, node, side, goal))
+    return missions
+
+
+def test_a_perfect_oracle_reaches_every_goal_by_the_shortest_route(large: TopologicalMap) -> None:
+    for tag, node, side, goal in _random_missions(large, seed=4):
+        executor = MissionExecutor(large)
+        floor = Floor(large, node, side)
+        assert floor.run(executor, goal).success, (tag, goal)
+        assert_shortest(large, executor.state.nodes_visited, node, goal)
+        assert executor.state.tags_missed == executor.state.replans == 0
+
+
+def test_a_fifth_of_the_tags_dropped_still_reaches_every_goal(large: TopologicalMap) -> None:
+    rng = random.Random(7)
+    missed = 0
+    for tag, node, side, goal in _random_missions(large, seed=5):
+        executor = MissionExecutor(large)
+        first = True
+
+        def drop(read: str) -> bool:
+            nonlocal first
+            if first:                       # the start tag is read: the robot must localize somewhere
+                first = False
+                return False
+            return rng.random() < 0.2
+
+        floor = Floor(large, node, side, drop)
+        assert floor.run(executor, goal).success, (tag, goal)
+        assert_shortest(large, executor.state.nodes_visited, node, goal)
+        assert executor.state.replans == 0
+        missed += executor.state.tags_missed
+    assert missed > 20
