@@ -84,16 +84,26 @@ class WallFollowerSettings:
     turn_in_place_rad: float = math.radians(30.0)  # turn on the spot while the heading is further off
     settled_rad: float = math.radians(0.5)         # a stretch starts (and a turn ends) within this heading error
     position_tolerance_m: float = 0.01    # at the junction centre within this distance (slowing down to it)
+    measure_band_m: float = 0.4           # a stretch is measured only while the left reading stays within this
+                                          # of the set distance (beyond: an oblique wall or an opening's edge)
+    max_wall_change_rad: float = math.radians(25.0)  # reject (and re-measure) a wall direction further off
+                                          # the current estimate than this (corridors are straight)
+    sonar_half_angle_rad: float = math.radians(12.5)  # side sonar's half cone: an edge is seen this much late
+    recover_after_steps: int = 40         # blocked this many steps (2 s at 20 Hz): turn on the spot away
 
     def validate(self) -> None:
         for name in ("wall_distance_m", "speed_mps", "realign_every_m", "stop_distance_m", "diagonal_stop_distance_m",
                      "opening_threshold_m",
                      "opening_confirm_m", "junction_half_width_m", "turn_rate_radps", "heading_gain_per_s",
                      "distance_gain", "max_approach_rad", "turn_in_place_rad", "settled_rad",
-                     "position_tolerance_m"):
+                     "position_tolerance_m", "measure_band_m", "max_wall_change_rad"):
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0.0):
                 raise ValueError(f"{name}: must be a positive number, got {value}")
+        if not (math.isfinite(self.sonar_half_angle_rad) and 0.0 <= self.sonar_half_angle_rad < math.pi / 4.0):
+            raise ValueError(f"sonar_half_angle_rad: must be in [0, pi/4), got {self.sonar_half_angle_rad}")
+        if not (isinstance(self.recover_after_steps, int) and self.recover_after_steps >= 0):
+            raise ValueError(f"recover_after_steps: must be a non-negative int, got {self.recover_after_steps}")
         if not (math.isfinite(self.resume_margin_m) and self.resume_margin_m >= 0.0):
             raise ValueError(f"resume_margin_m: must be a non-negative number, got {self.resume_margin_m}")
         if self.opening_threshold_m <= self.wall_distance_m:
@@ -184,6 +194,10 @@ class WallFollower:
         self.gap_start: dict[str, tuple[float, float] | None] = {LEFT: None, RIGHT: None}
         self.junction: Junction | None = None
         self.blocked = False                     # emergency stop in force
+        self.blocked_steps = 0                   # steps blocked so far (turning away after recover_after_steps)
+        self.turn_away = 0.0                     # sign of the on-the-spot turn away from the obstacle
+        self.last_side = {LEFT: settings.wall_distance_m, RIGHT: settings.wall_distance_m}   # last side reading that was a wall (for the edge compensation)
+        self.rejected = 0                        # measurements rejected (oblique wall, edge, implausible angle)
         self.last_measurement: tuple[float, float] | None = None   # (wall angle, wall distance) of the last stretch
 
     # ------------------------------------------------------------------------------------ commands
@@ -210,21 +224,41 @@ class WallFollower:
         if self.state == TURNING:
             return self.turning(odom)
         command = self.junction_step(sonar, odom) if self.state == JUNCTION else self.following(sonar, odom)
-        return self.guard(command, sonar)
+        return self.guard(command, sonar, odom)
 
-    def guard(self, command: Command, sonar: Sonar) -> Command:
-        """Emergency stop (linear and angular zero) of a forward command while an obstacle is too close ahead;
-        once stopped, the front must clear by ``resume_margin_m`` more before the robot drives on."""
+    def guard(self, command: Command, sonar: Sonar, odom: OdomPose | None = None) -> Command:
+        """Emergency stop of a forward command while an obstacle is too close ahead; once stopped, the front must
+        clear by ``resume_margin_m`` more before the robot drives on.
+
+        Only forward motion is blocked. The robot first waits ``recover_after_steps`` steps (a person may step
+        aside), then turns on the spot towards the freer side (the larger of the front-left/right readings)
+        until the way is clear; it then holds its new heading and re-measures the wall (a stretch that the
+        turn interrupted is dropped). Without that turn a robot steered into a wall would never get free."""
         s = self.settings
         margin = s.resume_margin_m if self.blocked else 0.0
         too_close = (sonar.front < s.stop_distance_m + margin
                      or min(sonar.front_left, sonar.front_right) < s.diagonal_stop_distance_m + margin)
-        if command.linear > 0.0 and too_close:
+        turning_away = self.blocked and self.blocked_steps > s.recover_after_steps
+        if (command.linear > 0.0 or turning_away) and too_close:
             event = command.event if self.blocked else OBSTACLE
-            self.blocked = True
-            return Command(0.0, 0.0, event)
-        if command.linear > 0.0:
+            if not self.blocked:
+                self.blocked, self.blocked_steps = True, 0
+                self.turn_away = 1.0 if _free(sonar.front_left) + _free(sonar.left) >= \
+                    _free(sonar.front_right) + _free(sonar.right) else -1.0
+            self.blocked_steps += 1
+            self.stretch = None
+            if self.blocked_steps <= s.recover_after_steps:
+                return Command(0.0, 0.0, event)
+            return Command(0.0, self.turn_away * s.turn_rate_radps, event)
+        if (command.linear > 0.0 or turning_away) and self.blocked:
             self.blocked = False
+            if turning_away and odom is not None:
+                # Turned away: hold the heading reached and measure the wall again from here.
+                self.stretch = None
+                if self.state == FOLLOWING:
+                    self.target_yaw = odom.yaw
+                    command = Command(command.linear, 0.0, command.event)
+            self.blocked_steps = 0
         return command
 
     def following(self, sonar: Sonar, odom: OdomPose) -> Command:
@@ -244,19 +278,31 @@ class WallFollower:
         for side, reading in ((LEFT, sonar.left), (RIGHT, sonar.right)):
             if reading <= s.opening_threshold_m:
                 self.wall_seen[side], self.gap_start[side] = True, None
+                if reading > 0.0:
+                    self.last_side[side] = reading
             elif self.wall_seen[side] and self.gap_start[side] is None:
                 self.gap_start[side] = (odom.x, odom.y)
         for side in (LEFT, RIGHT):
             start = self.gap_start[side]
             if start is not None and math.hypot(odom.x - start[0], odom.y - start[1]) >= s.opening_confirm_m:
-                return Junction(start[0], start[1], side, self.wall_yaw, s.junction_half_width_m)
+                # The cone still sees the corner until it is half a cone behind the beam: the true edge is
+                # (distance to the wall) * tan(half angle) before where the reading jumped.
+                late = min(self.last_side[side], s.opening_threshold_m) * math.tan(s.sonar_half_angle_rad)
+                axis = self.wall_yaw
+                return Junction(start[0] - late * math.cos(axis), start[1] - late * math.sin(axis), side, axis,
+                                s.junction_half_width_m)
         return None
 
     def measure(self, left: float, odom: OdomPose) -> None:
-        """Fig. 8(b): d1 once the heading has settled, d2 after ``realign_every_m``; then realign."""
+        """Fig. 8(b): d1 once the heading has settled, d2 after ``realign_every_m``; then realign.
+
+        Only a reading within ``measure_band_m`` of the set distance is taken for the followed wall: right after
+        a turn or next to an opening's edge the 25 deg cone sees an oblique wall or a corner further off, which
+        would corrupt d1 or d2; the stretch is then dropped and measured again. A wall direction more than
+        ``max_wall_change_rad`` off the current estimate is rejected as well (straight corridors)."""
         s = self.settings
-        if not (0.0 <= left <= s.opening_threshold_m):
-            self.stretch = None                  # no wall beside the robot: nothing to measure against
+        if not (0.0 <= left <= s.wall_distance_m + s.measure_band_m):
+            self.stretch = None                  # no (plausible) followed wall beside the robot
             return
         if self.stretch is None:
             if abs(wrap_angle(self.target_yaw - odom.yaw)) <= s.settled_rad:
@@ -267,6 +313,10 @@ class WallFollower:
             return
         mean_yaw = self.stretch.yaw + wrap_angle(odom.yaw - self.stretch.yaw) / 2.0
         angle = wall_angle(self.stretch.d1, left, travel)
+        if abs(wrap_angle(mean_yaw + angle - self.wall_yaw)) > s.max_wall_change_rad:
+            self.rejected += 1                   # implausible: an oblique wall or a corner was read; again
+            self.stretch = None
+            return
         self.wall_yaw = wrap_angle(mean_yaw + angle)
         distance = wall_distance(left, wrap_angle(self.wall_yaw - odom.yaw))
         approach = max(-s.max_approach_rad, min(s.max_approach_rad, s.distance_gain * (distance - s.wall_distance_m)))
@@ -283,7 +333,9 @@ class WallFollower:
         along = junction.along(odom)
         reading = sonar.left if junction.side == LEFT else sonar.right
         if not junction.resumed and reading <= self.settings.opening_threshold_m and along < junction.centre_s:
-            junction = self.junction = replace(junction, centre_s=along / 2.0, resumed=True)
+            # The cone sees the far corner early: its slant range times sin(half angle) before the edge.
+            early = min(reading, self.settings.opening_threshold_m) * math.sin(self.settings.sonar_half_angle_rad)
+            junction = self.junction = replace(junction, centre_s=(along + early) / 2.0, resumed=True)
         error = junction.centre_s - along
         if event is None and abs(error) <= self.settings.position_tolerance_m:
             self.state, self.junction = CENTRE, None
@@ -297,7 +349,7 @@ class WallFollower:
         action, self.pending = self.pending, None
         if action is None:
             self.resume_following(self.wall_yaw)
-            return self.guard(self.following(sonar, odom), sonar)
+            return self.guard(self.following(sonar, odom), sonar, odom)
         reading = {LEFT: sonar.left, RIGHT: sonar.right, STRAIGHT: sonar.front}.get(action, math.inf)
         if reading <= self.settings.opening_threshold_m:
             self.state = HALTED
@@ -336,3 +388,8 @@ class WallFollower:
         error = wrap_angle(self.target_yaw - odom.yaw)
         linear = 0.0 if abs(error) > self.settings.turn_in_place_rad else self.settings.speed_mps
         return Command(linear, self.heading_rate(odom))
+
+
+def _free(reading: float) -> float:
+    """A range for comparing how free a side is (no echo: far; closer than the minimum range: zero)."""
+    return 10.0 if reading == math.inf else max(0.0, reading)

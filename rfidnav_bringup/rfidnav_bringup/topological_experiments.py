@@ -1,0 +1,226 @@
+"""In-process topological navigation (paper 004): the mission executor and the sonar wall follower driving an
+idealised robot through a simulated building, for the paper's run and statistics.
+
+The robot is a unicycle stepped at ``step_s`` with the wall follower's (linear, angular) command (no motor
+dynamics; odometry is the true pose). Every step the sonar model's ranges (one per transducer, measured from
+where it is mounted) are turned into distances from the robot's centre, as the follower expects, by adding
+each transducer's mounting offset along its bearing; the wall-tag reader (default induction area: antenna at
+the centre, facing left, 40 x 100 cm) reads with the given miss probability, decided once per tag PASSAGE (the
+paper's read failure: a tag not read while the robot passes it) when the tag comes into reach, and drawn anew
+once it has left reach (per inventory round a tag in reach for ~40 rounds would practically never be missed). A tag id different from the last
+one read goes to ``MissionExecutor.on_tag``; the follower's junction events go to ``on_junction``; turn
+decisions go to ``WallFollower.command_turn``; ``stop`` ends the mission once the robot has driven on to the
+goal junction's centre (see ``FINAL_APPROACH_M``). Walls only reflect sonar: a robot
+driving into one is not stopped by the simulation (the follower's emergency stop is all there is).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from rfidnav_bringup.scenario import CONFIG_DIR
+from rfidnav_control.wall_following import (JUNCTION_CENTRE, NO_OPENING, OBSTACLE, TURN_DONE, OdomPose, Sonar,
+                                            WallFollower, WallFollowerSettings)
+from rfidnav_planning.mission_executor import STOP, TURNS, MissionExecutor
+from rfidnav_planning.topological_map import UNKNOWN, TopologicalMap, load_topological_map, opposite
+from rfidnav_sim.sonar_model import PAPER_LAYOUT, SonarModel
+from rfidnav_sim.wall_tag_model import InductionArea, WallTagReader
+from rfidnav_sim.world import World, load_world
+
+GOAL_RADIUS_M = 0.5                       # success: the robot stopped within this distance of the goal node
+# The goal's tag is read ~1.8-2 m before its node (tags are 1 m before the junction's edge, the edge half a
+# 1.6 m hallway before the node). After the executor's stop the robot therefore drives on to the junction's
+# centre (the follower's junction_centre), stopping early if blocked or after FINAL_APPROACH_M of travel.
+FINAL_APPROACH_M = 1.6 + 1.0 + 0.6        # hallway width + tag setback + margin
+FOLLOWER_EVENTS = (JUNCTION_CENTRE, NO_OPENING, TURN_DONE)
+FIG5_MAP = CONFIG_DIR / "maps" / "building_fig5.yaml"
+FIG5_WORLD = CONFIG_DIR / "worlds" / "building_fig5.yaml"
+LARGE_MAP = CONFIG_DIR / "maps" / "building_large.yaml"
+LARGE_WORLD = CONFIG_DIR / "worlds" / "building_large.yaml"
+# Sonar name -> the follower's Sonar field it feeds.
+SONAR_FIELDS = {"front": "front", "left": "left", "right": "right",
+                "front_left_45": "front_left", "front_right_45": "front_right"}
+
+
+@dataclass(frozen=True)
+class MissionRun:
+    success: bool                          # the executor's success AND within GOAL_RADIUS_M of the goal node
+    message: str
+    path_length_m: float                   # true distance driven
+    shortest_path_m: float                 # start pose -> first tag's node (straight) + shortest route to the goal
+    tags_missed: int
+    replans: int
+    nodes_visited: tuple[str, ...]
+    duration_s: float
+    final_position: tuple[float, float]
+    turns: tuple[tuple[str, str], ...] = ()   # (node, turn) made at junction centres, and U-turns, in order
+    first_node: str | None = None
+
+
+def mounting_offsets(layout=PAPER_LAYOUT) -> dict[str, float]:
+    """Per transducer, its position's component along its bearing: add it to a reading for the centre distance."""
+    return {r.name: r.position[0] * math.cos(r.bearing_rad) + r.position[1] * math.sin(r.bearing_rad)
+            for r in layout}
+
+
+def centre_sonar(ranges: dict[str, float], offsets: dict[str, float]) -> Sonar:
+    """The follower's Sonar (distances from the robot's centre) from the transducers' readings (inf stays inf)."""
+    return Sonar(**{field: ranges[name] + offsets[name] for name, field in SONAR_FIELDS.items()})
+
+
+def start_pose_for(topological_map: TopologicalMap, tag_id: str | int,
+                   before_m: float = 3.0, wall_distance_m: float = 0.8,
+                   hallway_width_m: float = 1.6) -> tuple[float, float, float]:
+    """A pose ``before_m`` before the node of ``tag_id`` (its centre, along the hallway the tag is read in),
+    ``wall_distance_m`` from the left wall, heading towards the node: the robot then reads the tag before the
+    junction. The hallway's centre line is taken to run through the node's position."""
+    located = topological_map.locate_tag(tag_id)
+    if located is None:
+        raise ValueError(f"tag '{tag_id}' is not in map '{topological_map.name}'")
+    node, arrival_side = located
+    position = topological_map.nodes[node].position
+    if position is None:
+        raise ValueError(f"node '{node}' of map '{topological_map.name}' has no position")
+    back = topological_map.direction_angle_rad(arrival_side)        # from the node into the arrival hallway
+    heading = topological_map.direction_angle_rad(opposite(arrival_side))
+    # The left wall is at +90 deg from the heading, half a hallway off the centre line.
+    lateral = hallway_width_m / 2.0 - wall_distance_m                # towards the left wall
+    x = position[0] + before_m * math.cos(back) + lateral * math.cos(heading + math.pi / 2.0)
+    y = position[1] + before_m * math.sin(back) + lateral * math.sin(heading + math.pi / 2.0)
+    return (x, y, heading)
+
+
+def shortest_path_m(topological_map: TopologicalMap, start_xy: tuple[float, float], first_node: str,
+                    goal_node: str) -> float:
+    route = topological_map.route(first_node, goal_node, weight="length")
+    along = sum(topological_map.hallway_length_m(a, topological_map.departure_direction(a, b, "length"))
+                for a, b in zip(route, route[1:]))
+    return math.dist(start_xy, topological_map.nodes[first_node].position) + along
+
+
+def run_mission(world: World, topological_map: TopologicalMap, start_pose: tuple[float, float, float],
+                goal_node: str, rng: np.random.Generator, miss_probability: float = 0.0, step_s: float = 0.05,
+                max_time_s: float = 900.0, settings: WallFollowerSettings = WallFollowerSettings()) -> MissionRun:
+    sonar_model = SonarModel(PAPER_LAYOUT, np.array(world.walls, dtype=float).reshape(-1, 4))
+    offsets = mounting_offsets()
+    if not 0.0 <= miss_probability <= 1.0:
+        raise ValueError(f"miss_probability: {miss_probability} is not in [0, 1]")
+    reader = WallTagReader(InductionArea(), world.wall_tags, 0.0)      # misses per passage, below
+    passage_read: dict[int, bool] = {}    # tag index in reach -> read on this passage
+    follower = WallFollower(settings)
+    executor = MissionExecutor(topological_map)
+    executor.start(goal_node)
+    x, y, yaw = start_pose
+    path = 0.0
+    t = 0.0
+    last_tag: str | None = None
+    first_node: str | None = None
+    turns: list[tuple[str, str]] = []
+    message = "timeout"
+    finished = False
+
+    def apply(d, at_junction: bool) -> bool:
+        nonlocal message
+        if d.message:
+            message = d.message
+        if d.action in TURNS:
+            follower.command_turn(d.action)
+            if at_junction or d.action == "back":      # a tag's left/right/straight waits for the junction
+                turns.append((executor.state.current_node or "?", d.action))
+        return d.action == STOP
+
+    def read_tags() -> list[str]:
+        reach = reader.in_reach(x, y, yaw)
+        for index in list(passage_read):
+            if not reach[index]:
+                del passage_read[index]                # left reach: the next passage draws again
+        tags = []
+        for index in np.flatnonzero(reach):
+            if index not in passage_read:
+                passage_read[index] = bool(rng.random() >= miss_probability)
+            if passage_read[index]:
+                tags.append(reader.tags[index].tag_id)
+        return tags
+
+    steps = int(round(max_time_s / step_s))
+    stopping_from: tuple[float, float] | None = None   # where the stop came: driving on to the junction centre
+    for _ in range(steps):
+        if stopping_from is not None:
+            command = follower.step(centre_sonar(sonar_model.ranges(x, y, yaw, rng), offsets), OdomPose(x, y, yaw))
+            if (command.event in (JUNCTION_CENTRE, OBSTACLE, NO_OPENING)
+                    or math.dist((x, y), stopping_from) >= FINAL_APPROACH_M):
+                finished = True
+                break
+        else:
+            command = None
+        for tag in (read_tags() if command is None else ()):
+            if tag == last_tag:
+                continue
+            last_tag = tag
+            located = topological_map.locate_tag(tag)
+            if first_node is None and located is not None:
+                first_node = located[0]
+            if apply(executor.on_tag(tag), False):
+                stopping_from = (x, y)
+                break
+        if command is None:
+            if stopping_from is not None:
+                continue                               # drive on to the centre from the next step
+            command = follower.step(centre_sonar(sonar_model.ranges(x, y, yaw, rng), offsets),
+                                    OdomPose(x, y, yaw))
+            if command.event in FOLLOWER_EVENTS:
+                if apply(executor.on_junction(command.event), True):
+                    finished = True                    # stopped at a junction event: already there
+                    break
+        # Unicycle, midpoint heading.
+        mid = yaw + 0.5 * command.angular * step_s
+        dx, dy = command.linear * step_s * math.cos(mid), command.linear * step_s * math.sin(mid)
+        x, y = x + dx, y + dy
+        yaw = math.atan2(math.sin(yaw + command.angular * step_s), math.cos(yaw + command.angular * step_s))
+        path += math.hypot(dx, dy)
+        t += step_s
+
+    state = executor.state
+    outcome = state.outcome
+    goal_xy = topological_map.nodes[goal_node].position
+    near = goal_xy is not None and math.dist((x, y), goal_xy) <= GOAL_RADIUS_M
+    success = bool(outcome is not None and outcome.success and near)
+    if not finished:
+        message = f"no stop within {max_time_s:.0f} s (last: {message})"
+    elif outcome is not None and outcome.success and not near:
+        message += f"; but stopped {math.dist((x, y), goal_xy):.2f} m from the goal node"
+    shortest = (shortest_path_m(topological_map, start_pose[:2], first_node, goal_node)
+                if first_node is not None else math.nan)
+    return MissionRun(success, message, path, shortest, state.tags_missed, state.replans,
+                      tuple(state.nodes_visited), t, (x, y), tuple(turns), first_node)
+
+
+def paper_run(rng: np.random.Generator, miss_probability: float = 0.0) -> MissionRun:
+    """Paper 004 section 5: from before tag 23 (arriving at h from the West) to g (tag 19), a right turn at h."""
+    topological_map = load_topological_map(FIG5_MAP)
+    return run_mission(load_world(FIG5_WORLD), topological_map, start_pose_for(topological_map, "23"), "g", rng,
+                       miss_probability)
+
+
+def random_missions(count: int, miss_probability: float, seed: int,
+                    map_path: Path = LARGE_MAP, world_path: Path = LARGE_WORLD) -> list[MissionRun]:
+    """``count`` missions on the large floor: a random start tag (on a mapped hallway) and a random goal node other
+    than the start tag's node, seeded; each mission gets its own generator."""
+    topological_map = load_topological_map(map_path)
+    world = load_world(world_path)
+    tags = sorted(tag for node in topological_map.nodes.values() for side, hallway in node.hallways.items()
+                  if hallway.neighbour != UNKNOWN for tag in hallway.tags)
+    choose = np.random.default_rng([seed, 0])
+    runs = []
+    for index in range(count):
+        tag = tags[int(choose.integers(len(tags)))]
+        start_node = topological_map.locate_tag(tag)[0]
+        goals = [name for name in topological_map.nodes if name != start_node]
+        goal = goals[int(choose.integers(len(goals)))]
+        runs.append(run_mission(world, topological_map, start_pose_for(topological_map, tag), goal,
+                                np.random.default_rng([seed, index + 1]), miss_probability))
+    return runs
