@@ -19,6 +19,7 @@ from rfidnav_common.geometry import quaternion_to_yaw, yaw_to_quaternion
 from rfidnav_common.ros import SENSOR_QOS, declare_parameters, run_node, seconds_of
 from rfidnav_common.seeding import rng_for
 from rfidnav_sim.parameters import CompassParameters
+from rfidnav_sim.schedule import GroundTruthSchedule
 
 UNKNOWN_ANGLE_VARIANCE = math.pi ** 2     # roll and pitch: not measured
 
@@ -29,16 +30,14 @@ class CompassSimNode(Node):
         self.params: CompassParameters = declare_parameters(self, CompassParameters)
         self.model = self.params.model()
         self.rng = rng_for(self.params.seed, "compass_sim")
-        self.period_s = 1.0 / self.params.rate_hz
-        self.next_reading_s = 0.0
+        self.schedule = GroundTruthSchedule(1.0 / self.params.rate_hz)
         self.publisher = self.create_publisher(Imu, "/compass", SENSOR_QOS)
         self.create_subscription(Odometry, "/sim/ground_truth", self.on_ground_truth, SENSOR_QOS)
 
     def on_ground_truth(self, msg: Odometry) -> None:
         now_s = seconds_of(msg.header.stamp)
-        if now_s + 1e-9 < self.next_reading_s:
+        if not self.schedule.due(now_s):
             return
-        self.next_reading_s = (math.floor(now_s / self.period_s + 1e-6) + 1) * self.period_s
         q = msg.pose.pose.orientation
         heading = self.model.measure(quaternion_to_yaw(q.x, q.y, q.z, q.w), self.rng)
         reading = Imu()

@@ -7,7 +7,6 @@ and the seed, never on process scheduling, so a run repeats exactly and a replay
 
 from __future__ import annotations
 
-import math
 from typing import Any
 
 from nav_msgs.msg import Odometry
@@ -20,6 +19,7 @@ from rfidnav_msgs.msg import TagReadArray
 from rfidnav_sim.conversions import reads_message
 from rfidnav_sim.parameters import ReaderParameters
 from rfidnav_sim.rfid_model import ReaderSimulator
+from rfidnav_sim.schedule import GroundTruthSchedule
 from rfidnav_sim.world import load_world
 
 
@@ -31,8 +31,7 @@ class RfidReaderSimNode(Node):
         world = load_world(self.params.world_file)
         self.simulator = ReaderSimulator.for_world(self.params.reader_model(), world,
                                                    rng_for(self.params.seed, "rfid_reader_sim"))
-        self.period_s = 1.0 / self.params.rate_hz
-        self.next_round_s = 0.0
+        self.schedule = GroundTruthSchedule(1.0 / self.params.rate_hz)
         self.reads_pub = self.create_publisher(TagReadArray, "/rfid/reads", SENSOR_QOS)
         self.create_subscription(Odometry, "/sim/ground_truth", self.on_ground_truth, SENSOR_QOS)
         lattice_tags = sum(deployment.tag_count() for deployment in world.deployments)
@@ -42,9 +41,8 @@ class RfidReaderSimNode(Node):
 
     def on_ground_truth(self, msg: Odometry) -> None:
         now_s = seconds_of(msg.header.stamp)
-        if now_s + 1e-9 < self.next_round_s:
+        if not self.schedule.due(now_s):
             return
-        self.next_round_s = (math.floor(now_s / self.period_s + 1e-6) + 1) * self.period_s
         pose = msg.pose.pose
         yaw = quaternion_to_yaw(pose.orientation.x, pose.orientation.y, pose.orientation.z, pose.orientation.w)
         reads = self.simulator.inventory(pose.position.x, pose.position.y, yaw, now_s)

@@ -7,7 +7,6 @@ walls, vectorized, and reports the nearest echo with noise, +inf when nothing ec
 
 from __future__ import annotations
 
-import math
 from typing import Any
 
 import numpy as np
@@ -19,6 +18,7 @@ from rfidnav_common.geometry import quaternion_to_yaw
 from rfidnav_common.ros import SENSOR_QOS, declare_parameters, run_node, seconds_of
 from rfidnav_common.seeding import rng_for
 from rfidnav_sim.parameters import SonarParameters
+from rfidnav_sim.schedule import GroundTruthSchedule
 from rfidnav_sim.sonar_model import PAPER_LAYOUT, SonarModel
 from rfidnav_sim.world import load_world
 
@@ -31,8 +31,7 @@ class SonarSimNode(Node):
         self.model = SonarModel(PAPER_LAYOUT, np.array(world.walls, dtype=float).reshape(-1, 4),
                                 self.params.noise_sd_m, self.params.noise_fraction, self.params.rays_per_beam)
         self.rng = rng_for(self.params.seed, "sonar_sim")
-        self.period_s = 1.0 / self.params.rate_hz
-        self.next_sweep_s = 0.0
+        self.schedule = GroundTruthSchedule(1.0 / self.params.rate_hz)
         self.publishers_by_name = {r.name: self.create_publisher(Range, f"/sonar/{r.name}", SENSOR_QOS)
                                    for r in PAPER_LAYOUT}
         self.create_subscription(Odometry, "/sim/ground_truth", self.on_ground_truth, SENSOR_QOS)
@@ -41,9 +40,8 @@ class SonarSimNode(Node):
 
     def on_ground_truth(self, msg: Odometry) -> None:
         now_s = seconds_of(msg.header.stamp)
-        if now_s + 1e-9 < self.next_sweep_s:
+        if not self.schedule.due(now_s):
             return
-        self.next_sweep_s = (math.floor(now_s / self.period_s + 1e-6) + 1) * self.period_s
         pose = msg.pose.pose
         yaw = quaternion_to_yaw(pose.orientation.x, pose.orientation.y, pose.orientation.z, pose.orientation.w)
         readings = self.model.ranges(pose.position.x, pose.position.y, yaw, self.rng)

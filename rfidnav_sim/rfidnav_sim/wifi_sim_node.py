@@ -9,7 +9,6 @@ taken, so scans depend on the poses and the seed only, as the RFID reader's roun
 from __future__ import annotations
 
 import dataclasses
-import math
 from typing import Any
 
 import numpy as np
@@ -21,6 +20,7 @@ from rfidnav_common.seeding import rng_for
 from rfidnav_msgs.msg import WifiScan
 from rfidnav_sim.conversions import wifi_scan_message
 from rfidnav_sim.parameters import WifiSimParameters
+from rfidnav_sim.schedule import GroundTruthSchedule
 from rfidnav_sim.wifi_model import WifiModel
 from rfidnav_sim.world import load_world
 
@@ -35,7 +35,7 @@ class WifiSimNode(Node):
         walls = np.array(world.walls, dtype=float).reshape(-1, 4)
         self.model = WifiModel(world.access_points, walls, receiver, world.wifi_seed)
         self.rng = rng_for(self.params.seed, "wifi_sim")
-        self.next_scan_s = 0.0
+        self.schedule = GroundTruthSchedule(self.params.scan_period_s)
         self.publisher = self.create_publisher(WifiScan, "/wifi/scan", SENSOR_QOS)
         self.create_subscription(Odometry, "/sim/ground_truth", self.on_ground_truth, SENSOR_QOS)
         self.get_logger().info(f"{len(world.access_points)} access points, {len(world.walls)} walls, "
@@ -43,10 +43,8 @@ class WifiSimNode(Node):
 
     def on_ground_truth(self, msg: Odometry) -> None:
         now_s = seconds_of(msg.header.stamp)
-        if now_s + 1e-9 < self.next_scan_s:
+        if not self.schedule.due(now_s):
             return
-        period = self.params.scan_period_s
-        self.next_scan_s = (math.floor(now_s / period + 1e-6) + 1) * period
         position = msg.pose.pose.position
         readings = self.model.scan(position.x, position.y, self.rng)
         self.publisher.publish(wifi_scan_message(readings, msg.header.stamp, self.params.frame_id,
