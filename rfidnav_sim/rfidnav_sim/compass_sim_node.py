@@ -15,9 +15,10 @@ from nav_msgs.msg import Odometry
 from rclpy.node import Node
 from sensor_msgs.msg import Imu
 
-from rfidnav_common.geometry import quaternion_to_yaw, yaw_to_quaternion
+from rfidnav_common.geometry import yaw_to_quaternion
 from rfidnav_common.ros import SENSOR_QOS, declare_parameters, run_node, seconds_of
 from rfidnav_common.seeding import rng_for
+from rfidnav_sim.conversions import pose_of
 from rfidnav_sim.parameters import CompassParameters
 from rfidnav_sim.schedule import GroundTruthSchedule
 
@@ -38,8 +39,7 @@ class CompassSimNode(Node):
         now_s = seconds_of(msg.header.stamp)
         if not self.schedule.due(now_s):
             return
-        q = msg.pose.pose.orientation
-        heading = self.model.measure(quaternion_to_yaw(q.x, q.y, q.z, q.w), self.rng)
+        heading = self.model.measure(pose_of(msg)[2], self.rng)
         reading = Imu()
         reading.header.stamp = msg.header.stamp
         reading.header.frame_id = self.params.frame_id

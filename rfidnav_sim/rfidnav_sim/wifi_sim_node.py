@@ -18,7 +18,7 @@ from rclpy.node import Node
 from rfidnav_common.ros import SENSOR_QOS, declare_parameters, run_node, seconds_of
 from rfidnav_common.seeding import rng_for
 from rfidnav_msgs.msg import WifiScan
-from rfidnav_sim.conversions import wifi_scan_message
+from rfidnav_sim.conversions import pose_of, wifi_scan_message
 from rfidnav_sim.parameters import WifiSimParameters
 from rfidnav_sim.schedule import GroundTruthSchedule
 from rfidnav_sim.wifi_model import WifiModel
@@ -45,8 +45,8 @@ class WifiSimNode(Node):
         now_s = seconds_of(msg.header.stamp)
         if not self.schedule.due(now_s):
             return
-        position = msg.pose.pose.position
-        readings = self.model.scan(position.x, position.y, self.rng)
+        x, y, _ = pose_of(msg)
+        readings = self.model.scan(x, y, self.rng)
         self.publisher.publish(wifi_scan_message(readings, msg.header.stamp, self.params.frame_id,
                                                  self.params.interface))
 
