@@ -82,11 +82,13 @@ def parser() -> argparse.ArgumentParser:
     report.add_argument("run", type=Path)
     report.add_argument("--json", action="store_true")
     reproduce = verbs.add_parser("reproduce", help="the papers' experiments in-process, beside the papers' figures")
-    reproduce.add_argument("name", choices=["flc", "partitions", "two_tier"],
-                           help="flc: paper 001 sec. V; partitions: paper 000 sec. 6; two_tier: paper 003 sec. 4.2")
+    reproduce.add_argument("name", choices=["flc", "partitions", "two_tier", "topological"],
+                           help="flc: paper 001 sec. V; partitions: paper 000 sec. 6; two_tier: paper 003 sec. 4.2; "
+                                "topological: paper 004 sec. 5 and missions under read failures")
     reproduce.add_argument("--seeds", type=int, default=10, help="flc: seeds per setting")
     reproduce.add_argument("--runs", type=int, help="partitions: runs per (read range, level, method), default 250; "
-                                                    "two_tier: runs per route, default 20")
+                                                    "two_tier: runs per route, default 20; topological: missions "
+                                                    "per miss rate, default 100")
     reproduce.add_argument("--out", type=Path, default=WORKSPACE / "bags" / "reproduce")
     reproduce.add_argument("--json", action="store_true")
     survey = verbs.add_parser("survey", help="paper 003: build a radio map file for a scenario's world (in-process)")
@@ -229,6 +231,10 @@ def verb_reproduce(args) -> int:
         from rfidnav_bringup.reproduce_partitions import RUNS_PER_CURVE, reproduce_partitions
 
         return reproduce_partitions(runs=args.runs or RUNS_PER_CURVE, out_dir=args.out, as_json=args.json)
+    if args.name == "topological":
+        from rfidnav_bringup.reproduce_topological import MISSIONS, reproduce_topological
+
+        return reproduce_topological(missions=args.runs or MISSIONS, out_dir=args.out, as_json=args.json)
     if args.name == "two_tier":
         from rfidnav_bringup.reproduce_two_tier import RUNS, reproduce_two_tier
 
