@@ -76,7 +76,7 @@ def test_wifi_sim_scans_at_its_period_with_the_worlds_radio_and_drops_what_it_ca
     graph.spin_until(lambda: len(scans) >= 3, "3 scans on /wifi/scan")
     assert [round(s.header.stamp.sec + s.header.stamp.nanosec * 1e-9, 6) for s in scans] == [0.02, 0.5, 1.0]
     world = load_world(world_file)
-    model = WifiModel(world.access_points, np.array(world.walls), world.wifi, world.wifi_seed)
+    model = WifiModel(world.access_points, world.wall_segments(), world.wifi, world.wifi_seed)
     for scan, x in zip(scans, (0.05, 1.25, 2.5)):
         assert scan.interface == "sim"
         heard = {ap.bssid: ap.rssi_dbm for ap in scan.access_points}

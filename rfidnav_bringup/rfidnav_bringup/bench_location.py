@@ -24,7 +24,7 @@ from rfidnav_bringup.errors import ReadinessError
 from rfidnav_bringup.orchestrator import child_environment
 from rfidnav_bringup.processes import DomainLease
 from rfidnav_bringup.scenario import CONFIG_DIR
-from rfidnav_bringup.two_tier_experiments import wifi_model
+from rfidnav_bringup.two_tier_experiments import floor_extent, wifi_model
 from rfidnav_common.robot_map import load_route_map
 from rfidnav_localization.fingerprint import RadioMap
 from rfidnav_localization.radio_map_file import load_radio_map
@@ -39,9 +39,11 @@ ANSWER_TIMEOUT_S = 10.0
 
 
 def scans(count: int, seed: int) -> list[dict[str, float]]:
-    wifi = wifi_model(load_world(WORLD_FILE))
+    world = load_world(WORLD_FILE)
+    wifi = wifi_model(world)
+    width, height = floor_extent(world)
     rng = np.random.default_rng(seed)
-    points = rng.uniform((0.2, 0.2), (11.8, 7.8), (count, 2))
+    points = rng.uniform((0.2, 0.2), (width - 0.2, height - 0.2), (count, 2))
     return [{r.bssid: r.rssi_dbm for r in wifi.scan(float(x), float(y), rng)} for x, y in points]
 
 

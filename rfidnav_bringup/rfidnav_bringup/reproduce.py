@@ -153,6 +153,14 @@ def progress(line: str, final: bool) -> None:
 
 # ----------------------------------------------------------------------------------------- aggregate
 
+def save(figure: plt.Figure, path: Path, dpi: int) -> Path:
+    """Lay out, write and close a reproduction's figure."""
+    figure.tight_layout()
+    figure.savefig(path, dpi=dpi)
+    plt.close(figure)
+    return path
+
+
 def mean_or_none(values: list[float]) -> float | None:
     return statistics.fmean(values) if values else None
 
@@ -308,11 +316,7 @@ def plot_scenario(scenario: Scenario, runs: dict[str, RouteRun], out_dir: Path) 
     bottom.set_ylabel("e(t) [cm], + = left of path")
     bottom.legend(loc="best")
     bottom.grid(True, alpha=0.3)
-    figure.tight_layout()
-    path = out_dir / f"flc_{scenario.name}.png"
-    figure.savefig(path, dpi=100)
-    plt.close(figure)
-    return path
+    return save(figure, out_dir / f"flc_{scenario.name}.png", dpi=100)
 
 
 def write_plots(results: dict[tuple[str, str], list[RouteRun]], out_dir: Path) -> list[Path]:

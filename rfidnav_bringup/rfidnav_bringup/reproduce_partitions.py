@@ -41,7 +41,7 @@ from rfidnav_common.geometry import wrap_angle  # noqa: E402
 from rfidnav_common.seeding import rng_for  # noqa: E402
 from rfidnav_common.tag_lattice import LAYOUTS, Deployment, make_deployment, partitions_along_segment  # noqa: E402
 from rfidnav_bringup.partition_experiments import random_task, run_navigation  # noqa: E402
-from rfidnav_bringup.reproduce import mean_or_none, progress, table  # noqa: E402
+from rfidnav_bringup.reproduce import mean_or_none, progress, save, table  # noqa: E402
 from rfidnav_bringup.scenario import CONFIG_DIR  # noqa: E402
 from rfidnav_localization.parameters import PartitionLocalizerParameters  # noqa: E402
 from rfidnav_localization.partition_localization import (LocalizerSettings, PartitionLocalizer,  # noqa: E402
@@ -418,13 +418,6 @@ def json_rows(summaries, fig11: OrientationErrors | None, counts, accuracy, runs
 
 
 # ---------------------------------------------------------------------------------------------- plots
-
-def save(figure: plt.Figure, path: Path, dpi: int) -> Path:
-    figure.tight_layout()
-    figure.savefig(path, dpi=dpi)
-    plt.close(figure)
-    return path
-
 
 def plot_costs(summaries, out_dir: Path) -> Path:
     figure, axes = plt.subplots(len(METHODS), len(NAVIGATION_RANGES_M), figsize=(15, 8), sharex=True, squeeze=False)

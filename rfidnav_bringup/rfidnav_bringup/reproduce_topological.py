@@ -23,7 +23,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from rfidnav_bringup.reproduce import progress, table  # noqa: E402
+from rfidnav_bringup.reproduce import progress, save, table  # noqa: E402
 from rfidnav_bringup.topological_experiments import MissionRun, paper_run, random_missions  # noqa: E402
 from rfidnav_common.errors import ConfigError  # noqa: E402
 
@@ -124,8 +124,4 @@ def plot_summaries(summaries: list[RateSummary], out_dir: Path) -> Path:
     axes[1].axhline(PATH_TARGET, color="grey", linestyle="--", label="target: within 10 %")
     axes[1].set(xlabel="tag read misses [%]", ylabel="path / shortest (successful)", title="Path length")
     axes[1].legend()
-    figure.tight_layout()
-    path = out_dir / "topological_missions.png"
-    figure.savefig(path, dpi=110)
-    plt.close(figure)
-    return path
+    return save(figure, out_dir / "topological_missions.png", dpi=110)

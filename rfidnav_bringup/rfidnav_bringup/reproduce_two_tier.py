@@ -33,9 +33,10 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from rfidnav_bringup.reproduce import table  # noqa: E402
+from rfidnav_bringup.reproduce import save, table  # noqa: E402
 from rfidnav_bringup.scenario import CONFIG_DIR  # noqa: E402
-from rfidnav_bringup.two_tier_experiments import Site, grid_radio_map, robot_survey, run_two_tier  # noqa: E402
+from rfidnav_bringup.two_tier_experiments import (Site, floor_extent, grid_radio_map, robot_survey,  # noqa: E402
+                                                  run_two_tier)
 from rfidnav_common.errors import ConfigError  # noqa: E402
 from rfidnav_common.robot_map import load_route_map  # noqa: E402
 from rfidnav_common.seeding import rng_for  # noqa: E402
@@ -149,7 +150,7 @@ def fig11(site: Site, runs: int, seed: int) -> dict[str, list[float]]:
 
 def tier_one_errors(site: Site, radio_map: RadioMap, seed: int) -> list[float]:
     rng = rng_for(seed, "test points")
-    width, height = 12.0, 8.0
+    width, height = floor_extent(site.world)
     errors = []
     for _ in range(TEST_POINTS):
         point = (float(rng.uniform(0.2, width - 0.2)), float(rng.uniform(0.2, height - 0.2)))
@@ -271,8 +272,4 @@ def plot_figures(spiral, moving, routes, out_dir: Path) -> Path:
     axes[2].set_xticks(x, [p for _, p in points])
     axes[2].set(ylabel="median error [cm]", yscale="log", title="Fig. 12: error at the turning points")
     axes[2].legend()
-    figure.tight_layout()
-    path = out_dir / "two_tier_figs10_12.png"
-    figure.savefig(path, dpi=110)
-    plt.close(figure)
-    return path
+    return save(figure, out_dir / "two_tier_figs10_12.png", dpi=110)

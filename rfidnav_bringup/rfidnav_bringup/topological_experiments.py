@@ -105,7 +105,7 @@ def shortest_path_m(topological_map: TopologicalMap, start_xy: tuple[float, floa
 def run_mission(world: World, topological_map: TopologicalMap, start_pose: tuple[float, float, float],
                 goal_node: str, rng: np.random.Generator, miss_probability: float = 0.0, step_s: float = 0.05,
                 max_time_s: float = 900.0, settings: WallFollowerSettings = WallFollowerSettings()) -> MissionRun:
-    sonar_model = SonarModel(PAPER_LAYOUT, np.array(world.walls, dtype=float).reshape(-1, 4))
+    sonar_model = SonarModel(PAPER_LAYOUT, world.wall_segments())
     offsets = mounting_offsets()
     if not 0.0 <= miss_probability <= 1.0:
         raise ValueError(f"miss_probability: {miss_probability} is not in [0, 1]")

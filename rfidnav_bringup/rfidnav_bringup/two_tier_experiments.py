@@ -66,15 +66,15 @@ def wifi_model(world: World) -> WifiModel:
     receiver = parameters_from_mapping(WifiSimParameters, values, str(path))
     settings = dataclasses.replace(world.wifi, scan_noise_sd_db=receiver.scan_noise_sd_db,
                                    sensitivity_dbm=receiver.sensitivity_dbm)
-    return WifiModel(world.access_points, np.array(world.walls, dtype=float).reshape(-1, 4), settings, world.wifi_seed)
+    return WifiModel(world.access_points, world.wall_segments(), settings, world.wifi_seed)
 
 
 def grid_radio_map(world: World, spacing_m: float, rng: np.random.Generator, scans_per_point: int = 3) -> RadioMap:
     """A site survey on a regular grid at known positions (the usual manual way): each fingerprint is the mean
     of a few scans, as surveyors average."""
     wifi = wifi_model(world)
-    xs = np.arange(spacing_m / 2.0, _extent(world)[0], spacing_m)
-    ys = np.arange(spacing_m / 2.0, _extent(world)[1], spacing_m)
+    xs = np.arange(spacing_m / 2.0, floor_extent(world)[0], spacing_m)
+    ys = np.arange(spacing_m / 2.0, floor_extent(world)[1], spacing_m)
     fingerprints = []
     for x in xs:
         for y in ys:
@@ -89,8 +89,9 @@ def grid_radio_map(world: World, spacing_m: float, rng: np.random.Generator, sca
     return RadioMap(fingerprints)
 
 
-def _extent(world: World) -> tuple[float, float]:
-    walls = np.array(world.walls, dtype=float).reshape(-1, 4)
+def floor_extent(world: World) -> tuple[float, float]:
+    """(width, height) of a floor whose walls start at the origin: its walls' largest x and y."""
+    walls = world.wall_segments()
     return float(max(walls[:, 0].max(), walls[:, 2].max())), float(max(walls[:, 1].max(), walls[:, 3].max()))
 
 

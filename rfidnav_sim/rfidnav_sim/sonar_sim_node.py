@@ -9,7 +9,6 @@ from __future__ import annotations
 
 from typing import Any
 
-import numpy as np
 from nav_msgs.msg import Odometry
 from rclpy.node import Node
 from sensor_msgs.msg import Range
@@ -28,7 +27,7 @@ class SonarSimNode(Node):
         super().__init__("sonar_sim", **node_options)
         self.params: SonarParameters = declare_parameters(self, SonarParameters)
         world = load_world(self.params.world_file)
-        self.model = SonarModel(PAPER_LAYOUT, np.array(world.walls, dtype=float).reshape(-1, 4),
+        self.model = SonarModel(PAPER_LAYOUT, world.wall_segments(),
                                 self.params.noise_sd_m, self.params.noise_fraction, self.params.rays_per_beam)
         self.rng = rng_for(self.params.seed, "sonar_sim")
         self.schedule = GroundTruthSchedule(1.0 / self.params.rate_hz)

@@ -11,7 +11,6 @@ from __future__ import annotations
 import dataclasses
 from typing import Any
 
-import numpy as np
 from nav_msgs.msg import Odometry
 from rclpy.node import Node
 
@@ -32,8 +31,7 @@ class WifiSimNode(Node):
         world = load_world(self.params.world_file)
         receiver = dataclasses.replace(world.wifi, scan_noise_sd_db=self.params.scan_noise_sd_db,
                                        sensitivity_dbm=self.params.sensitivity_dbm)
-        walls = np.array(world.walls, dtype=float).reshape(-1, 4)
-        self.model = WifiModel(world.access_points, walls, receiver, world.wifi_seed)
+        self.model = WifiModel(world.access_points, world.wall_segments(), receiver, world.wifi_seed)
         self.rng = rng_for(self.params.seed, "wifi_sim")
         self.schedule = GroundTruthSchedule(self.params.scan_period_s)
         self.publisher = self.create_publisher(WifiScan, "/wifi/scan", SENSOR_QOS)

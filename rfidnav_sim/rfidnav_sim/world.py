@@ -80,6 +80,10 @@ class World:
     def tag_positions(self) -> np.ndarray:
         return np.array([tag.position for tag in self.tags], dtype=float).reshape(-1, 3)
 
+    def wall_segments(self) -> np.ndarray:
+        """The walls as an N x 4 array of [x1, y1, x2, y2] rows (N may be 0)."""
+        return np.array(self.walls, dtype=float).reshape(-1, 4)
+
 
 def world_from_section(section: Section) -> World:
     section.reject_unknown(("name", "frame_id", "tags", "walls", "lattices", "tag_groups", "wall_tags", "access_points",
