@@ -117,10 +117,12 @@ class RadioMap:
     def __init__(self, fingerprints: Iterable[Fingerprint] = ()) -> None:
         self._fingerprints: list[Fingerprint] = list(fingerprints)
         self._matrix: _Matrix | None = None
+        self._filled_rss: tuple[float, np.ndarray] | None = None    # (missing_rss_dbm, filled matrix)
 
     def add(self, *fingerprints: Fingerprint) -> None:
         self._fingerprints.extend(fingerprints)
         self._matrix = None     # rebuilt on next use, so a survey adding one at a time costs one build
+        self._filled_rss = None
 
     def __len__(self) -> int:
         return len(self._fingerprints)
@@ -156,7 +158,7 @@ class RadioMap:
         query[columns] = [readings[bssid] for bssid in known]
         # APs heard on neither side are 'missing' on both and add nothing, so the sum over every column of
         # the map equals the documented sum over the union of the two sides' APs.
-        filled = np.where(matrix.heard, matrix.rss, missing)
+        filled = self._filled(missing)
         distance = np.sqrt(np.square(filled - query).sum(axis=1))
         common = matrix.heard[:, columns].sum(axis=1)
         candidates = np.flatnonzero(common >= settings.min_common_aps)
@@ -183,6 +185,14 @@ class RadioMap:
         if self._matrix is None:
             self._matrix = _build_matrix(self._fingerprints)
         return self._matrix
+
+    def _filled(self, missing_rss_dbm: float) -> np.ndarray:
+        """The map's RSS matrix with ``missing_rss_dbm`` where an AP is not heard: built once per map and setting,
+        not on every locate (the server answers many scans against one map)."""
+        if self._filled_rss is None or self._filled_rss[0] != missing_rss_dbm:
+            matrix = self._built()
+            self._filled_rss = (missing_rss_dbm, np.where(matrix.heard, matrix.rss, missing_rss_dbm))
+        return self._filled_rss[1]
 
 
 def _checked_scan(scan: Mapping[str, float]) -> dict[str, float]:
