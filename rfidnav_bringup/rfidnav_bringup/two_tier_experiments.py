@@ -180,8 +180,8 @@ def answer(site: Site, navigator: TwoTierNavigator, request: Request, true_posit
         scan = {reading.bssid: reading.rssi_dbm for reading in site.wifi.scan(*true_position, rng)}
         try:
             result = site.radio_map.locate(scan, locate)
-        except LocateError as error:
-            return navigator.on_located(None, 0.0, str(error))
+        except LocateError:
+            return navigator.on_located(None, 0.0)
         tier_one_errors.append(math.dist(result.position, true_position))
         return navigator.on_located(result.position, result.uncertainty_m)
     return navigator.on_tag_map(site.tags_near(request.centre, request.radius_m))

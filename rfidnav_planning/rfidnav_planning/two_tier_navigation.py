@@ -179,13 +179,13 @@ class TwoTierNavigator:
         return self.outcome
 
     # ------------------------------------------------------------------------------ location server
-    def on_located(self, position: tuple[float, float] | None, uncertainty_m: float, reason: str = "") -> Decision:
-        """The answer to LOCATE: a position (None when the server could not locate, with the reason)."""
+    def on_located(self, position: tuple[float, float] | None, uncertainty_m: float) -> Decision:
+        """The answer to LOCATE: a position, or None when the server could not locate (the caller logs why)."""
         self.pending = None
         if position is None:          # e.g. an empty scan: scan again
             return self.ask(Request(LOCATE), self.phase)
         estimate = self.reckoning.estimate()
-        if self.reckoning.position is None or estimate.last_fix is None:
+        if estimate.last_fix is None:           # the first fix: dead reckoning has no position before it
             self.fixed(Fix(position, uncertainty_m, TIER_WIFI))
             return self.ask(Request(TAG_MAP, position, self.settings.tag_map_radius_m), MAPPING)
         deviation = math.dist(position, estimate.position)

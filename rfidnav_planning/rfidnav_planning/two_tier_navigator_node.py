@@ -199,7 +199,7 @@ class TwoTierNavigatorNode(Node):
             position = (response.x, response.y) if response.success else None
             if not response.success:
                 self.get_logger().warning(f"tier one failed: {response.message}")
-            decision = self.navigator.on_located(position, response.uncertainty_m, response.message)
+            decision = self.navigator.on_located(position, response.uncertainty_m)
         else:
             tags = [MapTag(t.tag_id, (t.x, t.y), t.group_id, t.shape) for t in response.tags]
             decision = self.navigator.on_tag_map(tags)
