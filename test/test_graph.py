@@ -33,17 +33,21 @@ def run_cli(*args: str, timeout: float = 600) -> subprocess.CompletedProcess:
                           timeout=timeout, cwd=WORKSPACE, env=env)
 
 
-@pytest.fixture(scope="module")
-def line_run(tmp_path_factory) -> Path:
-    out = tmp_path_factory.mktemp("runs")
-    result = run_cli("run", "line_follow_90", "--rtf", str(GRAPH_TEST_RTF), "--seed", "1", "--out", str(out),
-                     "--params", f"heading_controller={WORKSPACE / 'config/params/flc_paper.yaml'}")
+def run_scenario(out: Path, scenario: str, *options: str) -> Path:
+    """``./rfidnav run SCENARIO OPTIONS --out OUT``, which must succeed: the one run folder, with the CLI's output
+    kept in it as cli.log."""
+    result = run_cli("run", scenario, *options, "--out", str(out))
     runs = list(out.iterdir())
     assert len(runs) == 1, result.stdout + result.stderr
-    run_dir = runs[0]
-    run_dir.joinpath("cli.log").write_text(result.stdout + result.stderr)
+    runs[0].joinpath("cli.log").write_text(result.stdout + result.stderr)
     assert result.returncode == 0, result.stdout + result.stderr
-    return run_dir
+    return runs[0]
+
+
+@pytest.fixture(scope="module")
+def line_run(tmp_path_factory) -> Path:
+    return run_scenario(tmp_path_factory.mktemp("runs"), "line_follow_90", "--rtf", str(GRAPH_TEST_RTF), "--seed", "1",
+                        "--params", f"heading_controller={WORKSPACE / 'config/params/flc_paper.yaml'}")
 
 
 def test_mission_succeeds_within_paper_rmse(line_run: Path) -> None:

@@ -15,7 +15,7 @@ from mcap_ros2.decoder import DecoderFactory
 
 from rfidnav_bringup.report import run_metrics
 from rfidnav_common.tag_lattice import decode_tag_id, make_deployment
-from test_graph import run_cli
+from test_graph import run_cli, run_scenario
 
 WORKSPACE = Path(__file__).resolve().parents[1]
 NAVIGATION_NODES = ("partition_localizer", "partition_navigator")
@@ -23,13 +23,7 @@ NAVIGATION_NODES = ("partition_localizer", "partition_navigator")
 
 @pytest.fixture(scope="module")
 def field_run(tmp_path_factory) -> Path:
-    out = tmp_path_factory.mktemp("runs")
-    result = run_cli("run", "partition_field", "--rtf", "3", "--seed", "1", "--out", str(out))
-    runs = list(out.iterdir())
-    assert len(runs) == 1, result.stdout + result.stderr
-    runs[0].joinpath("cli.log").write_text(result.stdout + result.stderr)
-    assert result.returncode == 0, result.stdout + result.stderr
-    return runs[0]
+    return run_scenario(tmp_path_factory.mktemp("runs"), "partition_field", "--rtf", "3", "--seed", "1")
 
 
 def test_partition_navigation_reaches_the_goal_partition(field_run: Path) -> None:

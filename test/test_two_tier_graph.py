@@ -13,19 +13,14 @@ from mcap.reader import make_reader
 from mcap_ros2.decoder import DecoderFactory
 
 from rfidnav_bringup.report import run_metrics
-from test_graph import run_cli
+from test_graph import run_scenario
 
 NAVIGATION_NODES = ("location_server", "two_tier_navigator")
 
 
 @pytest.fixture(scope="module")
 def home_run(tmp_path_factory) -> Path:
-    out = tmp_path_factory.mktemp("runs")
-    result = run_cli("run", "two_tier_home", "--rtf", "5", "--seed", "1", "--out", str(out))
-    runs = list(out.iterdir())
-    assert len(runs) == 1, result.stdout + result.stderr
-    assert result.returncode == 0, result.stdout + result.stderr
-    return runs[0]
+    return run_scenario(tmp_path_factory.mktemp("runs"), "two_tier_home", "--rtf", "5", "--seed", "1")
 
 
 def test_the_robot_reaches_the_target_with_centimetre_fixes(home_run: Path) -> None:
