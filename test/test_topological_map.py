@@ -95,13 +95,14 @@ def test_north_reference_and_side_fields(tmp_path: Path) -> None:
     path = write_map(tmp_path, """\
         name: rotated
         north_deg: 0
+        tag_to_node_m: 1.5
         description: a two-node map with North along map x
         nodes:
           c: {position: [0.0, 0.0], N: {node: d, tags: [A, 7], length_m: 4.5}}
           d: {position: [5.0, 0.0], S: {node: c}}
         """)
     rotated = load_topological_map(path)
-    assert rotated.north_deg == 0.0
+    assert rotated.north_deg == 0.0 and rotated.tag_to_node_m == 1.5
     assert rotated.nodes["c"].hallways["N"] == Hallway("d", ("A", "7"), 4.5)
     assert rotated.nodes["d"].hallways["S"] == Hallway("c", (), None)
     assert rotated.hallway_length_m("d", "S") == 4.5  # the length given at the other end
@@ -155,6 +156,8 @@ BROKEN = [
          "nodes.c.N.lenght_m", "unknown field", name="unknown-side-field"),
     case("name: paper_c_d", "name: paper_c_d\nnorth: 90",
          "north", "unknown field", name="unknown-top-field"),
+    case("name: paper_c_d", "name: paper_c_d\ntag_to_node_m: -1",
+         "tag_to_node_m", "at least 0", name="negative-tag-to-node"),
 ]
 
 
@@ -264,6 +267,13 @@ TURNS = {
     ("S", "N"): "straight", ("S", "E"): "right", ("S", "S"): "back", ("S", "W"): "left",
     ("W", "N"): "left", ("W", "E"): "straight", ("W", "S"): "right", ("W", "W"): "back",
 }
+
+
+def test_side_openings_are_what_a_wall_follower_can_sense(paper_map: TopologicalMap) -> None:
+    # c has hallways on all four sides; h only to the West: entered from there, it has no side opening.
+    assert all(paper_map.has_side_opening("c", side) for side in DIRECTIONS)
+    assert not paper_map.has_side_opening("h", "W")
+    assert paper_map.tag_to_node_m == 0.0                     # by default the robot stops at the goal's tag
 
 
 def test_turn_table_covers_every_pair() -> None:

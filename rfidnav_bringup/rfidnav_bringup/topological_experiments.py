@@ -7,10 +7,10 @@ where it is mounted) are turned into distances from the robot's centre, as the f
 each transducer's mounting offset along its bearing; the wall-tag reader (default induction area: antenna at
 the centre, facing left, 40 x 100 cm) reads with the given miss probability, decided once per tag PASSAGE (the
 paper's read failure: a tag not read while the robot passes it) when the tag comes into reach, and drawn anew
-once it has left reach (per inventory round a tag in reach for ~40 rounds would practically never be missed). A tag id different from the last
-one read goes to ``MissionExecutor.on_tag``; the follower's junction events go to ``on_junction``; turn
-decisions go to ``WallFollower.command_turn``; ``stop`` ends the mission once the robot has driven on to the
-goal junction's centre (see ``FINAL_APPROACH_M``). Walls only reflect sonar: a robot
+once it has left reach (per inventory round a tag in reach for ~40 rounds would practically never be missed).
+A tag id different from the last one read goes to ``MissionExecutor.on_tag``; the follower's junction events go to ``on_junction``; turn
+decisions go to ``WallFollower.command_turn``; ``stop`` goes to ``WallFollower.command_stop`` with the decision's
+``drive_on_m`` and the mission ends with the follower's ``stopped``. Walls only reflect sonar: a robot
 driving into one is not stopped by the simulation (the follower's emergency stop is all there is).
 """
 
@@ -23,8 +23,8 @@ from pathlib import Path
 import numpy as np
 
 from rfidnav_bringup.scenario import CONFIG_DIR
-from rfidnav_control.wall_following import (JUNCTION_CENTRE, NO_OPENING, OBSTACLE, TURN_DONE, OdomPose, Sonar,
-                                            WallFollower, WallFollowerSettings)
+from rfidnav_control.wall_following import (JUNCTION_CENTRE, NO_OPENING, OBSTACLE, STOPPED, TURN_DONE, OdomPose,
+                                            Sonar, WallFollower, WallFollowerSettings)
 from rfidnav_planning.mission_executor import STOP, TURNS, MissionExecutor
 from rfidnav_planning.topological_map import UNKNOWN, TopologicalMap, load_topological_map, opposite
 from rfidnav_sim.sonar_model import PAPER_LAYOUT, SonarModel
@@ -32,11 +32,7 @@ from rfidnav_sim.wall_tag_model import InductionArea, WallTagReader
 from rfidnav_sim.world import World, load_world
 
 GOAL_RADIUS_M = 0.5                       # success: the robot stopped within this distance of the goal node
-# The goal's tag is read ~1.8-2 m before its node (tags are 1 m before the junction's edge, the edge half a
-# 1.6 m hallway before the node). After the executor's stop the robot therefore drives on to the junction's
-# centre (the follower's junction_centre), stopping early if blocked or after FINAL_APPROACH_M of travel.
-FINAL_APPROACH_M = 1.6 + 1.0 + 0.6        # hallway width + tag setback + margin
-FOLLOWER_EVENTS = (JUNCTION_CENTRE, NO_OPENING, TURN_DONE)
+FOLLOWER_EVENTS = (JUNCTION_CENTRE, NO_OPENING, TURN_DONE, OBSTACLE)
 FIG5_MAP = CONFIG_DIR / "maps" / "building_fig5.yaml"
 FIG5_WORLD = CONFIG_DIR / "worlds" / "building_fig5.yaml"
 LARGE_MAP = CONFIG_DIR / "maps" / "building_large.yaml"
@@ -123,15 +119,19 @@ def run_mission(world: World, topological_map: TopologicalMap, start_pose: tuple
     message = "timeout"
     finished = False
 
-    def apply(d, at_junction: bool) -> bool:
-        nonlocal message
+    stopping = False
+
+    def apply(d, at_junction: bool) -> None:
+        nonlocal message, stopping
         if d.message:
             message = d.message
         if d.action in TURNS:
             follower.command_turn(d.action)
             if at_junction or d.action == "back":      # a tag's left/right/straight waits for the junction
                 turns.append((executor.state.current_node or "?", d.action))
-        return d.action == STOP
+        elif d.action == STOP and not stopping:
+            stopping = True                            # the executor repeats its outcome; stop once
+            follower.command_stop(d.drive_on_m)
 
     def read_tags() -> list[str]:
         reach = reader.in_reach(x, y, yaw)
@@ -146,36 +146,21 @@ def run_mission(world: World, topological_map: TopologicalMap, start_pose: tuple
                 tags.append(reader.tags[index].tag_id)
         return tags
 
-    steps = int(round(max_time_s / step_s))
-    stopping_from: tuple[float, float] | None = None   # where the stop came: driving on to the junction centre
-    for _ in range(steps):
-        if stopping_from is not None:
-            command = follower.step(centre_sonar(sonar_model.ranges(x, y, yaw, rng), offsets), OdomPose(x, y, yaw))
-            if (command.event in (JUNCTION_CENTRE, OBSTACLE, NO_OPENING)
-                    or math.dist((x, y), stopping_from) >= FINAL_APPROACH_M):
-                finished = True
-                break
-        else:
-            command = None
-        for tag in (read_tags() if command is None else ()):
+    for _ in range(int(round(max_time_s / step_s))):
+        for tag in read_tags():
             if tag == last_tag:
                 continue
             last_tag = tag
             located = topological_map.locate_tag(tag)
             if first_node is None and located is not None:
                 first_node = located[0]
-            if apply(executor.on_tag(tag), False):
-                stopping_from = (x, y)
-                break
-        if command is None:
-            if stopping_from is not None:
-                continue                               # drive on to the centre from the next step
-            command = follower.step(centre_sonar(sonar_model.ranges(x, y, yaw, rng), offsets),
-                                    OdomPose(x, y, yaw))
-            if command.event in FOLLOWER_EVENTS:
-                if apply(executor.on_junction(command.event), True):
-                    finished = True                    # stopped at a junction event: already there
-                    break
+            apply(executor.on_tag(tag), False)
+        command = follower.step(centre_sonar(sonar_model.ranges(x, y, yaw, rng), offsets), OdomPose(x, y, yaw))
+        if command.event == STOPPED:
+            finished = True
+            break
+        if command.event in FOLLOWER_EVENTS:
+            apply(executor.on_junction(command.event), True)
         # Unicycle, midpoint heading.
         mid = yaw + 0.5 * command.angular * step_s
         dx, dy = command.linear * step_s * math.cos(mid), command.linear * step_s * math.sin(mid)

@@ -18,6 +18,13 @@ next stretch with odometry; small heading changes are steered while driving, lar
 The next stretch is then measured at that constant heading, so every measurement satisfies the formula's
 straight-travel assumption, and the distance error shrinks by about ``distance_gain * L`` per stretch.
 
+Measuring a stretch (ours). The paper takes d1 and d2 as two single readings. Here every left reading along the
+stretch is kept and a straight line is fitted to range against travel; d1 and d2 are the line's ends. Beside a
+straight wall at constant heading the ranges ARE on a line, so the fit only averages the sonar noise away
+(~20 times less variance than two readings); where they are not — the 25 deg cone still reading the inside of
+a side corridor's wall or a corner just past a junction, which put the wall ~20 deg off — the largest residual
+exceeds ``max_fit_residual_m`` and the stretch is measured again from there.
+
 Junctions. A side whose wall was seen and then reads beyond ``opening_threshold_m`` for ``opening_confirm_m``
 of travel has an opening: the junction is entered (the edge is where the reading first jumped). Its centre
 along the hallway is midway between that edge and where the same side's wall resumes; when no wall resumes
@@ -25,7 +32,15 @@ within ``junction_half_width_m`` the centre is that far past the edge (half the 
 crossing corridor of the expected width). A wall resuming earlier means the robot has passed the centre
 of a narrow opening, and it backs up to it. At the centre a commanded turn is made if the side (or, straight on,
 the front) is open; otherwise ``no_opening`` is reported and the robot stops there, never turning into a
-wall, until the next command. Without a command it drives straight on. A U-turn (``back``) needs no junction.
+wall, until the next command. Without a command it drives straight on, or, where the front is closed (a corner, the end of
+a T), follows the walls round: left if open, else right, else back. A U-turn (``back``) needs no junction.
+Openings are looked for only while the hallway's direction is known: from the start and after turning away from
+an obstacle, not until a stretch has been measured (the side sonars of a robot at a slant to the walls read
+them growing past the threshold, which is no opening). The first measurement is then taken whatever it says.
+
+Stopping at a node (ours). :meth:`command_stop` ends the drive at the next junction's centre or after a given
+travel, whichever comes first, with the event ``stopped``: the goal's tag is read before its junction (the paper
+stops there), and a node with no side opening has no centre the sonar could find, only a known distance.
 
 Distances are from the robot's reference point (a driver adds each sonar's mounting offset). Corridors are
 assumed to meet at right angles, as on the paper's compass-point map.
@@ -36,6 +51,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, replace
 
+import numpy as np
+
 from rfidnav_common.geometry import wrap_angle
 
 FOLLOWING, JUNCTION, CENTRE, TURNING, HALTED = "following", "junction", "centre", "turning", "halted"
@@ -43,7 +60,7 @@ LEFT, RIGHT, STRAIGHT, BACK = "left", "right", "straight", "back"
 ACTIONS = (LEFT, RIGHT, STRAIGHT, BACK)
 TURN_ANGLES = {LEFT: math.pi / 2.0, RIGHT: -math.pi / 2.0, STRAIGHT: 0.0, BACK: math.pi}
 OBSTACLE, JUNCTION_ENTERED, JUNCTION_CENTRE = "obstacle", "junction_entered", "junction_centre"
-TURN_DONE, NO_OPENING = "turn_done", "no_opening"
+TURN_DONE, NO_OPENING, STOPPED = "turn_done", "no_opening", "stopped"
 
 
 def wall_angle(d1: float, d2: float, travel_m: float) -> float:
@@ -86,6 +103,8 @@ class WallFollowerSettings:
     position_tolerance_m: float = 0.01    # at the junction centre within this distance (slowing down to it)
     measure_band_m: float = 0.4           # a stretch is measured only while the left reading stays within this
                                           # of the set distance (beyond: an oblique wall or an opening's edge)
+    max_fit_residual_m: float = 0.06      # a stretch whose ranges stray further from their line is no straight
+                                          # wall (sonar noise at 0.8 m is ~0.02 m)
     max_wall_change_rad: float = math.radians(25.0)  # reject (and re-measure) a wall direction further off
                                           # the current estimate than this (corridors are straight)
     sonar_half_angle_rad: float = math.radians(12.5)  # side sonar's half cone: an edge is seen this much late
@@ -96,7 +115,7 @@ class WallFollowerSettings:
                      "opening_threshold_m",
                      "opening_confirm_m", "junction_half_width_m", "turn_rate_radps", "heading_gain_per_s",
                      "distance_gain", "max_approach_rad", "turn_in_place_rad", "settled_rad",
-                     "position_tolerance_m", "measure_band_m", "max_wall_change_rad"):
+                     "position_tolerance_m", "measure_band_m", "max_fit_residual_m", "max_wall_change_rad"):
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0.0):
                 raise ValueError(f"{name}: must be a positive number, got {value}")
@@ -149,15 +168,32 @@ class Command:
     linear: float                         # m/s, forward positive
     angular: float                        # rad/s, CCW positive
     event: str | None = None              # obstacle | junction_entered | junction_centre | turn_done | no_opening
+                                          # | stopped
 
 
-@dataclass(frozen=True)
+@dataclass
 class Stretch:
-    """The start of a measuring stretch: where and at which yaw the first left range ``d1`` was read."""
+    """A measuring stretch: where and at which yaw it started, and the left ranges read along it with the
+    travel [m] at which each was read."""
     x: float
     y: float
     yaw: float
-    d1: float
+    travels: list[float]
+    ranges: list[float]
+
+    def add(self, odom: OdomPose, reading: float) -> float:
+        """Keep ``reading``; return the travel so far."""
+        travel = math.hypot(odom.x - self.x, odom.y - self.y)
+        self.travels.append(travel)
+        self.ranges.append(reading)
+        return travel
+
+    def fitted_ends(self) -> tuple[float, float, float]:
+        """(d1, d2, largest residual) of the straight line fitted to range against travel."""
+        travels, ranges = np.asarray(self.travels), np.asarray(self.ranges)
+        slope, intercept = np.polyfit(travels, ranges, 1)
+        residual = float(np.max(np.abs(ranges - (intercept + slope * travels))))
+        return float(intercept), float(intercept + slope * travels[-1]), residual
 
 
 @dataclass(frozen=True)
@@ -187,6 +223,7 @@ class WallFollower:
         self.settings = settings
         self.state = FOLLOWING
         self.pending: str | None = None          # commanded action for the next junction centre
+        self.stop_from: tuple[float, float, float] | None = None   # (x, y, at most this far) of command_stop
         self.wall_yaw: float | None = None       # the hallway's direction in the odom frame, as last measured
         self.target_yaw: float | None = None     # heading held by odometry
         self.stretch: Stretch | None = None
@@ -196,7 +233,9 @@ class WallFollower:
         self.blocked = False                     # emergency stop in force
         self.blocked_steps = 0                   # steps blocked so far (turning away after recover_after_steps)
         self.turn_away = 0.0                     # sign of the on-the-spot turn away from the obstacle
-        self.last_side = {LEFT: settings.wall_distance_m, RIGHT: settings.wall_distance_m}   # last side reading that was a wall (for the edge compensation)
+        # The last side reading that was a wall (for the edge compensation).
+        self.last_side = {LEFT: settings.wall_distance_m, RIGHT: settings.wall_distance_m}
+        self.wall_known = False                  # wall_yaw was measured (not assumed, nor lost by turning away)
         self.rejected = 0                        # measurements rejected (oblique wall, edge, implausible angle)
         self.last_measurement: tuple[float, float] | None = None   # (wall angle, wall distance) of the last stretch
 
@@ -210,11 +249,21 @@ class WallFollower:
             raise ValueError(f"command_turn: '{action}' is not one of {', '.join(ACTIONS)}")
         self.pending = action
 
+    def command_stop(self, within_m: float) -> None:
+        """Stop at the next junction's centre or after ``within_m`` more travel (0: at the next step), whichever
+        comes first, reporting ``stopped``; a queued turn is dropped. The position is taken at the next step."""
+        if not (math.isfinite(within_m) and within_m >= 0.0):
+            raise ValueError(f"command_stop: within_m must be a non-negative number, got {within_m}")
+        self.pending = None
+        self.stop_from = (math.nan, math.nan, within_m)
+
     # --------------------------------------------------------------------------------------- steps
     def step(self, sonar: Sonar, odom: OdomPose) -> Command:
         """One control step: the velocity to apply until the next reading, and at most one event."""
         if self.target_yaw is None:
             self.target_yaw = self.wall_yaw = odom.yaw
+        if self.stop_from is not None:
+            return self.stopping(sonar, odom)
         if self.pending == BACK and self.state != TURNING:
             return self.start_turn(BACK, odom)
         if self.state == CENTRE or (self.state == HALTED and self.pending is not None):
@@ -226,12 +275,27 @@ class WallFollower:
         command = self.junction_step(sonar, odom) if self.state == JUNCTION else self.following(sonar, odom)
         return self.guard(command, sonar, odom)
 
+    def stopping(self, sonar: Sonar, odom: OdomPose) -> Command:
+        x, y, within = self.stop_from
+        if math.isnan(x):
+            x, y = odom.x, odom.y
+            self.stop_from = (x, y, within)
+        command = None
+        if self.state in (FOLLOWING, JUNCTION) and math.hypot(odom.x - x, odom.y - y) < within:
+            command = self.guard(self.junction_step(sonar, odom) if self.state == JUNCTION
+                                 else self.following(sonar, odom), sonar, odom)
+        if command is None or command.event == JUNCTION_CENTRE:
+            self.state, self.stop_from, self.junction = HALTED, None, None
+            return Command(0.0, 0.0, STOPPED)
+        return command
+
     def guard(self, command: Command, sonar: Sonar, odom: OdomPose | None = None) -> Command:
         """Emergency stop of a forward command while an obstacle is too close ahead; once stopped, the front must
         clear by ``resume_margin_m`` more before the robot drives on.
 
         Only forward motion is blocked. The robot first waits ``recover_after_steps`` steps (a person may step
-        aside), then turns on the spot towards the freer side (the larger of the front-left/right readings)
+        aside), then, with walls on both sides, turns back (a dead end); otherwise it turns on the spot towards
+        the freer side (the larger of the front-left/right readings)
         until the way is clear; it then holds its new heading and re-measures the wall (a stretch that the
         turn interrupted is dropped). Without that turn a robot steered into a wall would never get free."""
         s = self.settings
@@ -249,12 +313,20 @@ class WallFollower:
             self.stretch = None
             if self.blocked_steps <= s.recover_after_steps:
                 return Command(0.0, 0.0, event)
+            if (self.blocked_steps == s.recover_after_steps + 1 and odom is not None
+                    and max(sonar.left, sonar.right) <= s.opening_threshold_m):
+                # Walls left, right and ahead: a dead end (or a blocked hallway); turn back along the hallway
+                # rather than towards a side wall it would drive into next.
+                return self.start_turn(BACK, odom)
             return Command(0.0, self.turn_away * s.turn_rate_radps, event)
         if (command.linear > 0.0 or turning_away) and self.blocked:
             self.blocked = False
             if turning_away and odom is not None:
-                # Turned away: hold the heading reached and measure the wall again from here.
-                self.stretch = None
+                # Turned away: hold the heading reached and measure the wall again from here (a junction being
+                # crossed is given up: the opening may have been the robot's slant, not the floor's).
+                self.stretch, self.wall_known = None, False
+                if self.state == JUNCTION:
+                    self.state, self.junction = FOLLOWING, None
                 if self.state == FOLLOWING:
                     self.target_yaw = odom.yaw
                     command = Command(command.linear, 0.0, command.event)
@@ -275,6 +347,9 @@ class WallFollower:
     def detect_opening(self, sonar: Sonar, odom: OdomPose) -> Junction | None:
         """The junction once a side wall that was seen has read as open for ``opening_confirm_m``; else None."""
         s = self.settings
+        if not self.wall_known:
+            self.gap_start = {LEFT: None, RIGHT: None}
+            return None
         for side, reading in ((LEFT, sonar.left), (RIGHT, sonar.right)):
             if reading <= s.opening_threshold_m:
                 self.wall_seen[side], self.gap_start[side] = True, None
@@ -294,35 +369,38 @@ class WallFollower:
         return None
 
     def measure(self, left: float, odom: OdomPose) -> None:
-        """Fig. 8(b): d1 once the heading has settled, d2 after ``realign_every_m``; then realign.
+        """Fig. 8(b) over a fitted stretch (module docstring): start once the heading has settled, conclude after
+        ``realign_every_m``; then realign.
 
         Only a reading within ``measure_band_m`` of the set distance is taken for the followed wall: right after
-        a turn or next to an opening's edge the 25 deg cone sees an oblique wall or a corner further off, which
-        would corrupt d1 or d2; the stretch is then dropped and measured again. A wall direction more than
-        ``max_wall_change_rad`` off the current estimate is rejected as well (straight corridors)."""
+        a turn or next to an opening's edge the 25 deg cone sees an oblique wall or a corner further off; the
+        stretch is then dropped and measured again. So is one whose ranges are not on a line, and a wall
+        direction more than ``max_wall_change_rad`` off the current estimate (straight corridors)."""
         s = self.settings
         if not (0.0 <= left <= s.wall_distance_m + s.measure_band_m):
             self.stretch = None                  # no (plausible) followed wall beside the robot
             return
         if self.stretch is None:
             if abs(wrap_angle(self.target_yaw - odom.yaw)) <= s.settled_rad:
-                self.stretch = Stretch(odom.x, odom.y, odom.yaw, left)
+                self.stretch = Stretch(odom.x, odom.y, odom.yaw, [0.0], [left])
             return
-        travel = math.hypot(odom.x - self.stretch.x, odom.y - self.stretch.y)
+        travel = self.stretch.add(odom, left)
         if travel < s.realign_every_m:
             return
+        d1, d2, residual = self.stretch.fitted_ends()
         mean_yaw = self.stretch.yaw + wrap_angle(odom.yaw - self.stretch.yaw) / 2.0
-        angle = wall_angle(self.stretch.d1, left, travel)
-        if abs(wrap_angle(mean_yaw + angle - self.wall_yaw)) > s.max_wall_change_rad:
-            self.rejected += 1                   # implausible: an oblique wall or a corner was read; again
-            self.stretch = None
+        angle = wall_angle(d1, d2, travel)
+        self.stretch = None
+        implausible = self.wall_known and abs(wrap_angle(mean_yaw + angle - self.wall_yaw)) > s.max_wall_change_rad
+        if residual > s.max_fit_residual_m or implausible:
+            self.rejected += 1                   # not a straight wall, or an implausible one: measure again
             return
+        self.wall_known = True
         self.wall_yaw = wrap_angle(mean_yaw + angle)
-        distance = wall_distance(left, wrap_angle(self.wall_yaw - odom.yaw))
+        distance = wall_distance(d2, wrap_angle(self.wall_yaw - odom.yaw))
         approach = max(-s.max_approach_rad, min(s.max_approach_rad, s.distance_gain * (distance - s.wall_distance_m)))
         self.target_yaw = wrap_angle(self.wall_yaw + approach)    # CCW (towards the left wall) when too far
         self.last_measurement = (angle, distance)
-        self.stretch = None
 
     def junction_step(self, sonar: Sonar, odom: OdomPose, event: str | None = None) -> Command:
         """Drive along the hallway axis (backwards if past it) to the junction's centre, then stop there.
@@ -348,6 +426,8 @@ class WallFollower:
         (halted) if it is not, or, without a command, drive straight on."""
         action, self.pending = self.pending, None
         if action is None:
+            action = self.way_on(sonar)
+        if action is None:
             self.resume_following(self.wall_yaw)
             return self.guard(self.following(sonar, odom), sonar, odom)
         reading = {LEFT: sonar.left, RIGHT: sonar.right, STRAIGHT: sonar.front}.get(action, math.inf)
@@ -355,6 +435,14 @@ class WallFollower:
             self.state = HALTED
             return Command(0.0, 0.0, NO_OPENING)
         return self.start_turn(action, odom)
+
+    def way_on(self, sonar: Sonar) -> str | None:
+        """Without a command: None (straight on) if the front is open, else the way a left-wall follower goes on
+        at a corner or the end of a T: left, right, or back from a dead end."""
+        threshold = self.settings.opening_threshold_m
+        if sonar.front > threshold:
+            return None
+        return LEFT if sonar.left > threshold else RIGHT if sonar.right > threshold else BACK
 
     def start_turn(self, action: str, odom: OdomPose) -> Command:
         """Turn on the spot by the action's angle from the hallway's direction (not from the current heading, so

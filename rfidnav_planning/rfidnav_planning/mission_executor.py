@@ -12,6 +12,12 @@ from the East and leaving North is a right turn). The tag is read just before th
 decides is queued and made at the junction's centre; a ``back`` is a U-turn made at once, in the hallway.
 Reading the goal's tag stops the robot. Until the first tag the robot does not know where it is and follows.
 
+Beyond the paper, the stop (ours): the paper stops where the goal's tag is read, ~2 m before the junction. The
+``stop`` decision carries ``drive_on_m``: the wall follower drives on to the junction's centre, which it senses,
+but at most twice the map's ``tag_to_node_m``; a goal with no side opening has no centre to sense, and the robot
+drives ``tag_to_node_m`` on. Such a node (hallways only behind and ahead) is passed without a junction event
+anywhere else too: going straight through it is ``follow``, and an expectation skips over it (below).
+
 Beyond the paper (ours):
 
 * A missed tag. Every decision leaves an expectation: the next node and the side the robot arrives from.
@@ -20,7 +26,8 @@ Beyond the paper (ours):
   decides there as if the tag had been read (stopping if it is the goal). The assumption holds as long as
   hallways have no untagged junctions the map does not know; the next tag read re-localizes the robot and,
   if the assumption was wrong, counts a re-plan and plans from where the robot really is. Without an
-  expectation (before the first tag, or after being lost) the robot follows on.
+  expectation (before the first tag, or after being lost) the robot follows on. Nodes on the route with no
+  side opening give no junction event, so the expectation is the first node after them that does (or the goal).
 * Off the route. Every tag plans again from its node, so a tag of an unexpected node (a missed turn, a wrong
   assumption) needs nothing special; it is counted as a re-plan when an expectation existed and was wrong.
 * ``no_opening``: the junction cannot be left the way decided, so it is taken to be an opening the map does
@@ -42,8 +49,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
 
-from rfidnav_planning.topological_map import (DIRECTIONS, UNKNOWN, WEIGHTS, RouteError, TopologicalMap,
-                                              opposite, turn)
+from rfidnav_planning.topological_map import DIRECTIONS, UNKNOWN, WEIGHTS, RouteError, TopologicalMap, opposite, turn
 
 LEFT, RIGHT, STRAIGHT, BACK, STOP, FOLLOW = "left", "right", "straight", "back", "stop", "follow"
 TURNS = (LEFT, RIGHT, STRAIGHT, BACK)                 # the actions WallFollower.command_turn takes
@@ -58,6 +64,7 @@ class Decision:
     finished: bool = False
     success: bool = False
     message: str = ""
+    drive_on_m: float = 0.0         # on stop: at most this far on to the goal's centre (WallFollower.command_stop)
 
 
 @dataclass(frozen=True)
@@ -78,6 +85,7 @@ class MissionState:
     last_tag: str | None = None
     expected_node: str | None = None        # the next node the route leads to, and the side it is entered by
     expected_side: str | None = None
+    passing: tuple[tuple[str, str], ...] = ()   # (node, arrival side) passed on the way, without a junction
     nodes_visited: list[str] = field(default_factory=list)
     tags_missed: int = 0
     unknown_tags: int = 0
@@ -126,16 +134,21 @@ class MissionExecutor:
         state.last_tag, state.junction_since_tag = tag, False
         if state.exploring is not None:
             self._learn(state.exploring, node, side)
-        elif state.expected_node is not None and (node, side) != (state.expected_node, state.expected_side):
-            state.replans += 1
-        decision = self._arrive(node, side, f"tag {tag}")
+        elif state.expected_node is not None:
+            ahead = self._ahead()
+            if (node, side) in ahead:
+                self._passed(ahead[:ahead.index((node, side))])
+            else:
+                state.replans += 1
+        decision = self._arrive(node, side, f"tag {tag}", at_centre=False)
         state.awaiting = decision.action if decision.action in (LEFT, RIGHT, STRAIGHT) else None
         return decision
 
     def on_junction(self, event: str) -> Decision:
         """A wall follower event. ``junction_centre``: make the turn the last tag decided or, with none waiting,
-        a tag was missed (see the module docstring); ``no_opening``: the decided way is blocked; the others
-        (``junction_entered``, ``turn_done``, ``obstacle``, which the wall follower handles) change nothing."""
+        a tag was missed (see the module docstring); ``no_opening``: the decided way is blocked; ``obstacle``
+        where the route expects a dead end with no decision waiting: its tag was missed and the robot is there;
+        the others (``junction_entered``, ``turn_done``, which the wall follower handles) change nothing."""
         if event not in EVENTS:
             raise ValueError(f"on_junction: '{event}' is not one of {', '.join(EVENTS)}")
         state = self._mission()
@@ -145,7 +158,19 @@ class MissionExecutor:
             return self._junction_centre()
         if event == NO_OPENING:
             return self._no_opening()
+        if event == OBSTACLE and state.awaiting is None and self._dead_end_expected():
+            state.tags_missed += 1
+            self._passed(state.passing)
+            return self._answer(self._arrive(state.expected_node, state.expected_side,
+                                             "missed tag, assumed by the route at the dead end's wall", at_centre=True))
         return Decision(FOLLOW)
+
+    def _dead_end_expected(self) -> bool:
+        """The route leads into a dead end (its node has no hallway but the one the robot arrives by): with its
+        tag missed, the wall ahead is the only sign of arrival."""
+        state = self._mission()
+        return state.expected_node is not None and set(self.map.nodes[state.expected_node].hallways) == {
+            state.expected_side}
 
     # -------------------------------------------------------------------------------------- deciding
     def _junction_centre(self) -> Decision:
@@ -161,8 +186,13 @@ class MissionExecutor:
         if state.expected_node is None:
             return Decision(FOLLOW, message="junction without a tag read and no expectation: following on")
         state.tags_missed += 1
-        decision = self._arrive(state.expected_node, state.expected_side, "missed tag, assumed by the route")
-        return self._answer(decision)
+        ahead = self._ahead()
+        node, side = ahead[-1]
+        self._passed(ahead[:-1])
+        if node == UNKNOWN:
+            state.expected_node = state.expected_side = None
+            return Decision(FOLLOW, message="passed the goal with its tag missed into an unmapped hallway: lost")
+        return self._answer(self._arrive(node, side, "missed tag, assumed by the route", at_centre=True))
 
     def _no_opening(self) -> Decision:
         state = self._mission()
@@ -175,14 +205,18 @@ class MissionExecutor:
         state.awaiting = state.expected_node = state.expected_side = state.exploring = None
         return self._answer(Decision(BACK, message="no way on: turning back, lost until the next tag"))
 
-    def _arrive(self, node: str, side: str, how: str) -> Decision:
-        """Localized at ``node``, entered by ``side``: stop at the goal, or turn to leave by the route's side."""
+    def _arrive(self, node: str, side: str, how: str, at_centre: bool) -> Decision:
+        """Localized at ``node``, entered by ``side`` (``at_centre``: at its junction's centre, else at its tag):
+        stop at the goal, or turn to leave by the route's side."""
         state = self._mission()
         state.current_node, state.arrival_side = node, side
         state.nodes_visited.append(node)
         state.expected_node = state.expected_side = state.exploring = None
+        state.passing = ()
+        opening = self.map.has_side_opening(node, side)
         if node == state.goal:
-            state.outcome = Decision(STOP, finished=True, success=True,
+            drive_on = 0.0 if at_centre else self.map.tag_to_node_m * (2.0 if opening else 1.0)
+            state.outcome = Decision(STOP, finished=True, success=True, drive_on_m=drive_on,
                                      message=f"{how}: at the goal '{node}' after {len(state.nodes_visited)} nodes")
             return state.outcome
         departure = self._departure(node)
@@ -197,10 +231,50 @@ class MissionExecutor:
             state.exploring = (node, departure)
             goes = f"exploring the '{UNKNOWN}' hallway {departure}"
         else:
-            state.expected_node, state.expected_side = neighbour, self._far_side(node, departure)
-            goes = f"for '{neighbour}'"
-        return self._answer(Decision(action, message=f"{how}: at '{node}' from {side}; {action}, leaving {departure} "
-                                                     f"{goes}"))
+            state.expected_node, state.expected_side, state.passing = self._next_sensed(node, departure)
+            goes = f"for '{state.expected_node}'"
+        message = f"{how}: at '{node}' from {side}; {action}, leaving {departure} {goes}"
+        if action == STRAIGHT and not opening:
+            return Decision(FOLLOW, message=message + " (no junction to sense here)")
+        return self._answer(Decision(action, message=message))
+
+    def _ahead(self) -> list[tuple[str, str]]:
+        """The (node, arrival side) the robot meets next in order, up to the first junction it will sense: the
+        nodes it passes straight through, the expected node, and, if that is the goal with no junction to sense,
+        those beyond it (its tag missed, the robot drives past it). The last may be ``("?", "")``: an unmapped
+        hallway."""
+        state = self._mission()
+        ahead = [*state.passing, (state.expected_node, state.expected_side)]
+        node, side = ahead[-1]
+        if not self.map.has_side_opening(node, side) and opposite(side) in self.map.nodes[node].hallways:
+            beyond, beyond_side, passing = self._next_sensed(node, opposite(side), beyond_goal=True)
+            ahead += [*passing, (beyond, beyond_side)]
+        return ahead
+
+    def _passed(self, passing: tuple[tuple[str, str], ...]) -> None:
+        """Nodes without a side opening passed (their tags missed) on the way to where the robot is now."""
+        self._mission().nodes_visited.extend(node for node, _ in passing)
+
+    def _next_sensed(self, node: str, departure: str,
+                     beyond_goal: bool = False) -> tuple[str, str, tuple[tuple[str, str], ...]]:
+        """The next node (and its arrival side) leaving ``node`` by ``departure`` whose junction the robot will
+        sense or where it must stop (the goal, unless ``beyond_goal``), and the (node, arrival side) passed
+        straight through on the way: nodes without a side opening. ``?`` as the node: into an unmapped
+        hallway."""
+        goal = None if beyond_goal else self._mission().goal
+        passing: list[tuple[str, str]] = []
+        neighbour = self.map.nodes[node].hallways[departure].neighbour
+        if neighbour == UNKNOWN:
+            return UNKNOWN, "", ()
+        side = self._far_side(node, departure)
+        while (neighbour != goal and neighbour != node and (neighbour, side) not in passing
+               and not self.map.has_side_opening(neighbour, side)):
+            ahead = self.map.nodes[neighbour].hallways.get(opposite(side))
+            if ahead is None or ahead.neighbour == UNKNOWN:
+                break
+            passing.append((neighbour, side))
+            neighbour, side = ahead.neighbour, self._far_side(neighbour, opposite(side))
+        return neighbour, side, tuple(passing)
 
     def _departure(self, node: str) -> str | None:
         """The side to leave ``node`` by: along the route to the goal; without one, towards (or into) the nearest
@@ -255,7 +329,7 @@ class MissionExecutor:
             hallways = dict(nodes[name].hallways)
             hallways[name_side] = replace(hallways[name_side], neighbour=other)
             nodes[name] = replace(nodes[name], hallways=hallways)
-        self.map = TopologicalMap(self.map.name, nodes, self.map.north_deg)
+        self.map = replace(self.map, nodes=nodes)
         self.learned = state.learned_edges = (*self.learned, LearnedEdge(origin, origin_side, node, side))
 
     # --------------------------------------------------------------------------------------- helpers

@@ -11,6 +11,9 @@ YAML format (``config/maps/*.yaml``, robot knowledge)::
     name: building_fig5
     north_deg: 90            # bearing of compass North in the map frame, degrees CCW from the map x axis
                              # (default 90: North is the map's +y); used for drawing and position checks
+    tag_to_node_m: 1.8       # optional (default 0): how far past the point where an arriving robot reads a
+                             # node's tag the node's centre lies (the floor's tagging convention); the robot
+                             # drives this far on to a goal with no side opening to find its centre by
     nodes:                   # node name -> its sides; every node must be reachable from the first one
       c:
         position: [8.0, 8.0]               # optional, map frame [m]: drawing and default hallway lengths
@@ -114,6 +117,7 @@ class TopologicalMap:
     name: str
     nodes: dict[str, Node]
     north_deg: float = DEFAULT_NORTH_DEG
+    tag_to_node_m: float = 0.0
     _tag_places: dict[str, tuple[str, str]] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -126,6 +130,13 @@ class TopologicalMap:
         """The node a tag announces and the side the robot arrived from (tag 9 of Fig. 5: ``('c', 'E')``,
         so the robot is heading West); None for a tag not in the map."""
         return self._tag_places.get(str(tag_id))
+
+    def has_side_opening(self, node: str, arrival_side: str) -> bool:
+        """Whether a robot entering ``node`` by ``arrival_side`` passes a hallway on its left or right: only then
+        can a wall follower sense the junction (a node with hallways just behind and ahead is a stretch of
+        hallway to it)."""
+        lateral = set(DIRECTIONS) - {arrival_side, opposite(arrival_side)}
+        return any(side in lateral for side in self.nodes[node].hallways)
 
     def direction_angle_rad(self, direction: str) -> float:
         """The map-frame angle (CCW from the map x axis) of a compass direction."""
@@ -348,11 +359,12 @@ class _Reader:
     def read(self) -> tuple[TopologicalMap | None, list[ConfigError]]:
         document = self.document
         for key in document.keys():
-            if key not in ("name", "description", "north_deg", "nodes"):
+            if key not in ("name", "description", "north_deg", "tag_to_node_m", "nodes"):
                 self.problems.append(document.error(str(key), "unknown field (expected one of: description, "
-                                                              "name, nodes, north_deg)"))
+                                                              "name, nodes, north_deg, tag_to_node_m)"))
         name = self.attempt(document.string, "name")
         north_deg = self.attempt(document.number, "north_deg", DEFAULT_NORTH_DEG)
+        tag_to_node_m = self.attempt(document.number, "tag_to_node_m", 0.0, minimum=0.0)
         nodes_section = self.attempt(document.section, "nodes")
         if nodes_section is None:
             return None, self.problems
@@ -369,7 +381,7 @@ class _Reader:
         self.check_reachable(nodes_section, nodes)
         if self.problems:
             return None, self.problems
-        return TopologicalMap(name=name, nodes=nodes, north_deg=north_deg), []
+        return TopologicalMap(name=name, nodes=nodes, north_deg=north_deg, tag_to_node_m=tag_to_node_m), []
 
     def node(self, nodes_section: Section, key: Any) -> Node | None:
         if not isinstance(key, str) or key in (UNKNOWN, NO_HALLWAY):
