@@ -10,8 +10,8 @@ from pathlib import Path
 import pytest
 
 from rfidnav_planning.mission_executor import (BACK, FOLLOW, JUNCTION_CENTRE, LEFT, NO_OPENING, OBSTACLE, RIGHT,
-                                               STOP, STRAIGHT, TURN_DONE, TURNS, Decision, LearnedEdge,
-                                               MissionExecutor)
+                                               STOP, STRAIGHT, TURN_DONE, TURNS, Decision, FollowerCommand,
+                                               LearnedEdge, MissionExecutor)
 from rfidnav_planning.topological_map import (DIRECTIONS, UNKNOWN, Hallway, Node, RouteError, TopologicalMap,
                                               load_topological_map, opposite)
 
@@ -458,3 +458,17 @@ def test_a_dead_end_goal_whose_tag_is_missed_is_reached_at_its_wall(large: Topol
     done = executor.on_junction(OBSTACLE)                      # E3's tag 138 missed: the dead end's wall
     assert (done.action, done.success, done.drive_on_m) == (STOP, True, 0.0)
     assert executor.state.nodes_visited == ["E2", "E3"] and executor.state.tags_missed == 1
+
+
+def test_reads_are_new_only_when_the_tag_changes_and_a_stop_is_commanded_once(fig5: TopologicalMap) -> None:
+    executor = MissionExecutor(fig5)
+    executor.start("g")
+    first = executor.on_reads(["23", "23"])                    # one round reporting tag 23 twice
+    assert [d.action for d in first] == [RIGHT] and executor.on_reads(["23"]) == []
+    assert executor.follower_command(first[0]) == FollowerCommand(RIGHT)
+    assert executor.follower_command(executor.on_junction(JUNCTION_CENTRE)) == FollowerCommand(RIGHT)
+    assert executor.follower_command(executor.on_junction(TURN_DONE)) is None       # follow: nothing to command
+    (done,) = executor.on_reads([19])
+    assert executor.follower_command(done) == FollowerCommand(STOP, fig5.tag_to_node_m * 2.0)
+    assert executor.on_junction(JUNCTION_CENTRE) == done       # the outcome stands, and is not commanded again
+    assert executor.follower_command(done) is None

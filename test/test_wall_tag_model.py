@@ -91,3 +91,31 @@ def test_bad_tags_areas_and_readers_name_the_field() -> None:
         WallTagReader(InductionArea(), [], miss_probability=1.5)
     with pytest.raises(ValueError, match="unique"):
         WallTagReader(InductionArea(), [WallTag("T1", (0.0, 0.8), INTO_HALLWAY)] * 2)
+    with pytest.raises(ValueError, match="^passage_miss_probability:"):
+        WallTagReader(InductionArea(), [], passage_miss_probability=-0.1)
+    with pytest.raises(ValueError, match="^unreadable_tags: T9 not among"):
+        WallTagReader(InductionArea(), [WallTag("T1", (0.0, 0.8), INTO_HALLWAY)], unreadable_tags=["T9"])
+
+
+def passages(reader: WallTagReader, rng: np.random.Generator, count: int) -> list[bool]:
+    """Drive past the tag at x = 0 ``count`` times (0.02 m per round, -1 to 1 m): whether each passage read it
+    at all, and that a passage reads it in every round in reach or in none."""
+    read = []
+    for _ in range(count):
+        rounds = [bool(reader.read(x, 0.0, 0.0, rng)) for x in np.arange(-1.0, 1.0, 0.02)]
+        in_reach = [bool(reader.in_reach(x, 0.0, 0.0)[0]) for x in np.arange(-1.0, 1.0, 0.02)]
+        assert all(r == rounds[in_reach.index(True)] for r, reach in zip(rounds, in_reach) if reach)
+        read.append(any(rounds))
+    return read
+
+
+def test_a_passage_miss_holds_for_the_whole_passage_and_is_drawn_anew_for_the_next() -> None:
+    reader = WallTagReader(InductionArea(), [WallTag("T1", (0.0, 0.8), INTO_HALLWAY)], passage_miss_probability=0.3)
+    read = passages(reader, np.random.default_rng(3), 1000)
+    assert np.mean(read) == pytest.approx(0.7, abs=0.05)      # binomial sd 0.015
+
+
+def test_an_unreadable_tag_is_never_read_and_the_others_are() -> None:
+    tags = [WallTag("A", (-0.1, 0.8), INTO_HALLWAY), WallTag("B", (0.1, 0.8), INTO_HALLWAY)]
+    reader = WallTagReader(InductionArea(), tags, unreadable_tags=["B"])
+    assert reader.read(0.0, 0.0, 0.0, np.random.default_rng(4)) == ["A"]

@@ -8,9 +8,9 @@ each transducer's mounting offset along its bearing; the wall-tag reader (defaul
 the centre, facing left, 40 x 100 cm) reads with the given miss probability, decided once per tag PASSAGE (the
 paper's read failure: a tag not read while the robot passes it) when the tag comes into reach, and drawn anew
 once it has left reach (per inventory round a tag in reach for ~40 rounds would practically never be missed).
-A tag id different from the last one read goes to ``MissionExecutor.on_tag``; the follower's junction events go to ``on_junction``; turn
-decisions go to ``WallFollower.command_turn``; ``stop`` goes to ``WallFollower.command_stop`` with the decision's
-``drive_on_m`` and the mission ends with the follower's ``stopped``. Walls only reflect sonar: a robot
+Each round's reads go to ``MissionExecutor.on_reads``, the follower's events to ``on_junction``, and the
+decisions' ``follower_command`` to the follower (``command_turn``, ``command_stop``); the mission ends with the
+follower's ``stopped``. The mission_executor and wall_follower nodes do the same over DDS. Walls only reflect sonar: a robot
 driving into one is not stopped by the simulation (the follower's emergency stop is all there is).
 """
 
@@ -25,7 +25,7 @@ import numpy as np
 from rfidnav_bringup.scenario import CONFIG_DIR
 from rfidnav_control.wall_following import (JUNCTION_CENTRE, NO_OPENING, OBSTACLE, STOPPED, TURN_DONE, OdomPose,
                                             Sonar, WallFollower, WallFollowerSettings)
-from rfidnav_planning.mission_executor import STOP, TURNS, MissionExecutor
+from rfidnav_planning.mission_executor import STOP, Decision, MissionExecutor
 from rfidnav_planning.topological_map import UNKNOWN, TopologicalMap, load_topological_map, opposite
 from rfidnav_sim.sonar_model import PAPER_LAYOUT, SonarModel
 from rfidnav_sim.wall_tag_model import InductionArea, WallTagReader
@@ -103,58 +103,34 @@ def run_mission(world: World, topological_map: TopologicalMap, start_pose: tuple
                 max_time_s: float = 900.0, settings: WallFollowerSettings = WallFollowerSettings()) -> MissionRun:
     sonar_model = SonarModel(PAPER_LAYOUT, world.wall_segments())
     offsets = mounting_offsets()
-    if not 0.0 <= miss_probability <= 1.0:
-        raise ValueError(f"miss_probability: {miss_probability} is not in [0, 1]")
-    reader = WallTagReader(InductionArea(), world.wall_tags, 0.0)      # misses per passage, below
-    passage_read: dict[int, bool] = {}    # tag index in reach -> read on this passage
+    reader = WallTagReader(InductionArea(), world.wall_tags, passage_miss_probability=miss_probability)
     follower = WallFollower(settings)
     executor = MissionExecutor(topological_map)
     executor.start(goal_node)
     x, y, yaw = start_pose
     path = 0.0
     t = 0.0
-    last_tag: str | None = None
-    first_node: str | None = None
     turns: list[tuple[str, str]] = []
     message = "timeout"
     finished = False
 
-    stopping = False
-
-    def apply(d, at_junction: bool) -> None:
-        nonlocal message, stopping
-        if d.message:
-            message = d.message
-        if d.action in TURNS:
-            follower.command_turn(d.action)
-            if at_junction or d.action == "back":      # a tag's left/right/straight waits for the junction
-                turns.append((executor.state.current_node or "?", d.action))
-        elif d.action == STOP and not stopping:
-            stopping = True                            # the executor repeats its outcome; stop once
-            follower.command_stop(d.drive_on_m)
-
-    def read_tags() -> list[str]:
-        reach = reader.in_reach(x, y, yaw)
-        for index in list(passage_read):
-            if not reach[index]:
-                del passage_read[index]                # left reach: the next passage draws again
-        tags = []
-        for index in np.flatnonzero(reach):
-            if index not in passage_read:
-                passage_read[index] = bool(rng.random() >= miss_probability)
-            if passage_read[index]:
-                tags.append(reader.tags[index].tag_id)
-        return tags
+    def apply(decision: Decision, at_junction: bool) -> None:
+        nonlocal message
+        if decision.message:
+            message = decision.message
+        command = executor.follower_command(decision)
+        if command is None:
+            return
+        if command.action == STOP:
+            follower.command_stop(command.within_m)
+            return
+        follower.command_turn(command.action)
+        if at_junction or command.action == "back":      # a tag's left/right/straight waits for the junction
+            turns.append((executor.state.current_node or "?", command.action))
 
     for _ in range(int(round(max_time_s / step_s))):
-        for tag in read_tags():
-            if tag == last_tag:
-                continue
-            last_tag = tag
-            located = topological_map.locate_tag(tag)
-            if first_node is None and located is not None:
-                first_node = located[0]
-            apply(executor.on_tag(tag), False)
+        for decision in executor.on_reads(reader.read(x, y, yaw, rng)):
+            apply(decision, False)
         command = follower.step(centre_sonar(sonar_model.ranges(x, y, yaw, rng), offsets), OdomPose(x, y, yaw))
         if command.event == STOPPED:
             finished = True
@@ -171,6 +147,7 @@ def run_mission(world: World, topological_map: TopologicalMap, start_pose: tuple
 
     state = executor.state
     outcome = state.outcome
+    first_node = state.nodes_visited[0] if state.nodes_visited else None
     goal_xy = topological_map.nodes[goal_node].position
     near = goal_xy is not None and math.dist((x, y), goal_xy) <= GOAL_RADIUS_M
     success = bool(outcome is not None and outcome.success and near)

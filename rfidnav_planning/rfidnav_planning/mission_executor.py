@@ -47,6 +47,7 @@ Tags are read many times while the robot passes; a repeat of the last tag before
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass, field, replace
 
 from rfidnav_planning.topological_map import DIRECTIONS, UNKNOWN, WEIGHTS, RouteError, TopologicalMap, opposite, turn
@@ -65,6 +66,14 @@ class Decision:
     success: bool = False
     message: str = ""
     drive_on_m: float = 0.0         # on stop: at most this far on to the goal's centre (WallFollower.command_stop)
+
+
+@dataclass(frozen=True)
+class FollowerCommand:
+    """What a decision asks of the wall follower: ``left``, ``right``, ``straight``, ``back`` (its command_turn)
+    or ``stop`` (its command_stop, at most ``within_m`` on)."""
+    action: str
+    within_m: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -96,6 +105,8 @@ class MissionState:
     junction_since_tag: bool = True         # False while a repeat of last_tag is still the same read
     commanded: str | None = None            # the last turn answered, to know what no_opening refused
     outcome: Decision | None = None
+    last_read: str | None = None            # the last tag id the reader reported (see on_reads)
+    stop_commanded: bool = False
 
 
 class MissionExecutor:
@@ -143,6 +154,28 @@ class MissionExecutor:
         decision = self._arrive(node, side, f"tag {tag}", at_centre=False)
         state.awaiting = decision.action if decision.action in (LEFT, RIGHT, STRAIGHT) else None
         return decision
+
+    def on_reads(self, tag_ids: Iterable[str | int]) -> list[Decision]:
+        """One inventory round's tag ids: a reader reports a tag every round while it is in reach, so only a tag
+        other than the last one reported is a new read for :meth:`on_tag`; the decisions, in order."""
+        state = self._mission()
+        decisions = []
+        for tag in map(str, tag_ids):
+            if tag != state.last_read:
+                state.last_read = tag
+                decisions.append(self.on_tag(tag))
+        return decisions
+
+    def follower_command(self, decision: Decision) -> FollowerCommand | None:
+        """The wall follower's command for ``decision``: its turn, or the stop (once: the outcome is repeated to
+        every later input), or None (follow)."""
+        state = self._mission()
+        if decision.action in TURNS:
+            return FollowerCommand(decision.action)
+        if decision.action == STOP and not state.stop_commanded:
+            state.stop_commanded = True
+            return FollowerCommand(STOP, decision.drive_on_m)
+        return None
 
     def on_junction(self, event: str) -> Decision:
         """A wall follower event. ``junction_centre``: make the turn the last tag decided or, with none waiting,

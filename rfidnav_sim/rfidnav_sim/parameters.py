@@ -75,6 +75,10 @@ class ReaderParameters:
     sensitivity_dbm: float = param("weakest RSSI the reader decodes [dBm]", -90.0)
     pattern_exponent: float = param("antenna gain pattern cos(angle)^n, one way", 1.0)
     side_area_width_m: float = param("side antennas: width of the induction area [m] (paper 004: 40 cm)", 0.40)
+    passage_miss_probability: float = param("side antennas: probability that a wall tag is missed for a whole "
+                                            "passage through the induction area (paper 004's read failure)", 0.0)
+    unreadable_tags: list[str] = param("side antennas: wall tag ids never read (broken or covered plates: forced "
+                                       "read failures)", [])
 
     def validate(self) -> None:
         if not self.world_file:
@@ -97,6 +101,8 @@ class ReaderParameters:
             raise ValueError("channels_mhz: at least one positive frequency is needed")
         if not 0.0 <= self.miss_probability < 1.0:
             raise ValueError(f"miss_probability: must be in [0, 1), got {self.miss_probability}")
+        if not 0.0 <= self.passage_miss_probability <= 1.0:
+            raise ValueError(f"passage_miss_probability: must be in [0, 1], got {self.passage_miss_probability}")
         if self.phase_noise_rad_per_m < 0.0:
             raise ValueError("phase_noise_rad_per_m: must not be negative")
 
@@ -113,7 +119,9 @@ class ReaderParameters:
                            hop_dwell_s=self.hop_dwell_s, phase_noise_rad_per_m=self.phase_noise_rad_per_m,
                            miss_probability=self.miss_probability, rssi_at_1m_dbm=self.rssi_at_1m_dbm,
                            sensitivity_dbm=self.sensitivity_dbm, pattern_exponent=self.pattern_exponent,
-                           side_area_width_m=self.side_area_width_m)
+                           side_area_width_m=self.side_area_width_m,
+                           passage_miss_probability=self.passage_miss_probability,
+                           unreadable_tags=tuple(self.unreadable_tags))
 
 
 @dataclass(frozen=True)

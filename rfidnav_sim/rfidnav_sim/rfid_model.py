@@ -53,6 +53,8 @@ class ReaderModel:
     sensitivity_dbm: float = -90.0
     pattern_exponent: float = 1.0            # one-way gain cos(theta)^n off boresight
     side_area_width_m: float = 0.40          # side antennas: the induction area's width (paper 004 Fig. 3)
+    passage_miss_probability: float = 0.0    # side antennas: a wall tag missed for a whole passage
+    unreadable_tags: tuple[str, ...] = ()    # side antennas: wall tags never read (forced read failures)
 
 
 @dataclass(frozen=True)
@@ -85,7 +87,8 @@ class ReaderSimulator:
         # Side antennas read only wall tags, in their induction areas (rfidnav_sim.wall_tag_model).
         self.wall_readers = [(index, WallTagReader(InductionArea(antenna.position[:2], antenna.side_bearing_rad,
                                                                  model.side_area_width_m, antenna.max_range_m),
-                                                   wall_tags, model.miss_probability))
+                                                   wall_tags, model.miss_probability,
+                                                   model.passage_miss_probability, model.unreadable_tags))
                              for index, antenna in enumerate(model.antennas)
                              if antenna.side_bearing_rad is not None and wall_tags]
         self.tag_ids = list(tag_ids)

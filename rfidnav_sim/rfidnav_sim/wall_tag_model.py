@@ -5,8 +5,13 @@ following that wall at about 0.8 m, reads it with a sensor whose induction area 
 from the antenna" (Fig. 3). The area is modelled as exactly that rectangle: it starts at the antenna and reaches
 ``depth_m`` along the antenna's bearing, ``width_m`` across, edges included. Inside it a tag is read when its
 face is towards the antenna (a plate on the far side of a wall has its normal pointing away, and the wall is in
-the way), unless the read misses (probability ``miss_probability``, independent per tag and round). Tag height
-is ignored: the area is a footprint in the floor plane, as the paper's sensitivity map is.
+the way), unless the read misses. Tag height is ignored: the area is a footprint in the floor plane, as the
+paper's sensitivity map is.
+
+Three kinds of misses: ``miss_probability``, independent per tag and round (a tag in reach for ~40 rounds is then
+practically never missed for good); ``passage_miss_probability``, drawn once when a tag comes into reach and kept
+until it has left it (paper 004's read failure: the robot passes a tag without reading it); and
+``unreadable_tags``, never read (a broken or covered plate: forced failures for tests).
 """
 
 from __future__ import annotations
@@ -60,15 +65,25 @@ class InductionArea:
 class WallTagReader:
     """Which wall tags one antenna reads per inventory round, with the robot at a pose."""
 
-    def __init__(self, area: InductionArea, tags: Sequence[WallTag], miss_probability: float = 0.0) -> None:
-        if not 0.0 <= miss_probability <= 1.0:
-            raise ValueError(f"miss_probability: {miss_probability} is not in [0, 1]")
+    def __init__(self, area: InductionArea, tags: Sequence[WallTag], miss_probability: float = 0.0,
+                 passage_miss_probability: float = 0.0, unreadable_tags: Sequence[str] = ()) -> None:
+        for name, value in (("miss_probability", miss_probability),
+                            ("passage_miss_probability", passage_miss_probability)):
+            if not 0.0 <= value <= 1.0:
+                raise ValueError(f"{name}: {value} is not in [0, 1]")
         ids = [tag.tag_id for tag in tags]
         if len(set(ids)) != len(ids):
             raise ValueError(f"tags: tag_id must be unique, got {ids}")
+        unknown = sorted(set(unreadable_tags) - set(ids))
+        if unknown:
+            raise ValueError(f"unreadable_tags: {', '.join(unknown)} not among the wall tags")
         self.area = area
         self.tags = tuple(tags)
         self.miss_probability = miss_probability
+        self.passage_miss_probability = passage_miss_probability
+        self.readable = np.array([tag_id not in set(unreadable_tags) for tag_id in ids], dtype=bool)
+        self.passage_read = np.ones(len(self.tags), dtype=bool)   # per tag: read on its current passage
+        self.was_in_reach = np.zeros(len(self.tags), dtype=bool)
         self.positions = np.array([tag.position for tag in self.tags], dtype=float).reshape(-1, 2)
         self.normals = np.array([tag.normal for tag in self.tags], dtype=float).reshape(-1, 2)
 
@@ -90,6 +105,11 @@ class WallTagReader:
 
     def read(self, x: float, y: float, yaw: float, rng: np.random.Generator) -> list[str]:
         """Ids of the tags read in one round with the robot at (x, y, yaw), in tag order."""
-        # A draw for every tag, read or not, so the stream consumed does not depend on the pose.
+        reach = self.in_reach(x, y, yaw)
+        # Draws for every tag, read or not, so the stream consumed does not depend on the pose.
         kept = rng.random(len(self.tags)) >= self.miss_probability
-        return [self.tags[i].tag_id for i in np.flatnonzero(self.in_reach(x, y, yaw) & kept)]
+        passage = rng.random(len(self.tags)) >= self.passage_miss_probability
+        arriving = reach & ~self.was_in_reach
+        self.passage_read[arriving] = passage[arriving]
+        self.was_in_reach = reach
+        return [self.tags[i].tag_id for i in np.flatnonzero(reach & kept & self.passage_read & self.readable)]
