@@ -17,5 +17,6 @@ setup(
     license="Apache-2.0",
     entry_points={"console_scripts": [
         "heading_controller = rfidnav_control.heading_controller_node:main",
+        "wall_follower = rfidnav_control.wall_follower_node:main",
     ]},
 )

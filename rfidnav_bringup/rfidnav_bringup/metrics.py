@@ -1,5 +1,5 @@
-"""Metrics of a run from ground truth: tag-route tracking (paper 001 section V) and partition navigation
-(paper 000 section 6.2).
+"""Metrics of a run from ground truth: tag-route tracking (paper 001 section V), partition navigation
+(paper 000 section 6.2), two-tier fixes (paper 003) and topological missions (paper 004).
 
 Used both on bags (``./rfidnav report``) and on in-process runs (``./rfidnav reproduce``), so the
 figures of the two agree by construction.
@@ -15,9 +15,12 @@ figures of the two agree by construction.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
+
+from rfidnav_planning.topological_map import TopologicalMap
 
 FIRST_TAG_RADIUS_M = 0.01
 
@@ -152,3 +155,47 @@ def two_tier_metrics(trajectory: Trajectory, mission_start_s: float, mission_end
     return TwoTierMetrics(errors, float(np.median(errors)) if errors else None, max(errors, default=None),
                           float(np.linalg.norm(run.xy[-1] - np.asarray(target))), float(steps.sum()),
                           len(searching), float(steps[in_search].sum()))
+
+
+# Topological missions (paper 004): the robot has arrived when the executor says so AND it stopped this close to
+# the goal node's position (a junction's centre; a 1.6 m hallway's half width plus a margin).
+GOAL_RADIUS_M = 0.5
+
+
+@dataclass(frozen=True)
+class TopologicalMetrics:
+    success: bool                  # the executor's success and stopped within GOAL_RADIUS_M of the goal node
+    path_length_m: float           # driven (ground truth), mission start to end
+    shortest_path_m: float | None  # start -> first node localized at (straight) + the shortest route by length
+    path_over_shortest: float | None
+    final_distance_m: float        # from the goal node's position
+    tags_missed: int | None        # the executor's counts
+    replans: int | None
+
+    def as_dict(self) -> dict[str, float | int | None]:
+        return dict(self.__dict__)
+
+
+def topological_shortest_m(topological_map: TopologicalMap, start_xy: tuple[float, float], first_node: str,
+                           goal_node: str) -> float:
+    """The straight distance from the start to the first node the robot localized at, plus the shortest route
+    from there to the goal by hallway length: what a robot that knew where it started would at least drive."""
+    route = topological_map.route(first_node, goal_node, weight="length")
+    along = sum(topological_map.hallway_length_m(a, topological_map.departure_direction(a, b, "length"))
+                for a, b in zip(route, route[1:]))
+    return math.dist(start_xy, topological_map.nodes[first_node].position) + along
+
+
+def topological_metrics(trajectory: Trajectory, mission_start_s: float, mission_end_s: float,
+                        topological_map: TopologicalMap, goal_node: str, executor_success: bool,
+                        first_node: str | None, tags_missed: int | None, replans: int | None) -> TopologicalMetrics:
+    run = trajectory.between(mission_start_s, mission_end_s)
+    goal_xy = np.asarray(topological_map.nodes[goal_node].position)
+    if len(run.xy) == 0:
+        return TopologicalMetrics(False, 0.0, None, None, math.nan, tags_missed, replans)
+    path = float(np.linalg.norm(np.diff(run.xy, axis=0), axis=1).sum())
+    final = float(np.linalg.norm(run.xy[-1] - goal_xy))
+    shortest = (topological_shortest_m(topological_map, tuple(run.xy[0]), first_node, goal_node)
+                if first_node is not None else None)
+    return TopologicalMetrics(bool(executor_success and final <= GOAL_RADIUS_M), path, shortest,
+                              path / shortest if shortest else None, final, tags_missed, replans)

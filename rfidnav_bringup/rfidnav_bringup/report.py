@@ -21,8 +21,9 @@ import yaml  # noqa: E402
 
 from rfidnav_bringup.bags import bag_info, read_messages  # noqa: E402
 from rfidnav_bringup.errors import BagError  # noqa: E402
-from rfidnav_bringup.metrics import (Fix, Trajectory, partition_metrics, tracking_error, two_tier_metrics,  # noqa: E402
-                                     tracking_metrics)
+from rfidnav_bringup.metrics import (Fix, Trajectory, partition_metrics, topological_metrics,  # noqa: E402
+                                     tracking_error, tracking_metrics, two_tier_metrics)
+from rfidnav_planning.topological_map import load_topological_map  # noqa: E402
 from rfidnav_sim.world import World, load_world  # noqa: E402
 
 STATUS_ACCEPTED, STATUS_EXECUTING = 1, 2
@@ -121,6 +122,15 @@ def record_metrics(record: RunRecord) -> dict[str, float | int | None]:
         metrics.update(partition_metrics(record.ground_truth, record.mission_start_s, record.mission_end_s,
                                          (float(target.get("x", 0.0)), float(target.get("y", 0.0))),
                                          replans).as_dict())
+    if "topological" in record.metric_groups:
+        first_node = next((msg.feedback.current_node for _, _, msg in mission_feedback(record)
+                           if msg.feedback.current_node), None)
+        feedback = record.last_feedback
+        topological_map = load_topological_map(record.run_dir / "map.yaml")
+        metrics.update(topological_metrics(
+            record.ground_truth, record.mission_start_s, record.mission_end_s, topological_map,
+            str(record.goal.get("goal_node")), record.final_status == "succeeded", first_node,
+            getattr(feedback, "tags_missed", None), getattr(feedback, "replans", None)).as_dict())
     if "two_tier" in record.metric_groups:
         target = record.goal.get("target", {})
         fixes, searching = two_tier_events(record)
@@ -130,18 +140,23 @@ def record_metrics(record: RunRecord) -> dict[str, float | int | None]:
     return metrics
 
 
+def mission_feedback(record: RunRecord, topics: tuple[str, ...] = ()):
+    """(topic, stamp_ns, message) of the mission's action feedback, and of ``topics``, during the mission."""
+    action = yaml.safe_load((record.run_dir / "scenario.yaml").read_text())["mission"]["action"].rstrip("/")
+    for topic, stamp_ns, msg in read_messages(record.bag, [*topics, f"{action}/_action/feedback"]):
+        if record.mission_start_s <= stamp_ns * 1e-9 <= record.mission_end_s:
+            yield topic, stamp_ns, msg
+
+
 def two_tier_events(record: RunRecord) -> tuple[list[Fix], list[tuple[float, float]]]:
     """The tier-two fixes the navigator reported on /localization/status (a new last_fix_tag_id) and the spans
     its feedback said it was searching, during the mission."""
-    action = yaml.safe_load((record.run_dir / "scenario.yaml").read_text())["mission"]["action"].rstrip("/")
     fixes: list[Fix] = []
     searching: list[tuple[float, float]] = []
     search_start = None
     last_tag = ""
-    for topic, stamp_ns, msg in read_messages(record.bag, ["/localization/status", f"{action}/_action/feedback"]):
+    for topic, stamp_ns, msg in mission_feedback(record, ("/localization/status",)):
         now_s = stamp_ns * 1e-9
-        if not record.mission_start_s <= now_s <= record.mission_end_s:
-            continue
         if topic == "/localization/status":
             if msg.last_fix_tier == 2 and msg.last_fix_tag_id != last_tag:
                 fixes.append(Fix(msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9, msg.last_fix_tag_id,
@@ -177,6 +192,13 @@ def write_report(path: Path) -> tuple[dict[str, float | int | None], list[Path]]
         axes.plot([run.xy[0, 0], target["x"]], [run.xy[0, 1], target["y"]], "--", color="tab:green",
                   label="shortest path")
         axes.plot(target["x"], target["y"], "*", color="tab:red", markersize=12, label="goal")
+    goal_node = record.goal.get("goal_node")
+    if goal_node is not None:
+        for tag in record.world.wall_tags:
+            axes.plot(*tag.position, "s", color="tab:orange", markersize=4)
+        goal_xy = load_topological_map(record.run_dir / "map.yaml").nodes[goal_node].position
+        if goal_xy is not None:
+            axes.plot(*goal_xy, "*", color="tab:red", markersize=12, label=f"goal node {goal_node}")
     axes.plot(run.xy[:, 0], run.xy[:, 1], color="tab:blue", label="robot (ground truth)")
     for tag in record.world.tags:
         marker, colour = ("s", "tab:orange") if tag.kind == "ceiling" else ("o", "tab:purple")

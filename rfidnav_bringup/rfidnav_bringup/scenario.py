@@ -21,9 +21,11 @@ import yaml
 from rfidnav_bringup.processes import UnknownExecutableError, resolve_executable
 from rfidnav_common.config import Section, node_parameter_section, parameters_from_mapping, typed_values
 from rfidnav_common.errors import ConfigError
-from rfidnav_control.parameters import HeadingControllerParameters
+from rfidnav_control.parameters import HeadingControllerParameters, WallFollowerParameters
 from rfidnav_localization.parameters import LocationServerParameters, PartitionLocalizerParameters
-from rfidnav_planning.parameters import PartitionNavigatorParameters, TwoTierNavigatorParameters
+from rfidnav_planning.parameters import (MissionExecutorParameters, PartitionNavigatorParameters,
+                                        TwoTierNavigatorParameters)
+from rfidnav_planning.topological_map import TopologicalMap, load_topological_map
 from rfidnav_common.robot_map import RouteMap, load_route_map
 from rfidnav_sim.parameters import (CompassParameters, ReaderParameters, RobotSimParameters, SonarParameters,
                                     WifiSimParameters)
@@ -45,8 +47,10 @@ KNOWN_NODES: dict[tuple[str, str], tuple[str, type]] = {
     ("rfidnav_sim", "sonar_sim"): ("sonar_sim", SonarParameters),
     ("rfidnav_localization", "location_server"): ("location_server", LocationServerParameters),
     ("rfidnav_planning", "two_tier_navigator"): ("two_tier_navigator", TwoTierNavigatorParameters),
+    ("rfidnav_control", "wall_follower"): ("wall_follower", WallFollowerParameters),
+    ("rfidnav_planning", "mission_executor"): ("mission_executor", MissionExecutorParameters),
 }
-METRIC_GROUPS = ("tracking", "partition", "two_tier")
+METRIC_GROUPS = ("tracking", "partition", "two_tier", "topological")
 
 
 @dataclass(frozen=True)
@@ -86,7 +90,8 @@ class Scenario:
     mission: MissionSpec
     metrics: tuple[str, ...]
     world: World = field(repr=False)
-    route_map: RouteMap = field(repr=False)
+    route_map: RouteMap | None = field(repr=False)          # papers 000, 001, 003
+    topological_map: TopologicalMap | None = field(default=None, repr=False)   # paper 004: a map with nodes
 
     def resolved_document(self) -> dict[str, Any]:
         """The scenario as run (absolute paths, swaps and parameter files applied), for the run folder."""
@@ -160,11 +165,12 @@ def load_scenario(name_or_path: str, swaps: dict[str, str] | None = None,
         robot=(robot.number("x"), robot.number("y"), robot.number("yaw_deg", 0.0)), nodes=nodes,
         mission=MissionSpec(mission.string("action"), mission.string("type"), goal,
                             mission.number("timeout_s", 600.0, positive=True), mission.raw("server", None)),
-        metrics=tuple(metrics), world=load_world(world_file), route_map=load_route_map(map_file))
+        metrics=tuple(metrics), world=load_world(world_file), **_robot_map(map_file))
     if scenario.mission.server is not None and scenario.mission.server not in nodes:
         raise mission.error("server", f"no role '{scenario.mission.server}' (roles: {', '.join(nodes)})")
     _check_route(scenario, mission)
     _check_goal_area(scenario, mission)
+    _check_goal_node(scenario, mission)
     for spec in scenario.nodes.values():
         node_parameters(scenario, spec, seed=0, rtf=1.0)
     return scenario
@@ -227,10 +233,32 @@ def _program(command: tuple[str, ...], source: str, field: str) -> tuple[str, ..
     return command
 
 
+def _robot_map(map_file: Path) -> dict[str, Any]:
+    """The scenario's map: a topological map (paper 004) if it has ``nodes``, else a route map."""
+    if Section.from_file(map_file).has("nodes"):
+        return {"route_map": None, "topological_map": load_topological_map(map_file)}
+    return {"route_map": load_route_map(map_file)}
+
+
+def _check_goal_node(scenario: Scenario, mission: Section) -> None:
+    """A node goal (paper 004) must name a node of the scenario's topological map."""
+    node = scenario.mission.goal.get("goal_node")
+    if node is None:
+        return
+    topological_map = scenario.topological_map
+    if topological_map is None:
+        raise mission.error("goal", f"goal_node: the map {scenario.map_file} is not a topological map")
+    if node not in topological_map.nodes:
+        raise mission.error("goal", f"goal_node: '{node}' is not a node of {scenario.map_file} "
+                                    f"(nodes: {', '.join(topological_map.nodes)})")
+
+
 def _check_route(scenario: Scenario, mission: Section) -> None:
     tag_ids = scenario.mission.goal.get("tag_ids")
     if tag_ids is None:
         return
+    if scenario.route_map is None:
+        raise mission.error("goal", f"tag_ids: the map {scenario.map_file} is not a route map")
     if not isinstance(tag_ids, list) or not tag_ids or not all(isinstance(t, str) for t in tag_ids):
         raise mission.error("goal", "tag_ids: expected a non-empty list of tag ids")
     unknown = scenario.route_map.unknown_tags(tag_ids)
@@ -241,7 +269,7 @@ def _check_route(scenario: Scenario, mission: Section) -> None:
 def _check_goal_area(scenario: Scenario, mission: Section) -> None:
     """A point goal must lie on the tagged area the map declares (the navigator would refuse it)."""
     target = scenario.mission.goal.get("target")
-    area = scenario.route_map.deployment_area
+    area = scenario.route_map.deployment_area if scenario.route_map is not None else None
     if not isinstance(target, dict) or area is None:
         return
     x, y = target.get("x"), target.get("y")

@@ -22,6 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
+from rfidnav_bringup.metrics import GOAL_RADIUS_M, topological_shortest_m
 from rfidnav_bringup.scenario import CONFIG_DIR
 from rfidnav_control.wall_following import (JUNCTION_CENTRE, NO_OPENING, OBSTACLE, STOPPED, TURN_DONE, OdomPose,
                                             Sonar, WallFollower, WallFollowerSettings)
@@ -31,7 +32,6 @@ from rfidnav_sim.sonar_model import PAPER_LAYOUT, SonarModel
 from rfidnav_sim.wall_tag_model import InductionArea, WallTagReader
 from rfidnav_sim.world import World, load_world
 
-GOAL_RADIUS_M = 0.5                       # success: the robot stopped within this distance of the goal node
 FOLLOWER_EVENTS = (JUNCTION_CENTRE, NO_OPENING, TURN_DONE, OBSTACLE)
 FIG5_MAP = CONFIG_DIR / "maps" / "building_fig5.yaml"
 FIG5_WORLD = CONFIG_DIR / "worlds" / "building_fig5.yaml"
@@ -88,14 +88,6 @@ def start_pose_for(topological_map: TopologicalMap, tag_id: str | int,
     x = position[0] + before_m * math.cos(back) + lateral * math.cos(heading + math.pi / 2.0)
     y = position[1] + before_m * math.sin(back) + lateral * math.sin(heading + math.pi / 2.0)
     return (x, y, heading)
-
-
-def shortest_path_m(topological_map: TopologicalMap, start_xy: tuple[float, float], first_node: str,
-                    goal_node: str) -> float:
-    route = topological_map.route(first_node, goal_node, weight="length")
-    along = sum(topological_map.hallway_length_m(a, topological_map.departure_direction(a, b, "length"))
-                for a, b in zip(route, route[1:]))
-    return math.dist(start_xy, topological_map.nodes[first_node].position) + along
 
 
 def run_mission(world: World, topological_map: TopologicalMap, start_pose: tuple[float, float, float],
@@ -155,7 +147,7 @@ def run_mission(world: World, topological_map: TopologicalMap, start_pose: tuple
         message = f"no stop within {max_time_s:.0f} s (last: {message})"
     elif outcome is not None and outcome.success and not near:
         message += f"; but stopped {math.dist((x, y), goal_xy):.2f} m from the goal node"
-    shortest = (shortest_path_m(topological_map, start_pose[:2], first_node, goal_node)
+    shortest = (topological_shortest_m(topological_map, start_pose[:2], first_node, goal_node)
                 if first_node is not None else math.nan)
     return MissionRun(success, message, path, shortest, state.tags_missed, state.replans,
                       tuple(state.nodes_visited), t, (x, y), tuple(turns), first_node)

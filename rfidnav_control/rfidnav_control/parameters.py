@@ -1,5 +1,5 @@
-"""Parameters of the heading_controller node: typed, with defaults and descriptions, importable without
-rclpy so the orchestrator and the in-process runner validate parameter files against the same class.
+"""Parameters of the heading_controller and wall_follower nodes: typed, with defaults and descriptions, importable
+without rclpy so the orchestrator and the in-process runner validate parameter files against the same class.
 
 Defaults are the faithful paper-001 set; config/params/flc_paper.yaml repeats them and
 config/params/flc_tuned.yaml is ours.
@@ -8,13 +8,14 @@ config/params/flc_tuned.yaml is ours.
 from __future__ import annotations
 
 import dataclasses
-
+import math
 from dataclasses import dataclass
 
 from rfidnav_common.config import param
 from rfidnav_control.errors import FuzzySpecError
 from rfidnav_control.fuzzy import FuzzyHeadingSpec
 from rfidnav_control.tag_route import ARRIVAL_MODES, FollowerSettings
+from rfidnav_control.wall_following import WallFollowerSettings
 
 
 @dataclass(frozen=True)
@@ -74,3 +75,56 @@ class HeadingControllerParameters:
         return FuzzyHeadingSpec.from_flat(
             self.input_range_rad, self.output_range_rad, self.input_set_names, self.input_set_points,
             self.output_set_names, self.output_set_points, self.rules, self.resolution)
+
+
+_WALL = WallFollowerSettings()
+SONAR_FIELDS = ("front", "front_left", "front_right", "left", "right")   # the follower's Sonar, in this order
+
+
+@dataclass(frozen=True)
+class WallFollowerParameters:
+    """wall_follower (paper 004); config/params/wall_follower.yaml documents them. The follower's settings keep
+    its names; the mounting offsets are those of paper 004's layout (rfidnav_sim.sonar_model.PAPER_LAYOUT)."""
+
+    control_rate_hz: float = param("control steps per second [Hz, sim time]", 20.0)
+    sonar_topics: list[str] = param("Range topics feeding the follower's front, front_left, front_right, left and "
+                                    "right readings, in that order",
+                                    ["/sonar/front", "/sonar/front_left_45", "/sonar/front_right_45", "/sonar/left",
+                                     "/sonar/right"])
+    sonar_offsets_m: list[float] = param(
+        "per sonar topic: its mounting position's component along its bearing, added to each reading so that "
+        "ranges are from the robot's centre [m]", [0.175, 0.1945, 0.1945, 0.175, 0.175])
+    sonar_timeout_s: float = param("stop (and warn) while any sonar has been silent this long [s, sim time]", 0.5)
+    recover_after_s: float = param("blocked this long, turn away on the spot (or back, in a dead end) [s]", 2.0)
+    wall_distance_m: float = param("set distance to the left wall [m] (paper 004: 0.8; tags read within 1 m)",
+                                   _WALL.wall_distance_m)
+    speed_mps: float = param("forward speed [m/s]", _WALL.speed_mps)
+    realign_every_m: float = param("length of a measuring stretch (paper 004: every 1 m) [m]", _WALL.realign_every_m)
+    stop_distance_m: float = param("emergency stop when the front sonar reads closer [m]", _WALL.stop_distance_m)
+    diagonal_stop_distance_m: float = param("... or a diagonal one reads closer [m]", _WALL.diagonal_stop_distance_m)
+    opening_threshold_m: float = param("a side reading beyond this is an opening [m]", _WALL.opening_threshold_m)
+    junction_half_width_m: float = param("junction centre this far past an edge when no wall resumes [m]",
+                                         _WALL.junction_half_width_m)
+    turn_rate_radps: float = param("largest yaw rate [rad/s]", _WALL.turn_rate_radps)
+    heading_gain_per_s: float = param("yaw rate per radian of heading error [1/s]", _WALL.heading_gain_per_s)
+    distance_gain: float = param("approach angle per metre of distance error [rad/m]", _WALL.distance_gain)
+    max_fit_residual_m: float = param("a stretch's ranges further off their fitted line are no straight wall [m]",
+                                      _WALL.max_fit_residual_m)
+    sonar_half_angle_rad: float = param("side sonars' half cone [rad] (paper 004: 25 deg cones)",
+                                        _WALL.sonar_half_angle_rad)
+
+    def validate(self) -> None:
+        if len(self.sonar_topics) != len(SONAR_FIELDS) or len(self.sonar_offsets_m) != len(SONAR_FIELDS):
+            raise ValueError(f"sonar_topics and sonar_offsets_m: one each for {', '.join(SONAR_FIELDS)}, got "
+                             f"{len(self.sonar_topics)} and {len(self.sonar_offsets_m)}")
+        for name in ("control_rate_hz", "sonar_timeout_s"):
+            if not (math.isfinite(getattr(self, name)) and getattr(self, name) > 0.0):
+                raise ValueError(f"{name}: must be positive, got {getattr(self, name)}")
+        if not (math.isfinite(self.recover_after_s) and self.recover_after_s >= 0.0):
+            raise ValueError(f"recover_after_s: must not be negative, got {self.recover_after_s}")
+        self.settings().validate()
+
+    def settings(self) -> WallFollowerSettings:
+        names = {field.name for field in dataclasses.fields(WallFollowerSettings)} & set(self.__dataclass_fields__)
+        return dataclasses.replace(_WALL, **{name: getattr(self, name) for name in names},
+                                   recover_after_steps=round(self.recover_after_s * self.control_rate_hz))

@@ -1,6 +1,7 @@
-"""Parameters of the navigator nodes (partition_navigator, two_tier_navigator): typed, with defaults and
-descriptions, importable without rclpy so the orchestrator and the in-process runner validate parameter files
-against the same class. config/params/partition_navigator.yaml and two_tier_navigator.yaml document them."""
+"""Parameters of the navigator nodes (partition_navigator, two_tier_navigator, mission_executor): typed, with
+defaults and descriptions, importable without rclpy so the orchestrator and the in-process runner validate parameter
+files against the same class. config/params/partition_navigator.yaml, two_tier_navigator.yaml and mission_executor.yaml
+document them."""
 
 from __future__ import annotations
 
@@ -11,6 +12,7 @@ from dataclasses import dataclass
 from rfidnav_common.config import param
 from rfidnav_control.go_to import GoToSettings
 from rfidnav_planning.partition_navigation import NavigatorSettings
+from rfidnav_planning.topological_map import WEIGHTS
 from rfidnav_planning.two_tier_navigation import TwoTierSettings
 
 
@@ -92,3 +94,17 @@ class TwoTierNavigatorParameters:
                              heading_gain_per_s=self.heading_gain_per_s, tolerance_m=self.goal_tolerance_m)
         names = {field.name for field in dataclasses.fields(TwoTierSettings)} - {"go_to"}
         return TwoTierSettings(**{name: getattr(self, name) for name in names}, go_to=go_to)
+
+
+@dataclass(frozen=True)
+class MissionExecutorParameters:
+    """mission_executor (paper 004); config/params/mission_executor.yaml documents them."""
+
+    map_file: str = param("topological map YAML (rfidnav_planning.topological_map)", "")
+    weight: str = param("routes: fewest hallways (edges) or shortest by hallway lengths (length)", "edges")
+
+    def validate(self) -> None:
+        if not self.map_file:
+            raise ValueError("map_file: required (the topological map)")
+        if self.weight not in WEIGHTS:
+            raise ValueError(f"weight: '{self.weight}' is not one of {', '.join(WEIGHTS)}")

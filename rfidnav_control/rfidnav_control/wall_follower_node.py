@@ -1,0 +1,136 @@
+"""wall_follower: paper 004's sonar left-wall following as a node: /sonar/* and /odom in, /cmd_vel and
+/wall_follower/event out, commanded on /wall_follower/command (by mission_executor).
+
+A thin adapter around rfidnav_control.wall_following.WallFollower: a timer at ``control_rate_hz`` (sim time) feeds
+it the latest range of each sonar topic (plus that sonar's mounting offset, so ranges are from the robot's centre)
+and the latest odometry pose, and publishes its velocity and events. It is idle until the first command: a
+``follow`` or a turn starts a new follower (what was measured of the walls on an earlier drive is not kept); its
+``stopped`` event makes it idle again. While a sonar is silent longer than ``sonar_timeout_s`` it stops the robot
+rather than drive blind, and says so; a NaN range or pose is dropped with a warning.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+from geometry_msgs.msg import Pose2D, Twist
+from nav_msgs.msg import Odometry
+from rclpy.node import Node
+from sensor_msgs.msg import Range
+
+from rfidnav_common.geometry import quaternion_to_yaw
+from rfidnav_common.ros import COMMAND_QOS, SENSOR_QOS, declare_parameters, run_node
+from rfidnav_control.parameters import SONAR_FIELDS, WallFollowerParameters
+from rfidnav_control.wall_following import ACTIONS, STOPPED, OdomPose, Sonar, WallFollower
+from rfidnav_msgs.msg import WallFollowerCommand, WallFollowerEvent
+
+
+class WallFollowerNode(Node):
+    def __init__(self, **node_options: Any) -> None:
+        """``node_options``: keyword arguments of rclpy's Node (``context``, ``parameter_overrides``), for tests."""
+        super().__init__("wall_follower", **node_options)
+        self.params: WallFollowerParameters = declare_parameters(self, WallFollowerParameters)
+        self.settings = self.params.settings()
+        self.follower: WallFollower | None = None          # None: idle
+        self.ranges: dict[str, tuple[float, float]] = {}    # field -> (range from the centre, sim time received)
+        self.odom: OdomPose | None = None
+        self.cmd_pub = self.create_publisher(Twist, "/cmd_vel", COMMAND_QOS)
+        self.event_pub = self.create_publisher(WallFollowerEvent, "/wall_follower/event", COMMAND_QOS)
+        for field, topic, offset in zip(SONAR_FIELDS, self.params.sonar_topics, self.params.sonar_offsets_m):
+            self.create_subscription(Range, topic, self.range_callback(field, topic, offset), SENSOR_QOS)
+        self.create_subscription(Odometry, "/odom", self.on_odom, SENSOR_QOS)
+        self.create_subscription(WallFollowerCommand, "/wall_follower/command", self.on_command, COMMAND_QOS)
+        self.create_timer(1.0 / self.params.control_rate_hz, self.control_step)
+        self.get_logger().info(f"idle until commanded; set distance {self.settings.wall_distance_m:g} m, "
+                               f"{self.settings.speed_mps:g} m/s, {self.params.control_rate_hz:g} steps/s")
+
+    def now_s(self) -> float:
+        return self.get_clock().now().nanoseconds * 1e-9
+
+    # ---------------------------------------------------------------------------------------- inputs
+    def range_callback(self, field: str, topic: str, offset: float):
+        def on_range(msg: Range) -> None:
+            if math.isnan(msg.range):
+                self.get_logger().warning(f"{topic}: dropped a NaN range", throttle_duration_sec=5.0)
+                return
+            # +inf (no echo) stays inf; -inf (closer than the minimum, REP 117) stays below any threshold.
+            self.ranges[field] = (msg.range + offset if math.isfinite(msg.range) else msg.range, self.now_s())
+        return on_range
+
+    def on_odom(self, msg: Odometry) -> None:
+        pose = msg.pose.pose
+        yaw = quaternion_to_yaw(pose.orientation.x, pose.orientation.y, pose.orientation.z, pose.orientation.w)
+        if not all(math.isfinite(v) for v in (pose.position.x, pose.position.y, yaw)):
+            self.get_logger().warning("dropped an odometry message with non-finite values", throttle_duration_sec=5.0)
+            return
+        self.odom = OdomPose(pose.position.x, pose.position.y, yaw)
+
+    def on_command(self, msg: WallFollowerCommand) -> None:
+        action = msg.action
+        if action not in (*ACTIONS, WallFollowerCommand.FOLLOW, WallFollowerCommand.STOP):
+            self.get_logger().error(f"/wall_follower/command: unknown action '{action}' ignored")
+            return
+        if action == WallFollowerCommand.STOP:
+            if self.follower is not None:
+                try:
+                    self.follower.command_stop(msg.stop_within_m)
+                except ValueError as error:
+                    self.get_logger().error(f"/wall_follower/command: {error}; stopping at once")
+                    self.follower.command_stop(0.0)
+            return
+        if self.follower is None:
+            self.follower = WallFollower(self.settings)
+            self.get_logger().info("following the left wall")
+        if action != WallFollowerCommand.FOLLOW:
+            self.follower.command_turn(action)
+
+    # ------------------------------------------------------------------------------------- control
+    def control_step(self) -> None:
+        if self.follower is None:
+            return
+        sonar = self.latest_sonar()
+        if sonar is None or self.odom is None:
+            self.drive(0.0, 0.0)
+            return
+        command = self.follower.step(sonar, self.odom)
+        self.drive(command.linear, command.angular)
+        if command.event is not None:
+            self.publish_event(command.event)
+        if command.event == STOPPED:
+            self.follower = None
+            self.get_logger().info(f"stopped at odom ({self.odom.x:.2f}, {self.odom.y:.2f}); idle")
+
+    def latest_sonar(self) -> Sonar | None:
+        """The follower's Sonar from the latest ranges; None (with a warning) while any is missing or stale."""
+        now = self.now_s()
+        stale = [topic for field, topic in zip(SONAR_FIELDS, self.params.sonar_topics)
+                 if field not in self.ranges or now - self.ranges[field][1] > self.params.sonar_timeout_s]
+        if stale:
+            self.get_logger().warning(f"no recent range on {', '.join(stale)}: holding still",
+                                      throttle_duration_sec=5.0)
+            return None
+        return Sonar(**{field: self.ranges[field][0] for field in SONAR_FIELDS})
+
+    # -------------------------------------------------------------------------------------- output
+    def drive(self, linear: float, angular: float) -> None:
+        twist = Twist()
+        twist.linear.x = float(linear)
+        twist.angular.z = float(angular)
+        self.cmd_pub.publish(twist)
+
+    def publish_event(self, event: str) -> None:
+        msg = WallFollowerEvent(event=event, state=self.follower.state,
+                                odom_pose=Pose2D(x=float(self.odom.x), y=float(self.odom.y),
+                                                 theta=float(self.odom.yaw)))
+        msg.header.stamp = self.get_clock().now().to_msg()
+        msg.header.frame_id = "odom"
+        self.event_pub.publish(msg)
+
+
+def main(args: list[str] | None = None) -> int:
+    return run_node(WallFollowerNode, args)
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
