@@ -250,6 +250,9 @@ def verb_survey(args) -> int:
     from rfidnav_localization.radio_map_file import write_radio_map
 
     scenario = load_scenario(args.scenario)
+    if scenario.route_map is None:
+        raise ConfigError(str(scenario.map_file), "", "a survey needs a route map with tag_groups (this is a "
+                                                     "topological map)")
     fingerprints, description = survey(scenario.world, scenario.route_map, args.grid, args.seed)
     write_radio_map(args.out, fingerprints, description)
     print(f"{len(fingerprints)} fingerprints ({description}) -> {args.out}")
