@@ -5,9 +5,10 @@ import math
 import numpy as np
 import pytest
 
-from rfidnav_bringup.topological_experiments import (FIG5_MAP, centre_sonar, mounting_offsets, paper_run,
-                                                     random_missions, start_pose_for)
+from rfidnav_bringup.topological_experiments import (FIG5_MAP, FIG5_WORLD, centre_sonar, mounting_offsets,
+                                                     paper_run, random_missions, run_mission, start_pose_for)
 from rfidnav_planning.topological_map import load_topological_map
+from rfidnav_sim.world import load_world
 
 
 def test_mounting_offsets_put_the_side_sonars_at_the_robot_edge():
@@ -43,12 +44,31 @@ def test_paper_run_succeeds_whatever_the_sonar_noise():
     assert all(run.success for run in runs), [run.message for run in runs]
 
 
-def test_random_missions_without_misses_succeed_four_times_in_five():
-    # Measured 4/5: mission 3 (tag 150 at E4 -> A2) misses no tag but finds no left opening at A3 (open issue).
-    runs = random_missions(5, 0.0, seed=7)
-    assert sum(run.success for run in runs) >= 4, [run.message for run in runs]
+def test_random_missions_without_misses_all_succeed_near_the_shortest_path():
+    runs = random_missions(6, 0.0, seed=7)
+    assert all(run.success for run in runs), [run.message for run in runs]
+    ratios = [run.path_length_m / run.shortest_path_m for run in runs]
+    assert all(run.tags_missed == 0 for run in runs) and all(0.9 < ratio < 1.15 for ratio in ratios), ratios
+    assert np.mean(ratios) < 1.1
 
 
-def test_random_missions_with_20_percent_misses_succeed_four_times_in_five():
-    runs = random_missions(5, 0.2, seed=7)
-    assert sum(run.success for run in runs) >= 4, [run.message for run in runs]
+def test_random_missions_with_30_percent_misses_all_succeed_by_the_routes_expectation():
+    runs = random_missions(6, 0.3, seed=7)
+    assert all(run.success for run in runs), [run.message for run in runs]
+    assert sum(run.tags_missed for run in runs) >= 2             # the misses happened and were carried
+
+
+def test_a_question_mark_hallway_is_explored_and_learned_on_the_way_to_its_far_end(tmp_path):
+    # The robot's map does not know the hallway h - f (both ends "?"): f is reached only by exploring it.
+    text = FIG5_MAP.read_text()
+    for known, unknown in (("E: {node: f, tags: [24]}", 'E: {node: "?", tags: [24]}'),
+                           ("W: {node: h, tags: [17]}", 'W: {node: "?", tags: [17]}')):
+        assert known in text
+        text = text.replace(known, unknown)
+    partial = tmp_path / "fig5_without_h_f.yaml"
+    partial.write_text(text)
+    topological_map = load_topological_map(partial)
+    run = run_mission(load_world(FIG5_WORLD), topological_map, start_pose_for(topological_map, "23"), "f",
+                      np.random.default_rng(1))
+    assert run.success, run.message
+    assert run.nodes_visited == ("h", "f") and run.turns == (("h", "straight"),)

@@ -174,6 +174,14 @@ def test_check_map_names_file_and_field(tmp_path: Path, old: str, new: str, fiel
     assert (raised.value.source, raised.value.field) == (str(path), field)
 
 
+def test_a_node_only_reachable_through_question_marks_is_allowed(tmp_path: Path) -> None:
+    # d has a "?" hallway North; k has one West: they may join through hallways not yet explored.
+    path = broken(tmp_path, "h: {position: [16.0, 8.0], W: {node: c, tags: [23]}}",
+                  "h: {position: [16.0, 8.0], W: {node: c, tags: [23]}}\n  k: {position: [30.0, 8.0], "
+                  "W: {node: '?', tags: [99]}}")
+    assert check_map(path) == []
+
+
 def test_length_mismatch_is_reported_once(tmp_path: Path) -> None:
     path = broken(tmp_path, "a: {position: [0.0, 8.0], E: {node: c, tags: [1]}}",
                   "a: {position: [0.0, 8.0], E: {node: c, tags: [1], length_m: 9.0}}")

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from rfidnav_planning.topological_map import TopologicalMap
+from rfidnav_planning.topological_map import RouteError, TopologicalMap
 
 FIRST_TAG_RADIUS_M = 0.01
 
@@ -166,7 +166,7 @@ GOAL_RADIUS_M = 0.5
 class TopologicalMetrics:
     success: bool                  # the executor's success and stopped within GOAL_RADIUS_M of the goal node
     path_length_m: float           # driven (ground truth), mission start to end
-    shortest_path_m: float | None  # start -> first node localized at (straight) + the shortest route by length
+    shortest_path_m: float | None  # see topological_shortest_m
     path_over_shortest: float | None
     final_distance_m: float        # from the goal node's position
     tags_missed: int | None        # the executor's counts
@@ -177,25 +177,44 @@ class TopologicalMetrics:
 
 
 def topological_shortest_m(topological_map: TopologicalMap, start_xy: tuple[float, float], first_node: str,
-                           goal_node: str) -> float:
-    """The straight distance from the start to the first node the robot localized at, plus the shortest route
-    from there to the goal by hallway length: what a robot that knew where it started would at least drive."""
-    route = topological_map.route(first_node, goal_node, weight="length")
-    along = sum(topological_map.hallway_length_m(a, topological_map.departure_direction(a, b, "length"))
-                for a, b in zip(route, route[1:]))
-    return math.dist(start_xy, topological_map.nodes[first_node].position) + along
+                           arrival_side: str, goal_node: str) -> float:
+    """What a robot that knew where it started would at least drive: it starts in the hallway entering
+    ``first_node`` (the first node it localized at) by ``arrival_side``, so straight to either end of that
+    hallway, then the shortest route by hallway length from there. RouteError if neither end has a route."""
+    ends = [first_node]
+    behind = topological_map.nodes[first_node].hallways[arrival_side].neighbour
+    if behind in topological_map.nodes:
+        ends.append(behind)
+    lengths = []
+    for end in ends:
+        try:
+            route = topological_map.route(end, goal_node, weight="length")
+        except RouteError:
+            continue
+        along = sum(topological_map.hallway_length_m(a, topological_map.departure_direction(a, b, "length"))
+                    for a, b in zip(route, route[1:]))
+        lengths.append(math.dist(start_xy, topological_map.nodes[end].position) + along)
+    if not lengths:
+        raise RouteError(f"map '{topological_map.name}': no route to '{goal_node}' from either end of the hallway "
+                         f"entering '{first_node}' by {arrival_side}")
+    return min(lengths)
 
 
 def topological_metrics(trajectory: Trajectory, mission_start_s: float, mission_end_s: float,
                         topological_map: TopologicalMap, goal_node: str, executor_success: bool,
-                        first_node: str | None, tags_missed: int | None, replans: int | None) -> TopologicalMetrics:
+                        first_arrival: tuple[str, str] | None, tags_missed: int | None,
+                        replans: int | None) -> TopologicalMetrics:
+    """``first_arrival``: the (node, arrival side) the robot first localized at (None: it never did)."""
     run = trajectory.between(mission_start_s, mission_end_s)
     goal_xy = np.asarray(topological_map.nodes[goal_node].position)
     if len(run.xy) == 0:
         return TopologicalMetrics(False, 0.0, None, None, math.nan, tags_missed, replans)
     path = float(np.linalg.norm(np.diff(run.xy, axis=0), axis=1).sum())
     final = float(np.linalg.norm(run.xy[-1] - goal_xy))
-    shortest = (topological_shortest_m(topological_map, tuple(run.xy[0]), first_node, goal_node)
-                if first_node is not None else None)
+    try:
+        shortest = (topological_shortest_m(topological_map, tuple(run.xy[0]), *first_arrival, goal_node)
+                    if first_arrival is not None else None)
+    except RouteError:
+        shortest = None            # the goal lies beyond "?" hallways of the given map: no shortest route known
     return TopologicalMetrics(bool(executor_success and final <= GOAL_RADIUS_M), path, shortest,
                               path / shortest if shortest else None, final, tags_missed, replans)

@@ -123,13 +123,13 @@ def record_metrics(record: RunRecord) -> dict[str, float | int | None]:
                                          (float(target.get("x", 0.0)), float(target.get("y", 0.0))),
                                          replans).as_dict())
     if "topological" in record.metric_groups:
-        first_node = next((msg.feedback.current_node for _, _, msg in mission_feedback(record)
-                           if msg.feedback.current_node), None)
+        first_arrival = next(((msg.feedback.current_node, msg.feedback.arrival_direction)
+                              for _, _, msg in mission_feedback(record) if msg.feedback.current_node), None)
         feedback = record.last_feedback
         topological_map = load_topological_map(record.run_dir / "map.yaml")
         metrics.update(topological_metrics(
             record.ground_truth, record.mission_start_s, record.mission_end_s, topological_map,
-            str(record.goal.get("goal_node")), record.final_status == "succeeded", first_node,
+            str(record.goal.get("goal_node")), record.final_status == "succeeded", first_arrival,
             getattr(feedback, "tags_missed", None), getattr(feedback, "replans", None)).as_dict())
     if "two_tier" in record.metric_groups:
         target = record.goal.get("target", {})

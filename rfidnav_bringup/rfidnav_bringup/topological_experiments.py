@@ -92,12 +92,13 @@ def start_pose_for(topological_map: TopologicalMap, tag_id: str | int,
 
 def run_mission(world: World, topological_map: TopologicalMap, start_pose: tuple[float, float, float],
                 goal_node: str, rng: np.random.Generator, miss_probability: float = 0.0, step_s: float = 0.05,
-                max_time_s: float = 900.0, settings: WallFollowerSettings = WallFollowerSettings()) -> MissionRun:
+                max_time_s: float = 900.0, settings: WallFollowerSettings = WallFollowerSettings(),
+                weight: str = "length") -> MissionRun:
     sonar_model = SonarModel(PAPER_LAYOUT, world.wall_segments())
     offsets = mounting_offsets()
     reader = WallTagReader(InductionArea(), world.wall_tags, passage_miss_probability=miss_probability)
     follower = WallFollower(settings)
-    executor = MissionExecutor(topological_map)
+    executor = MissionExecutor(topological_map, weight)
     executor.start(goal_node)
     x, y, yaw = start_pose
     path = 0.0
@@ -147,8 +148,9 @@ def run_mission(world: World, topological_map: TopologicalMap, start_pose: tuple
         message = f"no stop within {max_time_s:.0f} s (last: {message})"
     elif outcome is not None and outcome.success and not near:
         message += f"; but stopped {math.dist((x, y), goal_xy):.2f} m from the goal node"
-    shortest = (topological_shortest_m(topological_map, start_pose[:2], first_node, goal_node)
-                if first_node is not None else math.nan)
+    # On the map as learned by the end: a goal reached through an explored "?" hallway has a route.
+    shortest = (topological_shortest_m(executor.map, start_pose[:2], *state.first_arrival, goal_node)
+                if state.first_arrival is not None else math.nan)
     return MissionRun(success, message, path, shortest, state.tags_missed, state.replans,
                       tuple(state.nodes_visited), t, (x, y), tuple(turns), first_node)
 

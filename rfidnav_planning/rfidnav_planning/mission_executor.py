@@ -96,6 +96,7 @@ class MissionState:
     expected_side: str | None = None
     passing: tuple[tuple[str, str], ...] = ()   # (node, arrival side) passed on the way, without a junction
     nodes_visited: list[str] = field(default_factory=list)
+    first_arrival: tuple[str, str] | None = None    # (node, side) of the first localization
     tags_missed: int = 0
     unknown_tags: int = 0
     replans: int = 0
@@ -244,6 +245,8 @@ class MissionExecutor:
         state = self._mission()
         state.current_node, state.arrival_side = node, side
         state.nodes_visited.append(node)
+        if state.first_arrival is None:
+            state.first_arrival = (node, side)
         state.expected_node = state.expected_side = state.exploring = None
         state.passing = ()
         opening = self.map.has_side_opening(node, side)

@@ -101,7 +101,8 @@ class MissionExecutorParameters:
     """mission_executor (paper 004); config/params/mission_executor.yaml documents them."""
 
     map_file: str = param("topological map YAML (rfidnav_planning.topological_map)", "")
-    weight: str = param("routes: fewest hallways (edges) or shortest by hallway lengths (length)", "edges")
+    weight: str = param("routes: shortest by hallway lengths (length: length_m, else between positions, else 1 m) "
+                        "or fewest hallways (edges)", "length")
 
     def validate(self) -> None:
         if not self.map_file:

@@ -37,7 +37,9 @@ Rules (``check_map`` lists every break, ``load_topological_map`` raises the firs
   both ends agree;
 * where both ends have positions, the far end lies within 45 degrees of the side's compass direction, so a
   drawing (and a person reading the map) sees the turns the robot will make;
-* every node is reachable from the first through mapped hallways (``?`` does not count).
+* every node is reachable from the first through mapped hallways, or it and the first node both lie in parts of
+  the map with a ``?`` hallway (the parts may join through unexplored hallways: the mission executor explores
+  them).
 
 Hallway length for ``route(..., weight="length")``: ``length_m`` from either end, else the straight distance
 between the two positions, else 1 m (the topology alone then decides, as with ``weight="edges"``).
@@ -507,7 +509,11 @@ class _Reader:
                              for hallway in node.hallways.values() if hallway.neighbour in nodes)
         first = next(iter(nodes))
         reached = nx.node_connected_component(graph, first)
+
+        def explorable(part: set[str]) -> bool:
+            return any(hallway.neighbour == UNKNOWN for name in part for hallway in nodes[name].hallways.values())
+
         for name in nodes:
-            if name not in reached:
+            if name not in reached and not (explorable(reached) and explorable(nx.node_connected_component(graph, name))):
                 self.problems.append(nodes_section.error(name, f"not reachable from '{first}' (the first node) "
-                                                               "through mapped hallways"))
+                                                               f"through mapped hallways nor through '{UNKNOWN}' ones"))
