@@ -472,3 +472,14 @@ def test_reads_are_new_only_when_the_tag_changes_and_a_stop_is_commanded_once(fi
     assert executor.follower_command(done) == FollowerCommand(STOP, fig5.tag_to_node_m * 2.0)
     assert executor.on_junction(JUNCTION_CENTRE) == done       # the outcome stands, and is not commanded again
     assert executor.follower_command(done) is None
+
+
+def test_the_papers_loop_follows_on_past_a_missed_tag_until_the_next_one(fig5: TopologicalMap) -> None:
+    executor = MissionExecutor(fig5, recover_missed_tags=False)
+    executor.start("f")
+    assert executor.on_tag("7").action == STRAIGHT             # at c from the West, leaving East for h
+    executor.on_junction(JUNCTION_CENTRE)
+    passed = executor.on_junction(JUNCTION_CENTRE)             # h's tag 23 missed: the baseline cannot know it
+    assert passed.action == FOLLOW and executor.state.tags_missed == 0
+    assert executor.state.nodes_visited == ["c"]
+    assert executor.on_tag("17").success                       # f's tag, read: it still arrives

@@ -18,7 +18,8 @@ def test_the_paper_run_and_the_missions_are_reported_at_every_miss_rate(tmp_path
     paper = next(row for row in rows if row["experiment"] == "paper_run")
     assert paper["success"] and 8.0 <= paper["ours"] <= 12.0          # a right turn at h, then ~8 m to tag 19
     success = [row for row in rows if row["metric"] == "success_pct"]
-    assert [row["setting"]["miss_rate"] for row in success] == list(MISS_RATES)
+    assert [(row["setting"]["method"], row["setting"]["miss_rate"]) for row in success] == [
+        (method, rate) for method in ("paper", "ours") for rate in MISS_RATES]
     assert all(0.0 <= row["ours"] <= 100.0 for row in success)
     assert (tmp_path / "topological_missions.png").stat().st_size > 10_000
     assert "right at h" in capsys.readouterr().out

@@ -93,12 +93,12 @@ def start_pose_for(topological_map: TopologicalMap, tag_id: str | int,
 def run_mission(world: World, topological_map: TopologicalMap, start_pose: tuple[float, float, float],
                 goal_node: str, rng: np.random.Generator, miss_probability: float = 0.0, step_s: float = 0.05,
                 max_time_s: float = 900.0, settings: WallFollowerSettings = WallFollowerSettings(),
-                weight: str = "length") -> MissionRun:
+                weight: str = "length", recover_missed_tags: bool = True) -> MissionRun:
     sonar_model = SonarModel(PAPER_LAYOUT, world.wall_segments())
     offsets = mounting_offsets()
     reader = WallTagReader(InductionArea(), world.wall_tags, passage_miss_probability=miss_probability)
     follower = WallFollower(settings)
-    executor = MissionExecutor(topological_map, weight)
+    executor = MissionExecutor(topological_map, weight, recover_missed_tags)
     executor.start(goal_node)
     x, y, yaw = start_pose
     path = 0.0
@@ -162,8 +162,8 @@ def paper_run(rng: np.random.Generator, miss_probability: float = 0.0) -> Missio
                        miss_probability)
 
 
-def random_missions(count: int, miss_probability: float, seed: int,
-                    map_path: Path = LARGE_MAP, world_path: Path = LARGE_WORLD) -> list[MissionRun]:
+def random_missions(count: int, miss_probability: float, seed: int, map_path: Path = LARGE_MAP,
+                    world_path: Path = LARGE_WORLD, recover_missed_tags: bool = True) -> list[MissionRun]:
     """``count`` missions on the large floor: a random start tag (on a mapped hallway) and a random goal node other
     than the start tag's node, seeded; each mission gets its own generator."""
     topological_map = load_topological_map(map_path)
@@ -178,5 +178,6 @@ def random_missions(count: int, miss_probability: float, seed: int,
         goals = [name for name in topological_map.nodes if name != start_node]
         goal = goals[int(choose.integers(len(goals)))]
         runs.append(run_mission(world, topological_map, start_pose_for(topological_map, tag), goal,
-                                np.random.default_rng([seed, index + 1]), miss_probability))
+                                np.random.default_rng([seed, index + 1]), miss_probability,
+                                recover_missed_tags=recover_missed_tags))
     return runs

@@ -111,9 +111,13 @@ class MissionState:
 
 
 class MissionExecutor:
-    def __init__(self, topological_map: TopologicalMap, weight: str = "edges") -> None:
+    def __init__(self, topological_map: TopologicalMap, weight: str = "edges",
+                 recover_missed_tags: bool = True) -> None:
+        """``recover_missed_tags=False`` is the paper's loop, the baseline: a junction with no tag read is
+        followed straight on (or round a corner) and only the next tag read re-localizes the robot."""
         if weight not in WEIGHTS:
             raise ValueError(f"weight must be one of {', '.join(WEIGHTS)}, got '{weight}'")
+        self.recover_missed_tags = recover_missed_tags
         self.map = topological_map          # replaced by a copy with each learned hallway
         self.weight = weight
         self.learned: tuple[LearnedEdge, ...] = ()
@@ -192,7 +196,7 @@ class MissionExecutor:
             return self._junction_centre()
         if event == NO_OPENING:
             return self._no_opening()
-        if event == OBSTACLE and state.awaiting is None and self._dead_end_expected():
+        if event == OBSTACLE and self.recover_missed_tags and state.awaiting is None and self._dead_end_expected():
             state.tags_missed += 1
             self._passed(state.passing)
             return self._answer(self._arrive(state.expected_node, state.expected_side,
@@ -217,7 +221,7 @@ class MissionExecutor:
             state.exploring = None
             return Decision(FOLLOW, message="junction at the end of an explored hallway without a tag: lost; "
                                             "the hallway stays unexplored")
-        if state.expected_node is None:
+        if state.expected_node is None or not self.recover_missed_tags:
             return Decision(FOLLOW, message="junction without a tag read and no expectation: following on")
         state.tags_missed += 1
         ahead = self._ahead()

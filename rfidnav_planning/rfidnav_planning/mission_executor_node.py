@@ -42,7 +42,7 @@ class MissionExecutorNode(Node):
         super().__init__("mission_executor", **node_options)
         self.params: MissionExecutorParameters = declare_parameters(self, MissionExecutorParameters)
         self.map = load_topological_map(self.params.map_file)
-        self.executor_core = MissionExecutor(self.map, self.params.weight)
+        self.executor_core = MissionExecutor(self.map, self.params.weight, self.params.recover_missed_tags)
         self.active: ActiveGoal | None = None
         self.command_pub = self.create_publisher(WallFollowerCommand, "/wall_follower/command", COMMAND_QOS)
         self.create_subscription(TagReadArray, "/rfid/reads", self.on_reads, SENSOR_QOS)

@@ -103,6 +103,8 @@ class MissionExecutorParameters:
     map_file: str = param("topological map YAML (rfidnav_planning.topological_map)", "")
     weight: str = param("routes: shortest by hallway lengths (length: length_m, else between positions, else 1 m) "
                         "or fewest hallways (edges)", "length")
+    recover_missed_tags: bool = param("ours: a junction passed without its tag is taken to be the node the route "
+                                      "expected (false: the paper's loop, which follows on to the next tag)", True)
 
     def validate(self) -> None:
         if not self.map_file:
