@@ -12,6 +12,8 @@ import rclpy
 from rclpy.action.server import ServerGoalHandle
 from rclpy.context import Context
 from builtin_interfaces.msg import Time
+from geometry_msgs.msg import Twist
+from nav_msgs.msg import Odometry
 from rcl_interfaces.msg import ParameterDescriptor
 from rclpy.exceptions import InvalidParameterTypeException
 from rclpy.executors import Executor, ExternalShutdownException
@@ -23,6 +25,7 @@ from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPo
 
 from rfidnav_common.config import parameters_from_mapping
 from rfidnav_common.errors import ConfigError, RfidnavError
+from rfidnav_common.geometry import quaternion_to_yaw
 
 # Sensor streams: reliable, with room for a burst (a high RTF on a busy machine) so that the recorder
 # and the controller see every message on localhost.
@@ -115,6 +118,20 @@ def close_goal(node: Node, handle: ServerGoalHandle, outcome: tuple[str, str], w
     getattr(handle, {"succeeded": "succeed", "aborted": "abort", "canceled": "canceled"}[state])()
     node.get_logger().info(f"{what} {state}: {message}")
     return state == "succeeded", message
+
+
+def odometry_pose(msg: Odometry) -> tuple[float, float, float]:
+    """(x, y, yaw) of an Odometry message's pose (a planar robot); NaN is passed through for the caller."""
+    pose = msg.pose.pose
+    q = pose.orientation
+    return pose.position.x, pose.position.y, quaternion_to_yaw(q.x, q.y, q.z, q.w)
+
+
+def twist(linear: float, angular: float) -> Twist:
+    """A planar velocity command: forward [m/s] and yaw rate [rad/s]."""
+    command = Twist()
+    command.linear.x, command.angular.z = float(linear), float(angular)
+    return command
 
 
 def time_msg(seconds: float) -> Time:

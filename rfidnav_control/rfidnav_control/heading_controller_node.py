@@ -20,7 +20,7 @@ from rclpy.action import ActionServer, CancelResponse, GoalResponse
 from rclpy.action.server import ServerGoalHandle
 from rclpy.node import Node
 
-from rfidnav_common.ros import close_goal, COMMAND_QOS, SENSOR_QOS, declare_parameters, run_node, seconds_of
+from rfidnav_common.ros import COMMAND_QOS, SENSOR_QOS, close_goal, declare_parameters, run_node, seconds_of, twist
 from rfidnav_control.fuzzy import FuzzyHeadingController
 from rfidnav_control.parameters import HeadingControllerParameters
 from rfidnav_common.robot_map import load_route_map
@@ -121,10 +121,7 @@ class HeadingControllerNode(Node):
             self.conclude("aborted", command.failure)
 
     def publish(self, command: Command) -> None:
-        twist = Twist()
-        twist.linear.x = command.linear_mps
-        twist.angular.z = command.angular_radps
-        self.cmd_pub.publish(twist)
+        self.cmd_pub.publish(twist(command.linear_mps, command.angular_radps))
         feedback = FollowTagRoute.Feedback(
             target_index=command.target_index, target_tag_id=command.target_tag_id,
             phase_difference_rad=command.phase_difference_rad, heading_change_rad=command.heading_change_rad,

@@ -19,8 +19,7 @@ from nav_msgs.msg import Odometry
 from rclpy.node import Node
 from sensor_msgs.msg import Range
 
-from rfidnav_common.geometry import quaternion_to_yaw
-from rfidnav_common.ros import COMMAND_QOS, SENSOR_QOS, declare_parameters, run_node
+from rfidnav_common.ros import COMMAND_QOS, SENSOR_QOS, declare_parameters, odometry_pose, run_node, twist
 from rfidnav_control.parameters import SONAR_FIELDS, WallFollowerParameters
 from rfidnav_control.wall_following import ACTIONS, STOPPED, OdomPose, Sonar, WallFollower
 from rfidnav_msgs.msg import WallFollowerCommand, WallFollowerEvent
@@ -59,12 +58,11 @@ class WallFollowerNode(Node):
         return on_range
 
     def on_odom(self, msg: Odometry) -> None:
-        pose = msg.pose.pose
-        yaw = quaternion_to_yaw(pose.orientation.x, pose.orientation.y, pose.orientation.z, pose.orientation.w)
-        if not all(math.isfinite(v) for v in (pose.position.x, pose.position.y, yaw)):
+        pose = odometry_pose(msg)
+        if not all(math.isfinite(v) for v in pose):
             self.get_logger().warning("dropped an odometry message with non-finite values", throttle_duration_sec=5.0)
             return
-        self.odom = OdomPose(pose.position.x, pose.position.y, yaw)
+        self.odom = OdomPose(*pose)
 
     def on_command(self, msg: WallFollowerCommand) -> None:
         action = msg.action
@@ -114,10 +112,7 @@ class WallFollowerNode(Node):
 
     # -------------------------------------------------------------------------------------- output
     def drive(self, linear: float, angular: float) -> None:
-        twist = Twist()
-        twist.linear.x = float(linear)
-        twist.angular.z = float(angular)
-        self.cmd_pub.publish(twist)
+        self.cmd_pub.publish(twist(linear, angular))
 
     def publish_event(self, event: str) -> None:
         msg = WallFollowerEvent(event=event, state=self.follower.state,

@@ -22,9 +22,10 @@ from rclpy.action.server import ServerGoalHandle
 from rclpy.node import Node
 
 from rfidnav_common.errors import ConfigError
-from rfidnav_common.geometry import quaternion_to_yaw, wrap_angle
+from rfidnav_common.geometry import wrap_angle
 from rfidnav_common.robot_map import load_route_map
-from rfidnav_common.ros import close_goal, COMMAND_QOS, LATCHED_QOS, SENSOR_QOS, declare_parameters, run_node, seconds_of
+from rfidnav_common.ros import (COMMAND_QOS, LATCHED_QOS, SENSOR_QOS, close_goal, declare_parameters, odometry_pose,
+                                run_node, seconds_of, twist)
 from rfidnav_common.tag_lattice import Coordinate
 from rfidnav_msgs.action import NavigateToPoint
 from rfidnav_msgs.msg import LocalizationStatus, PartitionPath
@@ -110,12 +111,12 @@ class PartitionNavigatorNode(Node):
 
     # ---------------------------------------------------------------------------------- sensing
     def on_odom(self, msg: Odometry) -> None:
-        pose = msg.pose.pose
-        yaw = quaternion_to_yaw(pose.orientation.x, pose.orientation.y, pose.orientation.z, pose.orientation.w)
-        if not all(math.isfinite(v) for v in (pose.position.x, pose.position.y, yaw)):
+        pose = odometry_pose(msg)
+        if not all(math.isfinite(v) for v in pose):
             self.get_logger().warning("dropped an odometry message with non-finite values", throttle_duration_sec=5.0)
             return
-        previous, self.odom_pose = self.odom_pose, (pose.position.x, pose.position.y, yaw)
+        previous, self.odom_pose = self.odom_pose, pose
+        yaw = pose[2]
         active = self.active
         if active is None or active.outcome is not None:
             return
@@ -175,10 +176,7 @@ class PartitionNavigatorNode(Node):
 
     # ------------------------------------------------------------------------------------ output
     def drive(self, linear: float, angular: float) -> None:
-        twist = Twist()
-        twist.linear.x = float(linear)
-        twist.angular.z = float(angular)
-        self.cmd_pub.publish(twist)
+        self.cmd_pub.publish(twist(linear, angular))
 
     def publish_plan(self, decision: Decision) -> None:
         lattice = self.navigator.state.lattice

@@ -27,7 +27,7 @@ from rclpy.task import Future
 from sensor_msgs.msg import Imu
 
 from rfidnav_common.geometry import quaternion_to_yaw, yaw_to_quaternion
-from rfidnav_common.ros import close_goal, COMMAND_QOS, SENSOR_QOS, declare_parameters, run_node
+from rfidnav_common.ros import COMMAND_QOS, SENSOR_QOS, close_goal, declare_parameters, odometry_pose, run_node, twist
 from rfidnav_msgs.action import NavigateToPoint
 from rfidnav_msgs.msg import LocalizationStatus, TagReadArray, WifiScan
 from rfidnav_msgs.srv import GetTagMap, Locate
@@ -83,10 +83,9 @@ class TwoTierNavigatorNode(Node):
 
     # ------------------------------------------------------------------------------------ sensing
     def on_odom(self, msg: Odometry) -> None:
-        pose = msg.pose.pose
-        yaw = quaternion_to_yaw(pose.orientation.x, pose.orientation.y, pose.orientation.z, pose.orientation.w)
-        if all(math.isfinite(v) for v in (pose.position.x, pose.position.y, yaw)):
-            self.odom = (pose.position.x, pose.position.y, yaw)
+        pose = odometry_pose(msg)
+        if all(math.isfinite(v) for v in pose):
+            self.odom = pose
         else:
             self.get_logger().warning("dropped an odometry message with non-finite values", throttle_duration_sec=5.0)
 
@@ -207,9 +206,7 @@ class TwoTierNavigatorNode(Node):
 
     # ------------------------------------------------------------------------------------- output
     def drive(self, linear: float, angular: float) -> None:
-        twist = Twist()
-        twist.linear.x, twist.angular.z = float(linear), float(angular)
-        self.cmd_pub.publish(twist)
+        self.cmd_pub.publish(twist(linear, angular))
 
     def publish_feedback(self, phase: str) -> None:
         estimate = self.navigator.estimate()

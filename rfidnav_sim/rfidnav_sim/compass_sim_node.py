@@ -16,9 +16,8 @@ from rclpy.node import Node
 from sensor_msgs.msg import Imu
 
 from rfidnav_common.geometry import yaw_to_quaternion
-from rfidnav_common.ros import SENSOR_QOS, declare_parameters, run_node, seconds_of
+from rfidnav_common.ros import SENSOR_QOS, declare_parameters, odometry_pose, run_node, seconds_of
 from rfidnav_common.seeding import rng_for
-from rfidnav_sim.conversions import pose_of
 from rfidnav_sim.parameters import CompassParameters
 from rfidnav_sim.schedule import GroundTruthSchedule
 
@@ -39,7 +38,7 @@ class CompassSimNode(Node):
         now_s = seconds_of(msg.header.stamp)
         if not self.schedule.due(now_s):
             return
-        heading = self.model.measure(pose_of(msg)[2], self.rng)
+        heading = self.model.measure(odometry_pose(msg)[2], self.rng)
         reading = Imu()
         reading.header.stamp = msg.header.stamp
         reading.header.frame_id = self.params.frame_id

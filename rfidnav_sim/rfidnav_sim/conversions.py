@@ -8,7 +8,7 @@ from nav_msgs.msg import Odometry
 from std_msgs.msg import ColorRGBA
 from visualization_msgs.msg import Marker, MarkerArray
 
-from rfidnav_common.geometry import quaternion_to_yaw, yaw_to_quaternion
+from rfidnav_common.geometry import yaw_to_quaternion
 from rfidnav_common.tag_lattice import Deployment
 from rfidnav_msgs.msg import AccessPointRss, TagReadArray, TagReading, WifiScan
 from rfidnav_sim.kinematics import Pose2D
@@ -17,13 +17,6 @@ from rfidnav_sim.wifi_model import RssReading
 from rfidnav_sim.world import World
 
 TAG_COLOURS = {"ceiling": ColorRGBA(r=1.0, g=0.55, b=0.0, a=1.0), "floor": ColorRGBA(r=0.1, g=0.4, b=1.0, a=1.0)}
-
-
-def pose_of(msg: Odometry) -> tuple[float, float, float]:
-    """(x, y, yaw) of an Odometry message's pose (a planar robot)."""
-    pose = msg.pose.pose
-    q = pose.orientation
-    return pose.position.x, pose.position.y, quaternion_to_yaw(q.x, q.y, q.z, q.w)
 
 
 def odometry_message(pose: Pose2D, velocity: tuple[float, float], stamp: Time, frame_id: str) -> Odometry:

@@ -12,10 +12,10 @@ from typing import Any
 from nav_msgs.msg import Odometry
 from rclpy.node import Node
 
-from rfidnav_common.ros import SENSOR_QOS, declare_parameters, run_node, seconds_of
+from rfidnav_common.ros import SENSOR_QOS, declare_parameters, odometry_pose, run_node, seconds_of
 from rfidnav_common.seeding import rng_for
 from rfidnav_msgs.msg import TagReadArray
-from rfidnav_sim.conversions import pose_of, reads_message
+from rfidnav_sim.conversions import reads_message
 from rfidnav_sim.parameters import ReaderParameters
 from rfidnav_sim.rfid_model import ReaderSimulator
 from rfidnav_sim.schedule import GroundTruthSchedule
@@ -42,7 +42,7 @@ class RfidReaderSimNode(Node):
         now_s = seconds_of(msg.header.stamp)
         if not self.schedule.due(now_s):
             return
-        reads = self.simulator.inventory(*pose_of(msg), now_s)
+        reads = self.simulator.inventory(*odometry_pose(msg), now_s)
         self.reads_pub.publish(reads_message(reads, msg.header.stamp, self.params.frame_id))
 
 

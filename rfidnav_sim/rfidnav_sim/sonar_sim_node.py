@@ -13,9 +13,8 @@ from nav_msgs.msg import Odometry
 from rclpy.node import Node
 from sensor_msgs.msg import Range
 
-from rfidnav_common.ros import SENSOR_QOS, declare_parameters, run_node, seconds_of
+from rfidnav_common.ros import SENSOR_QOS, declare_parameters, odometry_pose, run_node, seconds_of
 from rfidnav_common.seeding import rng_for
-from rfidnav_sim.conversions import pose_of
 from rfidnav_sim.parameters import SonarParameters
 from rfidnav_sim.schedule import GroundTruthSchedule
 from rfidnav_sim.sonar_model import PAPER_LAYOUT, SonarModel
@@ -41,7 +40,7 @@ class SonarSimNode(Node):
         now_s = seconds_of(msg.header.stamp)
         if not self.schedule.due(now_s):
             return
-        readings = self.model.ranges(*pose_of(msg), self.rng)
+        readings = self.model.ranges(*odometry_pose(msg), self.rng)
         for rangefinder in PAPER_LAYOUT:
             reading = Range(radiation_type=Range.ULTRASOUND, field_of_view=2.0 * rangefinder.beam_half_angle_rad,
                             min_range=rangefinder.min_range_m, max_range=rangefinder.max_range_m,

@@ -14,10 +14,10 @@ from typing import Any
 from nav_msgs.msg import Odometry
 from rclpy.node import Node
 
-from rfidnav_common.ros import SENSOR_QOS, declare_parameters, run_node, seconds_of
+from rfidnav_common.ros import SENSOR_QOS, declare_parameters, odometry_pose, run_node, seconds_of
 from rfidnav_common.seeding import rng_for
 from rfidnav_msgs.msg import WifiScan
-from rfidnav_sim.conversions import pose_of, wifi_scan_message
+from rfidnav_sim.conversions import wifi_scan_message
 from rfidnav_sim.parameters import WifiSimParameters
 from rfidnav_sim.schedule import GroundTruthSchedule
 from rfidnav_sim.wifi_model import WifiModel
@@ -43,7 +43,7 @@ class WifiSimNode(Node):
         now_s = seconds_of(msg.header.stamp)
         if not self.schedule.due(now_s):
             return
-        x, y, _ = pose_of(msg)
+        x, y, _ = odometry_pose(msg)
         readings = self.model.scan(x, y, self.rng)
         self.publisher.publish(wifi_scan_message(readings, msg.header.stamp, self.params.frame_id,
                                                  self.params.interface))
