@@ -426,20 +426,23 @@ def test_a_node_without_side_openings_is_passed_straight_through(large: Topologi
     assert executor.state.nodes_visited == ["A1", "B1", "C1"] and executor.state.replans == 0
 
 
-def test_a_missed_tag_of_a_node_passed_through_loses_nothing(large: TopologicalMap) -> None:
+def leaving_a1_eastwards(large: TopologicalMap, goal: str) -> MissionExecutor:
+    """A mission to ``goal`` whose robot read A1's tag 103 (arriving from the West) and crossed A1 straight on."""
     executor = MissionExecutor(large)
-    executor.start("C1")
+    executor.start(goal)
     executor.on_tag(103)
     executor.on_junction(JUNCTION_CENTRE)
+    return executor
+
+
+def test_a_missed_tag_of_a_node_passed_through_loses_nothing(large: TopologicalMap) -> None:
+    executor = leaving_a1_eastwards(large, "C1")
     assert executor.on_tag(107).success                        # B1's tag 105 missed
     assert executor.state.nodes_visited == ["A1", "B1", "C1"] and executor.state.replans == 0
 
 
 def test_a_goal_without_a_junction_whose_tag_is_missed_is_driven_past_and_back_to(large: TopologicalMap) -> None:
-    executor = MissionExecutor(large)
-    executor.start("B1")
-    executor.on_tag(103)
-    executor.on_junction(JUNCTION_CENTRE)
+    executor = leaving_a1_eastwards(large, "B1")
     back = executor.on_junction(JUNCTION_CENTRE)               # B1's tag missed: this junction is C1, beyond it
     assert back.action == BACK and executor.state.current_node == "C1"
     assert executor.state.tags_missed == 1
