@@ -188,3 +188,20 @@ def test_a_cancelled_mission_stops_the_follower(graph: Graph) -> None:
     result = handle.get_result_async()
     graph.spin_until(result.done, "the result")
     assert not result.result().result.success and probe.commands[-1] == ("stop", 0.0)
+
+
+def test_a_wall_follower_that_comes_back_is_commanded_again(graph: Graph) -> None:
+    node = executor_node(graph)
+    probe = ExecutorProbe(graph)
+    probe.send("g")
+    graph.spin_until(lambda: probe.commands == [("follow", 0.0)], "the follow command")
+    probe.read("23")
+    graph.spin_until(lambda: probe.commands[-1] == ("right", 0.0), "the turn for h")
+    # The follower restarts: its subscription goes, and a new one comes.
+    graph.probe.destroy_subscription(next(s for s in graph.probe.subscriptions
+                                          if s.topic_name == "/wall_follower/command"))
+    graph.spin_until(lambda: not node.follower_listening, "the follower gone")
+    again: list[tuple[str, float]] = []
+    graph.probe.create_subscription(WallFollowerCommand, "/wall_follower/command",
+                                    lambda m: again.append((m.action, m.stop_within_m)), COMMAND_QOS)
+    graph.spin_until(lambda: again == [("follow", 0.0), ("right", 0.0)], "the commands again")

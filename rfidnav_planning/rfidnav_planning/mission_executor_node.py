@@ -6,7 +6,8 @@ in-process runner glues the two cores: each inventory round's tag ids go to ``on
 ``on_junction``, each decision's ``follower_command`` to the follower; the goal ends with the follower's
 ``stopped`` (the executor's stop, driven on to the node) or at once when the executor gives up. What the executor
 learns of ``?`` hallways is kept for later goals. A goal is refused for a node not in the map, while another goal
-runs, or while no wall follower listens on /wall_follower/command. As in the other action servers, the goal is
+runs, or while no wall follower listens on /wall_follower/command; a follower that restarts mid-mission (it starts
+idle) is commanded again. As in the other action servers, the goal is
 followed from its acceptance and its execute callback runs only once the outcome is known.
 """
 
@@ -44,6 +45,7 @@ class MissionExecutorNode(Node):
         self.map = load_topological_map(self.params.map_file)
         self.executor_core = MissionExecutor(self.map, self.params.weight, self.params.recover_missed_tags)
         self.active: ActiveGoal | None = None
+        self.follower_listening = False         # whether a wall follower subscribes to the commands
         self.command_pub = self.create_publisher(WallFollowerCommand, "/wall_follower/command", COMMAND_QOS)
         self.create_subscription(TagReadArray, "/rfid/reads", self.on_reads, SENSOR_QOS)
         self.create_subscription(WallFollowerEvent, "/wall_follower/event", self.on_event, COMMAND_QOS)
@@ -74,6 +76,7 @@ class MissionExecutorNode(Node):
 
     def on_accepted(self, handle: ServerGoalHandle) -> None:
         self.active = ActiveGoal(handle)
+        self.follower_listening = True          # checked by on_goal
         decision = self.executor_core.start(handle.request.goal_node)
         self.get_logger().info(decision.message)
         self.command(WallFollowerCommand.FOLLOW)
@@ -136,12 +139,22 @@ class MissionExecutorNode(Node):
             tags_missed=mission.tags_missed, replans=mission.replans))
 
     def supervise(self) -> None:
-        """A cancel request is noticed here: no read or event may arrive to notice it."""
+        """A cancel request is noticed here (no read or event may arrive to notice it), and a wall follower
+        that comes back (respawned) is told again to follow, with the turn waiting for the next junction."""
         active = self.active
-        if active is None or active.outcome is not None or not active.handle.is_cancel_requested:
+        listening = self.command_pub.get_subscription_count() > 0
+        came_back, self.follower_listening = listening and not self.follower_listening, listening
+        if active is None or active.outcome is not None:
             return
-        self.command(STOP, 0.0)
-        self.conclude("canceled", "cancelled by the client")
+        if active.handle.is_cancel_requested:
+            self.command(STOP, 0.0)
+            self.conclude("canceled", "cancelled by the client")
+        elif came_back:
+            self.get_logger().warning("the wall follower is back: commanding it again")
+            self.command(WallFollowerCommand.FOLLOW)
+            awaiting = self.executor_core.state.awaiting
+            if awaiting is not None:
+                self.command(awaiting)
 
 
 def main(args: list[str] | None = None) -> int:
