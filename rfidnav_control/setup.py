@@ -13,7 +13,8 @@ setup(
     install_requires=["setuptools"],
     zip_safe=True,
     maintainer="rfidnav developers",
-    description="Controllers of rfidnav: the phase-difference fuzzy heading controller (paper 001).",
+    description="Controllers of rfidnav: the fuzzy heading controller (paper 001), spiral search and go-to (003), "
+                "sonar wall following (004).",
     license="Apache-2.0",
     entry_points={"console_scripts": [
         "heading_controller = rfidnav_control.heading_controller_node:main",

@@ -22,7 +22,7 @@ import sysconfig
 from pathlib import Path
 
 PYTHON_PACKAGES = ("rfidnav_common", "rfidnav_sim", "rfidnav_control", "rfidnav_localization", "rfidnav_planning",
-                   "rfidnav_bringup")
+                   "rfidnav_drivers", "rfidnav_bringup")
 INTERFACE_PACKAGE = "rfidnav_msgs"
 
 

@@ -1,0 +1,1 @@
+"""Hardware drivers of rfidnav: LLRP RFID reader with phase, iRobot Create base, WiFi scanner."""

@@ -1,0 +1,93 @@
+"""Parameters of the driver nodes (llrp_reader, create_base, wifi_scanner): typed, with defaults and descriptions,
+importable without rclpy so the orchestrator validates a robot profile's parameter files against the same class.
+config/params/llrp_reader.yaml, create_base.yaml and wifi_scanner.yaml document them."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from rfidnav_common.config import param
+
+
+@dataclass(frozen=True)
+class LlrpReaderParameters:
+    host: str = param("the reader's address (an Impinj Speedway / R700 in LLRP mode)", "192.168.1.10")
+    port: int = param("LLRP TCP port", 5084)
+    antennas: list[int] = param("antenna ports to inventory (empty: all the reader has)", [1, 2])
+    session: int = param("Gen2 session 0-3 (0-1 for a moving robot: tags answer every round)", 0)
+    search_mode: int = param("Impinj search mode (0: reader default, 1: single target, 2: dual target, "
+                             "3: single target with suppression); -1: leave unset", 2)
+    mode_index: int = param("RF mode table index (-1: the reader's default)", -1)
+    tx_power_dbm: float = param("transmit power [dBm] (0: the reader's maximum)", 0.0)
+    frame_id: str = param("frame of /rfid/reads (antenna poses are relative to it)", "base_link")
+    batch_period_s: float = param("reads are published together every this long [s] (0: one message per report)",
+                                  0.02)
+    connect_timeout_s: float = param("give a connection attempt up after this long [s]", 5.0)
+    reconnect_initial_s: float = param("first wait before reconnecting after a drop [s]", 0.5)
+    reconnect_max_s: float = param("longest wait between reconnection attempts (doubling up to it) [s]", 10.0)
+    keepalive_s: float = param("ask the reader for a keepalive this often, to notice a dead link [s]", 1.0)
+
+    def validate(self) -> None:
+        if not self.host:
+            raise ValueError("host: required (the reader's address)")
+        if not 1 <= self.port <= 65535:
+            raise ValueError(f"port: a TCP port is 1..65535, got {self.port}")
+        if any(not 1 <= a <= 65535 for a in self.antennas):
+            raise ValueError(f"antennas: ports are 1..65535, got {self.antennas}")
+        if not 0 <= self.session <= 3:
+            raise ValueError(f"session: 0..3, got {self.session}")
+        for name in ("connect_timeout_s", "reconnect_initial_s", "reconnect_max_s", "keepalive_s"):
+            if not (math.isfinite(getattr(self, name)) and getattr(self, name) > 0.0):
+                raise ValueError(f"{name}: must be positive, got {getattr(self, name)}")
+        if self.reconnect_max_s < self.reconnect_initial_s:
+            raise ValueError("reconnect_max_s must be at least reconnect_initial_s")
+        if not (math.isfinite(self.batch_period_s) and self.batch_period_s >= 0.0):
+            raise ValueError(f"batch_period_s: must not be negative, got {self.batch_period_s}")
+
+
+@dataclass(frozen=True)
+class CreateBaseParameters:
+    port: str = param("serial port of the Open Interface (a USB serial cable: /dev/ttyUSB0)", "/dev/ttyUSB0")
+    baud: int = param("OI baud rate (Create 2 / Roomba 600+: 115200)", 115200)
+    mode: str = param("OI mode: safe (the base itself stops on cliffs and wheel drops) or full", "safe")
+    sensor_rate_hz: float = param("sensor queries (bumps, cliffs, wheel drops, encoders) per second", 50.0)
+    max_wheel_speed_mps: float = param("wheel speed limit [m/s] (the OI's is 0.5)", 0.5)
+    wheel_base_m: float = param("distance between the wheels [m] (Create 2: 0.235)", 0.235)
+    wheel_diameter_m: float = param("wheel diameter [m] (Create 2: 0.072)", 0.072)
+    counts_per_rev: float = param("encoder counts per wheel revolution (Create 2: 508.8)", 508.8)
+    command_timeout_s: float = param("watchdog: stop when no /cmd_vel arrived for this long [s]", 0.5)
+    odom_frame: str = param("frame of /odom", "odom")
+    base_frame: str = param("the robot's frame (child of /odom)", "base_link")
+
+    def validate(self) -> None:
+        if not self.port:
+            raise ValueError("port: required (the serial device of the Open Interface)")
+        if self.mode not in ("safe", "full"):
+            raise ValueError(f"mode: 'safe' or 'full', got '{self.mode}'")
+        if self.baud <= 0:
+            raise ValueError(f"baud: must be positive, got {self.baud}")
+        for name in ("sensor_rate_hz", "max_wheel_speed_mps", "wheel_base_m", "wheel_diameter_m", "counts_per_rev",
+                     "command_timeout_s"):
+            if not (math.isfinite(getattr(self, name)) and getattr(self, name) > 0.0):
+                raise ValueError(f"{name}: must be positive, got {getattr(self, name)}")
+        if self.max_wheel_speed_mps > 0.5:
+            raise ValueError(f"max_wheel_speed_mps: the Open Interface takes at most 0.5, got {self.max_wheel_speed_mps}")
+
+
+@dataclass(frozen=True)
+class WifiScannerParameters:
+    interface: str = param("wireless interface to scan (see `iw dev`)", "wlan0")
+    period_s: float = param("time between scans [s] (a full scan takes 2-4 s)", 5.0)
+    trigger: bool = param("run `iw dev IFACE scan` (fresh results, needs CAP_NET_ADMIN) rather than `scan dump` "
+                          "(the results of the system's last scan, no privilege)", True)
+    iw_path: str = param("the iw program", "iw")
+    timeout_s: float = param("give a scan up after this long [s]", 15.0)
+    frame_id: str = param("frame of /wifi/scan (the WiFi antenna)", "base_link")
+
+    def validate(self) -> None:
+        if not self.interface:
+            raise ValueError("interface: required (e.g. wlan0)")
+        for name in ("period_s", "timeout_s"):
+            if not (math.isfinite(getattr(self, name)) and getattr(self, name) > 0.0):
+                raise ValueError(f"{name}: must be positive, got {getattr(self, name)}")
