@@ -72,7 +72,8 @@ class CreateBaseParameters:
             if not (math.isfinite(getattr(self, name)) and getattr(self, name) > 0.0):
                 raise ValueError(f"{name}: must be positive, got {getattr(self, name)}")
         if self.max_wheel_speed_mps > 0.5:
-            raise ValueError(f"max_wheel_speed_mps: the Open Interface takes at most 0.5, got {self.max_wheel_speed_mps}")
+            raise ValueError(f"max_wheel_speed_mps: the Open Interface takes at most 0.5, got "
+                             f"{self.max_wheel_speed_mps}")
 
 
 @dataclass(frozen=True)
