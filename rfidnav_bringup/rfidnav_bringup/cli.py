@@ -39,6 +39,8 @@ def add_run_options(parser: argparse.ArgumentParser, default_rtf: float) -> None
     parser.add_argument("--rtf", type=float, default=default_rtf, help="real-time factor (sim s per wall s)")
     parser.add_argument("--seed", type=int, default=1, help="run seed (every node derives its own)")
     parser.add_argument("--out", type=Path, default=WORKSPACE / "bags", help="folder for the run folder")
+    parser.add_argument("--robot", metavar="PROFILE",
+                        help="run the roles a robot profile (config/robots/PROFILE.yaml) names with its drivers")
     parser.add_argument("--swap", type=key_value, action="append", default=[], metavar="ROLE=CMD",
                         help="replace a role: ROLE=pkg:executable or ROLE='command line'")
     parser.add_argument("--params", type=key_value, action="append", default=[], metavar="ROLE=FILE",
@@ -78,6 +80,12 @@ def parser() -> argparse.ArgumentParser:
     draw = map_verbs.add_parser("draw", help="a PNG of a topological map: compass-placed edges and tag ids")
     draw.add_argument("map", type=Path)
     draw.add_argument("--out", type=Path, help="the PNG to write (default: beside the map, .png)")
+    echo = verbs.add_parser("echo", help="print a topic's messages as YAML (checking a driver alone)")
+    echo.add_argument("topic")
+    echo.add_argument("--count", type=int, default=5, help="messages to print, then exit 0")
+    echo.add_argument("--wait", type=float, default=10.0, help="seconds to wait for a publisher")
+    echo.add_argument("--timeout", type=float, default=30.0, help="seconds to wait for the messages (else exit 2)")
+    echo.add_argument("--best-effort", action="store_true", help="for best-effort publishers")
     report = verbs.add_parser("report", help="plots and recomputed metrics of a run")
     report.add_argument("run", type=Path)
     report.add_argument("--json", action="store_true")
@@ -154,7 +162,8 @@ def verb_run(args, scenario_name: str | None = None) -> int:
         if not isinstance(goal, dict):
             raise ConfigError("--goal", "", "expected a YAML mapping of goal fields")
     scenario = load_scenario(scenario_name or args.scenario, swaps=dict(args.swap),
-                             param_files={role: Path(file) for role, file in args.params}, goal=goal)
+                             param_files={role: Path(file) for role, file in args.params}, goal=goal,
+                             robot_profile_name=getattr(args, "robot", None))
     if not math.isfinite(args.rtf) or args.rtf <= 0:
         raise ConfigError("--rtf", "", f"must be a positive number, got {args.rtf}")
     options = RunOptions(rtf=args.rtf, seed=args.seed, out_dir=args.out, record=not args.no_record,
@@ -210,6 +219,15 @@ def verb_bag(args) -> int:
                           "topics": [{"name": t.name, "type": t.msgtype, "count": t.count} for t in info.topics]}))
     else:
         print(format_bag_info(info))
+    return 0
+
+
+def verb_echo(args) -> int:
+    from rfidnav_bringup.echo import echo
+
+    if args.count < 1:
+        raise ConfigError("--count", "", f"must be at least 1, got {args.count}")
+    echo(args.topic, args.count, args.wait, args.timeout, args.best_effort)
     return 0
 
 
@@ -335,7 +353,7 @@ def bench_rtf(args) -> int:
 
 VERBS = {"setup": verb_setup, "demo": verb_demo, "test": verb_test, "run": verb_run, "replay": verb_replay,
          "bag": verb_bag, "report": verb_report, "reproduce": verb_reproduce, "survey": verb_survey,
-         "map": verb_map, "bench": verb_bench}
+         "map": verb_map, "bench": verb_bench, "echo": verb_echo}
 
 
 if __name__ == "__main__":
