@@ -128,10 +128,9 @@ class Orchestrator:
         params_dir = self.run_dir / "params"
         params_dir.mkdir()
         if self.options.record:
-            simulated = any(spec.clock_source for spec in self.scenario.nodes.values())
             command = resolve_executable("rfidnav_bringup", "recorder") + [
                 "--ros-args", "-p", f"output_dir:={self.run_dir / 'bag'}",
-                "-p", f"stamp_from_clock_topic:={str(simulated).lower()}"]
+                "-p", f"stamp_from_clock_topic:={str(self.scenario.simulated).lower()}"]
             if self.options.record_exclude:
                 command += ["-p", f"exclude_topics:={json.dumps(list(self.options.record_exclude))}"]
             self.processes[RECORDER_ROLE] = NodeProcess(RECORDER_ROLE, command, self.log_path(RECORDER_ROLE), env)
@@ -171,7 +170,7 @@ class Orchestrator:
         context = Context()
         rclpy.init(context=context, domain_id=lease.domain_id)
         node = Node("rfidnav_orchestrator", context=context,
-                    parameter_overrides=[rclpy.parameter.Parameter("use_sim_time", value=True)])
+                    parameter_overrides=[rclpy.parameter.Parameter("use_sim_time", value=self.scenario.simulated)])
         executor = events_executor(context)
         executor.add_node(node)
         previous_handler = signal.signal(signal.SIGINT, self.on_interrupt)

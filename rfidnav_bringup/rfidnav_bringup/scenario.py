@@ -22,6 +22,7 @@ from rfidnav_bringup.processes import UnknownExecutableError, resolve_executable
 from rfidnav_common.config import Section, node_parameter_section, parameters_from_mapping, typed_values
 from rfidnav_common.errors import ConfigError
 from rfidnav_control.parameters import HeadingControllerParameters, WallFollowerParameters
+from rfidnav_drivers.parameters import CreateBaseParameters, LlrpReaderParameters, WifiScannerParameters
 from rfidnav_localization.parameters import LocationServerParameters, PartitionLocalizerParameters
 from rfidnav_planning.parameters import (MissionExecutorParameters, PartitionNavigatorParameters,
                                         TwoTierNavigatorParameters)
@@ -33,6 +34,7 @@ from rfidnav_sim.world import World, load_world
 
 CONFIG_DIR = Path(__file__).resolve().parents[2] / "config"
 SCENARIO_DIR = CONFIG_DIR / "scenarios"
+ROBOT_DIR = CONFIG_DIR / "robots"
 
 # Parameter classes of the nodes this suite ships, to validate parameter files before start-up.
 # Nodes not listed here (hardware drivers, user nodes) get their files passed through unchecked.
@@ -49,6 +51,9 @@ KNOWN_NODES: dict[tuple[str, str], tuple[str, type]] = {
     ("rfidnav_planning", "two_tier_navigator"): ("two_tier_navigator", TwoTierNavigatorParameters),
     ("rfidnav_control", "wall_follower"): ("wall_follower", WallFollowerParameters),
     ("rfidnav_planning", "mission_executor"): ("mission_executor", MissionExecutorParameters),
+    ("rfidnav_drivers", "llrp_reader"): ("llrp_reader", LlrpReaderParameters),
+    ("rfidnav_drivers", "create_base"): ("create_base", CreateBaseParameters),
+    ("rfidnav_drivers", "wifi_scanner"): ("wifi_scanner", WifiScannerParameters),
 }
 METRIC_GROUPS = ("tracking", "partition", "two_tier", "topological")
 
@@ -93,6 +98,11 @@ class Scenario:
     route_map: RouteMap | None = field(repr=False)          # papers 000, 001, 003
     topological_map: TopologicalMap | None = field(default=None, repr=False)   # paper 004: a map with nodes
 
+    @property
+    def simulated(self) -> bool:
+        """Whether the simulated base runs and owns the clock (sim time); else (drivers on a robot) real time."""
+        return any(spec.clock_source for spec in self.nodes.values())
+
     def resolved_document(self) -> dict[str, Any]:
         """The scenario as run (absolute paths, swaps and parameter files applied), for the run folder."""
         return {
@@ -121,9 +131,54 @@ def scenario_path(name_or_path: str) -> Path:
     return SCENARIO_DIR / f"{name_or_path}.yaml"
 
 
+def profile_path(name_or_path: str) -> Path:
+    """A robot profile given by name (config/robots/NAME.yaml) or by path."""
+    candidate = Path(name_or_path)
+    if candidate.suffix in (".yaml", ".yml") or candidate.exists():
+        return candidate
+    return ROBOT_DIR / f"{name_or_path}.yaml"
+
+
+def robot_profile(name_or_path: str) -> dict[str, Section]:
+    """The roles a robot profile (``config/robots/NAME.yaml``) runs differently: role -> its node entry (the
+    scenario's node schema, paths relative to the profile). A missing file is one error naming it."""
+    path = profile_path(name_or_path).resolve()
+    if not path.is_file():
+        known = ", ".join(sorted(p.stem for p in ROBOT_DIR.glob("*.yaml")))
+        raise ConfigError("--robot", "", f"no robot profile '{name_or_path}' ({path} does not exist; known: {known})")
+    section = Section.from_file(path)
+    section.reject_unknown(("name", "description", "roles"))
+    roles = section.section("roles")
+    if not roles.keys():
+        raise section.error("roles", "a profile replaces at least one role")
+    return {role: roles.section(role) for role in roles.keys()}
+
+
+def _with_profile(nodes: dict[str, NodeSpec], profile: str, scenario_file: Path) -> dict[str, NodeSpec]:
+    """The scenario's roles with the profile's drivers in place. Without the simulated base (the clock source)
+    the run is in real time, and no simulator role may remain: nothing would publish its ground truth."""
+    entries = robot_profile(profile)
+    base = profile_path(profile).resolve().parent
+    nodes = dict(nodes)
+    for role, entry in entries.items():
+        if role not in nodes:
+            raise ConfigError(str(profile_path(profile).resolve()), f"roles.{role}",
+                              f"no role '{role}' in {scenario_file.name} (roles: {', '.join(nodes)})")
+        nodes[role] = _node_spec(role, entry, base)
+    if not any(spec.clock_source for spec in nodes.values()):
+        left = [role for role, spec in nodes.items() if spec.sim]
+        if left:
+            raise ConfigError(str(profile_path(profile).resolve()), "roles",
+                              f"replaces the simulated base but not the simulator roles {', '.join(left)} of "
+                              f"{scenario_file.name}: they need its ground truth (add a driver for each)")
+    return nodes
+
+
 def load_scenario(name_or_path: str, swaps: dict[str, str] | None = None,
-                  param_files: dict[str, Path] | None = None, goal: dict[str, Any] | None = None) -> Scenario:
-    """Load, apply ``--swap``, ``--params`` and ``--goal``, and validate everything the run will use."""
+                  param_files: dict[str, Path] | None = None, goal: dict[str, Any] | None = None,
+                  robot_profile_name: str | None = None) -> Scenario:
+    """Load, apply ``--robot``, ``--swap``, ``--params`` and ``--goal``, and validate everything the run will
+    use."""
     path = scenario_path(name_or_path).resolve()
     section = Section.from_file(path)
     section.reject_unknown(("name", "description", "world", "map", "robot", "nodes", "mission", "metrics"))
@@ -136,6 +191,8 @@ def load_scenario(name_or_path: str, swaps: dict[str, str] | None = None,
              for role in section.section("nodes").keys()}
     if not nodes:
         raise section.error("nodes", "at least one node is needed")
+    if robot_profile_name is not None:
+        nodes = _with_profile(nodes, robot_profile_name, path)
     for role, replacement in (swaps or {}).items():
         if role not in nodes:
             raise ConfigError("--swap", role, f"no role '{role}' in {path.name} (roles: {', '.join(nodes)})")
@@ -286,7 +343,7 @@ def injected_parameters(scenario: Scenario, spec: NodeSpec, seed: int, rtf: floa
     injected: dict[str, Any] = {"seed": seed}
     if run_dir is not None:
         injected["run_dir"] = str(run_dir)
-    if not spec.clock_source:
+    if not spec.clock_source and scenario.simulated:
         injected["use_sim_time"] = True
     if spec.sim:
         injected["world_file"] = str(scenario.world_file)
