@@ -125,6 +125,16 @@ class Section:
             raise self.error(key, f"expected {length} numbers, got {len(items)}")
         return [check_number(item, self.source, f"{self.field(key)}[{i}]") for i, item in enumerate(items)]
 
+    def integers(self, key: str, default: Any = _MISSING) -> list[int]:
+        items = self.raw(key, default)
+        if not isinstance(items, list):
+            raise self.error(key, f"expected a list of integers, got {type_name(items)}")
+        for index, item in enumerate(items):
+            if isinstance(item, bool) or not isinstance(item, int):
+                raise ConfigError(self.source, f"{self.field(key)}[{index}]", f"expected an integer, got "
+                                                                               f"{type_name(item)}")
+        return list(items)
+
     def strings(self, key: str, default: Any = _MISSING, *, unique: bool = False) -> list[str]:
         items = self.raw(key, default)
         if not isinstance(items, list):
@@ -176,7 +186,7 @@ def type_name(value: Any) -> str:
 def typed_values(cls: type, data: Any, source: str, prefix: str = "") -> dict[str, Any]:
     """Type-check ``data`` against the fields of parameter dataclass ``cls``; return the values given.
 
-    Fields may be float, int, bool, str, list[float] or list[str] (the ROS 2 parameter types);
+    Fields may be float, int, bool, str, list[float], list[int] or list[str] (the ROS 2 parameter types);
     unknown fields and NaN/Inf are errors."""
     hints = typing.get_type_hints(cls)
     section = Section(data if data is not None else {}, source, prefix)
@@ -189,6 +199,8 @@ def typed_values(cls: type, data: Any, source: str, prefix: str = "") -> dict[st
             values[name] = getters[kind](name)
         elif kind == list[float]:
             values[name] = section.numbers(name)
+        elif kind == list[int]:
+            values[name] = section.integers(name)
         elif kind == list[str]:
             values[name] = section.strings(name)
         else:
