@@ -4,7 +4,9 @@
 The run folder holds the bag, the resolved scenario and copies of its world and map, so a report
 needs nothing else. From the bag: ground truth (/sim/ground_truth), the mission start and end (the
 action's status topic: accepted, then succeeded/aborted/canceled) and the arrivals at route tags
-(the feedback's target index stepping on).
+(the feedback's target index stepping on). A run on a real robot has no ground truth: its report is the
+odometry (/odom, in the odom frame) and the distance driven by it (``odom_path_length_m``); the metric groups,
+which compare against the truth, are not computed.
 """
 
 from __future__ import annotations
@@ -44,6 +46,7 @@ class RunRecord:
     metric_groups: list[str]
     goal: dict
     last_feedback: object | None             # the mission's last feedback before it ended
+    trajectory_source: str = "ground_truth"  # or "odom": a run on a real robot (no simulator)
 
 
 def locate_run(path: Path) -> tuple[Path, Path]:
@@ -73,11 +76,14 @@ def load_run(path: Path) -> RunRecord:
     arrivals: list[float] = []
     target = 0
     last_feedback = None
-    for topic, stamp_ns, msg in read_messages(bag, ["/sim/ground_truth", status_topic, feedback_topic]):
+    odom_times, odom_xy = [], []
+    for topic, stamp_ns, msg in read_messages(bag, ["/sim/ground_truth", "/odom", status_topic, feedback_topic]):
         now_s = stamp_ns * 1e-9
-        if topic == "/sim/ground_truth":
-            times.append(msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9)
-            xy.append((msg.pose.pose.position.x, msg.pose.pose.position.y))
+        if topic in ("/sim/ground_truth", "/odom"):
+            stamp_s = msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9
+            position = (msg.pose.pose.position.x, msg.pose.pose.position.y)
+            (times if topic == "/sim/ground_truth" else odom_times).append(stamp_s)
+            (xy if topic == "/sim/ground_truth" else odom_xy).append(position)
         elif topic == status_topic:
             for status in msg.status_list:
                 if status.status in (STATUS_ACCEPTED, STATUS_EXECUTING) and start_s is None:
@@ -89,8 +95,11 @@ def load_run(path: Path) -> RunRecord:
             while getattr(msg.feedback, "target_index", 0) > target:   # tag routes: the next target means arrival
                 arrivals.append(now_s)
                 target += 1
+    source = "ground_truth"
     if not times:
-        raise BagError(f"{bag}: no /sim/ground_truth messages; metrics need the simulator's ground truth")
+        if not odom_times:
+            raise BagError(f"{bag}: neither /sim/ground_truth nor /odom messages: nothing to report")
+        times, xy, source = odom_times, odom_xy, "odom"
     if start_s is None:
         raise BagError(f"{bag}: no goal status on {status_topic}; was the mission sent?")
     if final == "succeeded" and len(arrivals) < len(route):
@@ -98,7 +107,7 @@ def load_run(path: Path) -> RunRecord:
     trajectory = Trajectory(np.array(times), np.array(xy))
     return RunRecord(run_dir, bag, world, route, trajectory, start_s,
                      end_s if end_s is not None else float(trajectory.times_s[-1]), final, arrivals,
-                     list(scenario.get("metrics", [])), dict(scenario["mission"]["goal"]), last_feedback)
+                     list(scenario.get("metrics", [])), dict(scenario["mission"]["goal"]), last_feedback, source)
 
 
 def route_points(world: World, route: list[str]) -> np.ndarray:
@@ -112,6 +121,9 @@ def run_metrics(path: Path) -> dict[str, float | int | None]:
 
 def record_metrics(record: RunRecord) -> dict[str, float | int | None]:
     metrics: dict[str, float | int | None] = {}
+    if record.trajectory_source == "odom":
+        run = record.ground_truth.between(record.mission_start_s, record.mission_end_s)
+        return {"odom_path_length_m": float(np.linalg.norm(np.diff(run.xy, axis=0), axis=1).sum())}
     if "tracking" in record.metric_groups:
         metrics.update(tracking_metrics(record.ground_truth, route_points(record.world, record.route),
                                         record.arrival_times_s, record.mission_start_s,
@@ -172,12 +184,8 @@ def two_tier_events(record: RunRecord) -> tuple[list[Fix], list[tuple[float, flo
     return fixes, searching
 
 
-def write_report(path: Path) -> tuple[dict[str, float | int | None], list[Path]]:
-    """Recompute the metrics and write trajectory.png (and tracking_error.png for tag routes) into the run folder."""
-    record = load_run(path)
-    metrics = record_metrics(record)
-    run = record.ground_truth.between(record.mission_start_s, record.mission_end_s)
-    figure, axes = plt.subplots(figsize=(7, 7))
+def draw_world(axes, record: RunRecord, run: Trajectory) -> None:
+    """The world's walls, tag deployments and tags, and the mission's desired path or goal, in the map frame."""
     for x1, y1, x2, y2 in record.world.walls:
         axes.plot([x1, x2], [y1, y2], color="0.6", linewidth=2)
     for deployment in record.world.deployments:
@@ -199,12 +207,24 @@ def write_report(path: Path) -> tuple[dict[str, float | int | None], list[Path]]
         goal_xy = load_topological_map(record.run_dir / "map.yaml").nodes[goal_node].position
         if goal_xy is not None:
             axes.plot(*goal_xy, "*", color="tab:red", markersize=12, label=f"goal node {goal_node}")
-    axes.plot(run.xy[:, 0], run.xy[:, 1], color="tab:blue", label="robot (ground truth)")
     for tag in record.world.tags:
         marker, colour = ("s", "tab:orange") if tag.kind == "ceiling" else ("o", "tab:purple")
         axes.plot(tag.position[0], tag.position[1], marker, color=colour, markersize=5)
         if tag.kind == "ceiling":
             axes.annotate(tag.tag_id, tag.position[:2], textcoords="offset points", xytext=(4, 4))
+
+
+def write_report(path: Path) -> tuple[dict[str, float | int | None], list[Path]]:
+    """Recompute the metrics and write trajectory.png (and tracking_error.png for tag routes) into the run folder."""
+    record = load_run(path)
+    metrics = record_metrics(record)
+    run = record.ground_truth.between(record.mission_start_s, record.mission_end_s)
+    figure, axes = plt.subplots(figsize=(7, 7))
+    if record.trajectory_source == "ground_truth":
+        draw_world(axes, record, run)
+        axes.plot(run.xy[:, 0], run.xy[:, 1], color="tab:blue", label="robot (ground truth)")
+    else:       # a real robot: its odometry, in the odom frame, which the world's map frame is not
+        axes.plot(run.xy[:, 0], run.xy[:, 1], color="tab:blue", label="robot (odometry, odom frame)")
     axes.plot(*run.xy[0], "k^", label="start")
     axes.set_aspect("equal")
     axes.set_xlabel("x [m]")
@@ -215,8 +235,9 @@ def write_report(path: Path) -> tuple[dict[str, float | int | None], list[Path]]
     trajectory_png = record.run_dir / "trajectory.png"
     figure.savefig(trajectory_png, dpi=110, bbox_inches="tight")
     plt.close(figure)
-    if "tracking" not in record.metric_groups:
+    if "tracking" not in record.metric_groups or record.trajectory_source != "ground_truth":
         return metrics, [trajectory_png]
+    points = route_points(record.world, record.route)
 
     error = tracking_error(run, points, record.arrival_times_s)
     figure, axes = plt.subplots(figsize=(8, 3.5))

@@ -1,0 +1,87 @@
+"""A whole run with the create2_llrp robot profile and no simulator at all: `create_base` on a fake Create 2 behind
+a pseudo-terminal, `llrp_reader` on llrpkit's LLRP emulator, paper 001's heading_controller between them, in real
+time (no /clock). The run is recorded like a simulated one, and `report` and `bag info` work on its bag
+(~40 s of wall time)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+from llrpkit.emulator.core import EmulatedTag, LLRPEmulator
+
+from fake_create import FakeCreate
+from test_graph import WORKSPACE, run_cli, run_scenario
+from test_llrp_graph import FLOOR, TARGET, DelayedFloorTag
+from test_llrp_reader import EmulatorLoop
+
+
+@pytest.fixture(scope="module")
+def robot_run(tmp_path_factory) -> tuple[Path, FakeCreate]:
+    folder = tmp_path_factory.mktemp("robot")
+    loop = EmulatorLoop()
+    create = FakeCreate()
+
+    async def started() -> LLRPEmulator:
+        emulator = DelayedFloorTag(host="127.0.0.1", port=0, reads_per_sec=200.0, antenna_count=4,
+                                   tags=[EmulatedTag(epc=bytes.fromhex(TARGET), antennas=(1, 2), rssi_dbm=-50.0)])
+        await emulator.start()
+        return emulator
+    emulator = loop.run(started())
+    loop.running.append(emulator)
+    try:
+        route_map = folder / "route.yaml"
+        route_map.write_text(f"name: emulated\narrival_tags: {{'{TARGET}': '{FLOOR}'}}\n")
+        scenario = folder / "on_the_robot.yaml"
+        scenario.write_text(
+            (WORKSPACE / "config/scenarios/line_follow_90.yaml").read_text()
+            .replace("../worlds/line_follow.yaml", str(WORKSPACE / "config/worlds/line_follow.yaml"))
+            .replace("../maps/line_follow.yaml", str(route_map))
+            .replace("../params/", str(WORKSPACE / "config/params") + "/")
+            .replace("flc_tuned.yaml", "flc_paper.yaml")
+            .replace("goal: {tag_ids: [C1, C2]}", f"goal: {{tag_ids: ['{TARGET}']}}"))
+        reader = folder / "llrp_reader.yaml"
+        reader.write_text((WORKSPACE / "config/params/llrp_reader.yaml").read_text()
+                          .replace("host: 192.168.1.10", "host: 127.0.0.1")
+                          .replace("port: 5084", f"port: {emulator.port}")
+                          .replace("antennas: [1, 2]", "antennas: [1, 2, 3]"))
+        base = folder / "create_base.yaml"
+        base.write_text((WORKSPACE / "config/params/create_base.yaml").read_text()
+                        .replace("port: /dev/ttyUSB0", f"port: {create.slave_path}"))
+        assert create.slave_path in base.read_text() and f"port: {emulator.port}" in reader.read_text()
+        run = run_scenario(folder / "runs", str(scenario), "--robot", "create2_llrp",
+                           "--params", f"rfid_reader={reader}", "--params", f"robot_sim={base}")
+        yield run, create
+    finally:
+        create.close()
+        loop.close()
+
+
+def test_the_route_is_followed_on_the_fake_create_in_real_time(robot_run: tuple[Path, FakeCreate]) -> None:
+    run, create = robot_run
+    summary = json.loads((run / "summary.json").read_text())
+    assert summary["success"] is True, summary["message"]
+    assert all(node["exit_code"] == 0 and node["restarts"] == 0 for node in summary["nodes"].values())
+    graph = json.loads((run / "graph.json").read_text())
+    assert {"create_base", "llrp_reader", "heading_controller"} <= set(graph["nodes"])
+    assert "robot_sim" not in graph["nodes"] and "/clock" not in graph["nodes"]["heading_controller"]["subscriptions"]
+    # Drive Direct (right, left) as signed mm/s: the controller drove forward through create_base.
+    speeds = [(int.from_bytes(bytes(c.args[0:2]), "big", signed=True),
+               int.from_bytes(bytes(c.args[2:4]), "big", signed=True)) for c in create.received() if c.opcode == 145]
+    assert any(right > 0 and left > 0 for right, left in speeds)
+    assert summary["metrics"]["odom_path_length_m"] > 0.2           # the fake's encoders, through /odom
+
+
+def test_report_bag_info_and_replay_work_on_the_robots_bag(robot_run: tuple[Path, FakeCreate]) -> None:
+    run, _ = robot_run
+    report = run_cli("report", str(run), "--json")
+    assert report.returncode == 0, report.stderr
+    assert json.loads(report.stdout)["metrics"]["odom_path_length_m"] > 0.2
+    assert (run / "trajectory.png").stat().st_size > 10_000
+    info = run_cli("bag", "info", str(run), "--json")
+    assert info.returncode == 0, info.stderr
+    topics = {topic["name"] for topic in json.loads(info.stdout)["topics"]}
+    assert {"/rfid/reads", "/cmd_vel", "/odom", "/diagnostics"} <= topics and "/sim/ground_truth" not in topics
+    replay = run_cli("replay", str(run), "--topics", "/rfid/reads", "/odom", "--rate", "10")
+    assert replay.returncode == 0, replay.stdout + replay.stderr
