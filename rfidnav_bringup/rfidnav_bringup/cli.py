@@ -109,10 +109,11 @@ def parser() -> argparse.ArgumentParser:
     survey.add_argument("--seed", type=int, default=1)
     survey.add_argument("--out", type=Path, required=True, help="the radio map file to write (YAML)")
     bench = verbs.add_parser("bench", help="performance benchmarks (JSON figures)")
-    bench.add_argument("name", choices=["flc", "rtf", "planner", "partitions", "location_server"],
+    bench.add_argument("name", choices=["flc", "rtf", "planner", "partitions", "location_server", "llrp"],
                        help="flc: fuzzy fast path vs scikit-fuzzy; rtf: a scenario over DDS at rising RTF; "
                             "planner: Algorithm 1 and a reader round in a 30 x 30 m field at r = 2 cm; partitions: the navigations of "
-                            "paper 000 Figs. 12-14 in-process; location_server: paper 003's tier-one locate over DDS")
+                            "paper 000 Figs. 12-14 in-process; location_server: paper 003's tier-one locate over DDS; "
+                            "llrp: the llrp_reader driver against llrpkit's LLRP emulator (latency, lossless rate)")
     bench.add_argument("--json", action="store_true")
     bench.add_argument("--evaluations", type=int, default=2000, help="flc: evaluations per timing")
     bench.add_argument("--plans", type=int, default=200, help="planner: random segments planned")
@@ -307,6 +308,10 @@ def verb_bench(args) -> int:
               f"map: p50 {figures['p50_ms']:.2f} ms, p99 {figures['p99_ms']:.2f} ms (the matcher alone "
               f"{figures['matcher_ms']:.3f} ms)")
         return 0
+    if args.name == "llrp":
+        from rfidnav_bringup.bench_llrp import bench_llrp
+
+        return bench_llrp(as_json=args.json)
     if args.name in ("planner", "partitions"):
         return bench_partitions(args)
     from rfidnav_control.fuzzy import benchmark
