@@ -111,8 +111,9 @@ def parser() -> argparse.ArgumentParser:
     bench = verbs.add_parser("bench", help="performance benchmarks (JSON figures)")
     bench.add_argument("name", choices=["flc", "rtf", "planner", "partitions", "location_server", "llrp"],
                        help="flc: fuzzy fast path vs scikit-fuzzy; rtf: a scenario over DDS at rising RTF; "
-                            "planner: Algorithm 1 and a reader round in a 30 x 30 m field at r = 2 cm; partitions: the navigations of "
-                            "paper 000 Figs. 12-14 in-process; location_server: paper 003's tier-one locate over DDS; "
+                            "planner: Algorithm 1 and a reader round in a 30 x 30 m field at r = 2 cm; "
+                            "partitions: the navigations of paper 000 Figs. 12-14 in-process; "
+                            "location_server: paper 003's tier-one locate over DDS; "
                             "llrp: the llrp_reader driver against llrpkit's LLRP emulator (latency, lossless rate)")
     bench.add_argument("--json", action="store_true")
     bench.add_argument("--evaluations", type=int, default=2000, help="flc: evaluations per timing")
@@ -328,13 +329,13 @@ def verb_bench(args) -> int:
 def bench_partitions(args) -> int:
     if args.name == "planner":
         from rfidnav_planning.partition_planner import benchmark
-
         from rfidnav_sim.rfid_model import lattice_benchmark
 
         figures = {**benchmark(plans=args.plans), **lattice_benchmark()}
         summary = (f"Algorithm 1, {figures['field_m']:g} x {figures['field_m']:g} m at r = "
-                   f"{figures['read_range_m'] * 100:g} cm ({figures['tags']} tags): {figures['mean_ms']:.1f} ms per plan "
-                   f"on average, p99 {figures['p99_ms']:.1f} ms, {figures['mean_partitions']:.0f} partitions per plan; "
+                   f"{figures['read_range_m'] * 100:g} cm ({figures['tags']} tags): {figures['mean_ms']:.1f} ms "
+                   f"per plan on average, p99 {figures['p99_ms']:.1f} ms, {figures['mean_partitions']:.0f} partitions "
+                   f"per plan; "
                    f"the reader simulator's round over the same floor: {figures['reader_round_us']:.0f} us")
     else:
         from rfidnav_bringup.reproduce_partitions import benchmark
