@@ -35,11 +35,10 @@ class DelayedFloorTag(LLRPEmulator):
         await super()._send(msg, message_id=message_id)
 
 
-@pytest.fixture(scope="module")
-def swap_run(tmp_path_factory) -> Path:
-    folder = tmp_path_factory.mktemp("llrp_swap")
-    loop = EmulatorLoop()
-
+def emulated_route(folder: Path, loop: EmulatorLoop, metrics: str) -> tuple[Path, Path]:
+    """Start the emulator (the target tag on antennas 1 and 2, its floor tag on 3 later) on ``loop`` and write
+    a line_follow_90 scenario routed to the target (paper 001's controller, ``metrics``) and llrp_reader
+    parameters for the emulator: (scenario, reader parameter file)."""
     async def started() -> LLRPEmulator:
         emulator = DelayedFloorTag(host="127.0.0.1", port=0, reads_per_sec=200.0, antenna_count=4,
                                    tags=[EmulatedTag(epc=bytes.fromhex(TARGET), antennas=(1, 2), rssi_dbm=-50.0)])
@@ -47,24 +46,32 @@ def swap_run(tmp_path_factory) -> Path:
         return emulator
     emulator = loop.run(started())
     loop.running.append(emulator)
+    route_map = folder / "route.yaml"
+    route_map.write_text(f"name: emulated\narrival_tags: {{'{TARGET}': '{FLOOR}'}}\n")
+    scenario = folder / "emulated_route.yaml"
+    scenario.write_text(
+        (WORKSPACE / "config/scenarios/line_follow_90.yaml").read_text()
+        .replace("../worlds/line_follow.yaml", str(WORKSPACE / "config/worlds/line_follow.yaml"))
+        .replace("../maps/line_follow.yaml", str(route_map))
+        .replace("../params/", str(WORKSPACE / "config/params") + "/")
+        .replace("flc_tuned.yaml", "flc_paper.yaml")
+        .replace("goal: {tag_ids: [C1, C2]}", f"goal: {{tag_ids: ['{TARGET}']}}")
+        .replace("metrics: [tracking]", f"metrics: {metrics}"))
+    params = folder / "llrp_reader.yaml"
+    params.write_text((WORKSPACE / "config/params/llrp_reader.yaml").read_text()
+                      .replace("host: 192.168.1.10", "host: 127.0.0.1")
+                      .replace("port: 5084", f"port: {emulator.port}")
+                      .replace("antennas: [1, 2]", "antennas: [1, 2, 3]"))
+    assert f"port: {emulator.port}" in params.read_text() and "antennas: [1, 2, 3]" in params.read_text()
+    return scenario, params
+
+
+@pytest.fixture(scope="module")
+def swap_run(tmp_path_factory) -> Path:
+    folder = tmp_path_factory.mktemp("llrp_swap")
+    loop = EmulatorLoop()
     try:
-        route_map = folder / "route.yaml"
-        route_map.write_text(f"name: emulated\narrival_tags: {{'{TARGET}': '{FLOOR}'}}\n")
-        scenario = folder / "llrp_swap.yaml"
-        scenario.write_text(
-            (WORKSPACE / "config/scenarios/line_follow_90.yaml").read_text()
-            .replace("../worlds/line_follow.yaml", str(WORKSPACE / "config/worlds/line_follow.yaml"))
-            .replace("../maps/line_follow.yaml", str(route_map))
-            .replace("../params/", str(WORKSPACE / "config/params") + "/")
-            .replace("flc_tuned.yaml", "flc_paper.yaml")
-            .replace("goal: {tag_ids: [C1, C2]}", f"goal: {{tag_ids: ['{TARGET}']}}")
-            .replace("metrics: [tracking]", "metrics: []"))   # tracking needs the tags' true positions
-        params = folder / "llrp_reader.yaml"
-        params.write_text((WORKSPACE / "config/params/llrp_reader.yaml").read_text()
-                          .replace("host: 192.168.1.10", "host: 127.0.0.1")
-                          .replace("port: 5084", f"port: {emulator.port}")
-                          .replace("antennas: [1, 2]", "antennas: [1, 2, 3]"))
-        assert f"port: {emulator.port}" in params.read_text() and "antennas: [1, 2, 3]" in params.read_text()
+        scenario, params = emulated_route(folder, loop, "[]")    # tracking needs the tags' true positions
         return run_scenario(folder / "runs", str(scenario), "--robot", "sim_base_llrp", "--params",
                             f"rfid_reader={params}", "--rtf", "1", "--seed", "1")
     finally:

@@ -6,50 +6,27 @@ time (no /clock). The run is recorded like a simulated one, and `report` and `ba
 from __future__ import annotations
 
 import json
+from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
-from llrpkit.emulator.core import EmulatedTag, LLRPEmulator
-
 from fake_create import FakeCreate
 from test_graph import WORKSPACE, run_cli, run_scenario
-from test_llrp_graph import FLOOR, TARGET, DelayedFloorTag
+from test_llrp_graph import emulated_route
 from test_llrp_reader import EmulatorLoop
 
 
 @pytest.fixture(scope="module")
-def robot_run(tmp_path_factory) -> tuple[Path, FakeCreate]:
+def robot_run(tmp_path_factory) -> Iterator[tuple[Path, FakeCreate]]:
     folder = tmp_path_factory.mktemp("robot")
     loop = EmulatorLoop()
     create = FakeCreate()
-
-    async def started() -> LLRPEmulator:
-        emulator = DelayedFloorTag(host="127.0.0.1", port=0, reads_per_sec=200.0, antenna_count=4,
-                                   tags=[EmulatedTag(epc=bytes.fromhex(TARGET), antennas=(1, 2), rssi_dbm=-50.0)])
-        await emulator.start()
-        return emulator
-    emulator = loop.run(started())
-    loop.running.append(emulator)
     try:
-        route_map = folder / "route.yaml"
-        route_map.write_text(f"name: emulated\narrival_tags: {{'{TARGET}': '{FLOOR}'}}\n")
-        scenario = folder / "on_the_robot.yaml"
-        scenario.write_text(
-            (WORKSPACE / "config/scenarios/line_follow_90.yaml").read_text()
-            .replace("../worlds/line_follow.yaml", str(WORKSPACE / "config/worlds/line_follow.yaml"))
-            .replace("../maps/line_follow.yaml", str(route_map))
-            .replace("../params/", str(WORKSPACE / "config/params") + "/")
-            .replace("flc_tuned.yaml", "flc_paper.yaml")
-            .replace("goal: {tag_ids: [C1, C2]}", f"goal: {{tag_ids: ['{TARGET}']}}"))
-        reader = folder / "llrp_reader.yaml"
-        reader.write_text((WORKSPACE / "config/params/llrp_reader.yaml").read_text()
-                          .replace("host: 192.168.1.10", "host: 127.0.0.1")
-                          .replace("port: 5084", f"port: {emulator.port}")
-                          .replace("antennas: [1, 2]", "antennas: [1, 2, 3]"))
+        scenario, reader = emulated_route(folder, loop, "[tracking]")   # not computed: no ground truth
         base = folder / "create_base.yaml"
         base.write_text((WORKSPACE / "config/params/create_base.yaml").read_text()
                         .replace("port: /dev/ttyUSB0", f"port: {create.slave_path}"))
-        assert create.slave_path in base.read_text() and f"port: {emulator.port}" in reader.read_text()
+        assert create.slave_path in base.read_text()
         run = run_scenario(folder / "runs", str(scenario), "--robot", "create2_llrp",
                            "--params", f"rfid_reader={reader}", "--params", f"robot_sim={base}")
         yield run, create
