@@ -183,6 +183,15 @@ def type_name(value: Any) -> str:
     return type(value).__name__
 
 
+def require_positive(parameters: Any, *names: str) -> None:
+    """For a parameter class's validate(): each named field must be a positive finite number (ValueError
+    naming the first that is not, in the form parameters_from_mapping reports against its field)."""
+    for name in names:
+        value = getattr(parameters, name)
+        if not (math.isfinite(value) and value > 0.0):
+            raise ValueError(f"{name}: must be positive, got {value}")
+
+
 def typed_values(cls: type, data: Any, source: str, prefix: str = "") -> dict[str, Any]:
     """Type-check ``data`` against the fields of parameter dataclass ``cls``; return the values given.
 

@@ -11,7 +11,7 @@ import dataclasses
 import math
 from dataclasses import dataclass
 
-from rfidnav_common.config import param
+from rfidnav_common.config import param, require_positive
 from rfidnav_control.errors import FuzzySpecError
 from rfidnav_control.fuzzy import FuzzyHeadingSpec
 from rfidnav_control.tag_route import ARRIVAL_MODES, FollowerSettings
@@ -58,9 +58,7 @@ class HeadingControllerParameters:
             raise ValueError("map_file: required (the route map of arrival floor tags)")
         if self.arrival not in ARRIVAL_MODES:
             raise ValueError(f"arrival: '{self.arrival}' is not one of {', '.join(ARRIVAL_MODES)}")
-        for name in ("forward_speed_mps", "max_yaw_rate_radps", "nominal_round_s", "unheard_timeout_s"):
-            if getattr(self, name) <= 0.0:
-                raise ValueError(f"{name}: must be positive, got {getattr(self, name)}")
+        require_positive(self, "forward_speed_mps", "max_yaw_rate_radps", "nominal_round_s", "unheard_timeout_s")
         self.follower_settings().validate()
         try:
             self.fuzzy_spec()
@@ -69,7 +67,8 @@ class HeadingControllerParameters:
 
     def follower_settings(self) -> FollowerSettings:
         # Every follower setting is a node parameter of the same name.
-        return FollowerSettings(**{field.name: getattr(self, field.name) for field in dataclasses.fields(FollowerSettings)})
+        return FollowerSettings(**{field.name: getattr(self, field.name)
+                                   for field in dataclasses.fields(FollowerSettings)})
 
     def fuzzy_spec(self) -> FuzzyHeadingSpec:
         return FuzzyHeadingSpec.from_flat(
@@ -117,9 +116,7 @@ class WallFollowerParameters:
         if len(self.sonar_topics) != len(SONAR_FIELDS) or len(self.sonar_offsets_m) != len(SONAR_FIELDS):
             raise ValueError(f"sonar_topics and sonar_offsets_m: one each for {', '.join(SONAR_FIELDS)}, got "
                              f"{len(self.sonar_topics)} and {len(self.sonar_offsets_m)}")
-        for name in ("control_rate_hz", "sonar_timeout_s"):
-            if not (math.isfinite(getattr(self, name)) and getattr(self, name) > 0.0):
-                raise ValueError(f"{name}: must be positive, got {getattr(self, name)}")
+        require_positive(self, "control_rate_hz", "sonar_timeout_s")
         if not (math.isfinite(self.recover_after_s) and self.recover_after_s >= 0.0):
             raise ValueError(f"recover_after_s: must not be negative, got {self.recover_after_s}")
         self.settings().validate()

@@ -7,7 +7,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from rfidnav_common.config import param
+from rfidnav_common.config import param, require_positive
 
 
 @dataclass(frozen=True)
@@ -37,9 +37,7 @@ class LlrpReaderParameters:
             raise ValueError(f"antennas: ports are 1..65535, got {self.antennas}")
         if not 0 <= self.session <= 3:
             raise ValueError(f"session: 0..3, got {self.session}")
-        for name in ("connect_timeout_s", "reconnect_initial_s", "reconnect_max_s", "keepalive_s"):
-            if not (math.isfinite(getattr(self, name)) and getattr(self, name) > 0.0):
-                raise ValueError(f"{name}: must be positive, got {getattr(self, name)}")
+        require_positive(self, "connect_timeout_s", "reconnect_initial_s", "reconnect_max_s", "keepalive_s")
         if self.reconnect_max_s < self.reconnect_initial_s:
             raise ValueError("reconnect_max_s must be at least reconnect_initial_s")
         if not (math.isfinite(self.batch_period_s) and self.batch_period_s >= 0.0):
@@ -67,10 +65,8 @@ class CreateBaseParameters:
             raise ValueError(f"mode: 'safe' or 'full', got '{self.mode}'")
         if self.baud <= 0:
             raise ValueError(f"baud: must be positive, got {self.baud}")
-        for name in ("sensor_rate_hz", "max_wheel_speed_mps", "wheel_base_m", "wheel_diameter_m", "counts_per_rev",
-                     "command_timeout_s"):
-            if not (math.isfinite(getattr(self, name)) and getattr(self, name) > 0.0):
-                raise ValueError(f"{name}: must be positive, got {getattr(self, name)}")
+        require_positive(self, "sensor_rate_hz", "max_wheel_speed_mps", "wheel_base_m", "wheel_diameter_m",
+                         "counts_per_rev", "command_timeout_s")
         if self.max_wheel_speed_mps > 0.5:
             raise ValueError(f"max_wheel_speed_mps: the Open Interface takes at most 0.5, got "
                              f"{self.max_wheel_speed_mps}")
@@ -89,6 +85,4 @@ class WifiScannerParameters:
     def validate(self) -> None:
         if not self.interface:
             raise ValueError("interface: required (e.g. wlan0)")
-        for name in ("period_s", "timeout_s"):
-            if not (math.isfinite(getattr(self, name)) and getattr(self, name) > 0.0):
-                raise ValueError(f"{name}: must be positive, got {getattr(self, name)}")
+        require_positive(self, "period_s", "timeout_s")

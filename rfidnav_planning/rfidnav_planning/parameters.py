@@ -6,10 +6,9 @@ document them."""
 from __future__ import annotations
 
 import dataclasses
-import math
 from dataclasses import dataclass
 
-from rfidnav_common.config import param
+from rfidnav_common.config import param, require_positive
 from rfidnav_control.go_to import GoToSettings
 from rfidnav_planning.partition_navigation import NavigatorSettings
 from rfidnav_planning.topological_map import WEIGHTS
@@ -46,15 +45,14 @@ class PartitionNavigatorParameters:
     def validate(self) -> None:
         if not self.map_file:
             raise ValueError("map_file: required (the map with the deployment_area)")
-        for name in ("forward_speed_mps", "turn_rate_radps", "turn_gain_per_s", "turn_tolerance_rad",
-                     "unheard_timeout_s"):
-            if getattr(self, name) <= 0.0:
-                raise ValueError(f"{name}: must be positive, got {getattr(self, name)}")
+        require_positive(self, "forward_speed_mps", "turn_rate_radps", "turn_gain_per_s", "turn_tolerance_rad",
+                         "unheard_timeout_s")
         self.settings().validate()
 
     def settings(self) -> NavigatorSettings:
         # Every navigator setting is a node parameter of the same name.
-        return NavigatorSettings(**{field.name: getattr(self, field.name) for field in dataclasses.fields(NavigatorSettings)})
+        return NavigatorSettings(**{field.name: getattr(self, field.name)
+                                    for field in dataclasses.fields(NavigatorSettings)})
 
 
 @dataclass(frozen=True)
@@ -84,9 +82,7 @@ class TwoTierNavigatorParameters:
     def validate(self) -> None:
         if not 1 <= self.floor_antenna <= 65535:
             raise ValueError(f"floor_antenna: a reader port is 1..65535, got {self.floor_antenna}")
-        for name in ("control_rate_hz", "service_timeout_s"):
-            if not (math.isfinite(getattr(self, name)) and getattr(self, name) > 0.0):
-                raise ValueError(f"{name}: must be positive, got {getattr(self, name)}")
+        require_positive(self, "control_rate_hz", "service_timeout_s")
         self.settings().validate()
 
     def settings(self) -> TwoTierSettings:

@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from rfidnav_common.config import param
+from rfidnav_common.config import param, require_positive
 from rfidnav_sim.compass_model import CompassModel
 from rfidnav_sim.rfid_model import Antenna, ReaderModel
 
@@ -38,10 +38,8 @@ class RobotSimParameters:
     def validate(self) -> None:
         if not self.world_file:
             raise ValueError("world_file: required (the world YAML to simulate)")
-        for name in ("step_s", "rtf", "odom_rate_hz", "track_width_m", "max_wheel_speed_mps",
-                     "max_wheel_accel_mps2", "command_timeout_s"):
-            if getattr(self, name) <= 0.0:
-                raise ValueError(f"{name}: must be positive, got {getattr(self, name)}")
+        require_positive(self, "step_s", "rtf", "odom_rate_hz", "track_width_m", "max_wheel_speed_mps",
+                         "max_wheel_accel_mps2", "command_timeout_s")
         if self.odom_slip_std < 0.0:
             raise ValueError("odom_slip_std: must not be negative")
 
