@@ -282,3 +282,14 @@ def test_cli_run_with_an_unknown_package_names_the_scenario_field_and_starts_not
     assert str((config / SCENARIO).resolve()) in lines[0]
     assert "nodes.heading_controller.package" in lines[0] and "nope_pkg" in lines[0]
     assert not out.exists() or not any(out.iterdir())
+
+
+def test_require_positive_names_the_first_field_that_is_not() -> None:
+    from types import SimpleNamespace
+
+    from rfidnav_common.config import require_positive
+
+    require_positive(SimpleNamespace(a=1.0, b=2), "a", "b")
+    for bad in (0.0, -1.0, float("nan"), float("inf")):
+        with pytest.raises(ValueError, match=rf"^b: must be positive, got {bad}"):
+            require_positive(SimpleNamespace(a=1.0, b=bad), "a", "b")
