@@ -48,7 +48,10 @@ class FollowerProbe:
         self.command_pub = probe.create_publisher(WallFollowerCommand, "/wall_follower/command", COMMAND_QOS)
         self.twists: list[Twist] = []
         self.events: list[str] = []
+        self.states: list[str] = []
         probe.create_subscription(Twist, "/cmd_vel", self.twists.append, COMMAND_QOS)
+        probe.create_subscription(WallFollowerEvent, "/wall_follower/state", lambda m: self.states.append(m.state),
+                                  COMMAND_QOS)
         probe.create_subscription(WallFollowerEvent, "/wall_follower/event", lambda m: self.events.append(m.event),
                                   COMMAND_QOS)
         self.ranges = dict(BESIDE_A_WALL)
@@ -81,9 +84,11 @@ def test_the_wall_follower_is_idle_until_commanded_then_drives_and_stops(graph: 
     probe.command("follow")
     graph.spin_until(lambda: probe.twists and probe.twists[-1].linear.x > 0.0, "driving forward")
     assert probe.twists[-1].linear.x == 0.2 and abs(probe.twists[-1].angular.z) < 1e-6   # parallel at 0.8 m
+    graph.spin_until(lambda: probe.states and probe.states[-1] == "following", "the state heartbeat")
     probe.command("stop", 0.0)
     graph.spin_until(lambda: "stopped" in probe.events, "the stopped event")
     assert probe.twists[-1].linear.x == 0.0 and node.follower is None
+    graph.spin_until(lambda: probe.states[-1] == "idle", "idle in the state heartbeat")
 
 
 def test_silent_or_nan_sonar_holds_the_robot_still_and_the_node_stays_up(graph: Graph) -> None:
@@ -152,12 +157,13 @@ def test_a_mission_from_tag_23_to_g_commands_the_follower_and_succeeds_on_stoppe
     assert probe.commands[1] == ("right", 0.0)
     last = probe.feedback[-1]
     assert (last.current_node, last.arrival_direction, last.last_tag, last.next_action) == ("h", "W", "23", "right")
-    probe.event("junction_centre")
-    graph.spin_until(lambda: len(probe.commands) == 3, "the turn at h's centre")
+    probe.event("junction_centre")          # the follower turns with the command it has: nothing is sent again
+    graph.spin_until(lambda: probe.feedback[-1].next_action == "right" and len(probe.feedback) >= 2,
+                     "the feedback of h's centre")
     probe.event("turn_done")
     probe.read("19")
     graph.spin_until(lambda: probe.commands[-1][0] == "stop", "the stop")
-    assert probe.commands[-1] == ("stop", 4.0)                # drive on to g's centre, at most 2 x tag_to_node_m
+    assert probe.commands == [("follow", 0.0), ("right", 0.0), ("stop", 4.0)]   # on to g's centre: 2 x tag_to_node
     result = handle.get_result_async()
     probe.event("stopped")
     graph.spin_until(result.done, "the result")
@@ -190,18 +196,21 @@ def test_a_cancelled_mission_stops_the_follower(graph: Graph) -> None:
     assert not result.result().result.success and probe.commands[-1] == ("stop", 0.0)
 
 
-def test_a_wall_follower_that_comes_back_is_commanded_again(graph: Graph) -> None:
-    node = executor_node(graph)
+def test_a_wall_follower_that_says_it_is_idle_during_a_mission_is_commanded_again(graph: Graph) -> None:
+    executor_node(graph)
     probe = ExecutorProbe(graph)
+    state_pub = graph.probe.create_publisher(WallFollowerEvent, "/wall_follower/state", COMMAND_QOS)
     probe.send("g")
     graph.spin_until(lambda: probe.commands == [("follow", 0.0)], "the follow command")
     probe.read("23")
     graph.spin_until(lambda: probe.commands[-1] == ("right", 0.0), "the turn for h")
-    # The follower restarts: its subscription goes, and a new one comes.
-    graph.probe.destroy_subscription(next(s for s in graph.probe.subscriptions
-                                          if s.topic_name == "/wall_follower/command"))
-    graph.spin_until(lambda: not node.follower_listening, "the follower gone")
-    again: list[tuple[str, float]] = []
-    graph.probe.create_subscription(WallFollowerCommand, "/wall_follower/command",
-                                    lambda m: again.append((m.action, m.stop_within_m)), COMMAND_QOS)
-    graph.spin_until(lambda: again == [("follow", 0.0), ("right", 0.0)], "the commands again")
+    state_pub.publish(WallFollowerEvent(state="following"))      # heard: nothing to do
+    state_pub.publish(WallFollowerEvent(state="idle"))           # restarted, or the command was lost
+    graph.spin_until(lambda: probe.commands[2:] == [("follow", 0.0), ("right", 0.0)], "the commands again")
+    probe.read("19")
+    graph.spin_until(lambda: probe.commands[-1][0] == "stop", "the stop")
+    count = len(probe.commands)
+    state_pub.publish(WallFollowerEvent(state="idle"))           # idle after the stop: the mission is ending
+    for _ in range(10):
+        graph.executor.spin_once(timeout_sec=0.05)
+    assert len(probe.commands) == count

@@ -26,7 +26,7 @@ from rfidnav_bringup.metrics import GOAL_RADIUS_M, topological_shortest_m
 from rfidnav_bringup.scenario import CONFIG_DIR
 from rfidnav_control.wall_following import (JUNCTION_CENTRE, NO_OPENING, OBSTACLE, STOPPED, TURN_DONE, OdomPose,
                                             Sonar, WallFollower, WallFollowerSettings)
-from rfidnav_planning.mission_executor import STOP, Decision, MissionExecutor
+from rfidnav_planning.mission_executor import STOP, TURNS, Decision, MissionExecutor
 from rfidnav_planning.topological_map import UNKNOWN, TopologicalMap, load_topological_map, opposite
 from rfidnav_sim.sonar_model import PAPER_LAYOUT, SonarModel
 from rfidnav_sim.wall_tag_model import InductionArea, WallTagReader
@@ -111,15 +111,15 @@ def run_mission(world: World, topological_map: TopologicalMap, start_pose: tuple
         nonlocal message
         if decision.message:
             message = decision.message
+        if decision.action in TURNS and (at_junction or decision.action == "back"):
+            turns.append((executor.state.current_node or "?", decision.action))   # a tag's turn waits for it
         command = executor.follower_command(decision)
         if command is None:
             return
         if command.action == STOP:
             follower.command_stop(command.within_m)
-            return
-        follower.command_turn(command.action)
-        if at_junction or command.action == "back":      # a tag's left/right/straight waits for the junction
-            turns.append((executor.state.current_node or "?", command.action))
+        else:
+            follower.command_turn(command.action)
 
     for _ in range(int(round(max_time_s / step_s))):
         for decision in executor.on_reads(reader.read(x, y, yaw, rng)):

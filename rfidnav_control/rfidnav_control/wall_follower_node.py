@@ -5,8 +5,10 @@ A thin adapter around rfidnav_control.wall_following.WallFollower: a timer at ``
 it the latest range of each sonar topic (plus that sonar's mounting offset, so ranges are from the robot's centre)
 and the latest odometry pose, and publishes its velocity and events. It is idle until the first command: a
 ``follow`` or a turn starts a new follower (what was measured of the walls on an earlier drive is not kept); its
-``stopped`` event makes it idle again. While a sonar is silent longer than ``sonar_timeout_s`` it stops the robot
-rather than drive blind, and says so; a NaN range or pose is dropped with a warning.
+``stopped`` event makes it idle again. Its state (``idle`` or the follower's) goes out on /wall_follower/state
+every STATE_PERIOD_S, so a commander can tell a lost command from a slow one. While a sonar is silent longer than
+``sonar_timeout_s`` it stops the robot rather than drive blind, and says so; a NaN range or pose is dropped with
+a warning.
 """
 
 from __future__ import annotations
@@ -25,6 +27,10 @@ from rfidnav_control.wall_following import ACTIONS, STOPPED, OdomPose, Sonar, Wa
 from rfidnav_msgs.msg import WallFollowerCommand, WallFollowerEvent
 
 
+STATE_PERIOD_S = 0.5
+IDLE = "idle"
+
+
 class WallFollowerNode(Node):
     def __init__(self, **node_options: Any) -> None:
         """``node_options``: keyword arguments of rclpy's Node (``context``, ``parameter_overrides``), for tests."""
@@ -36,11 +42,13 @@ class WallFollowerNode(Node):
         self.odom: OdomPose | None = None
         self.cmd_pub = self.create_publisher(Twist, "/cmd_vel", COMMAND_QOS)
         self.event_pub = self.create_publisher(WallFollowerEvent, "/wall_follower/event", COMMAND_QOS)
+        self.state_pub = self.create_publisher(WallFollowerEvent, "/wall_follower/state", COMMAND_QOS)
         for field, topic, offset in zip(SONAR_FIELDS, self.params.sonar_topics, self.params.sonar_offsets_m):
             self.create_subscription(Range, topic, self.range_callback(field, topic, offset), SENSOR_QOS)
         self.create_subscription(Odometry, "/odom", self.on_odom, SENSOR_QOS)
         self.create_subscription(WallFollowerCommand, "/wall_follower/command", self.on_command, COMMAND_QOS)
         self.create_timer(1.0 / self.params.control_rate_hz, self.control_step)
+        self.create_timer(STATE_PERIOD_S, self.publish_state)
         self.get_logger().info(f"idle until commanded; set distance {self.settings.wall_distance_m:g} m, "
                                f"{self.settings.speed_mps:g} m/s, {self.params.control_rate_hz:g} steps/s")
 
@@ -115,12 +123,18 @@ class WallFollowerNode(Node):
         self.cmd_pub.publish(twist(linear, angular))
 
     def publish_event(self, event: str) -> None:
-        msg = WallFollowerEvent(event=event, state=self.follower.state,
-                                odom_pose=Pose2D(x=float(self.odom.x), y=float(self.odom.y),
-                                                 theta=float(self.odom.yaw)))
+        self.event_pub.publish(self.report(event))
+
+    def publish_state(self) -> None:
+        self.state_pub.publish(self.report(""))
+
+    def report(self, event: str) -> WallFollowerEvent:
+        msg = WallFollowerEvent(event=event, state=self.follower.state if self.follower is not None else IDLE)
+        if self.odom is not None:
+            msg.odom_pose = Pose2D(x=float(self.odom.x), y=float(self.odom.y), theta=float(self.odom.yaw))
         msg.header.stamp = self.get_clock().now().to_msg()
         msg.header.frame_id = "odom"
-        self.event_pub.publish(msg)
+        return msg
 
 
 def main(args: list[str] | None = None) -> int:

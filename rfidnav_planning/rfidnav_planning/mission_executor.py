@@ -66,6 +66,7 @@ class Decision:
     success: bool = False
     message: str = ""
     drive_on_m: float = 0.0         # on stop: at most this far on to the goal's centre (WallFollower.command_stop)
+    commanded_already: bool = False  # the turn a tag decided, now due at its junction: the follower has it
 
 
 @dataclass(frozen=True)
@@ -173,9 +174,11 @@ class MissionExecutor:
 
     def follower_command(self, decision: Decision) -> FollowerCommand | None:
         """The wall follower's command for ``decision``: its turn, or the stop (once: the outcome is repeated to
-        every later input), or None (follow)."""
+        every later input), or None (follow; or the turn a tag decided, due now at its junction: the follower
+        was given it with the tag, and giving it again could reach the follower after it has turned, leaving it
+        queued for the next junction)."""
         state = self._mission()
-        if decision.action in TURNS:
+        if decision.action in TURNS and not decision.commanded_already:
             return FollowerCommand(decision.action)
         if decision.action == STOP and not state.stop_commanded:
             state.stop_commanded = True
@@ -216,7 +219,8 @@ class MissionExecutor:
         state.junction_since_tag = True
         if state.awaiting is not None:
             action, state.awaiting = state.awaiting, None
-            return self._answer(Decision(action, message=f"at '{state.current_node}': {action}"))
+            return self._answer(Decision(action, message=f"at '{state.current_node}': {action}",
+                                         commanded_already=True))
         if state.exploring is not None:
             state.exploring = None
             return Decision(FOLLOW, message="junction at the end of an explored hallway without a tag: lost; "

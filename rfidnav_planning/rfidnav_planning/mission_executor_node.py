@@ -6,8 +6,9 @@ in-process runner glues the two cores: each inventory round's tag ids go to ``on
 ``on_junction``, each decision's ``follower_command`` to the follower; the goal ends with the follower's
 ``stopped`` (the executor's stop, driven on to the node) or at once when the executor gives up. What the executor
 learns of ``?`` hallways is kept for later goals. A goal is refused for a node not in the map, while another goal
-runs, or while no wall follower listens on /wall_follower/command; a follower that restarts mid-mission (it starts
-idle) is commanded again. As in the other action servers, the goal is
+runs, or while no wall follower listens on /wall_follower/command. A follower that says it is idle
+(/wall_follower/state) while a mission runs did not hear its command (it restarted, or its subscription matched
+after the command went out): it is told again to follow, with the turn waiting for the next junction. As in the other action servers, the goal is
 followed from its acceptance and its execute callback runs only once the outcome is known.
 """
 
@@ -28,6 +29,7 @@ from rfidnav_planning.parameters import MissionExecutorParameters
 from rfidnav_planning.topological_map import load_topological_map
 
 STOPPED = "stopped"                       # the wall follower's event when a stop is done
+IDLE = "idle"                             # the wall follower's state with no drive to follow
 
 
 @dataclass
@@ -45,10 +47,10 @@ class MissionExecutorNode(Node):
         self.map = load_topological_map(self.params.map_file)
         self.executor_core = MissionExecutor(self.map, self.params.weight, self.params.recover_missed_tags)
         self.active: ActiveGoal | None = None
-        self.follower_listening = False         # whether a wall follower subscribes to the commands
         self.command_pub = self.create_publisher(WallFollowerCommand, "/wall_follower/command", COMMAND_QOS)
         self.create_subscription(TagReadArray, "/rfid/reads", self.on_reads, SENSOR_QOS)
         self.create_subscription(WallFollowerEvent, "/wall_follower/event", self.on_event, COMMAND_QOS)
+        self.create_subscription(WallFollowerEvent, "/wall_follower/state", self.on_follower_state, COMMAND_QOS)
         self.action_server = ActionServer(
             self, NavigateToNode, "/navigate_to_node", execute_callback=self.finish,
             goal_callback=self.on_goal, handle_accepted_callback=self.on_accepted,
@@ -76,7 +78,6 @@ class MissionExecutorNode(Node):
 
     def on_accepted(self, handle: ServerGoalHandle) -> None:
         self.active = ActiveGoal(handle)
-        self.follower_listening = True          # checked by on_goal
         decision = self.executor_core.start(handle.request.goal_node)
         self.get_logger().info(decision.message)
         self.command(WallFollowerCommand.FOLLOW)
@@ -138,23 +139,27 @@ class MissionExecutorNode(Node):
             last_tag=mission.last_tag or "", next_action=self.active.next_action,
             tags_missed=mission.tags_missed, replans=mission.replans))
 
-    def supervise(self) -> None:
-        """A cancel request is noticed here (no read or event may arrive to notice it), and a wall follower
-        that comes back (respawned) is told again to follow, with the turn waiting for the next junction."""
+    def on_follower_state(self, msg: WallFollowerEvent) -> None:
         active = self.active
-        listening = self.command_pub.get_subscription_count() > 0
-        came_back, self.follower_listening = listening and not self.follower_listening, listening
-        if active is None or active.outcome is not None:
+        if active is None or active.outcome is not None or msg.state != IDLE:
             return
-        if active.handle.is_cancel_requested:
-            self.command(STOP, 0.0)
-            self.conclude("canceled", "cancelled by the client")
-        elif came_back:
-            self.get_logger().warning("the wall follower is back: commanding it again")
-            self.command(WallFollowerCommand.FOLLOW)
-            awaiting = self.executor_core.state.awaiting
-            if awaiting is not None:
-                self.command(awaiting)
+        if self.executor_core.state.stop_commanded:
+            return                  # idle after the stop: the mission ends with its "stopped" event
+        # Idle while a mission runs: the follow command (and the turn waiting for the next junction) was not heard.
+        self.get_logger().warning("the wall follower is idle during the mission: commanding it again",
+                                  throttle_duration_sec=5.0)
+        self.command(WallFollowerCommand.FOLLOW)
+        awaiting = self.executor_core.state.awaiting
+        if awaiting is not None:
+            self.command(awaiting)
+
+    def supervise(self) -> None:
+        """A cancel request is noticed here: no read or event may arrive to notice it."""
+        active = self.active
+        if active is None or active.outcome is not None or not active.handle.is_cancel_requested:
+            return
+        self.command(STOP, 0.0)
+        self.conclude("canceled", "cancelled by the client")
 
 
 def main(args: list[str] | None = None) -> int:
