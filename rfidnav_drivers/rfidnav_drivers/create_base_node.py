@@ -22,6 +22,7 @@ from typing import Any
 import serial
 from geometry_msgs.msg import Twist
 from nav_msgs.msg import Odometry
+from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.publisher import Publisher
 
@@ -262,7 +263,9 @@ class CreateBaseNode(Node):
 
 
 def main(args: list[str] | None = None) -> int:
-    return run_node(CreateBaseNode, args)
+    # SingleThreadedExecutor: the serial thread publishes /odom and /base/event beside the executor, and with
+    # rclpy's EventsExecutor that once ended in a RuntimeError out of spin_once at shutdown (CI, a loaded machine).
+    return run_node(CreateBaseNode, args, make_executor=SingleThreadedExecutor)
 
 
 if __name__ == "__main__":
