@@ -12,7 +12,7 @@ from mcap.reader import make_reader
 from mcap_ros2.decoder import DecoderFactory
 
 from rfidnav_bringup.report import run_metrics
-from test_graph import WORKSPACE, run_scenario
+from test_graph import WORKSPACE, navigation_subscriptions, run_scenario
 
 NAVIGATION_NODES = ("wall_follower", "mission_executor")
 
@@ -54,15 +54,9 @@ def test_with_the_goals_tag_unreadable_the_junction_still_ends_the_mission(misse
 
 
 def test_navigation_nodes_know_neither_world_nor_ground_truth(paper_run: Path) -> None:
-    graph = json.loads((paper_run / "graph.json").read_text())
-    for name in NAVIGATION_NODES:
-        topics = graph["nodes"][name]
-        assert not [t for t in topics["subscriptions"] if t.startswith("/sim/")], (name, topics)
-        assert "world_file" not in (paper_run / "params" / f"{name}.yaml").read_text()
-    assert {"/sonar/left", "/sonar/front", "/odom", "/wall_follower/command"} <= set(
-        graph["nodes"]["wall_follower"]["subscriptions"])
-    assert {"/rfid/reads", "/wall_follower/event"} <= set(graph["nodes"]["mission_executor"]["subscriptions"])
-
+    subscriptions = navigation_subscriptions(paper_run, NAVIGATION_NODES)
+    assert {"/sonar/left", "/sonar/front", "/odom", "/wall_follower/command"} <= subscriptions["wall_follower"]
+    assert {"/rfid/reads", "/wall_follower/event"} <= subscriptions["mission_executor"]
 
 def test_the_bag_holds_sonar_tags_commands_and_events_that_third_party_readers_decode(paper_run: Path) -> None:
     mcap_file = next((paper_run / "bag").glob("*.mcap"))

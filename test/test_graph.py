@@ -44,6 +44,19 @@ def run_scenario(out: Path, scenario: str, *options: str) -> Path:
     return runs[0]
 
 
+def navigation_subscriptions(run: Path, navigation_nodes: tuple[str, ...]) -> dict[str, set[str]]:
+    """Each navigation node's subscriptions once the run's graph was ready (graph.json), after checking that none
+    is to a /sim/* topic and that none was given the world file: they know neither ground truth nor world."""
+    graph = json.loads((run / "graph.json").read_text())
+    subscriptions = {}
+    for name in navigation_nodes:
+        topics = graph["nodes"][name]["subscriptions"]
+        assert not [t for t in topics if t.startswith("/sim/")], (name, topics)
+        assert "world_file" not in (run / "params" / f"{name}.yaml").read_text(), name
+        subscriptions[name] = set(topics)
+    return subscriptions
+
+
 @pytest.fixture(scope="module")
 def line_run(tmp_path_factory) -> Path:
     return run_scenario(tmp_path_factory.mktemp("runs"), "line_follow_90", "--rtf", str(GRAPH_TEST_RTF), "--seed", "1",
