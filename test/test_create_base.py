@@ -292,7 +292,7 @@ def test_a_bump_stops_at_once_and_blocks_forward_motion_until_released(graph: Gr
     assert right == -left and right > 0, (right, left)
     assert base.drive(-0.1, 0.0) == (-100, -100)                # backing up: allowed
     assert base.drive(0.0, 2.0) == (235, -235)                  # turning on the spot: allowed
-    assert graph.logged("create_base", "bump_left", "holds")
+    graph.spin_until(lambda: graph.logged("create_base", "bump_left", "holds"), "the log of the refused motion")
 
     fake.set(bump_left=False)
     released = base.wait_event(BaseEvent.BUMP_LEFT, False)
@@ -344,7 +344,7 @@ def test_short_and_missing_replies_are_counted_and_warned_about(graph: Graph, fa
         missed = base.node.missed_replies
         fake.reply_bytes = reply_bytes
         graph.spin_until(lambda: base.node.missed_replies >= missed + 2, f"replies of {reply_bytes} bytes counted")
-    assert graph.logged("create_base", "no usable sensor reply")
+    graph.spin_until(lambda: graph.logged("create_base", "no usable sensor reply"), "the warning about replies")
     assert base.drive(0.1, 0.0) == (100, 100)                   # still serving commands
     fake.reply_bytes = None
     count = len(base.odoms)

@@ -205,7 +205,8 @@ def test_a_busy_device_is_a_warning_and_the_next_period_scans_again(graph: Graph
     scans = listen(graph)
     node = scanner(graph, iw)
     graph.spin_until(lambda: scans, "a scan after the busy one")
-    assert graph.logged("wifi_scanner", "Device or resource busy (-16)", "retry")
+    graph.spin_until(lambda: graph.logged("wifi_scanner", "Device or resource busy (-16)", "retry"),
+                     "the warning about the busy device")
     assert node.failed is None and not errors_logged(graph) and len(scans[0].access_points) == 4
 
 
