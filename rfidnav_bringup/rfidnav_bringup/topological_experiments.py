@@ -10,8 +10,8 @@ paper's read failure: a tag not read while the robot passes it) when the tag com
 once it has left reach (per inventory round a tag in reach for ~40 rounds would practically never be missed).
 Each round's reads go to ``MissionExecutor.on_reads``, the follower's events to ``on_junction``, and the
 decisions' ``follower_command`` to the follower (``command_turn``, ``command_stop``); the mission ends with the
-follower's ``stopped``. The mission_executor and wall_follower nodes do the same over DDS. Walls only reflect sonar: a robot
-driving into one is not stopped by the simulation (the follower's emergency stop is all there is).
+follower's ``stopped``. The mission_executor and wall_follower nodes do the same over DDS. Walls only reflect
+sonar: a robot driving into one is not stopped by the simulation (the follower's emergency stop is all there is).
 """
 
 from __future__ import annotations

@@ -32,8 +32,9 @@ within ``junction_half_width_m`` the centre is that far past the edge (half the 
 crossing corridor of the expected width). A wall resuming earlier means the robot has passed the centre
 of a narrow opening, and it backs up to it. At the centre a commanded turn is made if the side (or, straight on,
 the front) is open; otherwise ``no_opening`` is reported and the robot stops there, never turning into a
-wall, until the next command. Without a command it drives straight on, or, where the front is closed (a corner, the end of
-a T), follows the walls round: left if open, else right, else back. A U-turn (``back``) needs no junction.
+wall, until the next command. Without a command it drives straight on, or, where the front is closed (a corner,
+the end of a T), follows the walls round: left if open, else right, else back. A U-turn (``back``) needs no
+junction.
 Openings are looked for only while the hallway's direction is known: from the start and after turning away from
 an obstacle, not until a stretch has been measured (the side sonars of a robot at a slant to the walls read
 them growing past the threshold, which is no opening). The first measurement is then taken whatever it says.

@@ -8,8 +8,9 @@ in-process runner glues the two cores: each inventory round's tag ids go to ``on
 learns of ``?`` hallways is kept for later goals. A goal is refused for a node not in the map, while another goal
 runs, or while no wall follower listens on /wall_follower/command. A follower that says it is idle
 (/wall_follower/state) while a mission runs did not hear its command (it restarted, or its subscription matched
-after the command went out): it is told again to follow, with the turn waiting for the next junction. As in the other action servers, the goal is
-followed from its acceptance and its execute callback runs only once the outcome is known.
+after the command went out): it is told again to follow, with the turn waiting for the next junction. As in the
+other action servers, the goal is followed from its acceptance and its execute callback runs only once the
+outcome is known.
 """
 
 from __future__ import annotations

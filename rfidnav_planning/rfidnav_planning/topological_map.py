@@ -508,12 +508,15 @@ class _Reader:
         graph.add_edges_from((node.name, hallway.neighbour) for node in nodes.values()
                              for hallway in node.hallways.values() if hallway.neighbour in nodes)
         first = next(iter(nodes))
-        reached = nx.node_connected_component(graph, first)
+        reached = set(nx.node_connected_component(graph, first))
 
         def explorable(part: set[str]) -> bool:
             return any(hallway.neighbour == UNKNOWN for name in part for hallway in nodes[name].hallways.values())
 
+        if explorable(reached):
+            # Parts with a "?" hallway may join the first node's part through unexplored hallways.
+            reached.update(name for part in nx.connected_components(graph) if explorable(part) for name in part)
         for name in nodes:
-            if name not in reached and not (explorable(reached) and explorable(nx.node_connected_component(graph, name))):
+            if name not in reached:
                 self.problems.append(nodes_section.error(name, f"not reachable from '{first}' (the first node) "
                                                                f"through mapped hallways nor through '{UNKNOWN}' ones"))
