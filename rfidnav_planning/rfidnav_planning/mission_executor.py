@@ -200,10 +200,7 @@ class MissionExecutor:
         if event == NO_OPENING:
             return self._no_opening()
         if event == OBSTACLE and self.recover_missed_tags and state.awaiting is None and self._dead_end_expected():
-            state.tags_missed += 1
-            self._passed(state.passing)
-            return self._answer(self._arrive(state.expected_node, state.expected_side,
-                                             "missed tag, assumed by the route at the dead end's wall", at_centre=True))
+            return self._assume_arrival("missed tag, assumed by the route at the dead end's wall")
         return Decision(FOLLOW)
 
     def _dead_end_expected(self) -> bool:
@@ -227,6 +224,11 @@ class MissionExecutor:
                                             "the hallway stays unexplored")
         if state.expected_node is None or not self.recover_missed_tags:
             return Decision(FOLLOW, message="junction without a tag read and no expectation: following on")
+        return self._assume_arrival("missed tag, assumed by the route")
+
+    def _assume_arrival(self, how: str) -> Decision:
+        """A tag was missed: the robot is where the route leads next (the nodes passed on the way are visited)."""
+        state = self._mission()
         state.tags_missed += 1
         ahead = self._ahead()
         node, side = ahead[-1]
@@ -234,7 +236,7 @@ class MissionExecutor:
         if node == UNKNOWN:
             state.expected_node = state.expected_side = None
             return Decision(FOLLOW, message="passed the goal with its tag missed into an unmapped hallway: lost")
-        return self._answer(self._arrive(node, side, "missed tag, assumed by the route", at_centre=True))
+        return self._answer(self._arrive(node, side, how, at_centre=True))
 
     def _no_opening(self) -> Decision:
         state = self._mission()
