@@ -46,6 +46,7 @@ class RunRecord:
     metric_groups: list[str]
     goal: dict
     last_feedback: object | None             # the mission's last feedback before it ended
+    action: str                              # the mission's action name, without a trailing slash
     trajectory_source: str = "ground_truth"  # or "odom": a run on a real robot (no simulator)
 
 
@@ -107,7 +108,8 @@ def load_run(path: Path) -> RunRecord:
     trajectory = Trajectory(np.array(times), np.array(xy))
     return RunRecord(run_dir, bag, world, route, trajectory, start_s,
                      end_s if end_s is not None else float(trajectory.times_s[-1]), final, arrivals,
-                     list(scenario.get("metrics", [])), dict(scenario["mission"]["goal"]), last_feedback, source)
+                     list(scenario.get("metrics", [])), dict(scenario["mission"]["goal"]), last_feedback, action,
+                     source)
 
 
 def route_points(world: World, route: list[str]) -> np.ndarray:
@@ -154,8 +156,7 @@ def record_metrics(record: RunRecord) -> dict[str, float | int | None]:
 
 def mission_feedback(record: RunRecord, topics: tuple[str, ...] = ()):
     """(topic, stamp_ns, message) of the mission's action feedback, and of ``topics``, during the mission."""
-    action = yaml.safe_load((record.run_dir / "scenario.yaml").read_text())["mission"]["action"].rstrip("/")
-    for topic, stamp_ns, msg in read_messages(record.bag, [*topics, f"{action}/_action/feedback"]):
+    for topic, stamp_ns, msg in read_messages(record.bag, [*topics, f"{record.action}/_action/feedback"]):
         if record.mission_start_s <= stamp_ns * 1e-9 <= record.mission_end_s:
             yield topic, stamp_ns, msg
 
