@@ -1,6 +1,12 @@
+from pathlib import Path
+
 from setuptools import find_packages, setup
 
 package_name = "rfidnav_bringup"
+# The suite's configuration (scenarios, worlds, maps, parameters, robot profiles) lives at the workspace root
+# and installs to share/rfidnav_bringup/config, where rfidnav_bringup.scenario finds it.
+config_files = sorted(p.relative_to(Path(__file__).resolve().parent.parent)
+                      for p in (Path(__file__).resolve().parent.parent / "config").rglob("*") if p.is_file())
 
 setup(
     name=package_name,
@@ -9,14 +15,11 @@ setup(
     data_files=[
         ("share/ament_index/resource_index/packages", ["resource/" + package_name]),
         ("share/" + package_name, ["package.xml"]),
+        *((f"share/{package_name}/{path.parent}", [f"../{path}"]) for path in config_files),
     ],
     install_requires=["setuptools"],
     zip_safe=True,
     maintainer="rfidnav developers",
-    description="Orchestration of rfidnav: scenarios, process runner, MCAP recorder and player, metrics, reports, experiments, CLI.",
+    description="Orchestration of rfidnav: the CLI, scenarios, node processes, the orchestrator, metrics, reports.",
     license="Apache-2.0",
-    entry_points={"console_scripts": [
-        "recorder = rfidnav_bringup.recorder_node:main",
-        "player = rfidnav_bringup.player_node:main",
-    ]},
 )

@@ -38,8 +38,8 @@ from rosgraph_msgs.msg import Clock
 from std_msgs.msg import Header
 from visualization_msgs.msg import Marker, MarkerArray
 
-from rfidnav_bringup.bags import bag_info, format_bag_info, message_definition, read_messages, read_raw, typestore
-from rfidnav_bringup.errors import BagError
+from rfidnav_bag.bags import bag_info, format_bag_info, message_definition, read_messages, read_raw, typestore
+from rfidnav_bag.errors import BagError
 from rfidnav_common.ros import message_class
 from rfidnav_common.ros import LATCHED_QOS
 from rfidnav_msgs.action import FollowTagRoute

@@ -7,7 +7,7 @@ import json
 
 import pytest
 
-from rfidnav_bringup.bench_llrp import bench_llrp
+from rfidnav_experiments.bench.llrp import bench_llrp
 
 STEP_KEYS = {"asked_reports_per_s", "sent_reports_per_s", "sent", "received", "lost", "latency_p50_ms",
              "latency_p99_ms", "latency_max_ms"}

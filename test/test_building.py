@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 import yaml
 
-from rfidnav_planning.topological_map import TopologicalMap, load_topological_map
+from rfidnav_common.topological_map import TopologicalMap, load_topological_map
 from rfidnav_sim.building import building_floor, main, write_world
 from rfidnav_sim.wall_tag_model import InductionArea, WallTag, WallTagReader
 from rfidnav_sim.world import load_world

@@ -238,10 +238,10 @@ def test_swap_to_an_unknown_executable_is_a_config_error_naming_the_option(confi
 
 
 def test_swap_resolves_the_replacement_and_keeps_a_command_line(config: Path):
-    scenario = load_scenario(str(config / SCENARIO), swaps={"rfid_reader": "rfidnav_bringup:player",
+    scenario = load_scenario(str(config / SCENARIO), swaps={"rfid_reader": "rfidnav_bag:player",
                                                             "heading_controller": "true --flag"})
     reader, controller = scenario.nodes["rfid_reader"], scenario.nodes["heading_controller"]
-    assert reader.command == tuple(resolve_executable("rfidnav_bringup", "player"))
+    assert reader.command == tuple(resolve_executable("rfidnav_bag", "player"))
     assert reader.param_files
     assert (controller.package, controller.command, controller.param_files) == (None, ("true", "--flag"), ())
 

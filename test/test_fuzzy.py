@@ -15,10 +15,10 @@ from rfidnav_control.fuzzy import (
     FuzzyHeadingController,
     FuzzyHeadingSpec,
     FuzzySet,
-    benchmark,
     paper_spec,
     reference_controller,
 )
+from rfidnav_experiments.bench.fuzzy import benchmark
 
 # skfuzzy 0.5.0 calls np.maximum(a, b, out) positionally, which numpy 2.4 deprecates; not ours to fix.
 pytestmark = pytest.mark.filterwarnings("ignore:Passing more than 2 positional arguments:DeprecationWarning")

@@ -17,7 +17,7 @@ import pytest
 from mcap.reader import make_reader
 from mcap_ros2.decoder import DecoderFactory
 
-from rfidnav_bringup.bags import bag_info, read_messages
+from rfidnav_bag.bags import bag_info, read_messages
 from rfidnav_bringup.report import run_metrics
 
 WORKSPACE = Path(__file__).resolve().parents[1]

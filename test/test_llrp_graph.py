@@ -11,7 +11,7 @@ import pytest
 from llrpkit.emulator.core import EmulatedTag, LLRPEmulator
 from llrpkit.protocol import messages
 
-from rfidnav_bringup.bags import read_messages
+from rfidnav_bag.bags import read_messages
 from test_graph import WORKSPACE, run_scenario
 from test_llrp_reader import EmulatorLoop
 

@@ -123,7 +123,7 @@ def test_a_missing_or_corrupt_database_is_one_error_naming_the_file(graph: Graph
 
 
 def test_the_latency_bench_runs_the_server_in_its_own_process_and_reports_percentiles() -> None:
-    from rfidnav_bringup.bench_location import benchmark
+    from rfidnav_experiments.bench.location_server import benchmark
 
     figures = benchmark(requests=20)
     assert figures["requests"] == 20 and figures["fingerprints"] == 96

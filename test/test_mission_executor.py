@@ -12,7 +12,7 @@ import pytest
 from rfidnav_planning.mission_executor import (BACK, FOLLOW, JUNCTION_CENTRE, LEFT, NO_OPENING, OBSTACLE, RIGHT,
                                                STOP, STRAIGHT, TURN_DONE, TURNS, Decision, FollowerCommand,
                                                LearnedEdge, MissionExecutor)
-from rfidnav_planning.topological_map import (DIRECTIONS, UNKNOWN, Hallway, Node, RouteError, TopologicalMap,
+from rfidnav_common.topological_map import (DIRECTIONS, UNKNOWN, Hallway, Node, RouteError, TopologicalMap,
                                               load_topological_map, opposite)
 
 MAPS = Path(__file__).resolve().parents[1] / "config" / "maps"

@@ -28,8 +28,8 @@ from rosbags.rosbag2 import StoragePlugin, Writer
 from rosgraph_msgs.msg import Clock as ClockMsg
 from std_srvs.srv import Trigger
 
-from rfidnav_bringup.bags import message_definition
-from rfidnav_bringup.player_node import PlayerNode
+from rfidnav_bag.bags import message_definition
+from rfidnav_bag.player_node import PlayerNode
 from rfidnav_common.geometry import yaw_to_quaternion
 from rfidnav_common.ros import COMMAND_QOS, SENSOR_QOS, time_msg
 from rfidnav_control.heading_controller_node import HeadingControllerNode

@@ -107,8 +107,8 @@ def test_the_floor_antennas_read_exactly_the_lattice_tags_within_r(layout: str, 
 
 
 def test_reader_benchmark_reads_a_huge_described_floor() -> None:
-    from rfidnav_sim.rfid_model import lattice_benchmark
-    figures = lattice_benchmark(rounds=50)
+    from rfidnav_experiments.bench.planner import reader_round_benchmark
+    figures = reader_round_benchmark(rounds=50)
     assert figures["reader_tags"] > 860_000
     # At r = 2 cm and side r*sqrt(3) every point is read by 1 to 3 tags, about 1.2 on average.
     assert 1.0 <= figures["reader_tags_per_round"] <= 3.0

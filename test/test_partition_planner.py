@@ -9,7 +9,8 @@ import pytest
 
 from rfidnav_common.tag_lattice import Deployment, make_deployment, partition_centre, partitions_along_segment
 from rfidnav_planning.errors import PlanningError
-from rfidnav_planning.partition_planner import PartitionPlan, benchmark, plan_partition_path
+from rfidnav_experiments.bench.planner import planning_benchmark
+from rfidnav_planning.partition_planner import PartitionPlan, plan_partition_path
 
 # A 5 x 5 m field straddling the origin, so negative lattice coordinates are exercised too.
 FIELD = (-1.0, -2.0, 4.0, 3.0)
@@ -161,7 +162,7 @@ def test_plan_is_frozen_and_compares_by_value() -> None:
 
 
 def test_benchmark_reports_figures_with_units() -> None:
-    figures = benchmark(plans=3, seed=2)
+    figures = planning_benchmark(plans=3, seed=2)
     assert set(figures) == {"field_m", "read_range_m", "tags", "plans", "mean_ms", "p50_ms", "p99_ms",
                             "max_ms", "mean_partitions"}
     assert figures["plans"] == 3 and figures["field_m"] == 30.0 and figures["read_range_m"] == 0.02

@@ -57,7 +57,7 @@ from rclpy.node import Node
 from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
 from std_srvs.srv import Trigger
 
-from rfidnav_bringup.bags import bag_info, read_messages
+from rfidnav_bag.bags import bag_info, read_messages
 from rfidnav_bringup.processes import DomainLease, NodeProcess, resolve_executable
 from rfidnav_common.config import parameters_from_mapping
 from rfidnav_control.fuzzy import FuzzyHeadingController
@@ -211,7 +211,7 @@ def replay_controller(run_dir: Path, logs: Path, params_file: Path | None = None
     lease = DomainLease()
     env = dict(os.environ, ROS_DOMAIN_ID=str(lease.domain_id), ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST",
                PYTHONUNBUFFERED="1", RCUTILS_COLORIZED_OUTPUT="0")
-    player = NodeProcess("player", resolve_executable("rfidnav_bringup", "player") + [
+    player = NodeProcess("player", resolve_executable("rfidnav_bag", "player") + [
         "--ros-args", "-p", f"bag:={bag}", "-p", 'topics:=["/clock", "/rfid/reads"]',
         "-p", f"rate:={PLAYBACK_RATE}", "-p", "start_paused:=true",
         # Only the controller subscribes to these (the probe runs on the wall clock): playback waits for it.

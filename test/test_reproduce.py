@@ -13,8 +13,8 @@ from pathlib import Path
 
 import pytest
 
-from rfidnav_bringup.experiments import controller_parameters, run_tag_route
-from rfidnav_bringup.reproduce import PARAM_SETS, SCENARIOS, params_file, reproduce_flc
+from rfidnav_experiments.runners.tag_route import controller_parameters, run_tag_route
+from rfidnav_experiments.reproduce.flc import PARAM_SETS, SCENARIOS, params_file, reproduce_flc
 from rfidnav_bringup.scenario import load_scenario
 
 ROW_KEYS = {"experiment", "setting", "metric", "ours", "paper"}

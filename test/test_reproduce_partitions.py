@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from rfidnav_bringup import reproduce_partitions as rp
+from rfidnav_experiments.reproduce import partitions as rp
 from rfidnav_localization.partition_localization import LocalizerSettings
 
 

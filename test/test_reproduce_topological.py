@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from rfidnav_bringup.reproduce_topological import MISS_RATES, reproduce_topological
+from rfidnav_experiments.reproduce.topological import MISS_RATES, reproduce_topological
 from rfidnav_common.errors import ConfigError
 
 

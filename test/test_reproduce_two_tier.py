@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from rfidnav_bringup.reproduce_two_tier import reproduce_two_tier
+from rfidnav_experiments.reproduce.two_tier import reproduce_two_tier
 from rfidnav_common.errors import ConfigError
 
 WORKSPACE = Path(__file__).resolve().parents[1]

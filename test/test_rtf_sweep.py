@@ -6,7 +6,7 @@ import json
 
 import pytest
 
-from rfidnav_bringup.rtf_sweep import SweepRow, highest_usable_rtf, report
+from rfidnav_experiments.bench.rtf import SweepRow, highest_usable_rtf, report
 
 
 def row(rtf: float, rmse_cm: float | None, success: bool = True) -> SweepRow:

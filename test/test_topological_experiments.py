@@ -1,13 +1,13 @@
-"""In-process topological navigation (paper 004): rfidnav_bringup.topological_experiments."""
+"""In-process topological navigation (paper 004): rfidnav_experiments.runners.topological."""
 
 import math
 
 import numpy as np
 import pytest
 
-from rfidnav_bringup.topological_experiments import (FIG5_MAP, FIG5_WORLD, centre_sonar, mounting_offsets,
+from rfidnav_experiments.runners.topological import (FIG5_MAP, FIG5_WORLD, centre_sonar, mounting_offsets,
                                                      paper_run, random_missions, run_mission, start_pose_for)
-from rfidnav_planning.topological_map import load_topological_map
+from rfidnav_common.topological_map import load_topological_map
 from rfidnav_sim.world import load_world
 
 

@@ -9,11 +9,10 @@ from pathlib import Path
 import networkx as nx
 import pytest
 
-from rfidnav_common.errors import ConfigError
-from rfidnav_planning.errors import PlanningError
-from rfidnav_planning.topological_map import (DIRECTIONS, UNKNOWN, Hallway, NextAction, Node, RouteError,
-                                              TopologicalMap, check_map, draw_map, load_topological_map,
-                                              next_action, turn)
+from rfidnav_bringup.report import draw_map
+from rfidnav_common.errors import ConfigError, RfidnavError
+from rfidnav_common.topological_map import (DIRECTIONS, UNKNOWN, Hallway, NextAction, Node, RouteError,
+                                            TopologicalMap, check_map, load_topological_map, next_action, turn)
 
 MAPS = Path(__file__).resolve().parents[1] / "config" / "maps"
 
@@ -259,7 +258,7 @@ def test_unknown_hallways_are_not_routable(paper_map: TopologicalMap) -> None:
 def test_route_errors_name_the_node(paper_map: TopologicalMap) -> None:
     with pytest.raises(ValueError, match="unknown node 'zz'"):
         paper_map.route("a", "zz")
-    with pytest.raises(PlanningError, match="unknown node 'yy'"):
+    with pytest.raises(RfidnavError, match="unknown node 'yy'"):
         paper_map.route("yy", "a")
     with pytest.raises(ValueError, match="weight"):
         paper_map.route("a", "d", weight="time")

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from rfidnav_bringup.scenario import CONFIG_DIR
-from rfidnav_bringup.two_tier_experiments import Site, grid_radio_map, run_two_tier
+from rfidnav_experiments.runners.two_tier import Site, grid_radio_map, run_two_tier
 from rfidnav_control.go_to import GoToSettings, go_to_command
 from rfidnav_localization.dead_reckoning import TIER_TAG, TIER_WIFI, DeadReckoning, Fix
 from rfidnav_planning.two_tier_navigation import (DONE, LOCATE, MAPPING, TAG_MAP, TO_LANDMARK, Landmark, MapTag,

@@ -1,1 +1,1 @@
-"""Orchestration of rfidnav: scenarios, process runner, MCAP recorder and player, metrics, reports, experiments, CLI."""
+"""Orchestration of rfidnav: the CLI, scenarios, node processes, the orchestrator, metrics and reports."""

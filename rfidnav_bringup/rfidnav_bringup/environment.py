@@ -8,7 +8,9 @@ requirements file reinstalls the pins, a changed package manifest reinstalls the
 Steps: (1) create ``.venv``; (2) install ``requirements.txt`` under ``constraints.txt`` (ROS 2 Jazzy
 wheels from PyPI and everything else, transitive pins included); (3) build and install the
 ``rfidnav_msgs`` interface package with CMake into the venv; (4) install the ament_python packages
-in editable mode.
+in editable mode; (5) list them in the venv's ament resource index and link their share files (package.xml,
+and rfidnav_bringup's ``config``) from the sources, as ``colcon build --symlink-install`` does, so that code
+finds its configuration the same way in this workspace and in a colcon install.
 """
 
 from __future__ import annotations
@@ -22,7 +24,7 @@ import sysconfig
 from pathlib import Path
 
 PYTHON_PACKAGES = ("rfidnav_common", "rfidnav_sim", "rfidnav_control", "rfidnav_localization", "rfidnav_planning",
-                   "rfidnav_drivers", "rfidnav_bringup")
+                   "rfidnav_drivers", "rfidnav_bag", "rfidnav_bringup", "rfidnav_experiments")   # bottom up
 INTERFACE_PACKAGE = "rfidnav_msgs"
 
 
@@ -152,6 +154,28 @@ def ensure_packages(workspace: Path, stamps: Stamps, env: dict[str, str], say) -
     stamps.record("packages", value)
 
 
+SHARED_FILES = {"rfidnav_bringup": ("config",)}    # beyond package.xml: what a package installs to share/
+
+
+def link_shares(workspace: Path) -> None:
+    """The ament index entries and share links of step (5); cheap, so redone on every set-up."""
+    venv, _ = venv_paths(workspace)
+    index = venv / "share" / "ament_index" / "resource_index" / "packages"
+    index.mkdir(parents=True, exist_ok=True)
+    for pkg in PYTHON_PACKAGES:
+        (index / pkg).touch()
+        share = venv / "share" / pkg
+        share.mkdir(parents=True, exist_ok=True)
+        for name, source in [("package.xml", workspace / pkg / "package.xml"),
+                             *((name, workspace / name) for name in SHARED_FILES.get(pkg, ()))]:
+            link = share / name
+            if link.is_symlink() and link.resolve() == source.resolve():
+                continue
+            if link.is_symlink() or link.is_file():
+                link.unlink()
+            link.symlink_to(source)
+
+
 def set_up(workspace: Path, quiet: bool = False) -> None:
     def say(text: str) -> None:
         if not quiet:
@@ -164,6 +188,7 @@ def set_up(workspace: Path, quiet: bool = False) -> None:
     ensure_requirements(workspace, stamps, env, say)
     ensure_interfaces(workspace, stamps, env, say)
     ensure_packages(workspace, stamps, env, say)
+    link_shares(workspace)
 
 
 def main(argv: list[str] | None = None) -> int:

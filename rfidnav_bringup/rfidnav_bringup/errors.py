@@ -1,14 +1,8 @@
-"""Exceptions of rfidnav_bringup (orchestration, bags, reports)."""
+"""Exceptions of rfidnav_bringup (orchestration, scenarios, node processes)."""
 
 from __future__ import annotations
 
-from rfidnav_common.errors import ConfigError, RfidnavError
-
-__all__ = ["BagError", "ConfigError", "RfidnavError", "LaunchError", "ReadinessError"]
-
-
-class BagError(RfidnavError):
-    """A bag is missing, truncated, or not a rosbag2 MCAP directory rfidnav can read; names the path."""
+from rfidnav_common.errors import RfidnavError
 
 
 class LaunchError(RfidnavError):

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from rfidnav_planning.topological_map import RouteError, TopologicalMap
+from rfidnav_common.topological_map import RouteError, TopologicalMap
 
 FIRST_TAG_RADIUS_M = 0.01
 

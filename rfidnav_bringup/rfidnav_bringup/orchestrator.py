@@ -32,9 +32,11 @@ from rclpy.executors import Executor
 from rclpy.node import Node
 from std_srvs.srv import Trigger
 
-from rfidnav_bringup.errors import BagError, ReadinessError, RfidnavError
+from rfidnav_bag.errors import BagError
+from rfidnav_bringup.errors import ReadinessError
+from rfidnav_common.errors import RfidnavError
 from rfidnav_bringup.processes import DomainLease, NodeProcess, resolve_executable
-from rfidnav_bringup.recorder_node import recordable_definition
+from rfidnav_bag.recorder_node import recordable_definition
 from rfidnav_common.ros import events_executor, fill_message, interface_class
 from rfidnav_bringup.scenario import KNOWN_NODES, NodeSpec, Scenario, dump_parameters, injected_parameters, node_parameters
 
@@ -128,7 +130,7 @@ class Orchestrator:
         params_dir = self.run_dir / "params"
         params_dir.mkdir()
         if self.options.record:
-            command = resolve_executable("rfidnav_bringup", "recorder") + [
+            command = resolve_executable("rfidnav_bag", "recorder") + [
                 "--ros-args", "-p", f"output_dir:={self.run_dir / 'bag'}",
                 "-p", f"stamp_from_clock_topic:={str(self.scenario.simulated).lower()}"]
             if self.options.record_exclude:

@@ -54,13 +54,30 @@ class UnknownExecutableError(LaunchError):
         self.field = field
 
 
-def resolve_executable(package: str, executable: str) -> list[str]:
-    """The command for a node executable: ``<prefix>/lib/<package>/<executable>`` on any AMENT_PREFIX_PATH
-    entry (a colcon install), else the package's console_scripts entry point (an editable install).
-    An unknown package or executable is an :class:`UnknownExecutableError`."""
-    prefixes = [p for p in os.environ.get("AMENT_PREFIX_PATH", "").split(os.pathsep) if p] + [sys.prefix]
+def install_prefixes() -> list[Path]:
+    """Where installed packages are looked up, as ``ros2 run`` does: each AMENT_PREFIX_PATH entry (a colcon
+    install), then this Python's prefix (the workspace's .venv)."""
+    return [Path(p) for p in os.environ.get("AMENT_PREFIX_PATH", "").split(os.pathsep) if p] + [Path(sys.prefix)]
+
+
+def package_share(package: str) -> Path:
+    """``<prefix>/share/<package>`` of the first prefix whose ament resource index (REP 122) lists the package:
+    a colcon install, or the workspace's .venv where ``./rfidnav setup`` links the sources' share files.
+    An unknown package is an :class:`UnknownExecutableError` naming the prefixes searched."""
+    prefixes = install_prefixes()
     for prefix in prefixes:
-        candidate = Path(prefix) / "lib" / package / executable
+        if (prefix / "share" / "ament_index" / "resource_index" / "packages" / package).is_file():
+            return prefix / "share" / package
+    raise UnknownExecutableError("package", f"package '{package}' is in no ament index (searched "
+                                 f"{', '.join(map(str, prefixes))}); run ./rfidnav setup")
+
+
+def resolve_executable(package: str, executable: str) -> list[str]:
+    """The command for a node executable: ``<prefix>/lib/<package>/<executable>`` on any install prefix
+    (a colcon install), else the package's console_scripts entry point (an editable install).
+    An unknown package or executable is an :class:`UnknownExecutableError`."""
+    for prefix in install_prefixes():
+        candidate = prefix / "lib" / package / executable
         if candidate.is_file() and os.access(candidate, os.X_OK):
             return [str(candidate)]
     try:

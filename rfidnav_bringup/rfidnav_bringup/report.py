@@ -11,6 +11,7 @@ which compare against the truth, are not computed.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -18,14 +19,16 @@ import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+from matplotlib.figure import Figure  # noqa: E402
+import networkx as nx  # noqa: E402
 import numpy as np  # noqa: E402
 import yaml  # noqa: E402
 
-from rfidnav_bringup.bags import bag_info, read_messages  # noqa: E402
-from rfidnav_bringup.errors import BagError  # noqa: E402
+from rfidnav_bag.bags import bag_info, read_messages  # noqa: E402
+from rfidnav_bag.errors import BagError  # noqa: E402
 from rfidnav_bringup.metrics import (Fix, Trajectory, partition_metrics, topological_metrics,  # noqa: E402
                                      tracking_error, tracking_metrics, two_tier_metrics)
-from rfidnav_planning.topological_map import load_topological_map  # noqa: E402
+from rfidnav_common.topological_map import UNKNOWN, TopologicalMap, load_topological_map  # noqa: E402
 from rfidnav_sim.world import World, load_world  # noqa: E402
 
 STATUS_ACCEPTED, STATUS_EXECUTING = 1, 2
@@ -253,3 +256,79 @@ def write_report(path: Path) -> tuple[dict[str, float | int | None], list[Path]]
     figure.savefig(error_png, dpi=110, bbox_inches="tight")
     plt.close(figure)
     return metrics, [trajectory_png, error_png]
+
+
+# ---------------------------------------------------------------- topological maps (./rfidnav map draw)
+
+def draw_map(topological_map: TopologicalMap, path_png: Path | str) -> None:
+    """Draw the map to a PNG: nodes, hallways labelled at each end with the side and its arrival tags,
+    unmapped (``?``) hallways as dashed stubs, and a north arrow.
+
+    Nodes stand at their positions when every node has one, else one unit step per hallway in its compass
+    direction (relaxed by a spring layout where steps would stack nodes)."""
+    positions = _layout(topological_map)
+    edges = topological_map.edges()
+    drawn_lengths = sorted(math.dist(positions[e.node_a], positions[e.node_b]) for e in edges)
+    stub = 0.35 * (drawn_lengths[len(drawn_lengths) // 2] if drawn_lengths else 1.0)
+
+    figure = Figure(figsize=(10.0, 8.0))
+    axes = figure.add_subplot()
+    label_style = {"fontsize": 7, "ha": "center", "va": "center",
+                   "bbox": {"boxstyle": "round,pad=0.2", "facecolor": "white", "edgecolor": "none", "alpha": 0.85}}
+
+    def end_label(node: str, side: str, at: tuple[float, float]) -> None:
+        tags = topological_map.nodes[node].hallways[side].tags
+        axes.text(at[0], at[1], f"{side} {','.join(tags) or '-'}", **label_style)
+
+    for edge in edges:
+        (xa, ya), (xb, yb) = positions[edge.node_a], positions[edge.node_b]
+        axes.plot([xa, xb], [ya, yb], color="0.35", linewidth=2.0, zorder=1)
+        end_label(edge.node_a, edge.side_a, (xa + 0.3 * (xb - xa), ya + 0.3 * (yb - ya)))
+        end_label(edge.node_b, edge.side_b, (xb + 0.3 * (xa - xb), yb + 0.3 * (ya - yb)))
+    for node in topological_map.nodes.values():
+        for side, hallway in node.hallways.items():
+            if hallway.neighbour == UNKNOWN:
+                angle = topological_map.direction_angle_rad(side)
+                x, y = positions[node.name]
+                tip = (x + stub * math.cos(angle), y + stub * math.sin(angle))
+                axes.plot([x, tip[0]], [y, tip[1]], color="0.35", linewidth=1.5, linestyle="--", zorder=1)
+                axes.text(tip[0], tip[1], f"{side} ? {','.join(hallway.tags)}", **label_style)
+    for name, (x, y) in positions.items():
+        axes.scatter([x], [y], s=300, color="tab:blue", zorder=2)
+        axes.text(x, y, name, color="white", fontsize=8, fontweight="bold", ha="center", va="center", zorder=3)
+
+    north = math.radians(topological_map.north_deg)
+    axes.annotate("N", xy=(0.93, 0.08), xycoords="axes fraction", textcoords="offset points",
+                  xytext=(30.0 * math.cos(north), 30.0 * math.sin(north)), ha="center", va="center",
+                  fontweight="bold", arrowprops={"arrowstyle": "<-", "linewidth": 1.5})
+    axes.set_aspect("equal", adjustable="datalim")
+    axes.margins(0.12)
+    axes.set_title(f"{topological_map.name}: topological map (labels: side and arrival tags at each end)")
+    if all(node.position is not None for node in topological_map.nodes.values()):
+        axes.set_xlabel("x [m]")
+        axes.set_ylabel("y [m]")
+    else:
+        axes.set_axis_off()
+    figure.savefig(Path(path_png), dpi=110)
+
+
+def _layout(topological_map: TopologicalMap) -> dict[str, tuple[float, float]]:
+    nodes = topological_map.nodes.values()
+    if all(node.position is not None for node in nodes):
+        return {node.name: node.position for node in nodes if node.position is not None}
+    # One unit step per hallway in its compass direction keeps the map's turns in the drawing; only where those
+    # steps put two nodes on one spot (hallways of very different lengths) do springs pull the layout apart.
+    graph = topological_map.graph("edges")
+    steps: dict[str, tuple[float, float]] = {}
+    for first in topological_map.nodes:
+        if first in steps:
+            continue
+        steps[first] = (2.0 * len(steps), 0.0)
+        for parent, child in nx.bfs_edges(graph, first):
+            angle = topological_map.direction_angle_rad(topological_map.departure_direction(parent, child))
+            steps[child] = (steps[parent][0] + math.cos(angle), steps[parent][1] + math.sin(angle))
+    spots = {(round(x, 6), round(y, 6)) for x, y in steps.values()}
+    if len(spots) == len(steps):
+        return steps
+    layout = nx.spring_layout(graph, pos=steps, seed=0)
+    return {name: (float(x), float(y)) for name, (x, y) in layout.items()}

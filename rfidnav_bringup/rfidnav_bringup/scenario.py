@@ -18,7 +18,7 @@ from typing import Any
 
 import yaml
 
-from rfidnav_bringup.processes import UnknownExecutableError, resolve_executable
+from rfidnav_bringup.processes import UnknownExecutableError, package_share, resolve_executable
 from rfidnav_common.config import Section, node_parameter_section, parameters_from_mapping, typed_values
 from rfidnav_common.errors import ConfigError
 from rfidnav_control.parameters import HeadingControllerParameters, WallFollowerParameters
@@ -26,13 +26,13 @@ from rfidnav_drivers.parameters import CreateBaseParameters, LlrpReaderParameter
 from rfidnav_localization.parameters import LocationServerParameters, PartitionLocalizerParameters
 from rfidnav_planning.parameters import (MissionExecutorParameters, PartitionNavigatorParameters,
                                         TwoTierNavigatorParameters)
-from rfidnav_planning.topological_map import TopologicalMap, load_topological_map
+from rfidnav_common.topological_map import TopologicalMap, load_topological_map
 from rfidnav_common.robot_map import RouteMap, load_route_map
 from rfidnav_sim.parameters import (CompassParameters, ReaderParameters, RobotSimParameters, SonarParameters,
                                     WifiSimParameters)
 from rfidnav_sim.world import World, load_world
 
-CONFIG_DIR = Path(__file__).resolve().parents[2] / "config"
+CONFIG_DIR = package_share("rfidnav_bringup") / "config"   # installed with the package, or linked by set-up
 SCENARIO_DIR = CONFIG_DIR / "scenarios"
 ROBOT_DIR = CONFIG_DIR / "robots"
 

@@ -23,7 +23,6 @@ from __future__ import annotations
 import bisect
 import math
 import numbers
-import time
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -535,35 +534,3 @@ class FuzzyHeadingController:
         cell = np.minimum(node_index, self._starts_array.size - 1)
         interpolated = self._starts_array[cell] + (x - nodes[cell]) * self._slopes_array[cell]
         return np.where(x == nodes[node_index], self._node_values_array[node_index], interpolated)
-
-
-def benchmark(spec: FuzzyHeadingSpec | None = None, evaluations: int = 2000, seed: int = 0) -> dict[str, float]:
-    """Mean microseconds per scalar evaluation: scikit-fuzzy simulation versus :class:`FuzzyHeadingController`.
-
-    Both run over the same seeded uniform inputs on the input universe. The reference loop is
-    ``sim.input[...] = x; sim.compute(); sim.output[...]`` on one ``ControlSystemSimulation`` built beforehand;
-    the fast loop calls the controller (built beforehand) and repeats the inputs until at least 100,000 calls
-    so that timer resolution does not matter.
-    """
-    spec = spec if spec is not None else paper_spec()
-    if evaluations < 1:
-        raise ControlError(f"benchmark: evaluations must be >= 1, got {evaluations}")
-    inputs = np.random.default_rng(seed).uniform(-spec.input_range, spec.input_range, evaluations).tolist()
-
-    simulation = _reference_simulation(spec)
-    start = time.perf_counter()
-    for x in inputs:
-        simulation.input[INPUT_LABEL] = x
-        simulation.compute()
-        simulation.output.get(OUTPUT_LABEL, 0.0)
-    reference_us = (time.perf_counter() - start) / evaluations * 1e6
-
-    controller = FuzzyHeadingController(spec)
-    repeats = max(1, math.ceil(100_000 / evaluations))
-    start = time.perf_counter()
-    for _ in range(repeats):
-        for x in inputs:
-            controller(x)
-    fast_us = (time.perf_counter() - start) / (repeats * evaluations) * 1e6
-
-    return {"reference_us": reference_us, "fast_us": fast_us, "speedup": reference_us / fast_us}

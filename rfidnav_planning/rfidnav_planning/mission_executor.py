@@ -50,7 +50,7 @@ from __future__ import annotations
 from collections.abc import Iterable
 from dataclasses import dataclass, field, replace
 
-from rfidnav_planning.topological_map import DIRECTIONS, UNKNOWN, WEIGHTS, RouteError, TopologicalMap, opposite, turn
+from rfidnav_common.topological_map import DIRECTIONS, UNKNOWN, WEIGHTS, RouteError, TopologicalMap, opposite, turn
 
 LEFT, RIGHT, STRAIGHT, BACK, STOP, FOLLOW = "left", "right", "straight", "back", "stop", "follow"
 TURNS = (LEFT, RIGHT, STRAIGHT, BACK)                 # the actions WallFollower.command_turn takes

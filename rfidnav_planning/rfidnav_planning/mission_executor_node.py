@@ -27,7 +27,7 @@ from rfidnav_msgs.action import NavigateToNode
 from rfidnav_msgs.msg import TagReadArray, WallFollowerCommand, WallFollowerEvent
 from rfidnav_planning.mission_executor import EVENTS, FOLLOW, STOP, Decision, MissionExecutor
 from rfidnav_planning.parameters import MissionExecutorParameters
-from rfidnav_planning.topological_map import load_topological_map
+from rfidnav_common.topological_map import load_topological_map
 
 STOPPED = "stopped"                       # the wall follower's event when a stop is done
 IDLE = "idle"                             # the wall follower's state with no drive to follow

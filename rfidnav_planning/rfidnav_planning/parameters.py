@@ -11,7 +11,7 @@ from dataclasses import dataclass
 from rfidnav_common.config import param, require_positive
 from rfidnav_control.go_to import GoToSettings
 from rfidnav_planning.partition_navigation import NavigatorSettings
-from rfidnav_planning.topological_map import WEIGHTS
+from rfidnav_common.topological_map import WEIGHTS
 from rfidnav_planning.two_tier_navigation import TwoTierSettings
 
 
@@ -96,7 +96,7 @@ class TwoTierNavigatorParameters:
 class MissionExecutorParameters:
     """mission_executor (paper 004); config/params/mission_executor.yaml documents them."""
 
-    map_file: str = param("topological map YAML (rfidnav_planning.topological_map)", "")
+    map_file: str = param("topological map YAML (rfidnav_common.topological_map)", "")
     weight: str = param("routes: shortest by hallway lengths (length: length_m, else between positions, else 1 m) "
                         "or fewest hallways (edges)", "length")
     recover_missed_tags: bool = param("ours: a junction passed without its tag is taken to be the node the route "

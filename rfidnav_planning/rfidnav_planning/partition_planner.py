@@ -46,14 +46,12 @@ O(length / side) work for a segment, independent of the size of the field.
 from __future__ import annotations
 
 import math
-import time
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from rfidnav_common.geometry import point_segment_distance
-from rfidnav_common.tag_lattice import (Coordinate, Deployment, Lattice, disc_intervals, make_deployment,
-                                       partition_centre)
+from rfidnav_common.tag_lattice import Coordinate, Deployment, Lattice, disc_intervals, partition_centre
 from rfidnav_planning.errors import PlanningError
 
 Point = tuple[float, float]
@@ -283,30 +281,3 @@ def _check_request(deployment: Deployment, start: Point, goal: Point) -> None:
         if not deployment.contains_point(float(point[0]), float(point[1])):
             raise PlanningError(f"{name} ({point[0]}, {point[1]}) lies outside the deployment area "
                                 f"[x_min, y_min, x_max, y_max] = {list(deployment.area)}")
-
-
-# ---------------------------------------------------------------------------------------- benchmark
-
-BENCHMARK_FIELD_M = 30.0
-BENCHMARK_READ_RANGE_M = 0.02
-
-
-def benchmark(plans: int = 200, seed: int = 1) -> dict[str, float]:
-    """Plan ``plans`` random segments (uniform start and goal) in a 30 x 30 m triangular field at r = 2 cm
-    (about 870,000 tags); planning times in milliseconds."""
-    deployment = make_deployment("triangular", BENCHMARK_READ_RANGE_M,
-                                 (0.0, 0.0, BENCHMARK_FIELD_M, BENCHMARK_FIELD_M))
-    rng = np.random.default_rng(seed)
-    endpoints = rng.uniform(0.0, BENCHMARK_FIELD_M, size=(plans, 2, 2))
-    times_ms, partition_counts = [], []
-    for start, goal in endpoints:
-        began = time.perf_counter()
-        plan = plan_partition_path(deployment, (float(start[0]), float(start[1])), (float(goal[0]), float(goal[1])))
-        times_ms.append((time.perf_counter() - began) * 1e3)
-        partition_counts.append(len(plan.partitions))
-    times = np.array(times_ms)
-    return {"field_m": BENCHMARK_FIELD_M, "read_range_m": BENCHMARK_READ_RANGE_M,
-            "tags": deployment.tag_count(), "plans": plans,
-            "mean_ms": float(times.mean()), "p50_ms": float(np.percentile(times, 50)),
-            "p99_ms": float(np.percentile(times, 99)), "max_ms": float(times.max()),
-            "mean_partitions": float(np.mean(partition_counts))}

@@ -32,7 +32,7 @@ from pathlib import Path
 
 import numpy as np
 
-from rfidnav_planning.topological_map import DIRECTIONS, UNKNOWN, TopologicalMap, load_topological_map
+from rfidnav_common.topological_map import DIRECTIONS, UNKNOWN, TopologicalMap, load_topological_map
 from rfidnav_sim.wall_tag_model import WallTag
 
 DEAD_END_M = 3.0            # corridor length of a "?" hallway beyond its junction square

@@ -192,22 +192,3 @@ class ReaderSimulator:
                          + np.array([model.antennas[a].phase_offset_rad for a in antenna_index]))
         return self.reads_of([self.tag_ids[t] for t in tag_index], antenna_index, d, phase_offsets,
                              rssi[antenna_index, tag_index], frequency)
-
-
-def lattice_benchmark(rounds: int = 2000, seed: int = 1) -> dict[str, float]:
-    """Inventory rounds of one downward antenna over a 30 x 30 m triangular floor at r = 2 cm (868,367 tags,
-    described, never listed), at random poses: the cost of "which tags are within r of this antenna"."""
-    import time
-
-    from rfidnav_common.tag_lattice import make_deployment
-
-    deployment = make_deployment("triangular", 0.02, (0.0, 0.0, 30.0, 30.0))
-    model = ReaderModel(antennas=(Antenna(1, (0.0, 0.0, 0.05), False, 0.1, math.radians(60.0)),),
-                        channels_hz=(915.25e6,))
-    simulator = ReaderSimulator(model, [], np.empty((0, 3)), np.empty(0), np.random.default_rng(seed), (deployment,))
-    poses = np.random.default_rng(seed).uniform((0.0, 0.0, -math.pi), (30.0, 30.0, math.pi), (rounds, 3))
-    started = time.perf_counter()
-    tags_read = sum(len(simulator.inventory(x, y, yaw, 0.0)) for x, y, yaw in poses)
-    elapsed = time.perf_counter() - started
-    return {"reader_tags": deployment.tag_count(), "reader_rounds": rounds,
-            "reader_round_us": 1e6 * elapsed / rounds, "reader_tags_per_round": tags_read / rounds}

@@ -1,4 +1,4 @@
-"""``./rfidnav reproduce topological``: paper 004, in-process (rfidnav_bringup.topological_experiments).
+"""``./rfidnav reproduce topological``: paper 004, in-process (rfidnav_experiments.runners.topological).
 
 * The paper's run (section 5): from before tag 23 to tag 19 with a right turn, a 1.6 m passage, about 8 m.
 * 100 missions between random (start tag, goal node) pairs on the 25-junction floor at tag read-miss
@@ -24,8 +24,8 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from rfidnav_bringup.reproduce import progress, save, table  # noqa: E402
-from rfidnav_bringup.topological_experiments import MissionRun, paper_run, random_missions  # noqa: E402
+from rfidnav_experiments.reproduce.tables import progress, save, table  # noqa: E402
+from rfidnav_experiments.runners.topological import MissionRun, paper_run, random_missions  # noqa: E402
 from rfidnav_common.errors import ConfigError  # noqa: E402
 
 MISS_RATES = (0.0, 0.1, 0.2, 0.3)

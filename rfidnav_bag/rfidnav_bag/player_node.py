@@ -38,8 +38,9 @@ from builtin_interfaces.msg import Time
 from rosgraph_msgs.msg import Clock as ClockMsg
 from std_srvs.srv import Trigger
 
-from rfidnav_bringup.bags import BagInfo, RawMessage, TopicInfo, bag_info, read_raw
-from rfidnav_bringup.errors import BagError, ConfigError
+from rfidnav_bag.bags import BagInfo, RawMessage, TopicInfo, bag_info, read_raw
+from rfidnav_bag.errors import BagError
+from rfidnav_common.errors import ConfigError
 from rfidnav_common.ros import declare_parameters, message_class, run_node
 from rfidnav_common.config import param
 

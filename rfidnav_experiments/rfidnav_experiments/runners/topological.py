@@ -27,7 +27,7 @@ from rfidnav_bringup.scenario import CONFIG_DIR
 from rfidnav_control.wall_following import (JUNCTION_CENTRE, NO_OPENING, OBSTACLE, STOPPED, TURN_DONE, OdomPose,
                                             Sonar, WallFollower, WallFollowerSettings)
 from rfidnav_planning.mission_executor import STOP, TURNS, Decision, MissionExecutor
-from rfidnav_planning.topological_map import UNKNOWN, TopologicalMap, load_topological_map, opposite
+from rfidnav_common.topological_map import UNKNOWN, TopologicalMap, load_topological_map, opposite
 from rfidnav_sim.sonar_model import PAPER_LAYOUT, SonarModel
 from rfidnav_sim.wall_tag_model import InductionArea, WallTagReader
 from rfidnav_sim.world import World, load_world

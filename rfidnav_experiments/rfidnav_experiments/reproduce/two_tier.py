@@ -33,9 +33,9 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from rfidnav_bringup.reproduce import save, table  # noqa: E402
+from rfidnav_experiments.reproduce.tables import save, table  # noqa: E402
 from rfidnav_bringup.scenario import CONFIG_DIR  # noqa: E402
-from rfidnav_bringup.two_tier_experiments import (Site, floor_extent, grid_radio_map, robot_survey,  # noqa: E402
+from rfidnav_experiments.runners.two_tier import (Site, floor_extent, grid_radio_map, robot_survey,  # noqa: E402
                                                   run_two_tier)
 from rfidnav_common.errors import ConfigError  # noqa: E402
 from rfidnav_common.robot_map import load_route_map  # noqa: E402

@@ -55,8 +55,7 @@ from typing import Any, NamedTuple
 import networkx as nx
 
 from rfidnav_common.config import Section, type_name
-from rfidnav_common.errors import ConfigError
-from rfidnav_planning.errors import PlanningError
+from rfidnav_common.errors import ConfigError, RfidnavError
 
 DIRECTIONS: tuple[str, ...] = ("N", "E", "S", "W")   # clockwise, so one step along the tuple is a right turn
 UNKNOWN = "?"
@@ -73,7 +72,7 @@ _POSITION_TOLERANCE_DEG = 45.0                        # beyond this a hallway po
 _LENGTH_TOLERANCE_M = 1e-6
 
 
-class RouteError(PlanningError, ValueError):
+class RouteError(RfidnavError, ValueError):
     """No route: an unknown node or tag, or no mapped hallways between start and goal."""
 
 
@@ -175,7 +174,7 @@ class TopologicalMap:
             if name not in self.nodes:
                 raise RouteError(f"map '{self.name}': unknown node '{name}' (nodes: {', '.join(self.nodes)})")
         try:
-            return nx.shortest_path(self._graph(weight), start, goal, weight="weight")
+            return nx.shortest_path(self.graph(weight), start, goal, weight="weight")
         except nx.NetworkXNoPath:
             raise RouteError(f"map '{self.name}': no route from '{start}' to '{goal}' through mapped hallways "
                              f"('{UNKNOWN}' hallways are not routable)") from None
@@ -193,7 +192,8 @@ class TopologicalMap:
     def _weight(self, node: str, side: str, weight: str) -> float:
         return 1.0 if weight == "edges" else self.hallway_length_m(node, side)
 
-    def _graph(self, weight: str) -> nx.Graph:
+    def graph(self, weight: str) -> nx.Graph:
+        """The mapped hallways as a graph whose edge weights are ``weight`` (the cheapest of parallel hallways)."""
         graph = nx.Graph()
         graph.add_nodes_from(self.nodes)
         for edge in self.edges():
@@ -243,83 +243,6 @@ def load_topological_map(path: Path | str) -> TopologicalMap:
 def check_map(path: Path | str) -> list[str]:
     """Every problem of a map file, one line each (``file: field: problem``); empty for a good map."""
     return [str(problem) for problem in _read(Path(path))[1]]
-
-
-def draw_map(topological_map: TopologicalMap, path_png: Path | str) -> None:
-    """Draw the map to a PNG: nodes, hallways labelled at each end with the side and its arrival tags,
-    unmapped (``?``) hallways as dashed stubs, and a north arrow.
-
-    Nodes stand at their positions when every node has one, else one unit step per hallway in its compass
-    direction (relaxed by a spring layout where steps would stack nodes)."""
-    # matplotlib is imported here so that nodes that only route do not pay for it at start-up.
-    from matplotlib.figure import Figure
-
-    positions = _layout(topological_map)
-    edges = topological_map.edges()
-    drawn_lengths = sorted(math.dist(positions[e.node_a], positions[e.node_b]) for e in edges)
-    stub = 0.35 * (drawn_lengths[len(drawn_lengths) // 2] if drawn_lengths else 1.0)
-
-    figure = Figure(figsize=(10.0, 8.0))
-    axes = figure.add_subplot()
-    label_style = {"fontsize": 7, "ha": "center", "va": "center",
-                   "bbox": {"boxstyle": "round,pad=0.2", "facecolor": "white", "edgecolor": "none", "alpha": 0.85}}
-
-    def end_label(node: str, side: str, at: tuple[float, float]) -> None:
-        tags = topological_map.nodes[node].hallways[side].tags
-        axes.text(at[0], at[1], f"{side} {','.join(tags) or '-'}", **label_style)
-
-    for edge in edges:
-        (xa, ya), (xb, yb) = positions[edge.node_a], positions[edge.node_b]
-        axes.plot([xa, xb], [ya, yb], color="0.35", linewidth=2.0, zorder=1)
-        end_label(edge.node_a, edge.side_a, (xa + 0.3 * (xb - xa), ya + 0.3 * (yb - ya)))
-        end_label(edge.node_b, edge.side_b, (xb + 0.3 * (xa - xb), yb + 0.3 * (ya - yb)))
-    for node in topological_map.nodes.values():
-        for side, hallway in node.hallways.items():
-            if hallway.neighbour == UNKNOWN:
-                angle = topological_map.direction_angle_rad(side)
-                x, y = positions[node.name]
-                tip = (x + stub * math.cos(angle), y + stub * math.sin(angle))
-                axes.plot([x, tip[0]], [y, tip[1]], color="0.35", linewidth=1.5, linestyle="--", zorder=1)
-                axes.text(tip[0], tip[1], f"{side} ? {','.join(hallway.tags)}", **label_style)
-    for name, (x, y) in positions.items():
-        axes.scatter([x], [y], s=300, color="tab:blue", zorder=2)
-        axes.text(x, y, name, color="white", fontsize=8, fontweight="bold", ha="center", va="center", zorder=3)
-
-    north = math.radians(topological_map.north_deg)
-    axes.annotate("N", xy=(0.93, 0.08), xycoords="axes fraction", textcoords="offset points",
-                  xytext=(30.0 * math.cos(north), 30.0 * math.sin(north)), ha="center", va="center",
-                  fontweight="bold", arrowprops={"arrowstyle": "<-", "linewidth": 1.5})
-    axes.set_aspect("equal", adjustable="datalim")
-    axes.margins(0.12)
-    axes.set_title(f"{topological_map.name}: topological map (labels: side and arrival tags at each end)")
-    if all(node.position is not None for node in topological_map.nodes.values()):
-        axes.set_xlabel("x [m]")
-        axes.set_ylabel("y [m]")
-    else:
-        axes.set_axis_off()
-    figure.savefig(Path(path_png), dpi=110)
-
-
-def _layout(topological_map: TopologicalMap) -> dict[str, tuple[float, float]]:
-    nodes = topological_map.nodes.values()
-    if all(node.position is not None for node in nodes):
-        return {node.name: node.position for node in nodes if node.position is not None}
-    # One unit step per hallway in its compass direction keeps the map's turns in the drawing; only where those
-    # steps put two nodes on one spot (hallways of very different lengths) do springs pull the layout apart.
-    graph = topological_map._graph("edges")
-    steps: dict[str, tuple[float, float]] = {}
-    for first in topological_map.nodes:
-        if first in steps:
-            continue
-        steps[first] = (2.0 * len(steps), 0.0)
-        for parent, child in nx.bfs_edges(graph, first):
-            angle = topological_map.direction_angle_rad(topological_map.departure_direction(parent, child))
-            steps[child] = (steps[parent][0] + math.cos(angle), steps[parent][1] + math.sin(angle))
-    spots = {(round(x, 6), round(y, 6)) for x, y in steps.values()}
-    if len(spots) == len(steps):
-        return steps
-    layout = nx.spring_layout(graph, pos=steps, seed=0)
-    return {name: (float(x), float(y)) for name, (x, y) in layout.items()}
 
 
 def _check_weight(weight: str) -> None:

@@ -29,7 +29,7 @@ from rosbags.typesys import Stores, TypesysError, get_types_from_idl, get_types_
 from rosbags.typesys.store import Typestore
 from ruamel.yaml import YAML, YAMLError
 
-from rfidnav_bringup.errors import BagError
+from rfidnav_bag.errors import BagError
 
 __all__ = [
     "BagInfo", "OfferedQos", "RawMessage", "TopicInfo", "bag_info", "format_bag_info", "message_definition",

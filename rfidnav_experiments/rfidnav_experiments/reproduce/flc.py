@@ -2,7 +2,7 @@
 
 Runs the paper-faithful controller (config/params/flc_paper.yaml) and ours (flc_tuned.yaml) on the
 four scenarios of the paper (straight line from 90 and 0 degrees, the acute-angle path, the hallway)
-for seeds 1..N with :func:`rfidnav_bringup.experiments.run_tag_route` (no DDS, so hundreds of runs
+for seeds 1..N with :func:`rfidnav_experiments.runners.tag_route.run_tag_route` (no DDS, so hundreds of runs
 take minutes), then reports:
 
 * a table per scenario: the paper's RMSE, ours for both parameter sets (mean +- sd over the
@@ -35,10 +35,11 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 from rfidnav_common.errors import ConfigError  # noqa: E402
-from rfidnav_bringup.experiments import (RouteRun, controller_parameters, role_parameters,  # noqa: E402
+from rfidnav_experiments.runners.tag_route import (RouteRun, controller_parameters, role_parameters,  # noqa: E402
                                          run_tag_route, tag_points)
 from rfidnav_bringup.metrics import FIRST_TAG_RADIUS_M, tracking_error  # noqa: E402
 from rfidnav_bringup.scenario import CONFIG_DIR, Scenario, load_scenario  # noqa: E402
+from rfidnav_experiments.reproduce.tables import mean_or_none, progress, save, table  # noqa: E402
 
 EXPERIMENT = "flc"
 PARAM_SETS = ("flc_paper", "flc_tuned")
@@ -143,27 +144,7 @@ def run_all(seeds: int) -> dict[tuple[str, str], list[RouteRun]]:
     return {key: sorted(runs, key=lambda run: run.seed) for key, runs in results.items()}
 
 
-def progress(line: str, final: bool) -> None:
-    # One overwritten line on a terminal; in a log only the final line, not hundreds.
-    if sys.stderr.isatty():
-        print(f"\r\033[K{line}", end="\n" if final else "", file=sys.stderr, flush=True)
-    elif final:
-        print(line, file=sys.stderr, flush=True)
-
-
 # ----------------------------------------------------------------------------------------- aggregate
-
-def save(figure: plt.Figure, path: Path, dpi: int) -> Path:
-    """Lay out, write and close a reproduction's figure."""
-    figure.tight_layout()
-    figure.savefig(path, dpi=dpi)
-    plt.close(figure)
-    return path
-
-
-def mean_or_none(values: list[float]) -> float | None:
-    return statistics.fmean(values) if values else None
-
 
 def summarise(params: str, scenario: str, runs: list[RouteRun]) -> Summary:
     ok = [run for run in runs if run.success and run.metrics.tracking_rmse_m is not None]
@@ -209,12 +190,6 @@ def _cm_sd(summary: Summary) -> str:
         return "no success"
     sd = "" if summary.rmse_sd_m is None else f" ± {summary.rmse_sd_m * 100:.2f}"
     return f"{summary.rmse_mean_m * 100:.2f}{sd}"
-
-
-def table(header: list[str], rows: list[list[str]]) -> list[str]:
-    widths = [max(len(cell) for cell in column) for column in zip(header, *rows)]
-    line = lambda cells: "  ".join(cell.ljust(width) for cell, width in zip(cells, widths)).rstrip()  # noqa: E731
-    return [line(header), line(["-" * width for width in widths]), *(line(row) for row in rows)]
 
 
 def noise_model() -> str:

@@ -41,8 +41,9 @@ from rclpy.subscription import Subscription
 from rosbags.interfaces import Connection, Qos, QosDurability, QosHistory, QosLiveliness, QosReliability, QosTime
 from rosbags.rosbag2 import StoragePlugin, Writer, WriterError
 
-from rfidnav_bringup.bags import message_definition, register_installed_type
-from rfidnav_bringup.errors import BagError, ConfigError
+from rfidnav_bag.bags import message_definition, register_installed_type
+from rfidnav_bag.errors import BagError
+from rfidnav_common.errors import ConfigError
 from rfidnav_common.config import param
 from rfidnav_common.ros import declare_parameters, events_executor, message_class, run_node
 

@@ -1,0 +1,22 @@
+from setuptools import find_packages, setup
+
+package_name = "rfidnav_bag"
+
+setup(
+    name=package_name,
+    version="0.1.0",
+    packages=find_packages(exclude=["test"]),
+    data_files=[
+        ("share/ament_index/resource_index/packages", ["resource/" + package_name]),
+        ("share/" + package_name, ["package.xml"]),
+    ],
+    install_requires=["setuptools"],
+    zip_safe=True,
+    maintainer="rfidnav developers",
+    description="rosbag2 MCAP bags of rfidnav: the recorder and player nodes, reading and writing bags.",
+    license="Apache-2.0",
+    entry_points={"console_scripts": [
+        "recorder = rfidnav_bag.recorder_node:main",
+        "player = rfidnav_bag.player_node:main",
+    ]},
+)

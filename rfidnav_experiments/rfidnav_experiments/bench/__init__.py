@@ -1,0 +1,1 @@
+"""Benchmarks that print figures (JSON with --json): never asserted in timed tests."""

@@ -1,0 +1,1 @@
+"""The papers' experiments reproduced in-process, printed beside the papers' figures."""

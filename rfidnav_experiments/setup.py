@@ -1,0 +1,23 @@
+from setuptools import find_packages, setup
+
+package_name = "rfidnav_experiments"
+
+setup(
+    name=package_name,
+    version="0.1.0",
+    packages=find_packages(exclude=["test"]),
+    data_files=[
+        ("share/ament_index/resource_index/packages", ["resource/" + package_name]),
+        ("share/" + package_name, ["package.xml"]),
+    ],
+    install_requires=["setuptools"],
+    zip_safe=True,
+    maintainer="rfidnav developers",
+    description="In-process experiments of rfidnav: runners, the papers' reproductions, benchmarks.",
+    license="Apache-2.0",
+    entry_points={"rfidnav.verbs": [
+        "reproduce = rfidnav_experiments.verbs:add_reproduce",
+        "survey = rfidnav_experiments.verbs:add_survey",
+        "bench = rfidnav_experiments.verbs:add_bench",
+    ]},
+)
