@@ -5,14 +5,15 @@ import math
 import numpy as np
 import pytest
 
-from rfidnav_experiments.runners.topological import (FIG5_MAP, FIG5_WORLD, centre_sonar, mounting_offsets,
-                                                     paper_run, random_missions, run_mission, start_pose_for)
 from rfidnav_common.topological_map import load_topological_map
+from rfidnav_experiments.runners.topological import (FIG5_MAP, FIG5_WORLD, centre_sonar, follower_offsets,
+                                                     paper_run, random_missions, run_mission, start_pose_for)
+from rfidnav_sim.sonar_model import centre_offsets
 from rfidnav_sim.world import load_world
 
 
 def test_mounting_offsets_put_the_side_sonars_at_the_robot_edge():
-    offsets = mounting_offsets()
+    offsets = centre_offsets()
     assert offsets["front"] == pytest.approx(0.175)
     assert offsets["left"] == pytest.approx(0.175)
     assert offsets["right"] == pytest.approx(0.175)
@@ -20,6 +21,13 @@ def test_mounting_offsets_put_the_side_sonars_at_the_robot_edge():
     sonar = centre_sonar({"front": math.inf, "left": 0.625, "right": 0.625, "front_left_45": 1.0,
                           "front_right_45": 1.0, "left_60": 1.0, "right_60": 1.0}, offsets)
     assert sonar.left == pytest.approx(0.8) and sonar.front == math.inf
+
+
+def test_the_shipped_follower_offsets_are_the_layouts_to_a_tenth_of_a_millimetre():
+    # The runner feeds its follower with the wall_follower node's offsets, so they must be the layout's.
+    layout = centre_offsets()
+    for name, offset in follower_offsets().items():
+        assert offset == pytest.approx(layout[name], abs=1e-4), name
 
 
 def test_start_pose_before_tag_23_heads_east_towards_h():

@@ -53,6 +53,13 @@ class Pose2D:
         self.yaw = math.remainder(self.yaw + turn, 2.0 * math.pi)
 
 
+def unicycle_step(yaw: float, linear_mps: float, angular_radps: float, dt: float) -> tuple[float, float, float]:
+    """(dx, dy, dyaw) of an ideal unicycle over ``dt``, moving along the mid-step heading: the robot of the
+    in-process runners where the base's wheel limits and motor dynamics do not matter."""
+    mid = yaw + 0.5 * angular_radps * dt
+    return linear_mps * dt * math.cos(mid), linear_mps * dt * math.sin(mid), angular_radps * dt
+
+
 class DiffDriveBase:
     """Ground-truth motion and odometry of a differential-drive base, stepped at a fixed dt."""
 

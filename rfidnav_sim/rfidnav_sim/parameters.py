@@ -12,7 +12,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from rfidnav_common.config import param, require_positive
+from rfidnav_common.seeding import rng_for
 from rfidnav_sim.compass_model import CompassModel
+from rfidnav_sim.kinematics import BaseLimits, DiffDriveBase, OdometryDrift, Pose2D
 from rfidnav_sim.rfid_model import Antenna, ReaderModel
 
 @dataclass(frozen=True)
@@ -34,6 +36,16 @@ class RobotSimParameters:
     odom_right_scale_error: float = param("right wheel travel error of the odometry", 0.0)
     odom_track_scale_error: float = param("track width error of the odometry", 0.0)
     odom_slip_std: float = param("random relative wheel travel error per step", 0.0)
+
+    def base(self) -> DiffDriveBase:
+        """The base these parameters describe, at the start pose, its odometry slip stream seeded from ``seed``:
+        the one robot_sim steps and the in-process runners step alike."""
+        return DiffDriveBase(
+            Pose2D(self.start_x, self.start_y, math.radians(self.start_yaw_deg)),
+            BaseLimits(self.track_width_m, self.max_wheel_speed_mps, self.max_wheel_accel_mps2, self.command_timeout_s),
+            OdometryDrift(self.odom_left_scale_error, self.odom_right_scale_error, self.odom_track_scale_error,
+                          self.odom_slip_std),
+            rng_for(self.seed, "robot_sim.odometry"))
 
     def validate(self) -> None:
         if not self.world_file:

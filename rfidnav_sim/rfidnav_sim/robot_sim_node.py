@@ -20,9 +20,7 @@ from std_srvs.srv import Trigger
 from visualization_msgs.msg import MarkerArray
 
 from rfidnav_common.ros import COMMAND_QOS, LATCHED_QOS, SENSOR_QOS, declare_parameters, run_node, time_msg
-from rfidnav_common.seeding import rng_for
 from rfidnav_sim.conversions import odometry_message, world_markers
-from rfidnav_sim.kinematics import BaseLimits, DiffDriveBase, OdometryDrift, Pose2D
 from rfidnav_sim.parameters import RobotSimParameters
 from rfidnav_sim.world import load_world
 
@@ -33,12 +31,7 @@ class RobotSimNode(Node):
         self.params: RobotSimParameters = declare_parameters(self, RobotSimParameters)
         p = self.params
         self.world = load_world(p.world_file)
-        self.base = DiffDriveBase(
-            Pose2D(p.start_x, p.start_y, math.radians(p.start_yaw_deg)),
-            BaseLimits(p.track_width_m, p.max_wheel_speed_mps, p.max_wheel_accel_mps2, p.command_timeout_s),
-            OdometryDrift(p.odom_left_scale_error, p.odom_right_scale_error, p.odom_track_scale_error,
-                          p.odom_slip_std),
-            rng_for(p.seed, "robot_sim.odometry"))
+        self.base = p.base()
         self.steps = 0
         self.steps_per_odom = max(1, round(1.0 / (p.odom_rate_hz * p.step_s)))
         self.running = not p.start_paused

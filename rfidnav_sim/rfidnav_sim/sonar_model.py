@@ -67,6 +67,13 @@ PAPER_LAYOUT: tuple[Rangefinder, ...] = (
 )
 
 
+def centre_offsets(layout: tuple[Rangefinder, ...] = PAPER_LAYOUT) -> dict[str, float]:
+    """Per rangefinder, its position's component along its bearing: added to a reading, the distance from the
+    robot's centre (what wall_follower's ``sonar_offsets_m`` hold for the paper's layout)."""
+    return {r.name: r.position[0] * math.cos(r.bearing_rad) + r.position[1] * math.sin(r.bearing_rad)
+            for r in layout}
+
+
 def cast_rays(origins: np.ndarray, directions: np.ndarray, walls: np.ndarray) -> np.ndarray:
     """Distance along each ray (K origins, K unit directions, K x 2 each) to the nearest wall (N x 4 rows
     x1, y1, x2, y2) it hits, inf where it hits none; distances are in multiples of the directions' lengths.

@@ -20,7 +20,6 @@ from rfidnav_common.seeding import rng_for
 from rfidnav_control.fuzzy import FuzzyHeadingController
 from rfidnav_control.parameters import HeadingControllerParameters
 from rfidnav_control.tag_route import Command, TagRouteFollower, observe
-from rfidnav_sim.kinematics import BaseLimits, DiffDriveBase, OdometryDrift, Pose2D
 from rfidnav_sim.parameters import ReaderParameters, RobotSimParameters
 from rfidnav_sim.rfid_model import ReaderSimulator
 from rfidnav_bringup.metrics import TrackingMetrics, Trajectory, tracking_metrics
@@ -69,14 +68,7 @@ def run_tag_route(scenario: Scenario, controller: HeadingControllerParameters, s
     robot: RobotSimParameters = role_parameters(scenario, "robot_sim", seed)
     reader = reader or role_parameters(scenario, "rfid_reader_sim", seed)
     world = scenario.world
-    x, y, yaw_deg = scenario.robot
-    base = DiffDriveBase(
-        Pose2D(x, y, math.radians(yaw_deg)),
-        BaseLimits(robot.track_width_m, robot.max_wheel_speed_mps, robot.max_wheel_accel_mps2,
-                   robot.command_timeout_s),
-        OdometryDrift(robot.odom_left_scale_error, robot.odom_right_scale_error, robot.odom_track_scale_error,
-                      robot.odom_slip_std),
-        rng_for(seed, "robot_sim.odometry"))
+    base = robot.base()
     simulator = ReaderSimulator.for_world(reader.reader_model(), world, rng_for(seed, "rfid_reader_sim"))
     follower = TagRouteFollower(controller.follower_settings(), FuzzyHeadingController(controller.fuzzy_spec()),
                                 scenario.route_map.arrival_tags)

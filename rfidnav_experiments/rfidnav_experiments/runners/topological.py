@@ -4,7 +4,7 @@ idealised robot through a simulated building, for the paper's run and statistics
 The robot is a unicycle stepped at ``step_s`` with the wall follower's (linear, angular) command (no motor
 dynamics; odometry is the true pose). Every step the sonar model's ranges (one per transducer, measured from
 where it is mounted) are turned into distances from the robot's centre, as the follower expects, by adding
-each transducer's mounting offset along its bearing; the wall-tag reader (default induction area: antenna at
+the offsets of the shipped wall_follower parameters, as the node does; the wall-tag reader (default induction area: antenna at
 the centre, facing left, 40 x 100 cm) reads with the given miss probability, decided once per tag PASSAGE (the
 paper's read failure: a tag not read while the robot passes it) when the tag comes into reach, and drawn anew
 once it has left reach (per inventory round a tag in reach for ~40 rounds would practically never be missed).
@@ -24,10 +24,13 @@ import numpy as np
 
 from rfidnav_bringup.metrics import GOAL_RADIUS_M, topological_shortest_m
 from rfidnav_bringup.scenario import CONFIG_DIR
+from rfidnav_control.parameters import SONAR_FIELDS, WallFollowerParameters
 from rfidnav_control.wall_following import (JUNCTION_CENTRE, NO_OPENING, OBSTACLE, STOPPED, TURN_DONE, OdomPose,
                                             Sonar, WallFollower, WallFollowerSettings)
+from rfidnav_experiments.runners.shipped import shipped_parameters
 from rfidnav_planning.mission_executor import STOP, TURNS, Decision, MissionExecutor
 from rfidnav_common.topological_map import UNKNOWN, TopologicalMap, load_topological_map, opposite
+from rfidnav_sim.kinematics import unicycle_step
 from rfidnav_sim.sonar_model import PAPER_LAYOUT, SonarModel
 from rfidnav_sim.wall_tag_model import InductionArea, WallTagReader
 from rfidnav_sim.world import World, load_world
@@ -37,9 +40,7 @@ FIG5_MAP = CONFIG_DIR / "maps" / "building_fig5.yaml"
 FIG5_WORLD = CONFIG_DIR / "worlds" / "building_fig5.yaml"
 LARGE_MAP = CONFIG_DIR / "maps" / "building_large.yaml"
 LARGE_WORLD = CONFIG_DIR / "worlds" / "building_large.yaml"
-# Sonar name -> the follower's Sonar field it feeds.
-SONAR_FIELDS = {"front": "front", "left": "left", "right": "right",
-                "front_left_45": "front_left", "front_right_45": "front_right"}
+FOLLOWER = shipped_parameters(WallFollowerParameters, "wall_follower")   # its sonar topics, offsets, settings
 
 
 @dataclass(frozen=True)
@@ -57,15 +58,19 @@ class MissionRun:
     first_node: str | None = None
 
 
-def mounting_offsets(layout=PAPER_LAYOUT) -> dict[str, float]:
-    """Per transducer, its position's component along its bearing: add it to a reading for the centre distance."""
-    return {r.name: r.position[0] * math.cos(r.bearing_rad) + r.position[1] * math.sin(r.bearing_rad)
-            for r in layout}
+def follower_offsets(parameters: WallFollowerParameters = FOLLOWER) -> dict[str, float]:
+    """Per rangefinder (``/sonar/NAME``: NAME) that feeds the follower, the offset the wall_follower node adds to
+    its readings."""
+    return {topic.rsplit("/", 1)[-1]: offset for topic, offset in zip(parameters.sonar_topics,
+                                                                     parameters.sonar_offsets_m)}
 
 
-def centre_sonar(ranges: dict[str, float], offsets: dict[str, float]) -> Sonar:
-    """The follower's Sonar (distances from the robot's centre) from the transducers' readings (inf stays inf)."""
-    return Sonar(**{field: ranges[name] + offsets[name] for name, field in SONAR_FIELDS.items()})
+def centre_sonar(ranges: dict[str, float], offsets: dict[str, float],
+                 parameters: WallFollowerParameters = FOLLOWER) -> Sonar:
+    """The follower's Sonar (distances from the robot's centre) from the rangefinders' readings (inf stays inf),
+    fed as the wall_follower node feeds it: field by field from ``parameters.sonar_topics``."""
+    names = [topic.rsplit("/", 1)[-1] for topic in parameters.sonar_topics]
+    return Sonar(**{field: ranges[name] + offsets[name] for field, name in zip(SONAR_FIELDS, names)})
 
 
 def start_pose_for(topological_map: TopologicalMap, tag_id: str | int,
@@ -92,10 +97,10 @@ def start_pose_for(topological_map: TopologicalMap, tag_id: str | int,
 
 def run_mission(world: World, topological_map: TopologicalMap, start_pose: tuple[float, float, float],
                 goal_node: str, rng: np.random.Generator, miss_probability: float = 0.0, step_s: float = 0.05,
-                max_time_s: float = 900.0, settings: WallFollowerSettings = WallFollowerSettings(),
+                max_time_s: float = 900.0, settings: WallFollowerSettings = FOLLOWER.settings(),
                 weight: str = "length", recover_missed_tags: bool = True) -> MissionRun:
     sonar_model = SonarModel(PAPER_LAYOUT, world.wall_segments())
-    offsets = mounting_offsets()
+    offsets = follower_offsets()
     reader = WallTagReader(InductionArea(), world.wall_tags, passage_miss_probability=miss_probability)
     follower = WallFollower(settings)
     executor = MissionExecutor(topological_map, weight, recover_missed_tags)
@@ -130,11 +135,9 @@ def run_mission(world: World, topological_map: TopologicalMap, start_pose: tuple
             break
         if command.event in FOLLOWER_EVENTS:
             apply(executor.on_junction(command.event), True)
-        # Unicycle, midpoint heading.
-        mid = yaw + 0.5 * command.angular * step_s
-        dx, dy = command.linear * step_s * math.cos(mid), command.linear * step_s * math.sin(mid)
+        dx, dy, dyaw = unicycle_step(yaw, command.linear, command.angular, step_s)
         x, y = x + dx, y + dy
-        yaw = math.atan2(math.sin(yaw + command.angular * step_s), math.cos(yaw + command.angular * step_s))
+        yaw = math.atan2(math.sin(yaw + dyaw), math.cos(yaw + dyaw))
         path += math.hypot(dx, dy)
         t += step_s
 

@@ -16,10 +16,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from rfidnav_bringup.scenario import CONFIG_DIR
-from rfidnav_common.config import node_parameter_values, parameters_from_mapping
 from rfidnav_common.errors import ConfigError
 from rfidnav_common.seeding import rng_for
+from rfidnav_experiments.runners.shipped import shipped_parameters
 from rfidnav_common.tag_groups import HF_READ_RANGE_M
 from rfidnav_localization.errors import LocateError
 from rfidnav_localization.fingerprint import Fingerprint, LocateSettings, RadioMap
@@ -27,13 +26,14 @@ from rfidnav_common.robot_map import RouteMap
 from rfidnav_localization.dead_reckoning import TIER_TAG, Fix
 from rfidnav_planning.two_tier_navigation import LOCATE, MapTag, Request, TwoTierNavigator, TwoTierSettings
 from rfidnav_sim.compass_model import CompassModel
-from rfidnav_sim.parameters import WifiSimParameters
+from rfidnav_sim.kinematics import unicycle_step
+from rfidnav_sim.parameters import CompassParameters, WifiSimParameters
 from rfidnav_sim.wifi_model import WifiModel
 from rfidnav_sim.world import World
 
 STEP_S = 0.05                      # control and simulation step (20 Hz)
 SURVEY_FRESH_M = 2.0               # survey only within this odometry distance of a tag fix (sd ~ 10 cm)
-COMPASS = CompassModel(noise_sd_rad=math.radians(2.0), bias_rad=math.radians(3.0))
+COMPASS = shipped_parameters(CompassParameters, "compass_sim").model()   # the compass_sim node's
 
 
 @dataclass(frozen=True)
@@ -61,9 +61,7 @@ class Site:
 def wifi_model(world: World) -> WifiModel:
     """The world's WiFi heard by the receiver of config/params/wifi_sim.yaml (its noise and sensitivity), as the
     wifi_sim node hears it."""
-    path = CONFIG_DIR / "params" / "wifi_sim.yaml"
-    values = {**node_parameter_values(WifiSimParameters, path, "wifi_sim"), "world_file": "unused"}
-    receiver = parameters_from_mapping(WifiSimParameters, values, str(path))
+    receiver = shipped_parameters(WifiSimParameters, "wifi_sim", world_file="unused")
     settings = dataclasses.replace(world.wifi, scan_noise_sd_db=receiver.scan_noise_sd_db,
                                    sensitivity_dbm=receiver.sensitivity_dbm)
     return WifiModel(world.access_points, world.wall_segments(), settings, world.wifi_seed)
@@ -127,7 +125,7 @@ def run_two_tier(site: Site, start: tuple[float, float, float], target: tuple[fl
     x, y, yaw = start
     survey: list[tuple[tuple[float, float], dict[str, float]]] = []
     surveyed_at_m = -math.inf
-    odom = [0.0, 0.0, 0.0]
+    odom = (0.0, 0.0, 0.0)
     navigator = TwoTierNavigator(settings)
     decision = navigator.start(target, known_start)
     fix_errors: list[float] = []
@@ -139,18 +137,16 @@ def run_two_tier(site: Site, start: tuple[float, float, float], target: tuple[fl
             decision = answer(site, navigator, decision.request, (x, y), rng, locate, tier_one_errors)
             continue
         linear, angular = decision.command
-        x += linear * STEP_S * math.cos(yaw + 0.5 * angular * STEP_S)
-        y += linear * STEP_S * math.sin(yaw + 0.5 * angular * STEP_S)
-        yaw += angular * STEP_S
-        measured = linear * STEP_S * (1.0 + odometry_scale_error)
-        odom[0] += measured * math.cos(odom[2] + 0.5 * angular * STEP_S)
-        odom[1] += measured * math.sin(odom[2] + 0.5 * angular * STEP_S)
-        odom[2] += angular * STEP_S
+        dx, dy, dyaw = unicycle_step(yaw, linear, angular, STEP_S)
+        x, y, yaw = x + dx, y + dy, yaw + dyaw
+        # Odometry: the same motion with the distance off by the scale error.
+        dx, dy, dyaw = unicycle_step(odom[2], linear * (1.0 + odometry_scale_error), angular, STEP_S)
+        odom = (odom[0] + dx, odom[1] + dy, odom[2] + dyaw)
         path_m += abs(linear) * STEP_S
         time_s += STEP_S
         reads = [site.tag_ids[i] for i in np.flatnonzero(
             np.hypot(site.tag_positions[:, 0] - x, site.tag_positions[:, 1] - y) <= HF_READ_RANGE_M)]
-        decision = navigator.step((odom[0], odom[1], odom[2]), compass.measure(yaw, rng), reads)
+        decision = navigator.step(odom, compass.measure(yaw, rng), reads)
         fixes = navigator.progress.fixes
         for fix in fixes[fixes_seen:]:
             if fix.tag_id:
