@@ -16,7 +16,7 @@ from pathlib import Path
 from rfidnav_common.config import param
 from rfidnav_common.robot_map import load_route_map
 from rfidnav_localization.fingerprint import LocateSettings
-from rfidnav_localization.partition_localization import LocalizerSettings
+from rfidnav_localization.partition import LocalizerSettings
 
 
 @dataclass(frozen=True)

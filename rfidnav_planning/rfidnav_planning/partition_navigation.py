@@ -39,7 +39,7 @@ from dataclasses import dataclass
 
 from rfidnav_common.geometry import wrap_angle
 from rfidnav_common.tag_lattice import Coordinate, Deployment, Lattice
-from rfidnav_localization.partition_localization import LocalizationEstimate
+from rfidnav_localization.partition import LocalizationEstimate
 from rfidnav_planning.errors import PlanningError
 from rfidnav_planning.partition_planner import PartitionPlan, plan_partition_path
 
