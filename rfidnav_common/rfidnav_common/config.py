@@ -14,7 +14,7 @@ from typing import Any, Iterable, Mapping
 
 import yaml
 
-from rfidnav_common.errors import ConfigError
+from rfidnav_common.errors import ConfigError, ParameterError
 
 _MISSING: Any = object()
 
@@ -184,12 +184,12 @@ def type_name(value: Any) -> str:
 
 
 def require_positive(parameters: Any, *names: str) -> None:
-    """For a parameter class's validate(): each named field must be a positive finite number (ValueError
-    naming the first that is not, in the form parameters_from_mapping reports against its field)."""
+    """For a parameter class's validate(): each named field must be a positive finite number (a ParameterError
+    naming the first that is not)."""
     for name in names:
         value = getattr(parameters, name)
         if not (math.isfinite(value) and value > 0.0):
-            raise ValueError(f"{name}: must be positive, got {value}")
+            raise ParameterError(name, f"must be positive, got {value}")
 
 
 def typed_values(cls: type, data: Any, source: str, prefix: str = "") -> dict[str, Any]:

@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from rfidnav_common.errors import ParameterError
 from rfidnav_common.tag_lattice import Coordinate, Lattice
 
 METHODS = ("paper", "filter")
@@ -29,22 +30,22 @@ class LocalizerSettings:
 
     def validate(self) -> None:
         if self.method not in METHODS:
-            raise ValueError(f"method: '{self.method}' is not one of {', '.join(METHODS)}")
+            raise ParameterError("method", f"'{self.method}' is not one of {', '.join(METHODS)}")
         if self.particles < 10:
-            raise ValueError(f"particles: at least 10 needed, got {self.particles}")
+            raise ParameterError("particles", f"at least 10 needed, got {self.particles}")
         for name in ("turn_threshold_rad", "boundary_softness_m", "rogue_distance_factor"):
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0.0):
-                raise ValueError(f"{name}: must be a positive number, got {value}")
+                raise ParameterError(name, f"must be a positive number, got {value}")
         for name in ("motion_noise_fraction", "motion_noise_floor_m", "motion_noise_yaw_rad_per_m"):
             value = getattr(self, name)
             if not (math.isfinite(value) and value >= 0.0):
-                raise ValueError(f"{name}: must be a non-negative number, got {value}")
+                raise ParameterError(name, f"must be a non-negative number, got {value}")
         if not 0.0 < self.read_error_probability < 0.5:
-            raise ValueError(f"read_error_probability: must lie in (0, 0.5), got {self.read_error_probability}")
+            raise ParameterError("read_error_probability", f"must lie in (0, 0.5), got {self.read_error_probability}")
         if not math.isfinite(self.antenna_offset_m) or (self.method == "paper" and self.antenna_offset_m != 0.0):
-            raise ValueError("antenna_offset_m: the paper method reads at the rotation axis (0); the filter takes "
-                             f"any finite offset, got {self.antenna_offset_m}")
+            raise ParameterError("antenna_offset_m", "the paper method reads at the rotation axis (0); the filter "
+                                                     f"takes any finite offset, got {self.antenna_offset_m}")
 
 
 @dataclass(frozen=True)
