@@ -221,22 +221,25 @@ def parameters_from_mapping(cls: type, data: Any, source: str, prefix: str = "",
                             origins: Mapping[str, tuple[str, str]] | None = None) -> Any:
     """Build and validate parameter dataclass ``cls`` from ``data``; missing fields take their defaults.
 
-    A ``validate()`` error whose message starts with a field name (``miss_probability: must be ...``) is
-    reported against that field where its value came from: ``origins`` maps field names to the (source,
-    prefix) of the file that set them; without ``origins`` every value came from ``source``/``prefix``. Any
-    other ``validate()`` error is reported against ``source``/``prefix``."""
+    A ``validate()`` :class:`ParameterError` naming one of ``cls``'s fields is reported against that field
+    where its value came from: ``origins`` maps field names to the (source, prefix) of the file that set them;
+    without ``origins`` every value came from ``source``/``prefix``. Any other ``validate()`` error (between
+    fields, about a field of an inner settings class, or a plain ValueError) is reported against
+    ``source``/``prefix``."""
     instance = cls(**typed_values(cls, data, source, prefix))
     validate = getattr(instance, "validate", None)
     if validate is not None:
         try:
             validate()
-        except ValueError as error:
+        except ParameterError as error:
             if origins is None:
                 origins = dict.fromkeys(typing.get_type_hints(cls), (source, prefix))
-            name, separator, problem = str(error).partition(": ")
-            if separator and name in origins:
-                origin, origin_prefix = origins[name]
-                raise ConfigError(origin, f"{origin_prefix}.{name}" if origin_prefix else name, problem) from None
+            if error.field in origins:
+                origin, origin_prefix = origins[error.field]
+                field = f"{origin_prefix}.{error.field}" if origin_prefix else error.field
+                raise ConfigError(origin, field, error.problem) from None
+            raise ConfigError(source, prefix, str(error)) from None
+        except ValueError as error:   # recorder_node's and player_node's validate() raise no ParameterError yet
             raise ConfigError(source, prefix, str(error)) from None
     return instance
 
