@@ -293,3 +293,16 @@ def test_require_positive_names_the_first_field_that_is_not() -> None:
     for bad in (0.0, -1.0, float("nan"), float("inf")):
         with pytest.raises(ValueError, match=rf"^b: must be positive, got {bad}"):
             require_positive(SimpleNamespace(a=1.0, b=bad), "a", "b")
+
+
+def test_a_validate_error_names_its_field_as_data_and_reads_as_before() -> None:
+    from rfidnav_common.errors import ParameterError
+    from rfidnav_planning.parameters import PartitionNavigatorParameters
+
+    with pytest.raises(ParameterError) as raised:
+        PartitionNavigatorParameters(map_file="map.yaml", max_replans=-1).validate()
+    assert isinstance(raised.value, ValueError)     # callers that catch ValueError keep working
+    assert (raised.value.field, raised.value.problem) == ("max_replans", "must not be negative")
+    assert str(raised.value) == "max_replans: must not be negative"
+    between_fields = "rate_hz and hop_dwell_s must be positive"
+    assert str(ParameterError("", between_fields)) == between_fields

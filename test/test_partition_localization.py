@@ -18,8 +18,8 @@ from rfidnav_common.config import node_parameter_values, parameters_from_mapping
 from rfidnav_common.errors import ConfigError
 from rfidnav_common.tag_lattice import LAYOUTS, Deployment, make_deployment, partitions_along_segment
 from rfidnav_localization.parameters import PartitionLocalizerParameters
-from rfidnav_localization.partition_localization import (LocalizationEstimate, LocalizerSettings,
-                                                         PartitionLocalizer, orientation_bounds, read_range_of)
+from rfidnav_localization.partition import (LocalizationEstimate, LocalizerSettings, PartitionLocalizer,
+                                            orientation_bounds, read_range_of)
 
 WORKSPACE = Path(__file__).resolve().parents[1]
 ROUND_S = 0.04

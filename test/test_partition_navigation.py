@@ -10,7 +10,7 @@ import pytest
 
 from rfidnav_experiments.runners.partitions import random_task, run_navigation
 from rfidnav_common.tag_lattice import make_deployment
-from rfidnav_localization.partition_localization import LocalizationEstimate, LocalizerSettings
+from rfidnav_localization.partition import LocalizationEstimate, LocalizerSettings
 from rfidnav_planning.partition_navigation import (FOLLOWING, FORWARD, LOCALIZING, REPLANNING, ROTATE, GoalRejected,
                                                    NavigatorSettings, PartitionNavigator)
 

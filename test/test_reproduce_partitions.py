@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 
 from rfidnav_experiments.reproduce import partitions as rp
-from rfidnav_localization.partition_localization import LocalizerSettings
+from rfidnav_localization.partition import LocalizerSettings
 
 
 def test_experiments_use_the_nodes_parameter_files() -> None:

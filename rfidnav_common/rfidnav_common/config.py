@@ -14,7 +14,7 @@ from typing import Any, Iterable, Mapping
 
 import yaml
 
-from rfidnav_common.errors import ConfigError
+from rfidnav_common.errors import ConfigError, ParameterError
 
 _MISSING: Any = object()
 
@@ -184,12 +184,12 @@ def type_name(value: Any) -> str:
 
 
 def require_positive(parameters: Any, *names: str) -> None:
-    """For a parameter class's validate(): each named field must be a positive finite number (ValueError
-    naming the first that is not, in the form parameters_from_mapping reports against its field)."""
+    """For a parameter class's validate(): each named field must be a positive finite number (a ParameterError
+    naming the first that is not)."""
     for name in names:
         value = getattr(parameters, name)
         if not (math.isfinite(value) and value > 0.0):
-            raise ValueError(f"{name}: must be positive, got {value}")
+            raise ParameterError(name, f"must be positive, got {value}")
 
 
 def typed_values(cls: type, data: Any, source: str, prefix: str = "") -> dict[str, Any]:
@@ -221,22 +221,25 @@ def parameters_from_mapping(cls: type, data: Any, source: str, prefix: str = "",
                             origins: Mapping[str, tuple[str, str]] | None = None) -> Any:
     """Build and validate parameter dataclass ``cls`` from ``data``; missing fields take their defaults.
 
-    A ``validate()`` error whose message starts with a field name (``miss_probability: must be ...``) is
-    reported against that field where its value came from: ``origins`` maps field names to the (source,
-    prefix) of the file that set them; without ``origins`` every value came from ``source``/``prefix``. Any
-    other ``validate()`` error is reported against ``source``/``prefix``."""
+    A ``validate()`` :class:`ParameterError` naming one of ``cls``'s fields is reported against that field
+    where its value came from: ``origins`` maps field names to the (source, prefix) of the file that set them;
+    without ``origins`` every value came from ``source``/``prefix``. Any other ``validate()`` error (between
+    fields, about a field of an inner settings class, or a plain ValueError) is reported against
+    ``source``/``prefix``."""
     instance = cls(**typed_values(cls, data, source, prefix))
     validate = getattr(instance, "validate", None)
     if validate is not None:
         try:
             validate()
-        except ValueError as error:
+        except ParameterError as error:
             if origins is None:
                 origins = dict.fromkeys(typing.get_type_hints(cls), (source, prefix))
-            name, separator, problem = str(error).partition(": ")
-            if separator and name in origins:
-                origin, origin_prefix = origins[name]
-                raise ConfigError(origin, f"{origin_prefix}.{name}" if origin_prefix else name, problem) from None
+            if error.field in origins:
+                origin, origin_prefix = origins[error.field]
+                field = f"{origin_prefix}.{error.field}" if origin_prefix else error.field
+                raise ConfigError(origin, field, error.problem) from None
+            raise ConfigError(source, prefix, str(error)) from None
+        except ValueError as error:   # recorder_node's and player_node's validate() raise no ParameterError yet
             raise ConfigError(source, prefix, str(error)) from None
     return instance
 

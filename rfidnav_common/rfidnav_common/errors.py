@@ -19,3 +19,16 @@ class ConfigError(RfidnavError):
         self.problem = problem
         where = f"{source}: {field}" if field else source
         super().__init__(f"{where}: {problem}")
+
+
+class ParameterError(ValueError):
+    """A parameter or settings class's ``validate()`` found a value it cannot work with.
+
+    ``field`` is the offending field's name, or "" when the problem lies between fields (``problem`` then names
+    them); the message reads ``field: problem``. A ValueError, so callers that catch ValueError keep working;
+    rfidnav_common.config reports it against the file and line that set the field."""
+
+    def __init__(self, field: str, problem: str) -> None:
+        self.field = field
+        self.problem = problem
+        super().__init__(f"{field}: {problem}" if field else problem)

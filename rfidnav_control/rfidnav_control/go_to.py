@@ -6,6 +6,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from rfidnav_common.errors import ParameterError
 from rfidnav_common.geometry import wrap_angle
 
 
@@ -21,7 +22,7 @@ class GoToSettings:
         for name in ("speed_mps", "turn_rate_radps", "heading_gain_per_s", "turn_in_place_rad", "tolerance_m"):
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0.0):
-                raise ValueError(f"{name}: must be a positive number, got {value}")
+                raise ParameterError(name, f"must be a positive number, got {value}")
 
 
 def go_to_command(position: tuple[float, float], yaw: float, target: tuple[float, float],

@@ -12,6 +12,7 @@ import math
 from dataclasses import dataclass
 
 from rfidnav_common.config import param, require_positive
+from rfidnav_common.errors import ParameterError
 from rfidnav_control.errors import FuzzySpecError
 from rfidnav_control.fuzzy import FuzzyHeadingSpec
 from rfidnav_control.tag_route import ARRIVAL_MODES, FollowerSettings
@@ -55,15 +56,20 @@ class HeadingControllerParameters:
 
     def validate(self) -> None:
         if not self.map_file:
-            raise ValueError("map_file: required (the route map of arrival floor tags)")
+            raise ParameterError("map_file", "required (the route map of arrival floor tags)")
         if self.arrival not in ARRIVAL_MODES:
-            raise ValueError(f"arrival: '{self.arrival}' is not one of {', '.join(ARRIVAL_MODES)}")
+            raise ParameterError("arrival", f"'{self.arrival}' is not one of {', '.join(ARRIVAL_MODES)}")
         require_positive(self, "forward_speed_mps", "max_yaw_rate_radps", "nominal_round_s", "unheard_timeout_s")
         self.follower_settings().validate()
         try:
             self.fuzzy_spec()
         except FuzzySpecError as error:
-            raise ValueError(str(error)) from None
+            # The spec's messages start with the parameter they concern ("rules: ..."), or with a set or a rule
+            # ("fuzzy set 'neg': ..."), which no single parameter names.
+            name, separator, problem = str(error).partition(": ")
+            if separator and name in self.__dataclass_fields__:
+                raise ParameterError(name, problem) from None
+            raise ParameterError("", str(error)) from None
 
     def follower_settings(self) -> FollowerSettings:
         # Every follower setting is a node parameter of the same name.
@@ -114,11 +120,11 @@ class WallFollowerParameters:
 
     def validate(self) -> None:
         if len(self.sonar_topics) != len(SONAR_FIELDS) or len(self.sonar_offsets_m) != len(SONAR_FIELDS):
-            raise ValueError(f"sonar_topics and sonar_offsets_m: one each for {', '.join(SONAR_FIELDS)}, got "
-                             f"{len(self.sonar_topics)} and {len(self.sonar_offsets_m)}")
+            raise ParameterError("", f"sonar_topics and sonar_offsets_m: one each for {', '.join(SONAR_FIELDS)}, "
+                                     f"got {len(self.sonar_topics)} and {len(self.sonar_offsets_m)}")
         require_positive(self, "control_rate_hz", "sonar_timeout_s")
         if not (math.isfinite(self.recover_after_s) and self.recover_after_s >= 0.0):
-            raise ValueError(f"recover_after_s: must not be negative, got {self.recover_after_s}")
+            raise ParameterError("recover_after_s", f"must not be negative, got {self.recover_after_s}")
         self.settings().validate()
 
     def settings(self) -> WallFollowerSettings:

@@ -32,6 +32,7 @@ from typing import Callable
 
 import numpy as np
 
+from rfidnav_common.errors import ParameterError
 from rfidnav_common.geometry import wrap_angle
 from rfidnav_common.rf import range_change_m
 
@@ -81,17 +82,17 @@ class FollowerSettings:
 
     def validate(self) -> None:
         if self.arrival not in ARRIVAL_MODES:
-            raise ValueError(f"arrival: '{self.arrival}' is not one of {', '.join(ARRIVAL_MODES)}")
+            raise ParameterError("arrival", f"'{self.arrival}' is not one of {', '.join(ARRIVAL_MODES)}")
         if self.filter_rounds < 1:
-            raise ValueError("filter_rounds: must be at least 1")
+            raise ParameterError("filter_rounds", "must be at least 1")
         if not 0.0 < self.range_rate_smoothing <= 1.0:
-            raise ValueError("range_rate_smoothing: must be in (0, 1]")
+            raise ParameterError("range_rate_smoothing", "must be in (0, 1]")
         if not 0.0 <= self.turn_speed_fraction <= 1.0:
-            raise ValueError("turn_speed_fraction: must be in [0, 1]")
+            raise ParameterError("turn_speed_fraction", "must be in [0, 1]")
         if not 0.0 < self.approach_speed_fraction <= 1.0:
-            raise ValueError("approach_speed_fraction: must be in (0, 1]")
+            raise ParameterError("approach_speed_fraction", "must be in (0, 1]")
         if self.left_antenna == self.right_antenna:
-            raise ValueError("left_antenna and right_antenna must differ")
+            raise ParameterError("", "left_antenna and right_antenna must differ")
 
 
 @dataclass(frozen=True)

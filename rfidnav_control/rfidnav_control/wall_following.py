@@ -54,6 +54,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from rfidnav_common.errors import ParameterError
 from rfidnav_common.geometry import wrap_angle
 
 FOLLOWING, JUNCTION, CENTRE, TURNING, HALTED = "following", "junction", "centre", "turning", "halted"
@@ -119,21 +120,23 @@ class WallFollowerSettings:
                      "position_tolerance_m", "measure_band_m", "max_fit_residual_m", "max_wall_change_rad"):
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0.0):
-                raise ValueError(f"{name}: must be a positive number, got {value}")
+                raise ParameterError(name, f"must be a positive number, got {value}")
         if not (math.isfinite(self.sonar_half_angle_rad) and 0.0 <= self.sonar_half_angle_rad < math.pi / 4.0):
-            raise ValueError(f"sonar_half_angle_rad: must be in [0, pi/4), got {self.sonar_half_angle_rad}")
+            raise ParameterError("sonar_half_angle_rad", f"must be in [0, pi/4), got {self.sonar_half_angle_rad}")
         if not (isinstance(self.recover_after_steps, int) and self.recover_after_steps >= 0):
-            raise ValueError(f"recover_after_steps: must be a non-negative int, got {self.recover_after_steps}")
+            raise ParameterError("recover_after_steps", f"must be a non-negative int, got {self.recover_after_steps}")
         if not (math.isfinite(self.resume_margin_m) and self.resume_margin_m >= 0.0):
-            raise ValueError(f"resume_margin_m: must be a non-negative number, got {self.resume_margin_m}")
+            raise ParameterError("resume_margin_m", f"must be a non-negative number, got {self.resume_margin_m}")
         if self.opening_threshold_m <= self.wall_distance_m:
-            raise ValueError(f"opening_threshold_m ({self.opening_threshold_m}) must exceed wall_distance_m "
-                             f"({self.wall_distance_m}): the followed wall would read as an opening")
+            raise ParameterError("", f"opening_threshold_m ({self.opening_threshold_m}) must exceed "
+                                     f"wall_distance_m ({self.wall_distance_m}): the followed wall would read as an "
+                                     "opening")
         if self.opening_confirm_m >= self.junction_half_width_m:
-            raise ValueError(f"opening_confirm_m ({self.opening_confirm_m}) must be below junction_half_width_m "
-                             f"({self.junction_half_width_m})")
+            raise ParameterError("", f"opening_confirm_m ({self.opening_confirm_m}) must be below "
+                                     f"junction_half_width_m ({self.junction_half_width_m})")
         if self.max_approach_rad >= self.turn_in_place_rad:
-            raise ValueError("max_approach_rad must be below turn_in_place_rad (an approach is steered, not spun)")
+            raise ParameterError("", "max_approach_rad must be below turn_in_place_rad (an approach is steered, not "
+                                     "spun)")
 
 
 @dataclass(frozen=True)

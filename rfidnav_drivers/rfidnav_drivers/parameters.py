@@ -8,6 +8,7 @@ import math
 from dataclasses import dataclass
 
 from rfidnav_common.config import param, require_positive
+from rfidnav_common.errors import ParameterError
 
 
 @dataclass(frozen=True)
@@ -30,18 +31,18 @@ class LlrpReaderParameters:
 
     def validate(self) -> None:
         if not self.host:
-            raise ValueError("host: required (the reader's address)")
+            raise ParameterError("host", "required (the reader's address)")
         if not 1 <= self.port <= 65535:
-            raise ValueError(f"port: a TCP port is 1..65535, got {self.port}")
+            raise ParameterError("port", f"a TCP port is 1..65535, got {self.port}")
         if any(not 1 <= a <= 65535 for a in self.antennas):
-            raise ValueError(f"antennas: ports are 1..65535, got {self.antennas}")
+            raise ParameterError("antennas", f"ports are 1..65535, got {self.antennas}")
         if not 0 <= self.session <= 3:
-            raise ValueError(f"session: 0..3, got {self.session}")
+            raise ParameterError("session", f"0..3, got {self.session}")
         require_positive(self, "connect_timeout_s", "reconnect_initial_s", "reconnect_max_s", "keepalive_s")
         if self.reconnect_max_s < self.reconnect_initial_s:
-            raise ValueError("reconnect_max_s must be at least reconnect_initial_s")
+            raise ParameterError("", "reconnect_max_s must be at least reconnect_initial_s")
         if not (math.isfinite(self.batch_period_s) and self.batch_period_s >= 0.0):
-            raise ValueError(f"batch_period_s: must not be negative, got {self.batch_period_s}")
+            raise ParameterError("batch_period_s", f"must not be negative, got {self.batch_period_s}")
 
 
 @dataclass(frozen=True)
@@ -60,16 +61,16 @@ class CreateBaseParameters:
 
     def validate(self) -> None:
         if not self.port:
-            raise ValueError("port: required (the serial device of the Open Interface)")
+            raise ParameterError("port", "required (the serial device of the Open Interface)")
         if self.mode not in ("safe", "full"):
-            raise ValueError(f"mode: 'safe' or 'full', got '{self.mode}'")
+            raise ParameterError("mode", f"'safe' or 'full', got '{self.mode}'")
         if self.baud <= 0:
-            raise ValueError(f"baud: must be positive, got {self.baud}")
+            raise ParameterError("baud", f"must be positive, got {self.baud}")
         require_positive(self, "sensor_rate_hz", "max_wheel_speed_mps", "wheel_base_m", "wheel_diameter_m",
                          "counts_per_rev", "command_timeout_s")
         if self.max_wheel_speed_mps > 0.5:
-            raise ValueError(f"max_wheel_speed_mps: the Open Interface takes at most 0.5, got "
-                             f"{self.max_wheel_speed_mps}")
+            raise ParameterError("max_wheel_speed_mps", "the Open Interface takes at most 0.5, got "
+                                 f"{self.max_wheel_speed_mps}")
 
 
 @dataclass(frozen=True)
@@ -84,5 +85,5 @@ class WifiScannerParameters:
 
     def validate(self) -> None:
         if not self.interface:
-            raise ValueError("interface: required (e.g. wlan0)")
+            raise ParameterError("interface", "required (e.g. wlan0)")
         require_positive(self, "period_s", "timeout_s")

@@ -7,8 +7,8 @@ from builtin_interfaces.msg import Time
 from geometry_msgs.msg import PoseWithCovarianceStamped
 
 from rfidnav_common.geometry import yaw_to_quaternion
-from rfidnav_localization.partition_localization import LocalizationEstimate
 from rfidnav_localization.location_store import TagRecord
+from rfidnav_localization.partition import LocalizationEstimate
 from rfidnav_msgs.msg import FloorTag, LocalizationStatus, WifiScan
 
 # Yaw variance published while the heading is unknown: no consumer should mistake it for information.

@@ -30,6 +30,7 @@ from typing import Iterable, Mapping
 
 import numpy as np
 
+from rfidnav_common.errors import ParameterError
 from rfidnav_localization.errors import LocateError
 
 SOURCES = ("grid", "survey", "robot")   # a generated grid, a manual survey, the robot's own automatic survey
@@ -81,14 +82,14 @@ class LocateSettings:
 
     def validate(self) -> None:
         if isinstance(self.k, bool) or not isinstance(self.k, int) or self.k < 1:
-            raise ValueError(f"k: must be a whole number of at least 1, got {self.k}")
+            raise ParameterError("k", f"must be a whole number of at least 1, got {self.k}")
         if not math.isfinite(self.missing_rss_dbm):
-            raise ValueError(f"missing_rss_dbm: must be a finite dBm value, got {self.missing_rss_dbm}")
+            raise ParameterError("missing_rss_dbm", f"must be a finite dBm value, got {self.missing_rss_dbm}")
         if isinstance(self.min_common_aps, bool) or not isinstance(self.min_common_aps, int) \
                 or self.min_common_aps < 1:
-            raise ValueError(f"min_common_aps: must be a whole number of at least 1, got {self.min_common_aps}")
+            raise ParameterError("min_common_aps", f"must be a whole number of at least 1, got {self.min_common_aps}")
         if self.weighting not in WEIGHTINGS:
-            raise ValueError(f"weighting: '{self.weighting}' is not one of {', '.join(WEIGHTINGS)}")
+            raise ParameterError("weighting", f"'{self.weighting}' is not one of {', '.join(WEIGHTINGS)}")
 
 
 @dataclass(frozen=True)

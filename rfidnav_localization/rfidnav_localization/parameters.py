@@ -14,9 +14,10 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from rfidnav_common.config import param
+from rfidnav_common.errors import ParameterError
 from rfidnav_common.robot_map import load_route_map
 from rfidnav_localization.fingerprint import LocateSettings
-from rfidnav_localization.partition_localization import LocalizerSettings
+from rfidnav_localization.partition import LocalizerSettings
 
 
 @dataclass(frozen=True)
@@ -47,11 +48,11 @@ class PartitionLocalizerParameters:
 
     def validate(self) -> None:
         if not 1 <= self.antenna <= 65535:
-            raise ValueError(f"antenna: a reader port is 1..65535, got {self.antenna}")
+            raise ParameterError("antenna", f"a reader port is 1..65535, got {self.antenna}")
         if not self.map_frame:
-            raise ValueError("map_frame: must not be empty")
+            raise ParameterError("map_frame", "must not be empty")
         if self.seed < 0:
-            raise ValueError(f"seed: must not be negative, got {self.seed}")
+            raise ParameterError("seed", f"must not be negative, got {self.seed}")
         self.settings().validate()
 
     def settings(self) -> LocalizerSettings:
@@ -81,7 +82,7 @@ class LocationServerParameters:
 
     def validate(self) -> None:
         if not self.database_file:
-            raise ValueError("database_file: required")
+            raise ParameterError("database_file", "required")
         self.locate_settings().validate()
 
     def database_path(self) -> Path:

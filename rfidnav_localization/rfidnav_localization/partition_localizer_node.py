@@ -22,7 +22,7 @@ from rfidnav_common.ros import SENSOR_QOS, declare_parameters, run_node, seconds
 from rfidnav_common.seeding import rng_for
 from rfidnav_localization.conversions import pose_message, status_message
 from rfidnav_localization.parameters import PartitionLocalizerParameters
-from rfidnav_localization.partition_localization import PartitionLocalizer
+from rfidnav_localization.partition import PartitionLocalizer
 from rfidnav_msgs.msg import LocalizationStatus, TagReadArray
 
 NODE_NAME = "partition_localizer"

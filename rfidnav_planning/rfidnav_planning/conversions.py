@@ -10,7 +10,7 @@ from nav_msgs.msg import Path
 
 from rfidnav_common.geometry import yaw_to_quaternion
 from rfidnav_common.tag_lattice import Coordinate, Lattice, TagIdError, decode_tag_id, partition_centre
-from rfidnav_localization.partition_localization import LocalizationEstimate
+from rfidnav_localization.partition import LocalizationEstimate
 from rfidnav_msgs.msg import LocalizationStatus, Partition, PartitionPath
 from rfidnav_planning.partition_planner import PartitionPlan
 

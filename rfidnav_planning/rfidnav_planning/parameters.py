@@ -9,6 +9,7 @@ import dataclasses
 from dataclasses import dataclass
 
 from rfidnav_common.config import param, require_positive
+from rfidnav_common.errors import ParameterError
 from rfidnav_control.go_to import GoToSettings
 from rfidnav_planning.partition_navigation import NavigatorSettings
 from rfidnav_common.topological_map import WEIGHTS
@@ -44,7 +45,7 @@ class PartitionNavigatorParameters:
 
     def validate(self) -> None:
         if not self.map_file:
-            raise ValueError("map_file: required (the map with the deployment_area)")
+            raise ParameterError("map_file", "required (the map with the deployment_area)")
         require_positive(self, "forward_speed_mps", "turn_rate_radps", "turn_gain_per_s", "turn_tolerance_rad",
                          "unheard_timeout_s")
         self.settings().validate()
@@ -81,7 +82,7 @@ class TwoTierNavigatorParameters:
 
     def validate(self) -> None:
         if not 1 <= self.floor_antenna <= 65535:
-            raise ValueError(f"floor_antenna: a reader port is 1..65535, got {self.floor_antenna}")
+            raise ParameterError("floor_antenna", f"a reader port is 1..65535, got {self.floor_antenna}")
         require_positive(self, "control_rate_hz", "service_timeout_s")
         self.settings().validate()
 
@@ -104,6 +105,6 @@ class MissionExecutorParameters:
 
     def validate(self) -> None:
         if not self.map_file:
-            raise ValueError("map_file: required (the topological map)")
+            raise ParameterError("map_file", "required (the topological map)")
         if self.weight not in WEIGHTS:
-            raise ValueError(f"weight: '{self.weight}' is not one of {', '.join(WEIGHTS)}")
+            raise ParameterError("weight", f"'{self.weight}' is not one of {', '.join(WEIGHTS)}")

@@ -37,9 +37,10 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from rfidnav_common.errors import ParameterError
 from rfidnav_common.geometry import wrap_angle
 from rfidnav_common.tag_lattice import Coordinate, Deployment, Lattice
-from rfidnav_localization.partition_localization import LocalizationEstimate
+from rfidnav_localization.partition import LocalizationEstimate
 from rfidnav_planning.errors import PlanningError
 from rfidnav_planning.partition_planner import PartitionPlan, plan_partition_path
 
@@ -65,27 +66,28 @@ class NavigatorSettings:
 
     def validate(self) -> None:
         if not 1 <= self.approximation_level <= 64:
-            raise ValueError(f"approximation_level: must be in 1..64, got {self.approximation_level}")
+            raise ParameterError("approximation_level", f"must be in 1..64, got {self.approximation_level}")
         if self.localized_yaw_sd_rad < 0.0:
-            raise ValueError("localized_yaw_sd_rad: must not be negative")
+            raise ParameterError("localized_yaw_sd_rad", "must not be negative")
         if self.max_localization_m <= 0.0:
-            raise ValueError(f"max_localization_m: must be positive, got {self.max_localization_m}")
+            raise ParameterError("max_localization_m", f"must be positive, got {self.max_localization_m}")
         if self.max_path_factor <= 1.0:
-            raise ValueError(f"max_path_factor: must be above 1, got {self.max_path_factor}")
+            raise ParameterError("max_path_factor", f"must be above 1, got {self.max_path_factor}")
         if self.lost_distance_m <= 0.0:
-            raise ValueError(f"lost_distance_m: must be positive, got {self.lost_distance_m}")
+            raise ParameterError("lost_distance_m", f"must be positive, got {self.lost_distance_m}")
         if self.max_replans < 0:
-            raise ValueError("max_replans: must not be negative")
+            raise ParameterError("max_replans", "must not be negative")
         if self.deviation_check not in DEVIATION_CHECKS:
-            raise ValueError(f"deviation_check: '{self.deviation_check}' is not one of {', '.join(DEVIATION_CHECKS)}")
+            raise ParameterError("deviation_check",
+                                 f"'{self.deviation_check}' is not one of {', '.join(DEVIATION_CHECKS)}")
         if self.pose_miss_tolerance_r <= 0.0:
-            raise ValueError(f"pose_miss_tolerance_r: must be positive, got {self.pose_miss_tolerance_r}")
+            raise ParameterError("pose_miss_tolerance_r", f"must be positive, got {self.pose_miss_tolerance_r}")
         if self.spin_quarter_turns < 0:
-            raise ValueError(f"spin_quarter_turns: must not be negative, got {self.spin_quarter_turns}")
+            raise ParameterError("spin_quarter_turns", f"must not be negative, got {self.spin_quarter_turns}")
         if self.arrival not in ARRIVALS:
-            raise ValueError(f"arrival: '{self.arrival}' is not one of {', '.join(ARRIVALS)}")
+            raise ParameterError("arrival", f"'{self.arrival}' is not one of {', '.join(ARRIVALS)}")
         if self.position_tolerance_r <= 0.0:
-            raise ValueError(f"position_tolerance_r: must be positive, got {self.position_tolerance_r}")
+            raise ParameterError("position_tolerance_r", f"must be positive, got {self.position_tolerance_r}")
 
 
 @dataclass(frozen=True)

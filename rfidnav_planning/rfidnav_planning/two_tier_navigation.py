@@ -33,6 +33,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from rfidnav_common.errors import ParameterError
 from rfidnav_control.go_to import GoToSettings, go_to_command
 from rfidnav_control.spiral import SpiralSearch, separation_for_group
 from rfidnav_localization.dead_reckoning import TIER_TAG, TIER_WIFI, DeadReckoning, DeadReckoningEstimate, Fix
@@ -63,11 +64,11 @@ class TwoTierSettings:
                      "search_radius_sigmas", "search_min_radius_m", "read_range_m"):
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0.0):
-                raise ValueError(f"{name}: must be a positive number, got {value}")
+                raise ParameterError(name, f"must be a positive number, got {value}")
         if self.max_searches < 1:
-            raise ValueError(f"max_searches: must be at least 1, got {self.max_searches}")
+            raise ParameterError("max_searches", f"must be at least 1, got {self.max_searches}")
         if not (math.isfinite(self.drift_per_m) and self.drift_per_m >= 0.0):
-            raise ValueError(f"drift_per_m: must not be negative, got {self.drift_per_m}")
+            raise ParameterError("drift_per_m", f"must not be negative, got {self.drift_per_m}")
         self.go_to.validate()
 
 

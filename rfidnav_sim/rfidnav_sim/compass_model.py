@@ -13,6 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from rfidnav_common.errors import ParameterError
 from rfidnav_common.geometry import wrap_angle
 
 
@@ -23,9 +24,9 @@ class CompassModel:
 
     def validate(self) -> None:
         if not (math.isfinite(self.noise_sd_rad) and self.noise_sd_rad >= 0.0):
-            raise ValueError(f"noise_sd_rad: must be a finite non-negative number, got {self.noise_sd_rad}")
+            raise ParameterError("noise_sd_rad", f"must be a finite non-negative number, got {self.noise_sd_rad}")
         if not math.isfinite(self.bias_rad):
-            raise ValueError(f"bias_rad: must be finite, got {self.bias_rad}")
+            raise ParameterError("bias_rad", f"must be finite, got {self.bias_rad}")
 
     def measure(self, true_yaw: float, rng: np.random.Generator) -> float:
         """A heading reading in (-pi, pi] (map frame: CCW from x, REP 103)."""

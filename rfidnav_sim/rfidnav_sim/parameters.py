@@ -12,6 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from rfidnav_common.config import param, require_positive
+from rfidnav_common.errors import ParameterError
 from rfidnav_common.seeding import rng_for
 from rfidnav_sim.compass_model import CompassModel
 from rfidnav_sim.kinematics import BaseLimits, DiffDriveBase, OdometryDrift, Pose2D
@@ -49,11 +50,11 @@ class RobotSimParameters:
 
     def validate(self) -> None:
         if not self.world_file:
-            raise ValueError("world_file: required (the world YAML to simulate)")
+            raise ParameterError("world_file", "required (the world YAML to simulate)")
         require_positive(self, "step_s", "rtf", "odom_rate_hz", "track_width_m", "max_wheel_speed_mps",
                          "max_wheel_accel_mps2", "command_timeout_s")
         if self.odom_slip_std < 0.0:
-            raise ValueError("odom_slip_std: must not be negative")
+            raise ParameterError("odom_slip_std", "must not be negative")
 
 
 
@@ -92,29 +93,29 @@ class ReaderParameters:
 
     def validate(self) -> None:
         if not self.world_file:
-            raise ValueError("world_file: required (the world YAML whose tags are read)")
+            raise ParameterError("world_file", "required (the world YAML whose tags are read)")
         count = len(self.antenna_facing)
         if count == 0:
-            raise ValueError("antenna_facing: at least one antenna is needed")
+            raise ParameterError("antenna_facing", "at least one antenna is needed")
         if len(self.antenna_positions) != 3 * count:
-            raise ValueError(f"antenna_positions: expected 3 numbers per antenna ({3 * count}), "
-                             f"got {len(self.antenna_positions)}")
+            raise ParameterError("antenna_positions", f"expected 3 numbers per antenna ({3 * count}), "
+                                 f"got {len(self.antenna_positions)}")
         for name in ("antenna_max_range_m", "antenna_half_angle_deg", "antenna_phase_offset_rad"):
             if len(getattr(self, name)) != count:
-                raise ValueError(f"{name}: expected one value per antenna ({count}), got {len(getattr(self, name))}")
+                raise ParameterError(name, f"expected one value per antenna ({count}), got {len(getattr(self, name))}")
         for facing in self.antenna_facing:
             if facing not in FACINGS:
-                raise ValueError(f"antenna_facing: '{facing}' is not one of {', '.join(FACINGS)}")
+                raise ParameterError("antenna_facing", f"'{facing}' is not one of {', '.join(FACINGS)}")
         if self.rate_hz <= 0.0 or self.hop_dwell_s <= 0.0:
-            raise ValueError("rate_hz and hop_dwell_s must be positive")
+            raise ParameterError("", "rate_hz and hop_dwell_s must be positive")
         if not self.channels_mhz or min(self.channels_mhz) <= 0.0:
-            raise ValueError("channels_mhz: at least one positive frequency is needed")
+            raise ParameterError("channels_mhz", "at least one positive frequency is needed")
         if not 0.0 <= self.miss_probability < 1.0:
-            raise ValueError(f"miss_probability: must be in [0, 1), got {self.miss_probability}")
+            raise ParameterError("miss_probability", f"must be in [0, 1), got {self.miss_probability}")
         if not 0.0 <= self.passage_miss_probability <= 1.0:
-            raise ValueError(f"passage_miss_probability: must be in [0, 1], got {self.passage_miss_probability}")
+            raise ParameterError("passage_miss_probability", f"must be in [0, 1], got {self.passage_miss_probability}")
         if self.phase_noise_rad_per_m < 0.0:
-            raise ValueError("phase_noise_rad_per_m: must not be negative")
+            raise ParameterError("phase_noise_rad_per_m", "must not be negative")
 
     def reader_model(self) -> ReaderModel:
         positions = np.reshape(self.antenna_positions, (-1, 3))
@@ -144,7 +145,7 @@ class CompassParameters:
 
     def validate(self) -> None:
         if not (math.isfinite(self.rate_hz) and self.rate_hz > 0.0):
-            raise ValueError(f"rate_hz: must be positive, got {self.rate_hz}")
+            raise ParameterError("rate_hz", f"must be positive, got {self.rate_hz}")
         self.model().validate()
 
     def model(self) -> CompassModel:
@@ -163,13 +164,14 @@ class WifiSimParameters:
 
     def validate(self) -> None:
         if not self.world_file:
-            raise ValueError("world_file: required (the world YAML to simulate)")
+            raise ParameterError("world_file", "required (the world YAML to simulate)")
         if not (math.isfinite(self.scan_period_s) and self.scan_period_s > 0.0):
-            raise ValueError(f"scan_period_s: must be positive, got {self.scan_period_s}")
+            raise ParameterError("scan_period_s", f"must be positive, got {self.scan_period_s}")
         if not (math.isfinite(self.scan_noise_sd_db) and self.scan_noise_sd_db >= 0.0):
-            raise ValueError(f"scan_noise_sd_db: must be a finite non-negative number, got {self.scan_noise_sd_db}")
+            raise ParameterError("scan_noise_sd_db",
+                                 f"must be a finite non-negative number, got {self.scan_noise_sd_db}")
         if not math.isfinite(self.sensitivity_dbm):
-            raise ValueError(f"sensitivity_dbm: must be finite, got {self.sensitivity_dbm}")
+            raise ParameterError("sensitivity_dbm", f"must be finite, got {self.sensitivity_dbm}")
 
 
 @dataclass(frozen=True)
@@ -185,11 +187,11 @@ class SonarParameters:
 
     def validate(self) -> None:
         if not self.world_file:
-            raise ValueError("world_file: required (the world YAML whose walls echo)")
+            raise ParameterError("world_file", "required (the world YAML whose walls echo)")
         if not (math.isfinite(self.rate_hz) and self.rate_hz > 0.0):
-            raise ValueError(f"rate_hz: must be positive, got {self.rate_hz}")
+            raise ParameterError("rate_hz", f"must be positive, got {self.rate_hz}")
         for name in ("noise_sd_m", "noise_fraction"):
             if not (math.isfinite(getattr(self, name)) and getattr(self, name) >= 0.0):
-                raise ValueError(f"{name}: must be a finite non-negative number, got {getattr(self, name)}")
+                raise ParameterError(name, f"must be a finite non-negative number, got {getattr(self, name)}")
         if self.rays_per_beam < 1:
-            raise ValueError(f"rays_per_beam: must be at least 1, got {self.rays_per_beam}")
+            raise ParameterError("rays_per_beam", f"must be at least 1, got {self.rays_per_beam}")

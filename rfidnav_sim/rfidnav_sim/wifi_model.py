@@ -28,6 +28,7 @@ from dataclasses import dataclass, fields
 
 import numpy as np
 
+from rfidnav_common.errors import ParameterError
 from rfidnav_common.rf import SPEED_OF_LIGHT_MPS
 from rfidnav_common.seeding import derive_seed
 
@@ -86,17 +87,17 @@ class PropagationSettings:
     min_distance_m: float = 0.5              # standing on an AP does not give infinite RSS
 
     def validate(self) -> None:
-        """Raise ValueError naming the first bad field."""
+        """Raise a ParameterError naming the first bad field."""
         for field in fields(self):
             value = getattr(self, field.name)
             if value is not None and not math.isfinite(value):
-                raise ValueError(f"{field.name}: {value} is not a finite number")
+                raise ParameterError(field.name, f"{value} is not a finite number")
         for name in ("wall_loss_db", "shadowing_sd_db", "scan_noise_sd_db"):
             if getattr(self, name) < 0.0:
-                raise ValueError(f"{name}: {getattr(self, name)} must not be negative")
+                raise ParameterError(name, f"{getattr(self, name)} must not be negative")
         for name in ("path_loss_exponent", "shadowing_correlation_m", "min_distance_m"):
             if getattr(self, name) <= 0.0:
-                raise ValueError(f"{name}: {getattr(self, name)} must be positive")
+                raise ParameterError(name, f"{getattr(self, name)} must be positive")
 
 
 @dataclass(frozen=True)

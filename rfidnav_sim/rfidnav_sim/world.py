@@ -45,7 +45,7 @@ from rfidnav_common.tag_groups import TagGroup
 from rfidnav_sim.wall_tag_model import WallTag
 from rfidnav_sim.wifi_model import AccessPoint, PropagationSettings
 from rfidnav_common.tag_lattice import Deployment, DeploymentError, make_deployment
-from rfidnav_common.errors import ConfigError
+from rfidnav_common.errors import ConfigError, ParameterError
 
 TAG_KINDS = ("ceiling", "floor")
 
@@ -176,9 +176,8 @@ def _wifi(entry: Section) -> tuple[PropagationSettings, int]:
     settings = PropagationSettings(**{name: entry.number(name, getattr(defaults, name)) for name in names})
     try:
         settings.validate()
-    except ValueError as error:
-        field, _, problem = str(error).partition(": ")
-        raise entry.error(field, problem) from None
+    except ParameterError as error:
+        raise entry.error(error.field, error.problem) from None
     return settings, entry.integer("shadowing_seed", 1)
 
 

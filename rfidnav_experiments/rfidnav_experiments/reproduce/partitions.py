@@ -44,8 +44,7 @@ from rfidnav_experiments.runners.partitions import random_task, run_navigation  
 from rfidnav_experiments.reproduce.tables import mean_or_none, progress, save, table  # noqa: E402
 from rfidnav_bringup.scenario import CONFIG_DIR  # noqa: E402
 from rfidnav_localization.parameters import PartitionLocalizerParameters  # noqa: E402
-from rfidnav_localization.partition_localization import (LocalizerSettings, PartitionLocalizer,  # noqa: E402
-                                                         orientation_bounds)
+from rfidnav_localization.partition import LocalizerSettings, PartitionLocalizer, orientation_bounds  # noqa: E402
 from rfidnav_planning.parameters import PartitionNavigatorParameters  # noqa: E402
 from rfidnav_planning.partition_navigation import NavigatorSettings  # noqa: E402
 

@@ -24,7 +24,7 @@ from typing import Callable
 import numpy as np
 
 from rfidnav_common.tag_lattice import Deployment, partitions_along_segment
-from rfidnav_localization.partition_localization import LocalizerSettings, PartitionLocalizer
+from rfidnav_localization.partition import LocalizerSettings, PartitionLocalizer
 from rfidnav_planning.partition_navigation import FORWARD, ROTATE, Decision, NavigatorSettings, PartitionNavigator
 
 SPEED_MPS = 0.2                 # paper 001's speed; only the stamps depend on it
