@@ -1,6 +1,15 @@
-"""Test-wide ROS environment: a private DDS domain, localhost-only discovery, strict message field checks.
+"""Test-wide ROS environment: a private DDS domain, localhost-only discovery, strict message field checks. Set at
+import, before any test initialises rclpy, so parallel or concurrent runs never hear each other.
 
-Set at import, before any test initialises rclpy, so parallel or concurrent runs never hear each other."""
+And the tiers: every test has exactly one, declared as ``pytest.mark.tier(NAME)`` on its module (``pytestmark``) or,
+where a module spans tiers, on the test itself (the closer one wins). The hook below turns it into the plain marker
+NAME, so ``./rfidnav test -m unit`` selects a tier:
+
+* ``unit``: pure code (no rclpy, no processes), seconds in all;
+* ``slow``: pure code too, but whole in-process missions, reproductions or comparisons against scikit-fuzzy;
+* ``node``: real nodes in this process on a private context and executor (``support.graph.Graph``);
+* ``graph``: node processes over DDS, the CLI, the recorder and player, LLRP and serial peers.
+"""
 
 from __future__ import annotations
 
@@ -19,7 +28,22 @@ import pytest  # noqa: E402
 from rfidnav_bringup.processes import DomainLease  # noqa: E402
 
 if TYPE_CHECKING:
-    from test_nodes import Graph
+    from support.graph import Graph
+
+TIERS = ("unit", "slow", "node", "graph")
+
+
+def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+    untiered = []
+    for item in items:
+        declared = item.get_closest_marker("tier")
+        if declared is None or declared.args[0] not in TIERS:
+            untiered.append(item.nodeid)
+            continue
+        item.add_marker(declared.args[0])
+    if untiered:
+        raise pytest.UsageError(f"tests without a tier (pytest.mark.tier, one of {', '.join(TIERS)}): "
+                                + ", ".join(untiered[:10]) + (" ..." if len(untiered) > 10 else ""))
 
 
 @pytest.fixture
@@ -34,8 +58,9 @@ def domain():
 
 @pytest.fixture
 def graph(domain: int) -> Iterator["Graph"]:
-    """Nodes under test and a probe on one private context and executor (test_nodes.Graph), closed after."""
-    from test_nodes import Graph    # here, not at the top: the environment above must be set before rclpy loads
+    """Nodes under test and a probe on one private context and executor (support.graph.Graph), closed after."""
+    # Imported here, not at the top: the environment above must be set before rclpy loads.
+    from support.graph import Graph
 
     graph = Graph(domain)
     try:

@@ -31,19 +31,34 @@ from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.serialization import serialize_message
-from rosbags.interfaces import Qos, QosDurability, QosHistory, QosLiveliness, QosReliability, QosTime
+from rosbags.interfaces import (
+    Qos,
+    QosDurability,
+    QosHistory,
+    QosLiveliness,
+    QosReliability,
+    QosTime,
+)
 from rosbags.rosbag2 import StoragePlugin, Writer
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 from rosgraph_msgs.msg import Clock
 from std_msgs.msg import Header
 from visualization_msgs.msg import Marker, MarkerArray
 
-from rfidnav_bag.bags import bag_info, format_bag_info, message_definition, read_messages, read_raw, typestore
+from rfidnav_bag.bags import (
+    bag_info,
+    format_bag_info,
+    message_definition,
+    read_messages,
+    read_raw,
+    typestore,
+)
 from rfidnav_bag.errors import BagError
-from rfidnav_common.ros import message_class
-from rfidnav_common.ros import LATCHED_QOS
+from rfidnav_common.ros import LATCHED_QOS, message_class
 from rfidnav_msgs.action import FollowTagRoute
 from rfidnav_msgs.msg import TagReadArray, TagReading
+
+pytestmark = pytest.mark.tier("graph")
 
 BIN = Path(sys.prefix) / "bin"
 N = 40  # messages per streamed topic in the round trip
@@ -233,6 +248,7 @@ def synthetic_bag(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 # ------------------------------------------------------------------------------------------- types
 
+@pytest.mark.tier("unit")
 def test_typestore_hashes_equal_rosidl_hashes() -> None:
     """Every rfidnav type, action-derived ones included, has the field layout rosidl generated:
     its RIHS01 hash equals the one in the installed type description (.json)."""
@@ -254,6 +270,7 @@ def test_typestore_hashes_equal_rosidl_hashes() -> None:
             "rfidnav_msgs/srv/Locate_Response", "rfidnav_msgs/msg/WifiScan"} <= set(checked)
 
 
+@pytest.mark.tier("unit")
 def test_action_types_resolve_to_generated_classes() -> None:
     assert message_class("rfidnav_msgs/action/FollowTagRoute_FeedbackMessage") is FollowTagRoute.Impl.FeedbackMessage
     assert message_class("rfidnav_msgs/msg/TagReadArray") is TagReadArray
@@ -417,6 +434,7 @@ def _truncated(bag: Path) -> Path:
     return path
 
 
+@pytest.mark.tier("unit")
 @pytest.mark.parametrize("damage", [_missing, _plain_file, _no_metadata, _truncated],
                          ids=["missing", "plain_file", "no_metadata", "truncated"])
 def test_unreadable_bags_raise_bag_error_naming_the_path(damage: Callable[[Path], Path], tmp_path: Path,
@@ -432,6 +450,7 @@ def test_unreadable_bags_raise_bag_error_naming_the_path(damage: Callable[[Path]
     assert str(broken) in str(read_error.value)
 
 
+@pytest.mark.tier("unit")
 def test_unknown_type_without_definition_names_the_topic(tmp_path: Path) -> None:
     writer = Writer(tmp_path / "bag", version=9, storage_plugin=StoragePlugin.MCAP)
     writer.open()
@@ -443,6 +462,7 @@ def test_unknown_type_without_definition_names_the_topic(tmp_path: Path) -> None
         list(read_messages(tmp_path / "bag"))
 
 
+@pytest.mark.tier("unit")
 def test_foreign_type_decodes_from_the_definition_in_the_bag(tmp_path: Path) -> None:
     """A bag from another robot's packages: the type is in no installed package, only in the bag."""
     definition = "int32 value\nstring name\ngeometry_msgs/Point where"
@@ -463,6 +483,7 @@ def test_foreign_type_decodes_from_the_definition_in_the_bag(tmp_path: Path) -> 
     assert "other_pkg/msg/Blip" not in typestore().fielddefs, "a bag's definitions leaked into the shared store"
 
 
+@pytest.mark.tier("unit")
 def test_topic_filter_of_the_readers(synthetic_bag: Path) -> None:
     raw = list(read_raw(synthetic_bag, ["/sim/markers", "/not_recorded"]))
     assert [(m.topic, m.msgtype, m.timestamp_ns) for m in raw] == [

@@ -9,6 +9,8 @@ import pytest
 
 from rfidnav_experiments.bench.llrp import bench_llrp
 
+pytestmark = pytest.mark.tier("graph")
+
 STEP_KEYS = {"asked_reports_per_s", "sent_reports_per_s", "sent", "received", "lost", "latency_p50_ms",
              "latency_p99_ms", "latency_max_ms"}
 

@@ -19,6 +19,8 @@ from rfidnav_sim.building import building_floor, main, write_world
 from rfidnav_sim.wall_tag_model import InductionArea, WallTag, WallTagReader
 from rfidnav_sim.world import load_world
 
+pytestmark = pytest.mark.tier("unit")
+
 REPO = Path(__file__).resolve().parents[1]
 MAPS = ("building_fig5", "building_large")
 TWO_NODES = """\

@@ -9,8 +9,9 @@ import pytest
 
 from rfidnav_bringup.scenario import load_scenario
 from rfidnav_common.errors import ConfigError
+from support.runs import WORKSPACE
 
-WORKSPACE = Path(__file__).resolve().parents[1]
+pytestmark = pytest.mark.tier("unit")
 
 
 def test_the_scenario_carries_a_topological_map_and_a_node_goal() -> None:

@@ -6,16 +6,18 @@ import math
 
 import numpy as np
 import pytest
+from nav_msgs.msg import Odometry
 from rclpy.parameter import Parameter
 from sensor_msgs.msg import Imu
-from nav_msgs.msg import Odometry
 
 from rfidnav_common.geometry import quaternion_to_yaw
 from rfidnav_common.ros import SENSOR_QOS
 from rfidnav_sim.compass_model import CompassModel
 from rfidnav_sim.compass_sim_node import CompassSimNode
 from rfidnav_sim.parameters import CompassParameters
-from test_nodes import Graph, ground_truth
+from support.graph import Graph, ground_truth
+
+pytestmark = pytest.mark.tier("unit")
 
 
 def test_readings_carry_the_bias_and_the_noise_and_stay_wrapped() -> None:
@@ -36,6 +38,7 @@ def test_bad_parameters_name_the_field(field: str, value: float) -> None:
         CompassParameters(**{field: value}).validate()
 
 
+@pytest.mark.tier("node")
 def test_compass_sim_publishes_the_heading_at_its_rate_on_the_ground_truth_clock(graph: Graph) -> None:
     graph.add(CompassSimNode(context=graph.context, parameter_overrides=[
         Parameter("seed", value=3), Parameter("rate_hz", value=25.0), Parameter("noise_sd_deg", value=0.0),

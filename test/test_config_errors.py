@@ -8,7 +8,6 @@ thing."""
 from __future__ import annotations
 
 import os
-import shutil
 import subprocess
 import sys
 from dataclasses import dataclass
@@ -21,33 +20,20 @@ from rfidnav_bringup.errors import LaunchError
 from rfidnav_bringup.processes import resolve_executable
 from rfidnav_bringup.scenario import load_scenario
 from rfidnav_common.errors import ConfigError
+from support.config_files import copy_config, edit
+from support.runs import WORKSPACE
 
-WORKSPACE = Path(__file__).resolve().parents[1]
+pytestmark = pytest.mark.tier("unit")
+
 CONFIG = WORKSPACE / "config"
 SCENARIO = "scenarios/line_follow_90.yaml"
 REFERENCED = (SCENARIO, "worlds/line_follow.yaml", "maps/line_follow.yaml", "params/robot_sim.yaml",
               "params/reader_uhf_2ant.yaml", "params/flc_tuned.yaml", "params/flc_paper.yaml")
 
 
-def copy_config(tmp_path: Path, referenced: tuple[str, ...]) -> Path:
-    """A private copy of the config files a scenario uses (paths relative to config/), for breaking."""
-    root = tmp_path / "config"
-    for relative in referenced:
-        (root / relative).parent.mkdir(parents=True, exist_ok=True)
-        shutil.copyfile(CONFIG / relative, root / relative)
-    return root
-
-
 @pytest.fixture
 def config(tmp_path: Path) -> Path:
     return copy_config(tmp_path, REFERENCED)
-
-
-def edit(path: Path, old: str, new: str) -> None:
-    """Replace ``old`` once; fail loudly if the shipped file no longer contains it (the case would test nothing)."""
-    text = path.read_text()
-    assert text.count(old) == 1, f"{path.name}: expected exactly one {old!r}"
-    path.write_text(text.replace(old, new))
 
 
 @dataclass(frozen=True)
@@ -254,6 +240,7 @@ def run_cli(scenario: Path, out: Path) -> subprocess.CompletedProcess:
                            "--rtf", "5"], capture_output=True, text=True, timeout=60, env=env, cwd=WORKSPACE)
 
 
+@pytest.mark.tier("graph")
 @pytest.mark.parametrize("name", ["wrong type robot.x", "NaN in a parameter file", "duplicate tag id in the world"])
 def test_cli_run_of_a_broken_scenario_prints_one_line_and_starts_nothing(config: Path, tmp_path: Path, name: str):
     case = CASES[name]
@@ -270,6 +257,7 @@ def test_cli_run_of_a_broken_scenario_prints_one_line_and_starts_nothing(config:
     assert not out.exists() or not any(out.iterdir())
 
 
+@pytest.mark.tier("graph")
 def test_cli_run_with_an_unknown_package_names_the_scenario_field_and_starts_nothing(config: Path, tmp_path: Path):
     edit(config / SCENARIO, "package: rfidnav_control, executable: heading_controller",
          "package: nope_pkg, executable: heading_controller")

@@ -14,26 +14,27 @@ import subprocess
 import sys
 import time
 from collections.abc import Callable, Iterator
-from pathlib import Path
 from typing import Any
 
 import pytest
 import serial
 import yaml
+from geometry_msgs.msg import Twist
 from nav_msgs.msg import Odometry
 from rclpy.parameter import Parameter
-from geometry_msgs.msg import Twist
 
-from fake_create import Command, FakeCreate
 from rfidnav_common.ros import COMMAND_QOS, SENSOR_QOS, odometry_pose, twist
 from rfidnav_drivers import create_oi as oi
 from rfidnav_drivers.create_base_node import CreateBaseNode, port_error
 from rfidnav_drivers.errors import DriverError
 from rfidnav_drivers.parameters import CreateBaseParameters
 from rfidnav_msgs.msg import BaseEvent
-from test_nodes import Graph
+from support.fake_create import Command, FakeCreate
+from support.graph import Graph
+from support.runs import WORKSPACE
 
-WORKSPACE = Path(__file__).resolve().parents[1]
+pytestmark = pytest.mark.tier("unit")
+
 GEOMETRY = oi.WheelGeometry()
 MISSING_PORT = "/dev/ttyRFIDNAV_NO_SUCH_PORT"
 
@@ -243,6 +244,7 @@ def base(start_base: Callable[..., Base]) -> Base:
     return start_base()
 
 
+@pytest.mark.tier("node")
 @pytest.mark.parametrize("mode, opcode", [("safe", oi.SAFE), ("full", oi.FULL)])
 def test_the_node_starts_the_open_interface_in_its_mode_and_queries_the_sensors(
         graph: Graph, fake: FakeCreate, start_base, mode, opcode):
@@ -256,6 +258,7 @@ def test_the_node_starts_the_open_interface_in_its_mode_and_queries_the_sensors(
     assert base.pose() == pytest.approx((0.0, 0.0, 0.0))       # start-up counts are only the reference
 
 
+@pytest.mark.tier("node")
 def test_a_forward_command_drives_both_wheels_and_odometry_advances_along_x(graph: Graph, base: Base):
     assert base.drive(0.2, 0.0) == (200, 200)
     graph.spin_until(lambda: base.pose()[0] > 0.1, "/odom to advance 10 cm")
@@ -268,6 +271,7 @@ def test_a_forward_command_drives_both_wheels_and_odometry_advances_along_x(grap
     assert stamps == sorted(stamps) and stamps[-1] > 0.0
 
 
+@pytest.mark.tier("node")
 def test_a_turn_command_gives_opposite_wheel_speeds_and_a_turning_pose(graph: Graph, base: Base):
     right, left = base.drive(0.0, 1.0)
     assert right == -left and right in (117, 118), (right, left)
@@ -276,6 +280,7 @@ def test_a_turn_command_gives_opposite_wheel_speeds_and_a_turning_pose(graph: Gr
     assert base.drive(0.5, 2.0) == (500, 180)                   # limited to 0.5 m/s, keeping the arc
 
 
+@pytest.mark.tier("node")
 def test_a_bump_stops_at_once_and_blocks_forward_motion_until_released(graph: Graph, fake: FakeCreate, base: Base):
     assert base.drive(0.2, 0.0) == (200, 200)
     since = len(fake.received())
@@ -301,6 +306,7 @@ def test_a_bump_stops_at_once_and_blocks_forward_motion_until_released(graph: Gr
     assert [e.active for e in base.events if e.event == BaseEvent.BUMP_LEFT] == [True, False]
 
 
+@pytest.mark.tier("node")
 @pytest.mark.parametrize("condition", [BaseEvent.CLIFF_FRONT_LEFT, BaseEvent.WHEEL_DROP_RIGHT])
 def test_a_cliff_or_wheel_drop_blocks_all_motion_and_safe_mode_comes_back(graph: Graph, fake: FakeCreate,
                                                                            base: Base, condition: str):
@@ -323,6 +329,7 @@ def test_a_cliff_or_wheel_drop_blocks_all_motion_and_safe_mode_comes_back(graph:
     assert fake.speeds() == (200, 200)
 
 
+@pytest.mark.tier("node")
 def test_the_watchdog_stops_the_base_without_commands_and_releases_on_the_next(graph: Graph, fake: FakeCreate,
                                                                                 start_base):
     base = start_base(command_timeout_s=0.3)
@@ -339,6 +346,7 @@ def test_the_watchdog_stops_the_base_without_commands_and_releases_on_the_next(g
     assert [e.active for e in base.events if e.event == BaseEvent.WATCHDOG] == [True, False]
 
 
+@pytest.mark.tier("node")
 def test_short_and_missing_replies_are_counted_and_warned_about(graph: Graph, fake: FakeCreate, base: Base):
     for reply_bytes in (4, 0):
         missed = base.node.missed_replies
@@ -352,6 +360,7 @@ def test_short_and_missing_replies_are_counted_and_warned_about(graph: Graph, fa
     assert base.node.thread.is_alive()
 
 
+@pytest.mark.tier("node")
 def test_a_nan_command_is_dropped_with_a_warning(graph: Graph, fake: FakeCreate, base: Base):
     since = len(fake.received())
     base.cmd_pub.publish(twist(math.nan, 0.0))
@@ -360,6 +369,7 @@ def test_a_nan_command_is_dropped_with_a_warning(graph: Graph, fake: FakeCreate,
     assert fake.drives(since) == [(100, 100)]                  # nothing was sent for the NaN one
 
 
+@pytest.mark.tier("node")
 def test_shutdown_stops_the_base_then_the_open_interface(graph: Graph, fake: FakeCreate, base: Base):
     assert base.drive(0.2, 0.0) == (200, 200)
     base.shutdown()
@@ -370,12 +380,14 @@ def test_shutdown_stops_the_base_then_the_open_interface(graph: Graph, fake: Fak
     assert not base.node.thread.is_alive()
 
 
+@pytest.mark.tier("node")
 def test_a_missing_port_is_one_driver_error_naming_it(graph: Graph):
     with pytest.raises(DriverError, match=MISSING_PORT) as raised:
         CreateBaseNode(context=graph.context, parameter_overrides=[Parameter("port", value=MISSING_PORT)])
     assert "not found" in str(raised.value)
 
 
+@pytest.mark.tier("graph")
 def test_main_prints_one_line_and_exits_2_for_a_missing_port():
     done = subprocess.run([sys.executable, "-m", "rfidnav_drivers.create_base_node", "--ros-args",
                            "-p", f"port:={MISSING_PORT}"], capture_output=True, text=True, timeout=60)
@@ -384,6 +396,7 @@ def test_main_prints_one_line_and_exits_2_for_a_missing_port():
     assert len(fatal) == 1 and MISSING_PORT in fatal[0] and "Traceback" not in done.stderr, done.stderr
 
 
+@pytest.mark.tier("graph")
 def test_ctrl_c_stops_the_base_then_the_open_interface_without_a_traceback(graph: Graph, fake: FakeCreate):
     process = subprocess.Popen([sys.executable, "-m", "rfidnav_drivers.create_base_node", "--ros-args",
                                 "-p", f"port:={fake.slave_path}"], stderr=subprocess.PIPE, text=True)

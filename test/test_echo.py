@@ -11,7 +11,9 @@ from geometry_msgs.msg import Twist
 
 from rfidnav_bringup.echo import EchoError, echo
 from rfidnav_common.ros import COMMAND_QOS, twist
-from test_nodes import Graph
+from support.graph import Graph
+
+pytestmark = pytest.mark.tier("node")
 
 
 def test_echo_prints_the_messages_a_publisher_sends(graph: Graph, domain: int) -> None:

@@ -13,6 +13,8 @@ import pytest
 from rfidnav_localization.errors import LocateError
 from rfidnav_localization.fingerprint import Fingerprint, LocateSettings, RadioMap
 
+pytestmark = pytest.mark.tier("unit")
+
 ACCESS_POINTS = {"ap:00": (0.0, 0.0), "ap:90": (9.0, 0.0), "ap:04": (0.0, 4.0), "ap:94": (9.0, 4.0),
                  "ap:mid": (4.5, 2.3)}
 

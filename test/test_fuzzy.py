@@ -21,7 +21,7 @@ from rfidnav_control.fuzzy import (
 from rfidnav_experiments.bench.fuzzy import benchmark
 
 # skfuzzy 0.5.0 calls np.maximum(a, b, out) positionally, which numpy 2.4 deprecates; not ours to fix.
-pytestmark = pytest.mark.filterwarnings("ignore:Passing more than 2 positional arguments:DeprecationWarning")
+pytestmark = [pytest.mark.tier("unit"), pytest.mark.filterwarnings("ignore:Passing more than 2 positional arguments:DeprecationWarning")]
 
 PI = math.pi
 TOLERANCE_RAD = 1e-3
@@ -101,6 +101,7 @@ def case(request: pytest.FixtureRequest) -> dict[str, Any]:
 # -- fast path against the reference ------------------------------------------------------------------------------
 
 
+@pytest.mark.tier("slow")
 def test_fast_path_matches_control_system_simulation(case: dict[str, Any]) -> None:
     count = SIMULATION_INPUTS[case["name"]]
     inputs = case["inputs"][:count]
@@ -122,6 +123,7 @@ def test_fast_path_matches_reference_on_random_inputs(case: dict[str, Any]) -> N
     assert np.ptp(case["reference"]) > 0.5 * case["spec"].output_range
 
 
+@pytest.mark.tier("slow")
 def test_table_matches_exact_centroid(case: dict[str, Any]) -> None:
     controller: FuzzyHeadingController = case["controller"]
     assert controller.table_error <= 1e-6
@@ -129,6 +131,7 @@ def test_table_matches_exact_centroid(case: dict[str, Any]) -> None:
     assert np.max(np.abs(controller.evaluate_many(case["inputs"]) - exact)) <= controller.table_error * 1.01 + 1e-12
 
 
+@pytest.mark.tier("slow")
 def test_comparison_detects_a_wrong_rule(case: dict[str, Any]) -> None:
     spec: FuzzyHeadingSpec = case["spec"]
     # Swap the consequents of the first and last rules: the controller then steers the wrong way for large |x|.

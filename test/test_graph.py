@@ -19,42 +19,13 @@ from mcap_ros2.decoder import DecoderFactory
 
 from rfidnav_bag.bags import bag_info, read_messages
 from rfidnav_bringup.report import run_metrics
+from support.runs import WORKSPACE, run_cli, run_scenario
 
-WORKSPACE = Path(__file__).resolve().parents[1]
+pytestmark = pytest.mark.tier("graph")
+
 # Issue 2: line_follow_90 over DDS at RTF >= 5 within the paper's RMSE.
 GRAPH_TEST_RTF = 5.0
 PAPER_RMSE_M = 0.034
-
-
-def run_cli(*args: str, timeout: float = 600) -> subprocess.CompletedProcess:
-    env = dict(os.environ)
-    env.pop("ROS_DOMAIN_ID", None)   # the orchestrator leases its own domain
-    return subprocess.run([sys.executable, "-m", "rfidnav_bringup.cli", *args], capture_output=True, text=True,
-                          timeout=timeout, cwd=WORKSPACE, env=env)
-
-
-def run_scenario(out: Path, scenario: str, *options: str) -> Path:
-    """``./rfidnav run SCENARIO OPTIONS --out OUT``, which must succeed: the one run folder, with the CLI's output
-    kept in it as cli.log."""
-    result = run_cli("run", scenario, *options, "--out", str(out))
-    runs = list(out.iterdir())
-    assert len(runs) == 1, result.stdout + result.stderr
-    runs[0].joinpath("cli.log").write_text(result.stdout + result.stderr)
-    assert result.returncode == 0, result.stdout + result.stderr
-    return runs[0]
-
-
-def navigation_subscriptions(run: Path, navigation_nodes: tuple[str, ...]) -> dict[str, set[str]]:
-    """Each navigation node's subscriptions once the run's graph was ready (graph.json), after checking that none
-    is to a /sim/* topic and that none was given the world file: they know neither ground truth nor world."""
-    graph = json.loads((run / "graph.json").read_text())
-    subscriptions = {}
-    for name in navigation_nodes:
-        topics = graph["nodes"][name]["subscriptions"]
-        assert not [t for t in topics if t.startswith("/sim/")], (name, topics)
-        assert "world_file" not in (run / "params" / f"{name}.yaml").read_text(), name
-        subscriptions[name] = set(topics)
-    return subscriptions
 
 
 @pytest.fixture(scope="module")

@@ -10,6 +10,8 @@ import pytest
 
 from rfidnav_sim.kinematics import BaseLimits, DiffDriveBase, OdometryDrift, Pose2D
 
+pytestmark = pytest.mark.tier("unit")
+
 DT = 0.01
 LIMITS = BaseLimits(track_width_m=0.30, max_wheel_speed_mps=0.5, max_wheel_accel_mps2=1.0, command_timeout_s=0.5)
 

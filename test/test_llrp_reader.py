@@ -4,16 +4,14 @@ restored connection, an unreachable reader, a silent link that stops answering, 
 
 from __future__ import annotations
 
-import asyncio
 import math
 import socket
-import threading
-from collections.abc import Coroutine, Iterator
+from collections.abc import Iterator
 from typing import Any
 
 import pytest
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
-from llrpkit.emulator.core import EmulatedTag, LLRPEmulator
+from llrpkit.emulator.core import EmulatedTag
 from llrpkit.inventory import TagReport
 from llrpkit.protocol import messages, params
 from llrpkit.reader import Reader
@@ -32,10 +30,12 @@ from rfidnav_drivers.llrp_reports import (
     tag_id_of,
 )
 from rfidnav_msgs.msg import TagReadArray, TagReading
-from test_nodes import Graph
+from support.graph import Graph
+from support.llrp import WAIT_S, EmulatorLoop
+
+pytestmark = pytest.mark.tier("node")
 
 TWO_PI = 2.0 * math.pi
-WAIT_S = 30.0    # generous: two loaded cores, and a reconnection waits out a back-off
 # The emulator's hop table (FCC): 50 channels from 902.75 MHz in 500 kHz steps, channel index 1-50.
 EMULATOR_TABLE_HZ = tuple(902.75e6 + 0.5e6 * k for k in range(50))
 # Five tags on antennas 1 and 2 with distinct RSSIs, and one on antenna 3 only, which the node does not inventory.
@@ -52,6 +52,7 @@ def tags_of(population: dict[bytes, tuple[tuple[int, ...], float]]) -> list[Emul
 
 # --------------------------------------------------------------------------------------------- conversions
 
+@pytest.mark.tier("unit")
 def test_phase_degrees_become_radians_in_the_half_open_turn() -> None:
     assert phase_rad_of(0.0) == 0.0
     assert phase_rad_of(90.0) == pytest.approx(math.pi / 2)
@@ -64,6 +65,7 @@ def test_phase_degrees_become_radians_in_the_half_open_turn() -> None:
     assert math.isnan(phase_rad_of(None)) and math.isnan(phase_rad_of(math.nan))
 
 
+@pytest.mark.tier("unit")
 def test_epc_is_upper_case_hex_and_iq_follow_the_simulator_convention() -> None:
     assert tag_id_of(bytes.fromhex("e2801160600002abcdef0012")) == "E2801160600002ABCDEF0012"
     i, q = iq_of(-60.0, math.pi / 3)
@@ -72,6 +74,7 @@ def test_epc_is_upper_case_hex_and_iq_follow_the_simulator_convention() -> None:
     assert all(math.isnan(v) for v in iq_of(math.nan, 1.0) + iq_of(-50.0, math.nan))
 
 
+@pytest.mark.tier("unit")
 def test_a_tag_report_becomes_a_reading() -> None:
     table = (865.7e6, 866.3e6, 866.9e6, 867.5e6)
     report = TagReport(epc=bytes.fromhex("e2801160600002aa"), antenna=2, rssi_dbm=-55.5, channel_index=3,
@@ -85,6 +88,7 @@ def test_a_tag_report_becomes_a_reading() -> None:
     assert all(math.isnan(v) for v in (bare.rssi_dbm, bare.phase_rad, bare.i, bare.q, bare.frequency_hz))
 
 
+@pytest.mark.tier("unit")
 def test_channel_frequency_lookup_and_a_missing_index() -> None:
     table = frequency_table_hz(params.FrequencyInformation(hopping=True, frequency_hop_tables=[
         params.FrequencyHopTable(hop_table_id=1, frequency=[902_750 + 500 * k for k in range(50)])]))
@@ -107,6 +111,7 @@ def test_channel_frequency_lookup_and_a_missing_index() -> None:
     assert frequency_table_hz(None) == ()
 
 
+@pytest.mark.tier("unit")
 def test_backoff_doubles_up_to_the_cap_and_starts_over_after_a_reset() -> None:
     backoff = Backoff(0.5, 10.0)
     assert [backoff.next_delay() for _ in range(7)] == [0.5, 1.0, 2.0, 4.0, 8.0, 10.0, 10.0]
@@ -122,38 +127,6 @@ def test_backoff_doubles_up_to_the_cap_and_starts_over_after_a_reset() -> None:
 
 # -------------------------------------------------------------------------------------------- the emulator
 
-class EmulatorLoop:
-    """An asyncio loop in its own thread for LLRPEmulator instances (the node's loop is another thread)."""
-
-    def __init__(self) -> None:
-        self.loop = asyncio.new_event_loop()
-        self.thread = threading.Thread(target=self.loop.run_forever, name="llrp-emulator", daemon=True)
-        self.thread.start()
-        self.running: list[LLRPEmulator] = []
-
-    def run(self, coroutine: Coroutine[Any, Any, Any]) -> Any:
-        return asyncio.run_coroutine_threadsafe(coroutine, self.loop).result(WAIT_S)
-
-    def start(self, tags: list[EmulatedTag], port: int = 0) -> LLRPEmulator:
-        async def started() -> LLRPEmulator:
-            emulator = LLRPEmulator(host="127.0.0.1", port=port, tags=tags, reads_per_sec=100.0, antenna_count=4)
-            await emulator.start()
-            return emulator
-        emulator = self.run(started())
-        self.running.append(emulator)
-        return emulator
-
-    def stop(self, emulator: LLRPEmulator) -> None:
-        self.run(emulator.stop())
-        self.running.remove(emulator)
-
-    def close(self) -> None:
-        for emulator in list(self.running):
-            self.stop(emulator)
-        self.loop.call_soon_threadsafe(self.loop.stop)
-        self.thread.join(WAIT_S)
-        self.loop.close()
-
 
 @pytest.fixture
 def emulators() -> Iterator[EmulatorLoop]:
@@ -164,6 +137,7 @@ def emulators() -> Iterator[EmulatorLoop]:
         emulator_loop.close()
 
 
+@pytest.mark.tier("unit")
 def test_the_emulator_reports_its_hop_table_in_its_capabilities(emulators: EmulatorLoop) -> None:
     emulator = emulators.start(tags_of(POPULATION))
 

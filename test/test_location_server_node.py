@@ -13,7 +13,9 @@ from rfidnav_localization.location_server_node import LocationServerNode
 from rfidnav_localization.location_store import LocationStore
 from rfidnav_msgs.msg import AccessPointRss, WifiScan
 from rfidnav_msgs.srv import AddFingerprint, GetTagMap, Locate
-from test_nodes import Graph
+from support.graph import Graph
+
+pytestmark = pytest.mark.tier("node")
 
 BSSIDS = ("02:00:00:00:00:01", "02:00:00:00:00:02", "02:00:00:00:00:03")
 AP_POSITIONS = ((0.0, 0.0), (6.0, 0.0), (0.0, 6.0))
@@ -122,6 +124,7 @@ def test_a_missing_or_corrupt_database_is_one_error_naming_the_file(graph: Graph
         start_server(graph, corrupt, map_file)
 
 
+@pytest.mark.tier("graph")
 def test_the_latency_bench_runs_the_server_in_its_own_process_and_reports_percentiles() -> None:
     from rfidnav_experiments.bench.location_server import benchmark
 

@@ -14,7 +14,14 @@ import pytest
 
 from rfidnav_localization.errors import StoreError
 from rfidnav_localization.fingerprint import Fingerprint
-from rfidnav_localization.location_store import SCHEMA_VERSION, LocationStore, TagGroupRecord, TagRecord
+from rfidnav_localization.location_store import (
+    SCHEMA_VERSION,
+    LocationStore,
+    TagGroupRecord,
+    TagRecord,
+)
+
+pytestmark = pytest.mark.tier("unit")
 
 FINGERPRINTS = [
     Fingerprint((0.0, 0.0), {"aa:01": -41.5, "aa:02": -70.25}, "grid"),

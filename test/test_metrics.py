@@ -7,7 +7,14 @@ import math
 import numpy as np
 import pytest
 
-from rfidnav_bringup.metrics import Trajectory, signed_segment_error, tracking_error, tracking_metrics
+from rfidnav_bringup.metrics import (
+    Trajectory,
+    signed_segment_error,
+    tracking_error,
+    tracking_metrics,
+)
+
+pytestmark = pytest.mark.tier("unit")
 
 LINE_TAGS = np.array([[0.0, 0.0], [0.0, 5.0]])
 

@@ -9,11 +9,35 @@ from pathlib import Path
 
 import pytest
 
-from rfidnav_planning.mission_executor import (BACK, FOLLOW, JUNCTION_CENTRE, LEFT, NO_OPENING, OBSTACLE, RIGHT,
-                                               STOP, STRAIGHT, TURN_DONE, TURNS, Decision, FollowerCommand,
-                                               LearnedEdge, MissionExecutor)
-from rfidnav_common.topological_map import (DIRECTIONS, UNKNOWN, Hallway, Node, RouteError, TopologicalMap,
-                                              load_topological_map, opposite)
+from rfidnav_common.topological_map import (
+    DIRECTIONS,
+    UNKNOWN,
+    Hallway,
+    Node,
+    RouteError,
+    TopologicalMap,
+    load_topological_map,
+    opposite,
+)
+from rfidnav_planning.mission_executor import (
+    BACK,
+    FOLLOW,
+    JUNCTION_CENTRE,
+    LEFT,
+    NO_OPENING,
+    OBSTACLE,
+    RIGHT,
+    STOP,
+    STRAIGHT,
+    TURN_DONE,
+    TURNS,
+    Decision,
+    FollowerCommand,
+    LearnedEdge,
+    MissionExecutor,
+)
+
+pytestmark = pytest.mark.tier("unit")
 
 MAPS = Path(__file__).resolve().parents[1] / "config" / "maps"
 _QUARTER_TURNS = {STRAIGHT: 0, RIGHT: 1, BACK: 2, LEFT: 3}

@@ -7,22 +7,13 @@ Each test leases its own DDS domain (as ``./rfidnav run`` does), so concurrent s
 from __future__ import annotations
 
 import math
-import time
-from collections.abc import Callable
 from pathlib import Path
-from typing import Any
 
 import pytest
-import rclpy
 from geometry_msgs.msg import Twist
 from nav_msgs.msg import Odometry
-from rcl_interfaces.msg import Log
 from rclpy.action import ActionClient
-from rclpy.context import Context
-from rclpy.executors import SingleThreadedExecutor
-from rclpy.node import Node
 from rclpy.parameter import Parameter
-from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.serialization import serialize_message
 from rosbags.rosbag2 import StoragePlugin, Writer
 from rosgraph_msgs.msg import Clock as ClockMsg
@@ -30,63 +21,21 @@ from std_srvs.srv import Trigger
 
 from rfidnav_bag.bags import message_definition
 from rfidnav_bag.player_node import PlayerNode
-from rfidnav_common.geometry import yaw_to_quaternion
 from rfidnav_common.ros import COMMAND_QOS, SENSOR_QOS, time_msg
 from rfidnav_control.heading_controller_node import HeadingControllerNode
 from rfidnav_msgs.action import FollowTagRoute
 from rfidnav_msgs.msg import TagReadArray, TagReading
 from rfidnav_sim.rfid_reader_sim_node import RfidReaderSimNode
+from support.graph import Graph, ground_truth
+from support.runs import WORKSPACE
 
-WORKSPACE = Path(__file__).resolve().parents[1]
+pytestmark = pytest.mark.tier("node")
+
 ROUTE_MAP = WORKSPACE / "config/maps/line_follow.yaml"     # C1 -> F1, C2 -> F2
 WORLD = WORKSPACE / "config/worlds/line_follow.yaml"       # C1 (0, 0, 3), C2 (0, 5, 3), F1, F2 on the floor
 WAIT_S = 10.0   # generous for a loaded 2-core machine; each wait normally takes milliseconds
 FREQUENCY_HZ = 915.25e6
 ROUND_S = 0.04
-# /rosout is transient local: a subscriber that joins late still gets what the nodes logged.
-ROSOUT_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1000, reliability=ReliabilityPolicy.RELIABLE,
-                        durability=DurabilityPolicy.TRANSIENT_LOCAL)
-
-
-class Graph:
-    """A private context, one executor, and the nodes under test plus a probe node on it."""
-
-    def __init__(self, domain_id: int) -> None:
-        self.context = Context()
-        rclpy.init(context=self.context, domain_id=domain_id)
-        self.executor = SingleThreadedExecutor(context=self.context)
-        self.nodes: list[Node] = []
-        self.clients: list[ActionClient] = []
-        self.probe = self.add(Node("probe", context=self.context))
-        self.logs: list[Log] = []
-        self.probe.create_subscription(Log, "/rosout", self.logs.append, ROSOUT_QOS)
-
-    def add(self, node: Node) -> Any:
-        self.nodes.append(node)
-        self.executor.add_node(node)
-        return node
-
-    def spin_until(self, condition: Callable[[], bool], what: str, timeout_s: float = WAIT_S) -> None:
-        deadline = time.monotonic() + timeout_s
-        while not condition():
-            if time.monotonic() > deadline:
-                pytest.fail(f"timed out after {timeout_s:.0f} s waiting for {what}")
-            self.executor.spin_once(timeout_sec=0.05)
-
-    def logged(self, node_name: str, *words: str) -> list[str]:
-        return [log.msg for log in self.logs if log.name == node_name and all(w in log.msg for w in words)]
-
-    def close(self) -> None:
-        """Destroy everything, so no DDS entity outlives the test (the domain goes back to the lease pool):
-        rclpy's destroy_node leaves action clients and servers alive, and the participant lives until the
-        context is destroyed."""
-        self.executor.shutdown()
-        for client in self.clients:
-            client.destroy()
-        for node in self.nodes:
-            node.destroy_node()
-        self.context.try_shutdown()
-        self.context.destroy()
 
 
 def reading(tag_id: str, antenna: int, phase: float, **bad: float) -> TagReading:
@@ -249,16 +198,6 @@ def test_controller_drops_and_counts_non_finite_reads_and_stays_up(graph: Graph)
 
 
 # ---------------------------------------------------------------------------------------- rfid_reader_sim
-
-def ground_truth(x: float, y: float, yaw_deg: float, stamp_s: float) -> Odometry:
-    msg = Odometry()
-    msg.header.stamp = time_msg(stamp_s)
-    msg.header.frame_id = "map"
-    msg.pose.pose.position.x, msg.pose.pose.position.y = x, y
-    qx, qy, qz, qw = yaw_to_quaternion(math.radians(yaw_deg))
-    msg.pose.pose.orientation.x, msg.pose.pose.orientation.y = qx, qy
-    msg.pose.pose.orientation.z, msg.pose.pose.orientation.w = qz, qw
-    return msg
 
 
 def test_reader_sim_publishes_one_round_per_period_on_the_ground_truth_clock(graph: Graph) -> None:

@@ -15,10 +15,11 @@ from rfidnav_common.tag_lattice import decode_tag_id
 from rfidnav_sim.parameters import ReaderParameters
 from rfidnav_sim.rfid_model import ReaderSimulator
 from rfidnav_sim.world import load_world
-from test_config_errors import copy_config, edit
-from test_graph import run_cli
+from support.config_files import copy_config, edit
+from support.runs import WORKSPACE, run_cli
 
-WORKSPACE = Path(__file__).resolve().parents[1]
+pytestmark = pytest.mark.tier("unit")
+
 CONFIG = WORKSPACE / "config"
 SCENARIO = "scenarios/partition_field.yaml"
 WORLD = "worlds/partition_field.yaml"
@@ -71,6 +72,7 @@ def test_broken_file_is_one_config_error_naming_file_and_field(config: Path, nam
     assert word in error.problem, str(error)
 
 
+@pytest.mark.tier("graph")
 def test_cli_run_of_a_broken_lattice_prints_one_line_and_starts_nothing(config: Path, tmp_path: Path) -> None:
     edit(config / WORLD, LATTICE, LATTICE.replace("0.2", "0.0"))
     out = tmp_path / "runs"

@@ -15,9 +15,10 @@ from mcap_ros2.decoder import DecoderFactory
 
 from rfidnav_bringup.report import run_metrics
 from rfidnav_common.tag_lattice import decode_tag_id, make_deployment
-from test_graph import navigation_subscriptions, run_cli, run_scenario
+from support.runs import navigation_subscriptions, run_cli, run_scenario
 
-WORKSPACE = Path(__file__).resolve().parents[1]
+pytestmark = pytest.mark.tier("graph")
+
 NAVIGATION_NODES = ("partition_localizer", "partition_navigator")
 
 

@@ -9,19 +9,30 @@ from __future__ import annotations
 import dataclasses
 import math
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 import pytest
 
 from rfidnav_common.config import node_parameter_values, parameters_from_mapping
 from rfidnav_common.errors import ConfigError
-from rfidnav_common.tag_lattice import LAYOUTS, Deployment, make_deployment, partitions_along_segment
+from rfidnav_common.tag_lattice import (
+    LAYOUTS,
+    Deployment,
+    make_deployment,
+    partitions_along_segment,
+)
 from rfidnav_localization.parameters import PartitionLocalizerParameters
-from rfidnav_localization.partition import (LocalizationEstimate, LocalizerSettings, PartitionLocalizer,
-                                            orientation_bounds, read_range_of)
+from rfidnav_localization.partition import (
+    LocalizationEstimate,
+    LocalizerSettings,
+    PartitionLocalizer,
+    orientation_bounds,
+    read_range_of,
+)
+from support.runs import WORKSPACE
 
-WORKSPACE = Path(__file__).resolve().parents[1]
+pytestmark = pytest.mark.tier("unit")
+
 ROUND_S = 0.04
 
 
@@ -313,6 +324,7 @@ def final_errors(method: str, robot: Robot, seed: int) -> tuple[float, float, Lo
     return math.dist(estimate.position, (x, y)), angle_error(estimate.yaw, yaw), estimate
 
 
+@pytest.mark.tier("slow")
 @pytest.mark.parametrize("r, odometry_noise", [(0.02, 0.0), (0.02, 0.02), (0.2, 0.02), (0.5, 0.02)])
 def test_the_filter_ends_far_closer_than_the_paper_method_on_a_straight_then_turning_drive(
         r: float, odometry_noise: float) -> None:
@@ -330,6 +342,7 @@ def test_the_filter_ends_far_closer_than_the_paper_method_on_a_straight_then_tur
     assert math.degrees(np.mean([e[1] for e in filtered])) < 3.0
 
 
+@pytest.mark.tier("slow")
 @pytest.mark.parametrize("r, turn_deg", [(0.02, 180.0), (0.2, 360.0)])
 def test_turning_on_the_spot_with_the_antenna_ahead_of_the_axis_finds_the_heading(r: float, turn_deg: float) -> None:
     """The antenna sweeps a circle of crossings; paired crossings fix the heading without driving."""

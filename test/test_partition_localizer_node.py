@@ -22,7 +22,9 @@ from rfidnav_localization.partition_localizer_node import PartitionLocalizerNode
 from rfidnav_msgs.msg import LocalizationStatus, TagReadArray, TagReading
 from rfidnav_sim.conversions import odometry_message
 from rfidnav_sim.kinematics import Pose2D
-from test_nodes import Graph
+from support.graph import Graph
+
+pytestmark = pytest.mark.tier("node")
 
 WAIT_S = 10.0   # generous for a loaded machine; each wait normally takes milliseconds
 FLOOR_ANTENNA = 1                # the default port of the floor antenna (reader_floor_lattice.yaml)

@@ -8,11 +8,21 @@ import math
 import numpy as np
 import pytest
 
-from rfidnav_experiments.runners.partitions import random_task, run_navigation
 from rfidnav_common.tag_lattice import make_deployment
+from rfidnav_experiments.runners.partitions import random_task, run_navigation
 from rfidnav_localization.partition import LocalizationEstimate, LocalizerSettings
-from rfidnav_planning.partition_navigation import (FOLLOWING, FORWARD, LOCALIZING, REPLANNING, ROTATE, GoalRejected,
-                                                   NavigatorSettings, PartitionNavigator)
+from rfidnav_planning.partition_navigation import (
+    FOLLOWING,
+    FORWARD,
+    LOCALIZING,
+    REPLANNING,
+    ROTATE,
+    GoalRejected,
+    NavigatorSettings,
+    PartitionNavigator,
+)
+
+pytestmark = pytest.mark.tier("unit")
 
 FIELD = (0.0, 0.0, 5.0, 5.0)
 
@@ -87,6 +97,7 @@ def test_driving_off_the_tagged_floor_while_localizing_turns_back(field) -> None
     assert decision.finished and not decision.success and "lost" in decision.message
 
 
+@pytest.mark.tier("slow")
 @pytest.mark.parametrize("method", ["paper", "filter"])
 @pytest.mark.parametrize("r", [0.02, 0.2, 0.5])
 def test_navigations_end_in_the_goal_partition(method: str, r: float) -> None:
@@ -128,6 +139,7 @@ def test_a_grid_deployment_ends_the_goal_with_the_planners_reason() -> None:
     assert "cannot plan" in decision.message and "triangular" in decision.message
 
 
+@pytest.mark.tier("slow")
 def test_a_floor_too_small_for_the_localization_phase_ends_the_goal() -> None:
     """At r = 50 cm a 5 x 5 m floor may never give 8 partitions in one straight line: each edge turns the robot
     back and restarts its stretch. The goal then fails with that reason instead of running for ever."""

@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Iterator
-from pathlib import Path
 from typing import Any
 
 import pytest
@@ -24,15 +23,22 @@ from rclpy.action import ActionClient
 from rclpy.parameter import Parameter
 
 from rfidnav_common.ros import COMMAND_QOS, LATCHED_QOS, SENSOR_QOS, time_msg
-from rfidnav_common.tag_lattice import Coordinate, decode_tag_id, make_deployment, partition_centre
+from rfidnav_common.tag_lattice import (
+    Coordinate,
+    decode_tag_id,
+    make_deployment,
+    partition_centre,
+)
 from rfidnav_msgs.action import NavigateToPoint
 from rfidnav_msgs.msg import LocalizationStatus, PartitionPath
 from rfidnav_planning.partition_navigator_node import PartitionNavigatorNode
 from rfidnav_sim.conversions import odometry_message
 from rfidnav_sim.kinematics import Pose2D
-from test_nodes import Graph
+from support.graph import Graph
+from support.runs import WORKSPACE
 
-WORKSPACE = Path(__file__).resolve().parents[1]
+pytestmark = pytest.mark.tier("node")
+
 MAP = WORKSPACE / "config/maps/partition_field.yaml"     # deployment_area [0, 0, 5, 5]
 WAIT_S = 15.0   # generous for a loaded 2-core machine; each wait normally takes milliseconds
 READ_RANGE_M = 0.2

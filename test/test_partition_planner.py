@@ -7,10 +7,17 @@ import math
 import numpy as np
 import pytest
 
-from rfidnav_common.tag_lattice import Deployment, make_deployment, partition_centre, partitions_along_segment
-from rfidnav_planning.errors import PlanningError
+from rfidnav_common.tag_lattice import (
+    Deployment,
+    make_deployment,
+    partition_centre,
+    partitions_along_segment,
+)
 from rfidnav_experiments.bench.planner import planning_benchmark
+from rfidnav_planning.errors import PlanningError
 from rfidnav_planning.partition_planner import PartitionPlan, plan_partition_path
+
+pytestmark = pytest.mark.tier("unit")
 
 # A 5 x 5 m field straddling the origin, so negative lattice coordinates are exercised too.
 FIELD = (-1.0, -2.0, 4.0, 3.0)
@@ -49,6 +56,7 @@ def sampled_read_sets(deployment: Deployment, start, goal) -> list[frozenset]:
     return read_sets
 
 
+@pytest.mark.tier("slow")
 @pytest.mark.parametrize("layout", ["triangular", "compressed"])
 @pytest.mark.parametrize("read_range_m", [0.02, 0.2, 0.5])
 def test_algorithm_1_equals_the_geometric_walk(layout: str, read_range_m: float) -> None:

@@ -7,8 +7,15 @@ from pathlib import Path
 
 import pytest
 
-from rfidnav_bringup.orchestrator import Orchestrator, RunOptions, recordable_type, topics_to_record
+from rfidnav_bringup.orchestrator import (
+    Orchestrator,
+    RunOptions,
+    recordable_type,
+    topics_to_record,
+)
 from rfidnav_bringup.scenario import load_scenario
+
+pytestmark = pytest.mark.tier("unit")
 
 PUBLISHED = [
     ("/rfid/reads", ["rfidnav_msgs/msg/TagReadArray"]),
@@ -47,6 +54,7 @@ def test_recordable_type_matches_what_the_recorder_can_store(msgtype: str, expec
     assert recordable_type(msgtype) is expected
 
 
+@pytest.mark.tier("graph")
 def test_the_recorder_is_told_the_topics_the_wait_leaves_out(tmp_path: Path):
     scenario = load_scenario("line_follow_90")
     options = RunOptions(out_dir=tmp_path, record_exclude=("/parameter_events", "/rosout"))

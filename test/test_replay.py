@@ -60,13 +60,15 @@ from std_srvs.srv import Trigger
 from rfidnav_bag.bags import bag_info, read_messages
 from rfidnav_bringup.processes import DomainLease, NodeProcess, resolve_executable
 from rfidnav_common.config import parameters_from_mapping
+from rfidnav_common.robot_map import load_route_map
 from rfidnav_control.fuzzy import FuzzyHeadingController
 from rfidnav_control.parameters import HeadingControllerParameters
-from rfidnav_common.robot_map import load_route_map
 from rfidnav_control.tag_route import TagObservation, TagRouteFollower, observe
 from rfidnav_msgs.action import FollowTagRoute
+from support.runs import WORKSPACE
 
-WORKSPACE = Path(__file__).resolve().parents[1]
+pytestmark = pytest.mark.tier("graph")
+
 SCENARIO = WORKSPACE / "config/scenarios/line_follow_90.yaml"
 RECORD_START = {"x": -1.5, "y": -1.5, "yaw_deg": 90.0}   # C1 at 2.1 m, 45 deg to the right
 RECORD_RTF = 3.0          # the demo's: a busy 2-core machine keeps the closed loop on time there

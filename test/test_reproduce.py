@@ -13,9 +13,16 @@ from pathlib import Path
 
 import pytest
 
-from rfidnav_experiments.runners.tag_route import controller_parameters, run_tag_route
-from rfidnav_experiments.reproduce.flc import PARAM_SETS, SCENARIOS, params_file, reproduce_flc
 from rfidnav_bringup.scenario import load_scenario
+from rfidnav_experiments.reproduce.flc import (
+    PARAM_SETS,
+    SCENARIOS,
+    params_file,
+    reproduce_flc,
+)
+from rfidnav_experiments.runners.tag_route import controller_parameters, run_tag_route
+
+pytestmark = pytest.mark.tier("slow")
 
 ROW_KEYS = {"experiment", "setting", "metric", "ours", "paper"}
 PAPER_RMSE_M = {"line_follow_90": 0.034, "line_follow_0": 0.093, "acute_path": 0.175, "hallway": 0.13}
@@ -63,6 +70,7 @@ def test_reproduce_flc_one_seed(tmp_path: Path, capsys: pytest.CaptureFixture[st
         assert str(plot) in captured.err
 
 
+@pytest.mark.tier("unit")
 def test_flc_tuned_tolerates_a_command_latency_of_several_rounds():
     """Over DDS at a high RTF the command answering a round arrives rounds later in sim time: 0.1 s here
     (2.5 rounds) must neither fail the mission nor lose the paper's accuracy."""

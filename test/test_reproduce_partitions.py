@@ -12,6 +12,8 @@ import pytest
 from rfidnav_experiments.reproduce import partitions as rp
 from rfidnav_localization.partition import LocalizerSettings
 
+pytestmark = pytest.mark.tier("unit")
+
 
 def test_experiments_use_the_nodes_parameter_files() -> None:
     paper, ours = rp.localizer_settings("paper"), rp.localizer_settings("filter")
@@ -60,6 +62,7 @@ def test_deployment_accuracy_orders_the_layouts_as_the_paper_does() -> None:
     assert all(0.0 < a.location_cm < 20.0 for a in accuracy.values())
 
 
+@pytest.mark.tier("slow")
 def test_reduced_reproduction_writes_rows_tables_and_plots(tmp_path: Path, monkeypatch, capsys) -> None:
     monkeypatch.setattr(rp, "NAVIGATION_RANGES_M", (0.2, 0.5))
     monkeypatch.setattr(rp, "LEVELS", (2, 4))

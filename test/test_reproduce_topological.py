@@ -7,8 +7,10 @@ from pathlib import Path
 
 import pytest
 
-from rfidnav_experiments.reproduce.topological import MISS_RATES, reproduce_topological
 from rfidnav_common.errors import ConfigError
+from rfidnav_experiments.reproduce.topological import MISS_RATES, reproduce_topological
+
+pytestmark = pytest.mark.tier("slow")
 
 
 def test_the_paper_run_and_the_missions_are_reported_at_every_miss_rate(tmp_path: Path,
@@ -25,6 +27,7 @@ def test_the_paper_run_and_the_missions_are_reported_at_every_miss_rate(tmp_path
     assert "right at h" in capsys.readouterr().out
 
 
+@pytest.mark.tier("unit")
 def test_no_missions_is_one_clear_error(tmp_path: Path) -> None:
     with pytest.raises(ConfigError, match="--runs"):
         reproduce_topological(missions=0, out_dir=tmp_path, as_json=False)

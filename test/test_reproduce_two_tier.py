@@ -10,10 +10,11 @@ from pathlib import Path
 
 import pytest
 
-from rfidnav_experiments.reproduce.two_tier import reproduce_two_tier
 from rfidnav_common.errors import ConfigError
+from rfidnav_experiments.reproduce.two_tier import reproduce_two_tier
+from support.runs import WORKSPACE
 
-WORKSPACE = Path(__file__).resolve().parents[1]
+pytestmark = pytest.mark.tier("unit")
 
 
 @pytest.fixture(scope="module")
@@ -57,6 +58,7 @@ def test_theorem1_rows_carry_the_printed_and_the_rayleigh_expectation(rows: list
         assert row["rayleigh_m"] > row["paper"] > 0.0 and row["ours"] > 0.0
 
 
+@pytest.mark.tier("graph")
 def test_a_bad_run_count_is_one_clear_error_from_the_command(tmp_path: Path) -> None:
     with pytest.raises(ConfigError, match="--runs"):
         reproduce_two_tier(runs=0, out_dir=tmp_path, as_json=False)

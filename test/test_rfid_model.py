@@ -12,9 +12,16 @@ import numpy as np
 import pytest
 
 from rfidnav_common.geometry import wrap_angle, wrap_angles
-from rfidnav_common.rf import SPEED_OF_LIGHT_MPS, range_change_m, round_trip_phase, wavelength_m
+from rfidnav_common.rf import (
+    SPEED_OF_LIGHT_MPS,
+    range_change_m,
+    round_trip_phase,
+    wavelength_m,
+)
 from rfidnav_sim.parameters import ReaderParameters
 from rfidnav_sim.rfid_model import Antenna, ReaderModel, ReaderSimulator
+
+pytestmark = pytest.mark.tier("unit")
 
 TWO_PI = 2.0 * math.pi
 FREQUENCY_HZ = 915.25e6

@@ -10,6 +10,8 @@ import pytest
 from rfidnav_bringup.scenario import injected_parameters, load_scenario
 from rfidnav_common.errors import ConfigError
 
+pytestmark = pytest.mark.tier("unit")
+
 
 def test_the_create2_llrp_profile_puts_the_drivers_in_and_runs_in_real_time() -> None:
     scenario = load_scenario("hallway", robot_profile_name="create2_llrp")

@@ -10,10 +10,12 @@ from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
-from fake_create import FakeCreate
-from test_graph import WORKSPACE, run_cli, run_scenario
-from test_llrp_graph import emulated_route
-from test_llrp_reader import EmulatorLoop
+
+from support.fake_create import FakeCreate
+from support.llrp import EmulatorLoop, emulated_route
+from support.runs import WORKSPACE, run_cli, run_scenario
+
+pytestmark = pytest.mark.tier("graph")
 
 
 @pytest.fixture(scope="module")

@@ -8,6 +8,8 @@ import pytest
 
 from rfidnav_experiments.bench.rtf import SweepRow, highest_usable_rtf, report
 
+pytestmark = pytest.mark.tier("unit")
+
 
 def row(rtf: float, rmse_cm: float | None, success: bool = True) -> SweepRow:
     return SweepRow(rtf, success, None if rmse_cm is None else rmse_cm / 100, 40.0 * rtf, 100.0 / rtf, (f"run{rtf:g}",))

@@ -13,6 +13,8 @@ import pytest
 
 from rfidnav_sim.sonar_model import PAPER_LAYOUT, Rangefinder, SonarModel, cast_rays
 
+pytestmark = pytest.mark.tier("unit")
+
 SQRT_HALF = math.sqrt(0.5)
 
 

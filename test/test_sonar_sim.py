@@ -13,7 +13,9 @@ from sensor_msgs.msg import Range
 from rfidnav_common.ros import SENSOR_QOS
 from rfidnav_sim.sonar_model import PAPER_LAYOUT
 from rfidnav_sim.sonar_sim_node import SonarSimNode
-from test_nodes import Graph, ground_truth
+from support.graph import Graph, ground_truth
+
+pytestmark = pytest.mark.tier("node")
 
 
 def test_every_rangefinder_publishes_its_range_once_a_sweep(graph: Graph, tmp_path: Path) -> None:

@@ -13,10 +13,26 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from rfidnav_common.tag_groups import HF_READ_RANGE_M, TagGroup, paper_size_for_separation
-from rfidnav_control.spiral import (GUARANTEE_DISTANCE_IN_D, SpiralSearch, expected_search_length,
-                                    length_to_radius, separation_for_group, simulate_crossing, simulate_search,
-                                    spiral_curvature, spiral_length, spiral_point, theta_at_length)
+from rfidnav_common.tag_groups import (
+    HF_READ_RANGE_M,
+    TagGroup,
+    paper_size_for_separation,
+)
+from rfidnav_control.spiral import (
+    GUARANTEE_DISTANCE_IN_D,
+    SpiralSearch,
+    expected_search_length,
+    length_to_radius,
+    separation_for_group,
+    simulate_crossing,
+    simulate_search,
+    spiral_curvature,
+    spiral_length,
+    spiral_point,
+    theta_at_length,
+)
+
+pytestmark = pytest.mark.tier("unit")
 
 D = 0.03
 TRIALS = 200

@@ -9,8 +9,16 @@ import numpy as np
 import pytest
 
 from rfidnav_common.geometry import point_segment_distance
-from rfidnav_common.tag_groups import (HF_READ_RANGE_M, SHAPES, TagGroup, minimum_width,
-                                       paper_size_for_separation, tags_in_range)
+from rfidnav_common.tag_groups import (
+    HF_READ_RANGE_M,
+    SHAPES,
+    TagGroup,
+    minimum_width,
+    paper_size_for_separation,
+    tags_in_range,
+)
+
+pytestmark = pytest.mark.tier("unit")
 
 PERIMETER_PER_SIZE = {"cross": 2.0, "circle": math.pi, "triangle": 3.0, "square": 4.0}
 

@@ -10,10 +10,24 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from rfidnav_common.tag_lattice import (COORDINATE_MAX, COORDINATE_MIN, LAYOUTS, DeploymentError, Lattice,
-                                        TagIdError, decode_tag_id, deinterleave, encode_tag_id, interleave,
-                                        make_deployment, partition_centre, partitions_along_segment,
-                                        spacing_for)
+from rfidnav_common.tag_lattice import (
+    COORDINATE_MAX,
+    COORDINATE_MIN,
+    LAYOUTS,
+    DeploymentError,
+    Lattice,
+    TagIdError,
+    decode_tag_id,
+    deinterleave,
+    encode_tag_id,
+    interleave,
+    make_deployment,
+    partition_centre,
+    partitions_along_segment,
+    spacing_for,
+)
+
+pytestmark = pytest.mark.tier("unit")
 
 coordinates = st.integers(min_value=COORDINATE_MIN, max_value=COORDINATE_MAX)
 layouts = st.sampled_from(LAYOUTS)

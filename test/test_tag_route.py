@@ -12,7 +12,15 @@ import pytest
 
 from rfidnav_common.rf import round_trip_phase, wavelength_m
 from rfidnav_control.fuzzy import FuzzyHeadingController, paper_spec
-from rfidnav_control.tag_route import FollowerSettings, PhaseTrack, TagObservation, TagRouteFollower, observe
+from rfidnav_control.tag_route import (
+    FollowerSettings,
+    PhaseTrack,
+    TagObservation,
+    TagRouteFollower,
+    observe,
+)
+
+pytestmark = pytest.mark.tier("unit")
 
 FREQUENCY_HZ = 915e6
 ROUND_S = 0.04

@@ -6,10 +6,20 @@ import numpy as np
 import pytest
 
 from rfidnav_common.topological_map import load_topological_map
-from rfidnav_experiments.runners.topological import (FIG5_MAP, FIG5_WORLD, centre_sonar, follower_offsets,
-                                                     paper_run, random_missions, run_mission, start_pose_for)
+from rfidnav_experiments.runners.topological import (
+    FIG5_MAP,
+    FIG5_WORLD,
+    centre_sonar,
+    follower_offsets,
+    paper_run,
+    random_missions,
+    run_mission,
+    start_pose_for,
+)
 from rfidnav_sim.sonar_model import centre_offsets
 from rfidnav_sim.world import load_world
+
+pytestmark = pytest.mark.tier("unit")
 
 
 def test_mounting_offsets_put_the_side_sonars_at_the_robot_edge():
@@ -47,11 +57,13 @@ def test_paper_run_turns_right_at_h_and_reaches_g():
     assert math.dist(run.final_position, (16.0, 0.0)) <= 0.5
 
 
+@pytest.mark.tier("slow")
 def test_paper_run_succeeds_whatever_the_sonar_noise():
     runs = [paper_run(np.random.default_rng(seed)) for seed in range(6)]
     assert all(run.success for run in runs), [run.message for run in runs]
 
 
+@pytest.mark.tier("slow")
 def test_random_missions_without_misses_all_succeed_near_the_shortest_path():
     runs = random_missions(6, 0.0, seed=7)
     assert all(run.success for run in runs), [run.message for run in runs]
@@ -60,6 +72,7 @@ def test_random_missions_without_misses_all_succeed_near_the_shortest_path():
     assert np.mean(ratios) < 1.1
 
 
+@pytest.mark.tier("slow")
 def test_random_missions_with_30_percent_misses_all_succeed_by_the_routes_expectation():
     runs = random_missions(6, 0.3, seed=7)
     assert all(run.success for run in runs), [run.message for run in runs]

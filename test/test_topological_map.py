@@ -11,8 +11,21 @@ import pytest
 
 from rfidnav_bringup.report import draw_map
 from rfidnav_common.errors import ConfigError, RfidnavError
-from rfidnav_common.topological_map import (DIRECTIONS, UNKNOWN, Hallway, NextAction, Node, RouteError,
-                                            TopologicalMap, check_map, load_topological_map, next_action, turn)
+from rfidnav_common.topological_map import (
+    DIRECTIONS,
+    UNKNOWN,
+    Hallway,
+    NextAction,
+    Node,
+    RouteError,
+    TopologicalMap,
+    check_map,
+    load_topological_map,
+    next_action,
+    turn,
+)
+
+pytestmark = pytest.mark.tier("unit")
 
 MAPS = Path(__file__).resolve().parents[1] / "config" / "maps"
 
@@ -389,6 +402,7 @@ def test_large_map_is_clean_and_big_enough() -> None:
     assert large.route("A1", "E5", weight="length")[-1] == "E5"
 
 
+@pytest.mark.tier("graph")
 def test_the_map_verbs_check_and_draw_with_exit_codes(tmp_path: Path) -> None:
     import subprocess
     import sys

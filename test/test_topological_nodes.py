@@ -5,7 +5,6 @@ feedback from scripted reads and events, refused goals, cancel."""
 from __future__ import annotations
 
 import math
-from pathlib import Path
 
 import pytest
 from geometry_msgs.msg import Twist
@@ -18,16 +17,24 @@ from rfidnav_common.ros import COMMAND_QOS, SENSOR_QOS
 from rfidnav_control.parameters import SONAR_FIELDS, WallFollowerParameters
 from rfidnav_control.wall_follower_node import WallFollowerNode
 from rfidnav_msgs.action import NavigateToNode
-from rfidnav_msgs.msg import TagReadArray, TagReading, WallFollowerCommand, WallFollowerEvent
+from rfidnav_msgs.msg import (
+    TagReadArray,
+    TagReading,
+    WallFollowerCommand,
+    WallFollowerEvent,
+)
 from rfidnav_planning.mission_executor_node import MissionExecutorNode
 from rfidnav_sim.sonar_model import PAPER_LAYOUT
-from test_nodes import Graph
+from support.graph import Graph
+from support.runs import WORKSPACE
 
-WORKSPACE = Path(__file__).resolve().parents[1]
+pytestmark = pytest.mark.tier("node")
+
 FIG5_MAP = WORKSPACE / "config/maps/building_fig5.yaml"
 BESIDE_A_WALL = {"front": math.inf, "front_left": math.inf, "front_right": math.inf, "left": 0.8, "right": 0.8}
 
 
+@pytest.mark.tier("unit")
 def test_the_sonar_offsets_are_those_of_the_simulated_layout() -> None:
     layout = {r.name: r.position[0] * math.cos(r.bearing_rad) + r.position[1] * math.sin(r.bearing_rad)
               for r in PAPER_LAYOUT}

@@ -13,7 +13,9 @@ from mcap.reader import make_reader
 from mcap_ros2.decoder import DecoderFactory
 
 from rfidnav_bringup.report import run_metrics
-from test_graph import navigation_subscriptions, run_scenario
+from support.runs import navigation_subscriptions, run_scenario
+
+pytestmark = pytest.mark.tier("graph")
 
 NAVIGATION_NODES = ("location_server", "two_tier_navigator")
 

@@ -9,12 +9,23 @@ import numpy as np
 import pytest
 
 from rfidnav_bringup.scenario import CONFIG_DIR
-from rfidnav_experiments.runners.two_tier import Site, grid_radio_map, run_two_tier
 from rfidnav_control.go_to import GoToSettings, go_to_command
+from rfidnav_experiments.runners.two_tier import Site, grid_radio_map, run_two_tier
 from rfidnav_localization.dead_reckoning import TIER_TAG, TIER_WIFI, DeadReckoning, Fix
-from rfidnav_planning.two_tier_navigation import (DONE, LOCATE, MAPPING, TAG_MAP, TO_LANDMARK, Landmark, MapTag,
-                                                  TwoTierNavigator, TwoTierSettings)
+from rfidnav_planning.two_tier_navigation import (
+    DONE,
+    LOCATE,
+    MAPPING,
+    TAG_MAP,
+    TO_LANDMARK,
+    Landmark,
+    MapTag,
+    TwoTierNavigator,
+    TwoTierSettings,
+)
 from rfidnav_sim.world import load_world
+
+pytestmark = pytest.mark.tier("unit")
 
 WORLD = CONFIG_DIR / "worlds" / "two_tier_home.yaml"
 
@@ -88,6 +99,7 @@ def site() -> Site:
     return Site.of(world, grid_radio_map(world, 1.0, np.random.default_rng(1)))
 
 
+@pytest.mark.tier("slow")
 @pytest.mark.parametrize("seed", range(4))
 def test_a_seeded_run_through_the_flat_arrives_and_its_fixes_stay_within_bounds(site: Site, seed: int) -> None:
     run = run_two_tier(site, (1.0, 1.0, 0.3), (10.8, 6.8), TwoTierSettings(), np.random.default_rng(seed))

@@ -21,7 +21,9 @@ from rfidnav_localization.location_store import LocationStore
 from rfidnav_msgs.action import NavigateToPoint
 from rfidnav_msgs.msg import AccessPointRss, WifiScan
 from rfidnav_planning.two_tier_navigator_node import TwoTierNavigatorNode
-from test_nodes import Graph
+from support.graph import Graph
+
+pytestmark = pytest.mark.tier("node")
 
 RSS = {"02:00:00:00:00:01": -40.0, "02:00:00:00:00:02": -60.0}
 

@@ -8,8 +8,18 @@ from dataclasses import dataclass, field
 
 import pytest
 
-from rfidnav_control.wall_following import (Command, OdomPose, Sonar, Stretch, WallFollower, WallFollowerSettings,
-                                            wall_angle, wall_distance)
+from rfidnav_control.wall_following import (
+    Command,
+    OdomPose,
+    Sonar,
+    Stretch,
+    WallFollower,
+    WallFollowerSettings,
+    wall_angle,
+    wall_distance,
+)
+
+pytestmark = pytest.mark.tier("unit")
 
 DT = 0.05
 MAX_RANGE = 5.0

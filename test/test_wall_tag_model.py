@@ -13,6 +13,8 @@ import pytest
 
 from rfidnav_sim.wall_tag_model import InductionArea, WallTag, WallTagReader
 
+pytestmark = pytest.mark.tier("unit")
+
 INTO_HALLWAY = (0.0, -1.0)      # the normal of a plate on the left wall y = 0.8, robot below it
 
 
@@ -109,6 +111,7 @@ def passages(reader: WallTagReader, rng: np.random.Generator, count: int) -> lis
     return read
 
 
+@pytest.mark.tier("slow")
 def test_a_passage_miss_holds_for_the_whole_passage_and_is_drawn_anew_for_the_next() -> None:
     reader = WallTagReader(InductionArea(), [WallTag("T1", (0.0, 0.8), INTO_HALLWAY)], passage_miss_probability=0.3)
     read = passages(reader, np.random.default_rng(3), 1000)

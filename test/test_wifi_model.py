@@ -11,8 +11,16 @@ import math
 import numpy as np
 import pytest
 
-from rfidnav_sim.wifi_model import (AccessPoint, PropagationSettings, RssReading, WifiModel, free_space_loss_db,
-                                    walls_crossed)
+from rfidnav_sim.wifi_model import (
+    AccessPoint,
+    PropagationSettings,
+    RssReading,
+    WifiModel,
+    free_space_loss_db,
+    walls_crossed,
+)
+
+pytestmark = pytest.mark.tier("unit")
 
 QUIET = PropagationSettings(shadowing_sd_db=0.0, scan_noise_sd_db=0.0)
 FREQ_CH6_LOSS_1M_DB = 40.18            # 20 log10(4 pi * 2.437e9 / 299792458) = 20 log10(102.15)

@@ -16,12 +16,30 @@ from rclpy.parameter import Parameter
 
 from rfidnav_common.ros import SENSOR_QOS
 from rfidnav_drivers.errors import DriverError
-from rfidnav_drivers.wifi_scan import (AccessPoint, DeviceBusy, InterfaceNotFound, IwNotFound, ScanFailed,
-                                       ScanNotPermitted, ScanTimedOut, channel_of, check_interface,
-                                       classify_failure, decode_ssid, parse_scan, run_scan)
-from rfidnav_drivers.wifi_scanner_node import FAILED_EXIT_CODE, WifiScannerNode, spin_until_failed
+from rfidnav_drivers.wifi_scan import (
+    AccessPoint,
+    DeviceBusy,
+    InterfaceNotFound,
+    IwNotFound,
+    ScanFailed,
+    ScanNotPermitted,
+    ScanTimedOut,
+    channel_of,
+    check_interface,
+    classify_failure,
+    decode_ssid,
+    parse_scan,
+    run_scan,
+)
+from rfidnav_drivers.wifi_scanner_node import (
+    FAILED_EXIT_CODE,
+    WifiScannerNode,
+    spin_until_failed,
+)
 from rfidnav_msgs.msg import WifiScan
-from test_nodes import Graph
+from support.graph import Graph
+
+pytestmark = pytest.mark.tier("unit")
 
 DATA = Path(__file__).resolve().parent / "data/iw"
 RPI_SCAN = DATA / "raspberrypi_wlan0_scan.txt"
@@ -174,6 +192,7 @@ def errors_logged(graph: Graph) -> list[str]:
     return [log.msg for log in graph.logs if log.name == "wifi_scanner" and log.level == Log.ERROR]
 
 
+@pytest.mark.tier("node")
 def test_the_node_publishes_what_a_real_scan_printed(graph: Graph, tmp_path: Path) -> None:
     iw = fake_iw(tmp_path, f'cat "{RPI_SCAN}"\n')
     scans = listen(graph)
@@ -189,6 +208,7 @@ def test_the_node_publishes_what_a_real_scan_printed(graph: Graph, tmp_path: Pat
     assert set(calls(tmp_path)) == {"dev lo scan"} and node.failed is None
 
 
+@pytest.mark.tier("node")
 def test_trigger_false_reads_the_last_scan_with_scan_dump(graph: Graph, tmp_path: Path) -> None:
     iw = fake_iw(tmp_path, f'cat "{OPENWRT_SCAN}"\n')
     scans = listen(graph)
@@ -198,6 +218,7 @@ def test_trigger_false_reads_the_last_scan_with_scan_dump(graph: Graph, tmp_path
     assert calls(tmp_path)[0] == "dev lo scan dump"
 
 
+@pytest.mark.tier("node")
 def test_a_busy_device_is_a_warning_and_the_next_period_scans_again(graph: Graph, tmp_path: Path) -> None:
     name, status, *_ = FAILURES["busy"]
     iw = fake_iw(tmp_path, f'if [ "$(wc -l < "{tmp_path / "calls"}")" -le 1 ]; then\n'
@@ -210,6 +231,7 @@ def test_a_busy_device_is_a_warning_and_the_next_period_scans_again(graph: Graph
     assert node.failed is None and not errors_logged(graph) and len(scans[0].access_points) == 4
 
 
+@pytest.mark.tier("node")
 def test_no_permission_logs_one_error_and_stops_the_node_with_exit_code_2(graph: Graph, tmp_path: Path) -> None:
     name, status, *_ = FAILURES["not_permitted"]
     iw = fake_iw(tmp_path, f'cat "{DATA / name}" >&2\nexit {status}\n')
@@ -225,6 +247,7 @@ def test_no_permission_logs_one_error_and_stops_the_node_with_exit_code_2(graph:
     assert spin_until_failed(graph.executor, node) == FAILED_EXIT_CODE
 
 
+@pytest.mark.tier("graph")
 def test_main_exits_2_when_not_permitted(tmp_path: Path, domain: int) -> None:
     name, status, *_ = FAILURES["not_permitted"]
     iw = fake_iw(tmp_path, f'cat "{DATA / name}" >&2\nexit {status}\n')
@@ -236,6 +259,7 @@ def test_main_exits_2_when_not_permitted(tmp_path: Path, domain: int) -> None:
     assert "CAP_NET_ADMIN" in done.stderr + done.stdout
 
 
+@pytest.mark.tier("node")
 def test_a_missing_interface_or_iw_fails_at_construction(graph: Graph, tmp_path: Path) -> None:
     iw = fake_iw(tmp_path, f'cat "{RPI_SCAN}"\n')
     with pytest.raises(DriverError) as raised:

@@ -16,7 +16,9 @@ from rfidnav_msgs.msg import WifiScan
 from rfidnav_sim.wifi_model import WifiModel
 from rfidnav_sim.wifi_sim_node import WifiSimNode
 from rfidnav_sim.world import load_world
-from test_nodes import Graph, ground_truth
+from support.graph import Graph, ground_truth
+
+pytestmark = pytest.mark.tier("unit")
 
 WORLD = """name: flat
 tag_groups:
@@ -61,6 +63,7 @@ def test_a_bad_entry_names_its_field(tmp_path: Path, replace: str, where: str) -
         load_world(path)
 
 
+@pytest.mark.tier("node")
 def test_wifi_sim_scans_at_its_period_with_the_worlds_radio_and_drops_what_it_cannot_hear(
         graph: Graph, world_file: Path) -> None:
     graph.add(WifiSimNode(context=graph.context, parameter_overrides=[

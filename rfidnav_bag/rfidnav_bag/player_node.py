@@ -27,6 +27,7 @@ from collections.abc import Iterator
 from dataclasses import dataclass
 from typing import Any
 
+from builtin_interfaces.msg import Time
 from rclpy.clock import Clock, ClockType
 from rclpy.duration import Duration
 from rclpy.executors import Executor, SingleThreadedExecutor
@@ -34,15 +35,14 @@ from rclpy.node import Node
 from rclpy.publisher import Publisher
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.task import Future
-from builtin_interfaces.msg import Time
 from rosgraph_msgs.msg import Clock as ClockMsg
 from std_srvs.srv import Trigger
 
 from rfidnav_bag.bags import BagInfo, RawMessage, TopicInfo, bag_info, read_raw
 from rfidnav_bag.errors import BagError
+from rfidnav_common.config import param
 from rfidnav_common.errors import ConfigError
 from rfidnav_common.ros import declare_parameters, message_class, run_node
-from rfidnav_common.config import param
 
 TICK_S = 0.005  # the pacing timer's period: the worst lateness of a message [s, wall]
 VOLATILE_DEPTH = 100  # room for a burst of due messages at a high rate before a reliable reader acks

@@ -43,8 +43,8 @@ from rosbags.rosbag2 import StoragePlugin, Writer, WriterError
 
 from rfidnav_bag.bags import message_definition, register_installed_type
 from rfidnav_bag.errors import BagError
-from rfidnav_common.errors import ConfigError
 from rfidnav_common.config import param
+from rfidnav_common.errors import ConfigError
 from rfidnav_common.ros import declare_parameters, events_executor, message_class, run_node
 
 # rosbag2 metadata version 9 is what Jazzy's rosbag2 writes (structured QoS in metadata.yaml).

@@ -18,8 +18,7 @@ from collections.abc import Callable
 from importlib.metadata import entry_points
 from pathlib import Path
 
-from rfidnav_common.errors import RfidnavError
-from rfidnav_common.errors import ConfigError
+from rfidnav_common.errors import ConfigError, RfidnavError
 
 WORKSPACE = Path(__file__).resolve().parents[2]
 DEMO_SCENARIO = "hallway"

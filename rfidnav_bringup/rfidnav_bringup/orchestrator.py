@@ -33,12 +33,19 @@ from rclpy.node import Node
 from std_srvs.srv import Trigger
 
 from rfidnav_bag.errors import BagError
-from rfidnav_bringup.errors import ReadinessError
-from rfidnav_common.errors import RfidnavError
-from rfidnav_bringup.processes import DomainLease, NodeProcess, resolve_executable
 from rfidnav_bag.recorder_node import recordable_definition
+from rfidnav_bringup.errors import ReadinessError
+from rfidnav_bringup.processes import DomainLease, NodeProcess, resolve_executable
+from rfidnav_bringup.scenario import (
+    KNOWN_NODES,
+    NodeSpec,
+    Scenario,
+    dump_parameters,
+    injected_parameters,
+    node_parameters,
+)
+from rfidnav_common.errors import RfidnavError
 from rfidnav_common.ros import events_executor, fill_message, interface_class
-from rfidnav_bringup.scenario import KNOWN_NODES, NodeSpec, Scenario, dump_parameters, injected_parameters, node_parameters
 
 READY_TIMEOUT_S = 90.0
 STOP_GRACE_S = 5.0

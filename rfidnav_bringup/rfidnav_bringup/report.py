@@ -19,15 +19,22 @@ import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
-from matplotlib.figure import Figure  # noqa: E402
 import networkx as nx  # noqa: E402
 import numpy as np  # noqa: E402
 import yaml  # noqa: E402
+from matplotlib.figure import Figure  # noqa: E402
 
 from rfidnav_bag.bags import bag_info, read_messages  # noqa: E402
 from rfidnav_bag.errors import BagError  # noqa: E402
-from rfidnav_bringup.metrics import (Fix, Trajectory, partition_metrics, topological_metrics,  # noqa: E402
-                                     tracking_error, tracking_metrics, two_tier_metrics)
+from rfidnav_bringup.metrics import (  # noqa: E402
+    Fix,
+    Trajectory,
+    partition_metrics,
+    topological_metrics,
+    tracking_error,
+    tracking_metrics,
+    two_tier_metrics,
+)
 from rfidnav_common.topological_map import UNKNOWN, TopologicalMap, load_topological_map  # noqa: E402
 from rfidnav_sim.world import World, load_world  # noqa: E402
 

@@ -21,15 +21,23 @@ import yaml
 from rfidnav_bringup.processes import UnknownExecutableError, package_share, resolve_executable
 from rfidnav_common.config import Section, node_parameter_section, parameters_from_mapping, typed_values
 from rfidnav_common.errors import ConfigError
+from rfidnav_common.robot_map import RouteMap, load_route_map
+from rfidnav_common.topological_map import TopologicalMap, load_topological_map
 from rfidnav_control.parameters import HeadingControllerParameters, WallFollowerParameters
 from rfidnav_drivers.parameters import CreateBaseParameters, LlrpReaderParameters, WifiScannerParameters
 from rfidnav_localization.parameters import LocationServerParameters, PartitionLocalizerParameters
-from rfidnav_planning.parameters import (MissionExecutorParameters, PartitionNavigatorParameters,
-                                        TwoTierNavigatorParameters)
-from rfidnav_common.topological_map import TopologicalMap, load_topological_map
-from rfidnav_common.robot_map import RouteMap, load_route_map
-from rfidnav_sim.parameters import (CompassParameters, ReaderParameters, RobotSimParameters, SonarParameters,
-                                    WifiSimParameters)
+from rfidnav_planning.parameters import (
+    MissionExecutorParameters,
+    PartitionNavigatorParameters,
+    TwoTierNavigatorParameters,
+)
+from rfidnav_sim.parameters import (
+    CompassParameters,
+    ReaderParameters,
+    RobotSimParameters,
+    SonarParameters,
+    WifiSimParameters,
+)
 from rfidnav_sim.world import World, load_world
 
 CONFIG_DIR = package_share("rfidnav_bringup") / "config"   # installed with the package, or linked by set-up

@@ -9,19 +9,19 @@ import typing
 from typing import Any, Callable
 
 import rclpy
-from rclpy.action.server import ServerGoalHandle
-from rclpy.context import Context
 from builtin_interfaces.msg import Time
 from geometry_msgs.msg import Twist
 from nav_msgs.msg import Odometry
 from rcl_interfaces.msg import ParameterDescriptor
+from rclpy.action.server import ServerGoalHandle
+from rclpy.context import Context
 from rclpy.exceptions import InvalidParameterTypeException
 from rclpy.executors import Executor, ExternalShutdownException
 from rclpy.experimental import EventsExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
-from rclpy.signals import SignalHandlerOptions
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.signals import SignalHandlerOptions
 
 from rfidnav_common.config import parameters_from_mapping
 from rfidnav_common.errors import ConfigError, RfidnavError

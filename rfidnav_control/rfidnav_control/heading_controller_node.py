@@ -20,10 +20,10 @@ from rclpy.action import ActionServer, CancelResponse, GoalResponse
 from rclpy.action.server import ServerGoalHandle
 from rclpy.node import Node
 
+from rfidnav_common.robot_map import load_route_map
 from rfidnav_common.ros import COMMAND_QOS, SENSOR_QOS, close_goal, declare_parameters, run_node, seconds_of, twist
 from rfidnav_control.fuzzy import FuzzyHeadingController
 from rfidnav_control.parameters import HeadingControllerParameters
-from rfidnav_common.robot_map import load_route_map
 from rfidnav_control.tag_route import Command, TagRouteFollower, observe
 from rfidnav_msgs.action import FollowTagRoute
 from rfidnav_msgs.msg import TagReadArray

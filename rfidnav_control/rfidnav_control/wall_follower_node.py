@@ -26,7 +26,6 @@ from rfidnav_control.parameters import SONAR_FIELDS, WallFollowerParameters
 from rfidnav_control.wall_following import ACTIONS, STOPPED, OdomPose, Sonar, WallFollower
 from rfidnav_msgs.msg import WallFollowerCommand, WallFollowerEvent
 
-
 STATE_PERIOD_S = 0.5
 IDLE = "idle"
 

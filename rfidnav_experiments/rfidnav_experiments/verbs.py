@@ -155,8 +155,8 @@ def bench_partitions(args: argparse.Namespace) -> int:
 
 
 def bench_rtf(args: argparse.Namespace) -> int:
-    from rfidnav_experiments.bench.rtf import highest_usable_rtf, report, sweep
     from rfidnav_bringup.scenario import load_scenario
+    from rfidnav_experiments.bench.rtf import highest_usable_rtf, report, sweep
 
     rows = sweep(load_scenario(args.scenario), args.rtfs, list(range(1, args.seeds + 1)), args.out)
     print(report(args.scenario, rows, args.tolerance, args.json))

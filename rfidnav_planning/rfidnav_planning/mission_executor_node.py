@@ -23,11 +23,11 @@ from rclpy.action.server import ServerGoalHandle
 from rclpy.node import Node
 
 from rfidnav_common.ros import COMMAND_QOS, SENSOR_QOS, close_goal, declare_parameters, run_node
+from rfidnav_common.topological_map import load_topological_map
 from rfidnav_msgs.action import NavigateToNode
 from rfidnav_msgs.msg import TagReadArray, WallFollowerCommand, WallFollowerEvent
 from rfidnav_planning.mission_executor import EVENTS, FOLLOW, STOP, Decision, MissionExecutor
 from rfidnav_planning.parameters import MissionExecutorParameters
-from rfidnav_common.topological_map import load_topological_map
 
 STOPPED = "stopped"                       # the wall follower's event when a stop is done
 IDLE = "idle"                             # the wall follower's state with no drive to follow

@@ -10,9 +10,9 @@ from dataclasses import dataclass
 
 from rfidnav_common.config import param, require_positive
 from rfidnav_common.errors import ParameterError
+from rfidnav_common.topological_map import WEIGHTS
 from rfidnav_control.go_to import GoToSettings
 from rfidnav_planning.partition_navigation import NavigatorSettings
-from rfidnav_common.topological_map import WEIGHTS
 from rfidnav_planning.two_tier_navigation import TwoTierSettings
 
 

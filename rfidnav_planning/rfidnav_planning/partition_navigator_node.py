@@ -24,15 +24,31 @@ from rclpy.node import Node
 from rfidnav_common.errors import ConfigError
 from rfidnav_common.geometry import wrap_angle
 from rfidnav_common.robot_map import load_route_map
-from rfidnav_common.ros import (COMMAND_QOS, LATCHED_QOS, SENSOR_QOS, close_goal, declare_parameters, odometry_pose,
-                                run_node, seconds_of, twist)
+from rfidnav_common.ros import (
+    COMMAND_QOS,
+    LATCHED_QOS,
+    SENSOR_QOS,
+    close_goal,
+    declare_parameters,
+    odometry_pose,
+    run_node,
+    seconds_of,
+    twist,
+)
 from rfidnav_common.tag_lattice import Coordinate
 from rfidnav_msgs.action import NavigateToPoint
 from rfidnav_msgs.msg import LocalizationStatus, PartitionPath
 from rfidnav_planning.conversions import estimate_from_status, plan_messages
 from rfidnav_planning.parameters import PartitionNavigatorParameters
-from rfidnav_planning.partition_navigation import (FORWARD, REPLANNING, ROTATE, STOP, Decision, GoalRejected,
-                                                   PartitionNavigator)
+from rfidnav_planning.partition_navigation import (
+    FORWARD,
+    REPLANNING,
+    ROTATE,
+    STOP,
+    Decision,
+    GoalRejected,
+    PartitionNavigator,
+)
 
 
 @dataclass

@@ -18,6 +18,7 @@ from rfidnav_sim.compass_model import CompassModel
 from rfidnav_sim.kinematics import BaseLimits, DiffDriveBase, OdometryDrift, Pose2D
 from rfidnav_sim.rfid_model import Antenna, ReaderModel
 
+
 @dataclass(frozen=True)
 class RobotSimParameters:
     world_file: str = param("world YAML (ground truth: tags, walls)", "")

@@ -30,6 +30,7 @@ from rfidnav_common.tag_lattice import Deployment
 from rfidnav_sim.wall_tag_model import InductionArea, WallTag, WallTagReader
 from rfidnav_sim.world import World
 
+
 @dataclass(frozen=True)
 class Antenna:
     port: int                                # 1-based, as the reader reports it

@@ -40,12 +40,12 @@ from pathlib import Path
 import numpy as np
 
 from rfidnav_common.config import Section, check_number
+from rfidnav_common.errors import ConfigError, ParameterError
 from rfidnav_common.robot_map import tag_groups_of
 from rfidnav_common.tag_groups import TagGroup
+from rfidnav_common.tag_lattice import Deployment, DeploymentError, make_deployment
 from rfidnav_sim.wall_tag_model import WallTag
 from rfidnav_sim.wifi_model import AccessPoint, PropagationSettings
-from rfidnav_common.tag_lattice import Deployment, DeploymentError, make_deployment
-from rfidnav_common.errors import ConfigError, ParameterError
 
 TAG_KINDS = ("ceiling", "floor")
 

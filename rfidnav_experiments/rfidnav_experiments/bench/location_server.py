@@ -24,8 +24,8 @@ from rfidnav_bringup.errors import ReadinessError
 from rfidnav_bringup.orchestrator import child_environment
 from rfidnav_bringup.processes import DomainLease
 from rfidnav_bringup.scenario import CONFIG_DIR
-from rfidnav_experiments.runners.two_tier import floor_extent, wifi_model
 from rfidnav_common.robot_map import load_route_map
+from rfidnav_experiments.runners.two_tier import floor_extent, wifi_model
 from rfidnav_localization.fingerprint import RadioMap
 from rfidnav_localization.radio_map_file import load_radio_map
 from rfidnav_msgs.msg import AccessPointRss, WifiScan

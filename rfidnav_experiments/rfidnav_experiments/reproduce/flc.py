@@ -34,12 +34,17 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-from rfidnav_common.errors import ConfigError  # noqa: E402
-from rfidnav_experiments.runners.tag_route import (RouteRun, controller_parameters, role_parameters,  # noqa: E402
-                                         run_tag_route, tag_points)
 from rfidnav_bringup.metrics import FIRST_TAG_RADIUS_M, tracking_error  # noqa: E402
 from rfidnav_bringup.scenario import CONFIG_DIR, Scenario, load_scenario  # noqa: E402
+from rfidnav_common.errors import ConfigError  # noqa: E402
 from rfidnav_experiments.reproduce.tables import mean_or_none, progress, save, table  # noqa: E402
+from rfidnav_experiments.runners.tag_route import (  # noqa: E402
+    RouteRun,
+    controller_parameters,
+    role_parameters,
+    run_tag_route,
+    tag_points,
+)
 
 EXPERIMENT = "flc"
 PARAM_SETS = ("flc_paper", "flc_tuned")

@@ -35,14 +35,14 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from rfidnav_bringup.scenario import CONFIG_DIR  # noqa: E402
 from rfidnav_common.config import node_parameter_values, parameters_from_mapping  # noqa: E402
 from rfidnav_common.errors import ConfigError  # noqa: E402
 from rfidnav_common.geometry import wrap_angle  # noqa: E402
 from rfidnav_common.seeding import rng_for  # noqa: E402
 from rfidnav_common.tag_lattice import LAYOUTS, Deployment, make_deployment, partitions_along_segment  # noqa: E402
-from rfidnav_experiments.runners.partitions import random_task, run_navigation  # noqa: E402
 from rfidnav_experiments.reproduce.tables import mean_or_none, progress, save, table  # noqa: E402
-from rfidnav_bringup.scenario import CONFIG_DIR  # noqa: E402
+from rfidnav_experiments.runners.partitions import random_task, run_navigation  # noqa: E402
 from rfidnav_localization.parameters import PartitionLocalizerParameters  # noqa: E402
 from rfidnav_localization.partition import LocalizerSettings, PartitionLocalizer, orientation_bounds  # noqa: E402
 from rfidnav_planning.parameters import PartitionNavigatorParameters  # noqa: E402

@@ -24,9 +24,9 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from rfidnav_common.errors import ConfigError  # noqa: E402
 from rfidnav_experiments.reproduce.tables import progress, save, table  # noqa: E402
 from rfidnav_experiments.runners.topological import MissionRun, paper_run, random_missions  # noqa: E402
-from rfidnav_common.errors import ConfigError  # noqa: E402
 
 MISS_RATES = (0.0, 0.1, 0.2, 0.3)
 METHODS = {"paper": False, "ours": True}     # method -> recover_missed_tags

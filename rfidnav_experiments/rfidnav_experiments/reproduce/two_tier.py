@@ -33,15 +33,20 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from rfidnav_experiments.reproduce.tables import save, table  # noqa: E402
 from rfidnav_bringup.scenario import CONFIG_DIR  # noqa: E402
-from rfidnav_experiments.runners.two_tier import (Site, floor_extent, grid_radio_map, robot_survey,  # noqa: E402
-                                                  run_two_tier)
 from rfidnav_common.errors import ConfigError  # noqa: E402
 from rfidnav_common.robot_map import load_route_map  # noqa: E402
 from rfidnav_common.seeding import rng_for  # noqa: E402
 from rfidnav_common.tag_groups import HF_READ_RANGE_M, TagGroup  # noqa: E402
 from rfidnav_control.spiral import expected_search_length, separation_for_group, simulate_search  # noqa: E402
+from rfidnav_experiments.reproduce.tables import save, table  # noqa: E402
+from rfidnav_experiments.runners.two_tier import (  # noqa: E402
+    Site,
+    floor_extent,
+    grid_radio_map,
+    robot_survey,
+    run_two_tier,
+)
 from rfidnav_localization.fingerprint import RadioMap  # noqa: E402
 from rfidnav_planning.two_tier_navigation import TwoTierSettings  # noqa: E402
 from rfidnav_sim.world import World, load_world  # noqa: E402

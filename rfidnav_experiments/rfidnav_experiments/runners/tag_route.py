@@ -15,6 +15,8 @@ from pathlib import Path
 
 import numpy as np
 
+from rfidnav_bringup.metrics import TrackingMetrics, Trajectory, tracking_metrics
+from rfidnav_bringup.scenario import Scenario, node_parameters
 from rfidnav_common.config import node_parameter_values, parameters_from_mapping
 from rfidnav_common.seeding import rng_for
 from rfidnav_control.fuzzy import FuzzyHeadingController
@@ -22,8 +24,6 @@ from rfidnav_control.parameters import HeadingControllerParameters
 from rfidnav_control.tag_route import Command, TagRouteFollower, observe
 from rfidnav_sim.parameters import ReaderParameters, RobotSimParameters
 from rfidnav_sim.rfid_model import ReaderSimulator
-from rfidnav_bringup.metrics import TrackingMetrics, Trajectory, tracking_metrics
-from rfidnav_bringup.scenario import Scenario, node_parameters
 
 
 @dataclass(frozen=True)

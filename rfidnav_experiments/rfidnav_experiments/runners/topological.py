@@ -24,12 +24,21 @@ import numpy as np
 
 from rfidnav_bringup.metrics import GOAL_RADIUS_M, topological_shortest_m
 from rfidnav_bringup.scenario import CONFIG_DIR
+from rfidnav_common.topological_map import UNKNOWN, TopologicalMap, load_topological_map, opposite
 from rfidnav_control.parameters import SONAR_FIELDS, WallFollowerParameters
-from rfidnav_control.wall_following import (JUNCTION_CENTRE, NO_OPENING, OBSTACLE, STOPPED, TURN_DONE, OdomPose,
-                                            Sonar, WallFollower, WallFollowerSettings)
+from rfidnav_control.wall_following import (
+    JUNCTION_CENTRE,
+    NO_OPENING,
+    OBSTACLE,
+    STOPPED,
+    TURN_DONE,
+    OdomPose,
+    Sonar,
+    WallFollower,
+    WallFollowerSettings,
+)
 from rfidnav_experiments.runners.shipped import shipped_parameters
 from rfidnav_planning.mission_executor import STOP, TURNS, Decision, MissionExecutor
-from rfidnav_common.topological_map import UNKNOWN, TopologicalMap, load_topological_map, opposite
 from rfidnav_sim.kinematics import unicycle_step
 from rfidnav_sim.sonar_model import PAPER_LAYOUT, SonarModel
 from rfidnav_sim.wall_tag_model import InductionArea, WallTagReader

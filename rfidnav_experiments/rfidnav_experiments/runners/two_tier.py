@@ -17,13 +17,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from rfidnav_common.errors import ConfigError
+from rfidnav_common.robot_map import RouteMap
 from rfidnav_common.seeding import rng_for
-from rfidnav_experiments.runners.shipped import shipped_parameters
 from rfidnav_common.tag_groups import HF_READ_RANGE_M
+from rfidnav_experiments.runners.shipped import shipped_parameters
+from rfidnav_localization.dead_reckoning import TIER_TAG, Fix
 from rfidnav_localization.errors import LocateError
 from rfidnav_localization.fingerprint import Fingerprint, LocateSettings, RadioMap
-from rfidnav_common.robot_map import RouteMap
-from rfidnav_localization.dead_reckoning import TIER_TAG, Fix
 from rfidnav_planning.two_tier_navigation import LOCATE, MapTag, Request, TwoTierNavigator, TwoTierSettings
 from rfidnav_sim.compass_model import CompassModel
 from rfidnav_sim.kinematics import unicycle_step

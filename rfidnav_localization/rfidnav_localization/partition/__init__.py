@@ -6,8 +6,14 @@ PartitionLocalizer that decodes each round and runs one of the two methods.
 """
 
 from rfidnav_localization.partition.estimate import METHODS, LocalizationEstimate, LocalizerSettings, YawEstimate
-from rfidnav_localization.partition.geometry import (PartitionGeometry, Region, direction_bounds, orientation_bounds,
-                                                     partition_geometry, read_range_of)
+from rfidnav_localization.partition.geometry import (
+                                                     PartitionGeometry,
+                                                     Region,
+                                                     direction_bounds,
+                                                     orientation_bounds,
+                                                     partition_geometry,
+                                                     read_range_of,
+)
 from rfidnav_localization.partition.localizer import PartitionLocalizer
 from rfidnav_localization.partition.particle_filter import FilterTracker, ParticleFilter
 from rfidnav_localization.partition.rogue import consistent_group

@@ -59,8 +59,12 @@ import numpy as np
 from rfidnav_common.geometry import wrap_angle
 from rfidnav_common.tag_lattice import Coordinate, DecodedTag, Deployment, Lattice, TagIdError, decode_tag_id
 from rfidnav_localization.partition.estimate import LocalizationEstimate, LocalizerSettings, YawEstimate
-from rfidnav_localization.partition.geometry import (PartitionGeometry, orientation_bounds, partition_geometry,
-                                                     read_range_of)
+from rfidnav_localization.partition.geometry import (
+    PartitionGeometry,
+    orientation_bounds,
+    partition_geometry,
+    read_range_of,
+)
 from rfidnav_localization.partition.particle_filter import FilterTracker
 from rfidnav_localization.partition.rogue import consistent_group
 from rfidnav_localization.partition.stretch import Stretch

@@ -33,8 +33,7 @@ import numpy as np
 from rfidnav_common.geometry import wrap_angle
 from rfidnav_common.tag_lattice import Coordinate, Deployment
 from rfidnav_localization.partition.estimate import LocalizerSettings, YawEstimate
-from rfidnav_localization.partition.geometry import (CIRCLE_SAMPLES, PartitionGeometry, Region,
-                                                     orientation_bounds)
+from rfidnav_localization.partition.geometry import CIRCLE_SAMPLES, PartitionGeometry, Region, orientation_bounds
 from rfidnav_localization.partition.stretch import Stretch
 
 ROUGHENING = 0.2                 # Gordon et al.'s K: jitter = K * spread * N^(-1/3) per dimension

@@ -1,0 +1,101 @@
+"""llrpkit's LLRP reader emulator on loopback, in an asyncio loop of its own, and a scenario routed to its tags."""
+
+from __future__ import annotations
+
+import asyncio
+import threading
+from collections.abc import Coroutine
+from pathlib import Path
+from typing import Any
+
+from llrpkit.emulator.core import EmulatedTag, LLRPEmulator
+from llrpkit.protocol import messages
+
+from support.runs import WORKSPACE
+
+WAIT_S = 30.0    # generous: two loaded cores, and a reconnection waits out a back-off
+
+
+class EmulatorLoop:
+    """An asyncio loop in its own thread for LLRPEmulator instances (the node's loop is another thread)."""
+
+    def __init__(self) -> None:
+        self.loop = asyncio.new_event_loop()
+        self.thread = threading.Thread(target=self.loop.run_forever, name="llrp-emulator", daemon=True)
+        self.thread.start()
+        self.running: list[LLRPEmulator] = []
+
+    def run(self, coroutine: Coroutine[Any, Any, Any]) -> Any:
+        return asyncio.run_coroutine_threadsafe(coroutine, self.loop).result(WAIT_S)
+
+    def start(self, tags: list[EmulatedTag], port: int = 0) -> LLRPEmulator:
+        async def started() -> LLRPEmulator:
+            emulator = LLRPEmulator(host="127.0.0.1", port=port, tags=tags, reads_per_sec=100.0, antenna_count=4)
+            await emulator.start()
+            return emulator
+        emulator = self.run(started())
+        self.running.append(emulator)
+        return emulator
+
+    def stop(self, emulator: LLRPEmulator) -> None:
+        self.run(emulator.stop())
+        self.running.remove(emulator)
+
+    def close(self) -> None:
+        for emulator in list(self.running):
+            self.stop(emulator)
+        self.loop.call_soon_threadsafe(self.loop.stop)
+        self.thread.join(WAIT_S)
+        self.loop.close()
+
+TARGET = "E2000017010B016210000101"     # the route's ceiling tag, seen by the two receiving antennas
+
+FLOOR = "E2000017010B016210000102"      # its arrival floor tag, on the downward antenna
+
+FLOOR_AFTER_REPORTS = 3000              # ~15 s at 200 reports/s: the robot steers on the target before it arrives
+
+
+class DelayedFloorTag(LLRPEmulator):
+    """The emulator with the floor tag coming into view only after FLOOR_AFTER_REPORTS reports. ``_send`` is
+    llrpkit's private hook through which every report goes; counting there is the only way to know what was
+    sent."""
+
+    reports = 0
+
+    async def _send(self, msg, *, message_id: int = 0) -> None:
+        if isinstance(msg, messages.RO_ACCESS_REPORT):
+            self.reports += 1
+            if self.reports == FLOOR_AFTER_REPORTS:
+                self.tags = [*self.tags, EmulatedTag(epc=bytes.fromhex(FLOOR), antennas=(3,), rssi_dbm=-60.0)]
+        await super()._send(msg, message_id=message_id)
+
+
+def emulated_route(folder: Path, loop: EmulatorLoop, metrics: str) -> tuple[Path, Path]:
+    """Start the emulator (the target tag on antennas 1 and 2, its floor tag on 3 later) on ``loop`` and write
+    a line_follow_90 scenario routed to the target (paper 001's controller, ``metrics``) and llrp_reader
+    parameters for the emulator: (scenario, reader parameter file)."""
+    async def started() -> LLRPEmulator:
+        emulator = DelayedFloorTag(host="127.0.0.1", port=0, reads_per_sec=200.0, antenna_count=4,
+                                   tags=[EmulatedTag(epc=bytes.fromhex(TARGET), antennas=(1, 2), rssi_dbm=-50.0)])
+        await emulator.start()
+        return emulator
+    emulator = loop.run(started())
+    loop.running.append(emulator)
+    route_map = folder / "route.yaml"
+    route_map.write_text(f"name: emulated\narrival_tags: {{'{TARGET}': '{FLOOR}'}}\n")
+    scenario = folder / "emulated_route.yaml"
+    scenario.write_text(
+        (WORKSPACE / "config/scenarios/line_follow_90.yaml").read_text()
+        .replace("../worlds/line_follow.yaml", str(WORKSPACE / "config/worlds/line_follow.yaml"))
+        .replace("../maps/line_follow.yaml", str(route_map))
+        .replace("../params/", str(WORKSPACE / "config/params") + "/")
+        .replace("flc_tuned.yaml", "flc_paper.yaml")
+        .replace("goal: {tag_ids: [C1, C2]}", f"goal: {{tag_ids: ['{TARGET}']}}")
+        .replace("metrics: [tracking]", f"metrics: {metrics}"))
+    params = folder / "llrp_reader.yaml"
+    params.write_text((WORKSPACE / "config/params/llrp_reader.yaml").read_text()
+                      .replace("host: 192.168.1.10", "host: 127.0.0.1")
+                      .replace("port: 5084", f"port: {emulator.port}")
+                      .replace("antennas: [1, 2]", "antennas: [1, 2, 3]"))
+    assert f"port: {emulator.port}" in params.read_text() and "antennas: [1, 2, 3]" in params.read_text()
+    return scenario, params

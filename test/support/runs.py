@@ -1,0 +1,43 @@
+"""``./rfidnav`` runs from the tests: the CLI in a subprocess (the orchestrator leases its own DDS domain), a
+scenario run that must succeed, and what the navigation nodes of a run subscribed to."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+WORKSPACE = Path(__file__).resolve().parents[2]
+
+
+def run_cli(*args: str, timeout: float = 600) -> subprocess.CompletedProcess:
+    env = dict(os.environ)
+    env.pop("ROS_DOMAIN_ID", None)   # the orchestrator leases its own domain
+    return subprocess.run([sys.executable, "-m", "rfidnav_bringup.cli", *args], capture_output=True, text=True,
+                          timeout=timeout, cwd=WORKSPACE, env=env)
+
+
+def run_scenario(out: Path, scenario: str, *options: str) -> Path:
+    """``./rfidnav run SCENARIO OPTIONS --out OUT``, which must succeed: the one run folder, with the CLI's output
+    kept in it as cli.log."""
+    result = run_cli("run", scenario, *options, "--out", str(out))
+    runs = list(out.iterdir())
+    assert len(runs) == 1, result.stdout + result.stderr
+    runs[0].joinpath("cli.log").write_text(result.stdout + result.stderr)
+    assert result.returncode == 0, result.stdout + result.stderr
+    return runs[0]
+
+
+def navigation_subscriptions(run: Path, navigation_nodes: tuple[str, ...]) -> dict[str, set[str]]:
+    """Each navigation node's subscriptions once the run's graph was ready (graph.json), after checking that none
+    is to a /sim/* topic and that none was given the world file: they know neither ground truth nor world."""
+    graph = json.loads((run / "graph.json").read_text())
+    subscriptions = {}
+    for name in navigation_nodes:
+        topics = graph["nodes"][name]["subscriptions"]
+        assert not [t for t in topics if t.startswith("/sim/")], (name, topics)
+        assert "world_file" not in (run / "params" / f"{name}.yaml").read_text(), name
+        subscriptions[name] = set(topics)
+    return subscriptions
