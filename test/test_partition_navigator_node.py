@@ -229,7 +229,7 @@ def test_localizes_over_n_partitions_then_plans_turns_and_drives_on(harness: Har
     harness.send_odometry(*ODOM_AT_PLAN, bearing)
     harness.spin_until(lambda: len(harness.commands) > before, "a command once the turn is done")
     assert motion(harness.commands[before]) == (pytest.approx(FORWARD_MPS), 0.0)
-    assert harness.node.goals.active.phase == "following" and harness.node.goals.active.turn_target_yaw is None
+    assert harness.node.goals.active.phase == "following" and harness.node.goals.active.turn.target_yaw is None
     # One feedback per status: the N + 1 partitions entered, none re-planned, the goal ever nearer.
     harness.spin_until(lambda: len(harness.feedback) >= APPROXIMATION_LEVEL + 1, "feedback for every status")
     assert [f.partitions_traversed for f in harness.feedback] == list(range(1, APPROXIMATION_LEVEL + 2))

@@ -2,7 +2,8 @@
 
 A thin adapter around PartitionNavigator: each LocalizationStatus (one inventory round, from
 partition_localizer) becomes one navigator decision. "Drive on" is the forward speed; "rotate by an
-angle" is a turn on the spot measured with /odom, after which the navigator is told the turn is done.
+angle" is a turn on the spot closed on /odom (the core's TurnOnTheSpot), after which the navigator is told
+the turn is done.
 Every new plan is published on /planning/path (partition centres) and /planning/partitions (their tags).
 One goal at a time, cancel and the watchdog on /localization/status: rfidnav_common.goal_server.
 """
@@ -18,7 +19,6 @@ from nav_msgs.msg import Odometry, Path
 from rclpy.node import Node
 
 from rfidnav_common.errors import ConfigError
-from rfidnav_common.geometry import wrap_angle
 from rfidnav_common.goal_server import ActiveGoal, GoalOutcome, SingleGoalServer, Watchdog
 from rfidnav_common.robot_map import load_route_map
 from rfidnav_common.ros import (COMMAND_QOS, LATCHED_QOS, SENSOR_QOS, declare_parameters, odometry_pose, run_node,
@@ -29,14 +29,13 @@ from rfidnav_msgs.msg import LocalizationStatus, PartitionPath
 from rfidnav_planning.conversions import estimate_from_status, plan_messages
 from rfidnav_planning.parameters import PartitionNavigatorParameters
 from rfidnav_planning.partition_navigation import (FORWARD, REPLANNING, ROTATE, STOP, Decision, GoalRejected,
-                                                   PartitionNavigator)
+                                                   PartitionNavigator, TurnOnTheSpot)
 
 
 @dataclass
 class NavigationGoal(ActiveGoal):
+    turn: TurnOnTheSpot
     phase: str = "localizing"
-    turn_target_yaw: float | None = None     # odometry heading to reach while turning
-    pending_turn_rad: float | None = None    # a turn asked for before any odometry: started by the first /odom
     previous_partition: frozenset[Coordinate] | None = None
     travelled_m: float = 0.0
 
@@ -56,9 +55,11 @@ class PartitionNavigatorNode(Node):
         self.partitions_pub = self.create_publisher(PartitionPath, "/planning/partitions", LATCHED_QOS)
         self.create_subscription(LocalizationStatus, "/localization/status", self.on_status, SENSOR_QOS)
         self.create_subscription(Odometry, "/odom", self.on_odom, SENSOR_QOS)
+        turn_settings = self.params.turn_settings()
         self.goals: SingleGoalServer[NavigationGoal] = SingleGoalServer(
             self, NavigateToPoint, "/navigate_to_point", what="navigation", busy="another goal is being navigated to",
-            check=self.refusal, new_goal=NavigationGoal, started=self.on_started, result=self.result,
+            check=self.refusal, new_goal=lambda handle: NavigationGoal(handle, TurnOnTheSpot(turn_settings)),
+            started=self.on_started, result=self.result,
             stop=lambda: self.drive(0.0, 0.0), abandon=self.navigator.cancel,
             watchdog=Watchdog(self.params.unheard_timeout_s, "/localization/status"))
         self.get_logger().info(f"deployment area {list(robot_map.deployment_area)} m; "
@@ -100,21 +101,15 @@ class PartitionNavigatorNode(Node):
             return
         if previous is not None:
             active.travelled_m += math.dist(previous[:2], pose[:2])
-        yaw = pose[2]
-        if active.pending_turn_rad is not None:
-            active.turn_target_yaw = wrap_angle(yaw + active.pending_turn_rad)
-            active.pending_turn_rad = None
-        if active.turn_target_yaw is not None:
-            self.turn_step(active, yaw)
+        if active.turn.turning:
+            self.turn_step(active, pose[2])
 
     def turn_step(self, active: NavigationGoal, yaw: float) -> None:
-        remaining = wrap_angle(active.turn_target_yaw - yaw)
-        if abs(remaining) <= self.params.turn_tolerance_rad:
-            active.turn_target_yaw = None
+        rate = active.turn.yaw_rate(yaw)
+        if rate is None:
             self.apply(self.navigator.rotation_done())
-            return
-        rate = max(-self.params.turn_rate_radps, min(self.params.turn_rate_radps, self.params.turn_gain_per_s * remaining))
-        self.drive(0.0, rate)
+        else:
+            self.drive(0.0, rate)
 
     def on_status(self, msg: LocalizationStatus) -> None:
         active = self.goals.running
@@ -128,8 +123,7 @@ class PartitionNavigatorNode(Node):
         if estimate.partition:
             active.previous_partition = estimate.partition
         decision = self.navigator.on_estimate(estimate, active.travelled_m)
-        turning = active.turn_target_yaw is not None or active.pending_turn_rad is not None
-        if not turning or decision.finished:   # a turn in progress is finished by on_odom
+        if not active.turn.turning or decision.finished:   # a turn in progress is finished by on_odom
             self.apply(decision)
         # Re-planning is reported as such; otherwise the phase the navigator is in now (rotating once it turns).
         phase = decision.phase if decision.phase == REPLANNING else self.navigator.state.phase
@@ -143,10 +137,10 @@ class PartitionNavigatorNode(Node):
         if decision.finished:
             self.goals.conclude(GoalOutcome.of(decision.success), decision.message)
         elif decision.motion.kind == ROTATE and self.odom_pose is None:
-            active.pending_turn_rad = decision.motion.rotate_by_rad
+            active.turn.start(decision.motion.rotate_by_rad, None)
             self.drive(0.0, 0.0)                # no heading to turn from yet: wait for /odom
         elif decision.motion.kind == ROTATE:
-            active.turn_target_yaw = wrap_angle(self.odom_pose[2] + decision.motion.rotate_by_rad)
+            active.turn.start(decision.motion.rotate_by_rad, self.odom_pose[2])
             self.turn_step(active, self.odom_pose[2])
         elif decision.motion.kind == FORWARD:
             self.drive(self.params.forward_speed_mps, 0.0)
