@@ -83,7 +83,7 @@ class ControllerHarness:
         handle = self.send_goal(tag_ids)
         assert handle.accepted, f"goal {tag_ids} rejected: {self.graph.logged('heading_controller')}"
         # Accepted is answered before the goal executes; rounds sent before that would be ignored.
-        self.graph.spin_until(lambda: self.node.active is not None, "the goal to start executing")
+        self.graph.spin_until(lambda: self.node.goals.active is not None, "the goal to start executing")
         return handle
 
     def send_round(self, readings: list[TagReading]) -> Twist:
@@ -113,7 +113,7 @@ def test_controller_rejects_an_unknown_or_empty_route_naming_the_problem(graph: 
     if named != "empty":
         message = graph.logged("heading_controller", "goal rejected")[0]
         assert "C1" not in message.split("unknown tag ids")[-1].split("(")[0], message  # only the unknown ones
-    assert controller.node.active is None
+    assert controller.node.goals.active is None
     # Still serving: a valid route is accepted afterwards.
     controller.start_route(["C1"])
 
@@ -148,7 +148,7 @@ def test_controller_steers_towards_the_tag_and_reports_each_arrival(graph: Graph
     assert "2 tags" in result.message
     graph.spin_until(lambda: len(controller.commands) >= 7, "the stop command sent when the route ends")
     assert (controller.commands[-1].linear.x, controller.commands[-1].angular.z) == (0.0, 0.0)
-    assert controller.node.active is None
+    assert controller.node.goals.active is None
 
 
 NAN, INF = math.nan, math.inf
@@ -193,7 +193,7 @@ def test_controller_drops_and_counts_non_finite_reads_and_stays_up(graph: Graph)
     # Still alive and steering: a good read of F1 is an arrival, and the goal is still the same goal.
     controller.send_round([reading("F1", 3, 1.0), *target_round("C2", 0.0)])
     graph.spin_until(lambda: controller.feedback[-1].target_tag_id == "C2", "arrival at C1 after the bad reads")
-    assert node.active is not None and node.active.handle.goal_id == handle.goal_id
+    assert node.goals.active is not None and node.goals.active.handle.goal_id == handle.goal_id
     assert node.dropped_reads == bad_reads
 
 

@@ -20,6 +20,8 @@ from rfidnav_planning.partition_navigation import (
     GoalRejected,
     NavigatorSettings,
     PartitionNavigator,
+    TurnOnTheSpot,
+    TurnSettings,
 )
 
 pytestmark = pytest.mark.tier("unit")
@@ -153,3 +155,31 @@ def test_a_floor_too_small_for_the_localization_phase_ends_the_goal() -> None:
         assert run.success or "could not localize" in run.message or "gave up" in run.message, run.message
         assert run.path_length_m < 10.0 + 5.0 * 2 * 5.0 * 1.5
     assert any(not run.success and "could not localize" in run.message for run in outcomes)
+
+
+TURN = TurnSettings(max_rate_radps=0.8, gain_per_s=3.0, tolerance_rad=0.005)
+
+
+def test_a_turn_on_the_spot_is_capped_then_proportional_and_done_within_the_tolerance() -> None:
+    turn = TurnOnTheSpot(TURN)
+    turn.start(math.pi / 2.0, 0.0)
+    assert turn.yaw_rate(0.0) == pytest.approx(0.8)                  # far from the target: the cap
+    assert turn.yaw_rate(math.pi / 2.0 - 0.1) == pytest.approx(0.3)  # near it: 3 /s x 0.1 rad
+    assert turn.turning
+    assert turn.yaw_rate(math.pi / 2.0 - 0.004) is None               # within 5 mrad: done
+    assert not turn.turning
+
+
+def test_a_turn_across_the_heading_wrap_takes_the_short_way() -> None:
+    turn = TurnOnTheSpot(TURN)
+    turn.start(-0.2, -math.pi + 0.1)                                 # clockwise past -pi
+    assert turn.target_yaw == pytest.approx(math.pi - 0.1)
+    assert turn.yaw_rate(-math.pi + 0.05) == pytest.approx(-0.45)    # 0.15 rad to go, clockwise
+
+
+def test_a_turn_asked_for_before_any_heading_starts_from_the_first_one() -> None:
+    turn = TurnOnTheSpot(TURN)
+    turn.start(-1.0, None)
+    assert turn.turning and turn.target_yaw is None
+    assert turn.yaw_rate(2.0) == pytest.approx(-0.8)
+    assert turn.target_yaw == pytest.approx(1.0)

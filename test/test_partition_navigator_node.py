@@ -110,7 +110,7 @@ class Harness(Graph):
         handle = self.send_goal(x, y)
         assert handle.accepted, f"goal ({x}, {y}) rejected: {self.logged('goal rejected')}"
         # Accepted is answered before the node starts navigating; statuses sent before that are ignored.
-        self.spin_until(lambda: self.node.active is not None and len(self.commands) > before,
+        self.spin_until(lambda: self.node.goals.active is not None and len(self.commands) > before,
                         "the goal to start, with its stop command")
         assert (self.commands[before].linear.x, self.commands[before].angular.z) == (0.0, 0.0)
         return handle
@@ -183,7 +183,7 @@ def localize_and_turn(harness: Harness) -> tuple[Any, PartitionPath, float]:
     assert [motion(c) for c in commands] == [(pytest.approx(FORWARD_MPS), 0.0)] * APPROXIMATION_LEVEL, \
         "fewer than N partitions traversed: drive straight on, even with a heading"
     assert not harness.paths and not harness.plans, "planned before the localization phase ended"
-    assert harness.node.active.phase == "localizing"
+    assert harness.node.goals.active.phase == "localizing"
 
     harness.send_odometry(*ODOM_AT_PLAN, 0.0)
     last = harness.status(partitions[-1], traversed=APPROXIMATION_LEVEL, yaw=0.0)
@@ -213,12 +213,12 @@ def test_a_goal_outside_the_deployment_is_rejected_and_logged_one_inside_accepte
     harness.spin_until(lambda: harness.logged("goal rejected", "outside the deployment"),
                        "partition_navigator to log why (6, 2) was rejected")
     assert "(6.000, 2.000)" in harness.logged("outside the deployment")[0]
-    assert harness.node.active is None
+    assert harness.node.goals.active is None
     handle = harness.send_goal(-0.01, 4.0)
     assert not handle.accepted, "a goal just west of the tagged area was accepted"
     # Still serving: a goal inside (here on the area's edge) is accepted and navigated to.
     handle = harness.start_goal(5.0, 2.5)
-    assert harness.node.active.handle.goal_id == handle.goal_id
+    assert harness.node.goals.active.handle.goal_id == handle.goal_id
     assert harness.node.navigator.state.goal == (5.0, 2.5)
 
 
@@ -235,7 +235,7 @@ def test_localizes_over_n_partitions_then_plans_turns_and_drives_on(harness: Har
     harness.send_odometry(*ODOM_AT_PLAN, bearing)
     harness.spin_until(lambda: len(harness.commands) > before, "a command once the turn is done")
     assert motion(harness.commands[before]) == (pytest.approx(FORWARD_MPS), 0.0)
-    assert harness.node.active.phase == "following" and harness.node.active.turn_target_yaw is None
+    assert harness.node.goals.active.phase == "following" and harness.node.goals.active.turn.target_yaw is None
     # One feedback per status: the N + 1 partitions entered, none re-planned, the goal ever nearer.
     harness.spin_until(lambda: len(harness.feedback) >= APPROXIMATION_LEVEL + 1, "feedback for every status")
     assert [f.partitions_traversed for f in harness.feedback] == list(range(1, APPROXIMATION_LEVEL + 2))
@@ -270,7 +270,7 @@ def test_entering_the_goal_partition_succeeds_and_stops(harness: Harness) -> Non
     # N + 1 partitions localizing (the first one read counts as entered), then the plan's after its first.
     assert result.partitions_traversed == (APPROXIMATION_LEVEL + 1) + (len(following) - 1)
     assert result.path_length_m == pytest.approx(math.dist((0.0, 0.0), ODOM_AT_PLAN))
-    assert harness.node.active is None and not harness.plans[-1].replans
+    assert harness.node.goals.active is None and not harness.plans[-1].replans
     assert len(harness.plans) == 1, "re-planned while following the plan"
     # Done: a new goal is accepted.
     harness.start_goal(*GOAL)
@@ -285,18 +285,18 @@ def test_a_status_with_non_finite_values_is_ignored_and_survived(harness: Harnes
     state = node.navigator.state
     assert state.partitions_entered == 1
     # A new partition, but a non-finite value in the status: nothing of it is taken.
-    heard = node.active.last_status_s
+    heard = node.goals.active.last_heard_s
     harness.status_pub.publish(harness.status(partitions[1], 1, yaw=0.0, **bad))
-    harness.spin_until(lambda: node.active.last_status_s != heard, "the bad status to arrive")
+    harness.spin_until(lambda: node.goals.active.last_heard_s != heard, "the bad status to arrive")
     harness.spin_until(lambda: harness.logged("ignored a localization status with non-finite values"),
                        "the warning about the bad status on /rosout")
     assert state.partitions_entered == 1 and state.last_estimate.partition == partitions[0]
-    assert node.active.previous_partition == partitions[0]
+    assert node.goals.active.previous_partition == partitions[0]
     # Still navigating the same goal: the next good status counts the partition and drives on.
     command = harness.send_status(harness.status(partitions[1], 1, yaw=0.0))
     assert motion(command) == (pytest.approx(FORWARD_MPS), 0.0)
     assert state.partitions_entered == 2 and state.last_estimate.partition == partitions[1]
-    assert node.active is not None and node.active.handle.goal_id == handle.goal_id
+    assert node.goals.active is not None and node.goals.active.handle.goal_id == handle.goal_id
     assert all(math.isfinite(v) for c in harness.commands for v in motion(c))
 
 
@@ -318,7 +318,7 @@ def test_cancelling_the_goal_ends_it_as_canceled_and_stops(harness: Harness) -> 
     assert answer.result.partitions_traversed == 2
     harness.spin_until(lambda: len(harness.commands) > before, "the stop command on cancelling")
     assert motion(harness.commands[-1]) == (0.0, 0.0)
-    assert harness.node.active is None and harness.node.navigator.state.outcome is not None
+    assert harness.node.goals.active is None and harness.node.navigator.state.outcome is not None
     harness.start_goal(*GOAL)
 
 

@@ -13,7 +13,6 @@ from builtin_interfaces.msg import Time
 from geometry_msgs.msg import Twist
 from nav_msgs.msg import Odometry
 from rcl_interfaces.msg import ParameterDescriptor
-from rclpy.action.server import ServerGoalHandle
 from rclpy.context import Context
 from rclpy.exceptions import InvalidParameterTypeException
 from rclpy.executors import Executor, ExternalShutdownException
@@ -75,8 +74,9 @@ def events_executor(context: Context | None = None) -> Executor:
 
     Spin it only with bounded ``spin_once`` calls (see run_node) and never give it a coroutine that awaits a
     Future: in rclpy 7.1 an awaiting task is re-queued at once, so it -- and ``spin()`` or
-    ``spin_until_future_complete()`` -- busy-loops a core (heading_controller therefore runs a goal's execute
-    callback only once the outcome is known). Pass SingleThreadedExecutor to run_node for such a node."""
+    ``spin_until_future_complete()`` -- busy-loops a core (the action servers therefore run a goal's execute
+    callback only once the outcome is known: rfidnav_common.goal_server). Pass SingleThreadedExecutor to
+    run_node for such a node."""
     return EventsExecutor(context=context)
 
 
@@ -114,16 +114,6 @@ def run_node(make_node: Callable[[], Node], args: list[str] | None = None,
         executor.shutdown()
         rclpy.try_shutdown()
     return code
-
-
-def close_goal(node: Node, handle: ServerGoalHandle, outcome: tuple[str, str], what: str) -> tuple[bool, str]:
-    """End an action goal with its outcome (succeeded | aborted | canceled, message) and log it; returns
-    (success, message) for the result. The rfidnav action servers decide the outcome while following a goal
-    and let its execute callback run only then (no coroutine waits on the EventsExecutor)."""
-    state, message = outcome
-    getattr(handle, {"succeeded": "succeed", "aborted": "abort", "canceled": "canceled"}[state])()
-    node.get_logger().info(f"{what} {state}: {message}")
-    return state == "succeeded", message
 
 
 def odometry_pose(msg: Odometry) -> tuple[float, float, float]:

@@ -8,9 +8,8 @@ in-process runner glues the two cores: each inventory round's tag ids go to ``on
 learns of ``?`` hallways is kept for later goals. A goal is refused for a node not in the map, while another goal
 runs, or while no wall follower listens on /wall_follower/command. A follower that says it is idle
 (/wall_follower/state) while a mission runs did not hear its command (it restarted, or its subscription matched
-after the command went out): it is told again to follow, with the turn waiting for the next junction. As in the
-other action servers, the goal is followed from its acceptance and its execute callback runs only once the
-outcome is known.
+after the command went out): it is told again to follow, with the turn waiting for the next junction. One goal at
+a time and cancel: rfidnav_common.goal_server.
 """
 
 from __future__ import annotations
@@ -18,11 +17,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
-from rclpy.action import ActionServer, CancelResponse, GoalResponse
-from rclpy.action.server import ServerGoalHandle
 from rclpy.node import Node
 
-from rfidnav_common.ros import COMMAND_QOS, SENSOR_QOS, close_goal, declare_parameters, run_node
+from rfidnav_common.goal_server import ActiveGoal, GoalOutcome, SingleGoalServer
+from rfidnav_common.ros import COMMAND_QOS, SENSOR_QOS, declare_parameters, run_node
 from rfidnav_common.topological_map import load_topological_map
 from rfidnav_msgs.action import NavigateToNode
 from rfidnav_msgs.msg import TagReadArray, WallFollowerCommand, WallFollowerEvent
@@ -34,10 +32,8 @@ IDLE = "idle"                             # the wall follower's state with no dr
 
 
 @dataclass
-class ActiveGoal:
-    handle: ServerGoalHandle
+class MissionGoal(ActiveGoal):
     next_action: str = FOLLOW
-    outcome: tuple[str, str] | None = None   # (succeeded | aborted | canceled, message) once concluded
 
 
 class MissionExecutorNode(Node):
@@ -47,69 +43,55 @@ class MissionExecutorNode(Node):
         self.params: MissionExecutorParameters = declare_parameters(self, MissionExecutorParameters)
         self.map = load_topological_map(self.params.map_file)
         self.executor_core = MissionExecutor(self.map, self.params.weight, self.params.recover_missed_tags)
-        self.active: ActiveGoal | None = None
         self.command_pub = self.create_publisher(WallFollowerCommand, "/wall_follower/command", COMMAND_QOS)
         self.create_subscription(TagReadArray, "/rfid/reads", self.on_reads, SENSOR_QOS)
         self.create_subscription(WallFollowerEvent, "/wall_follower/event", self.on_event, COMMAND_QOS)
         self.create_subscription(WallFollowerEvent, "/wall_follower/state", self.on_follower_state, COMMAND_QOS)
-        self.action_server = ActionServer(
-            self, NavigateToNode, "/navigate_to_node", execute_callback=self.finish,
-            goal_callback=self.on_goal, handle_accepted_callback=self.on_accepted,
-            cancel_callback=lambda _: CancelResponse.ACCEPT)
-        self.create_timer(0.1, self.supervise)
+        # No stop on every end: a mission that succeeds ends with the follower already stopped.
+        self.goals: SingleGoalServer[MissionGoal] = SingleGoalServer(
+            self, NavigateToNode, "/navigate_to_node", what="mission", busy="another goal is being navigated to",
+            check=self.refusal, new_goal=MissionGoal, started=self.on_started, result=self.result,
+            abandon=lambda _message: self.command(STOP, 0.0))
         self.get_logger().info(f"map '{self.map.name}': {len(self.map.nodes)} nodes; routes by {self.params.weight}")
 
     def destroy_node(self) -> None:
-        self.action_server.destroy()
+        self.goals.destroy()
         super().destroy_node()
 
     # ------------------------------------------------------------------------------------ goals
-    def on_goal(self, goal: NavigateToNode.Goal) -> GoalResponse:
-        problem = None
-        if self.active is not None:
-            problem = "another goal is being navigated to"
-        elif goal.goal_node not in self.map.nodes:
-            problem = f"'{goal.goal_node}' is not a node of map '{self.map.name}'"
-        elif self.command_pub.get_subscription_count() == 0:
-            problem = "no wall follower listens on /wall_follower/command"
-        if problem is not None:
-            self.get_logger().error(f"goal rejected: {problem}")
-            return GoalResponse.REJECT
-        return GoalResponse.ACCEPT
+    def refusal(self, goal: NavigateToNode.Goal) -> str | None:
+        if goal.goal_node not in self.map.nodes:
+            return f"'{goal.goal_node}' is not a node of map '{self.map.name}'"
+        if self.command_pub.get_subscription_count() == 0:
+            return "no wall follower listens on /wall_follower/command"
+        return None
 
-    def on_accepted(self, handle: ServerGoalHandle) -> None:
-        self.active = ActiveGoal(handle)
-        decision = self.executor_core.start(handle.request.goal_node)
+    def on_started(self, goal: MissionGoal) -> None:
+        decision = self.executor_core.start(goal.handle.request.goal_node)
         self.get_logger().info(decision.message)
         self.command(WallFollowerCommand.FOLLOW)
 
-    def conclude(self, state: str, message: str) -> None:
-        self.active.outcome = (state, message)
-        self.active.handle.execute()
-
-    def finish(self, handle: ServerGoalHandle) -> NavigateToNode.Result:
-        active, self.active = self.active, None
-        success, message = close_goal(self, handle, active.outcome, "mission")
+    def result(self, _goal: MissionGoal, success: bool, message: str) -> NavigateToNode.Result:
         mission = self.executor_core.state
         return NavigateToNode.Result(success=success, message=message, nodes_visited=list(mission.nodes_visited),
                                      tags_missed=mission.tags_missed, replans=mission.replans)
 
     # ---------------------------------------------------------------------------------- sensing
     def on_reads(self, msg: TagReadArray) -> None:
-        if self.active is None or self.active.outcome is not None or not msg.readings:
+        if self.goals.running is None or not msg.readings:
             return
         for decision in self.executor_core.on_reads(reading.tag_id for reading in msg.readings):
             self.apply(decision)
 
     def on_event(self, msg: WallFollowerEvent) -> None:
-        if self.active is None or self.active.outcome is not None:
+        if self.goals.running is None:
             return
         if msg.event == STOPPED:
             outcome = self.executor_core.state.outcome
-            if outcome is not None and outcome.success:
-                self.conclude("succeeded", outcome.message)
+            if outcome is not None:
+                self.goals.conclude(GoalOutcome.of(outcome.success), outcome.message)
             else:
-                self.conclude("aborted", outcome.message if outcome is not None else "the wall follower stopped")
+                self.goals.conclude(GoalOutcome.ABORTED, "the wall follower stopped")
             return
         if msg.event not in EVENTS:
             self.get_logger().warning(f"/wall_follower/event: unknown event '{msg.event}' ignored")
@@ -117,7 +99,7 @@ class MissionExecutorNode(Node):
         self.apply(self.executor_core.on_junction(msg.event))
 
     def apply(self, decision: Decision) -> None:
-        active = self.active
+        active = self.goals.active
         if decision.message:
             self.get_logger().info(decision.message)
         active.next_action = decision.action
@@ -127,7 +109,7 @@ class MissionExecutorNode(Node):
         self.publish_feedback()
         if decision.finished and not decision.success:
             self.command(STOP, 0.0)
-            self.conclude("aborted", decision.message)
+            self.goals.conclude(GoalOutcome.ABORTED, decision.message)
 
     # ------------------------------------------------------------------------------------ output
     def command(self, action: str, within_m: float = 0.0) -> None:
@@ -135,14 +117,14 @@ class MissionExecutorNode(Node):
 
     def publish_feedback(self) -> None:
         mission = self.executor_core.state
-        self.active.handle.publish_feedback(NavigateToNode.Feedback(
+        goal = self.goals.active
+        goal.handle.publish_feedback(NavigateToNode.Feedback(
             current_node=mission.current_node or "", arrival_direction=mission.arrival_side or "",
-            last_tag=mission.last_tag or "", next_action=self.active.next_action,
+            last_tag=mission.last_tag or "", next_action=goal.next_action,
             tags_missed=mission.tags_missed, replans=mission.replans))
 
     def on_follower_state(self, msg: WallFollowerEvent) -> None:
-        active = self.active
-        if active is None or active.outcome is not None or msg.state != IDLE:
+        if self.goals.running is None or msg.state != IDLE:
             return
         if self.executor_core.state.stop_commanded:
             return                  # idle after the stop: the mission ends with its "stopped" event
@@ -153,14 +135,6 @@ class MissionExecutorNode(Node):
         awaiting = self.executor_core.state.awaiting
         if awaiting is not None:
             self.command(awaiting)
-
-    def supervise(self) -> None:
-        """A cancel request is noticed here: no read or event may arrive to notice it."""
-        active = self.active
-        if active is None or active.outcome is not None or not active.handle.is_cancel_requested:
-            return
-        self.command(STOP, 0.0)
-        self.conclude("canceled", "cancelled by the client")
 
 
 def main(args: list[str] | None = None) -> int:

@@ -12,7 +12,7 @@ from rfidnav_common.config import param, require_positive
 from rfidnav_common.errors import ParameterError
 from rfidnav_common.topological_map import WEIGHTS
 from rfidnav_control.go_to import GoToSettings
-from rfidnav_planning.partition_navigation import NavigatorSettings
+from rfidnav_planning.partition_navigation import NavigatorSettings, TurnSettings
 from rfidnav_planning.two_tier_navigation import TwoTierSettings
 
 
@@ -54,6 +54,9 @@ class PartitionNavigatorParameters:
         # Every navigator setting is a node parameter of the same name.
         return NavigatorSettings(**{field.name: getattr(self, field.name)
                                     for field in dataclasses.fields(NavigatorSettings)})
+
+    def turn_settings(self) -> TurnSettings:
+        return TurnSettings(self.turn_rate_radps, self.turn_gain_per_s, self.turn_tolerance_rad)
 
 
 @dataclass(frozen=True)

@@ -3,8 +3,8 @@
 The navigator decides; something else moves the robot. It is fed one localization estimate per
 inventory round (or per partition crossing in the in-process experiments) and answers with a motion:
 drive straight on, rotate on the spot by an angle, or stop. The DDS node turns these into /cmd_vel
-(rotations measured with odometry); the experiment runner applies them to an idealised robot. Both
-run exactly this code.
+(rotations closed on odometry by :class:`TurnOnTheSpot`); the experiment runner applies them to an idealised
+robot, which turns exactly. Both run exactly this code.
 
 Phases (paper 000 sections 5.2 and 6.3):
 
@@ -126,6 +126,47 @@ class NavigationState:
     last_read_travel_m: float = 0.0
     path_limit_m: float = math.inf
     outcome: Decision | None = None
+
+
+@dataclass(frozen=True)
+class TurnSettings:
+    max_rate_radps: float                  # the largest yaw rate
+    gain_per_s: float                      # yaw rate per radian still to turn, near the end of a turn
+    tolerance_rad: float                   # a turn is done this close to its target heading
+
+
+class TurnOnTheSpot:
+    """A rotation the navigator asked for, closed on the odometry heading: a yaw rate proportional to the
+    angle still to turn (capped, so it slows down only near the end) until within the tolerance. A turn asked
+    for before any heading is known starts from the first one."""
+
+    def __init__(self, settings: TurnSettings) -> None:
+        self.settings = settings
+        self.target_yaw: float | None = None   # the odometry heading to reach
+        self.pending_rad: float | None = None  # the angle of a turn that waits for a heading to start from
+
+    @property
+    def turning(self) -> bool:
+        return self.target_yaw is not None or self.pending_rad is not None
+
+    def start(self, angle: float, yaw: float | None) -> None:
+        """Turn by ``angle`` (CCW positive) from the odometry heading ``yaw``, or from the first one if None."""
+        if yaw is None:
+            self.pending_rad = angle
+        else:
+            self.target_yaw = wrap_angle(yaw + angle)
+
+    def yaw_rate(self, yaw: float) -> float | None:
+        """The yaw rate [rad/s] to command at odometry heading ``yaw``, or None: the turn is done (tell the
+        navigator, :meth:`PartitionNavigator.rotation_done`)."""
+        if self.pending_rad is not None:
+            self.target_yaw, self.pending_rad = wrap_angle(yaw + self.pending_rad), None
+        remaining = wrap_angle(self.target_yaw - yaw)
+        if abs(remaining) <= self.settings.tolerance_rad:
+            self.target_yaw = None
+            return None
+        limit = self.settings.max_rate_radps
+        return max(-limit, min(limit, self.settings.gain_per_s * remaining))
 
 
 class GoalRejected(ValueError):

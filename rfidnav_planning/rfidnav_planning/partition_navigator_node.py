@@ -2,11 +2,10 @@
 
 A thin adapter around PartitionNavigator: each LocalizationStatus (one inventory round, from
 partition_localizer) becomes one navigator decision. "Drive on" is the forward speed; "rotate by an
-angle" is a turn on the spot measured with /odom, after which the navigator is told the turn is done.
+angle" is a turn on the spot closed on /odom (the core's TurnOnTheSpot), after which the navigator is told
+the turn is done.
 Every new plan is published on /planning/path (partition centres) and /planning/partitions (their tags).
-
-As heading_controller does, the goal is followed from its acceptance and its execute callback runs only
-once the outcome is known, so the node stays on rclpy's EventsExecutor with no coroutine waiting.
+One goal at a time, cancel and the watchdog on /localization/status: rfidnav_common.goal_server.
 """
 
 from __future__ import annotations
@@ -17,18 +16,15 @@ from typing import Any
 
 from geometry_msgs.msg import Pose2D, Twist
 from nav_msgs.msg import Odometry, Path
-from rclpy.action import ActionServer, CancelResponse, GoalResponse
-from rclpy.action.server import ServerGoalHandle
 from rclpy.node import Node
 
 from rfidnav_common.errors import ConfigError
-from rfidnav_common.geometry import wrap_angle
+from rfidnav_common.goal_server import ActiveGoal, GoalOutcome, SingleGoalServer, Watchdog
 from rfidnav_common.robot_map import load_route_map
 from rfidnav_common.ros import (
     COMMAND_QOS,
     LATCHED_QOS,
     SENSOR_QOS,
-    close_goal,
     declare_parameters,
     odometry_pose,
     run_node,
@@ -48,19 +44,16 @@ from rfidnav_planning.partition_navigation import (
     Decision,
     GoalRejected,
     PartitionNavigator,
+    TurnOnTheSpot,
 )
 
 
 @dataclass
-class ActiveGoal:
-    handle: ServerGoalHandle
-    last_status_s: float
+class NavigationGoal(ActiveGoal):
+    turn: TurnOnTheSpot
     phase: str = "localizing"
-    turn_target_yaw: float | None = None     # odometry heading to reach while turning
-    pending_turn_rad: float | None = None    # a turn asked for before any odometry: started by the first /odom
     previous_partition: frozenset[Coordinate] | None = None
     travelled_m: float = 0.0
-    outcome: tuple[str, str] | None = None   # (succeeded | aborted | canceled, message) once concluded
 
 
 class PartitionNavigatorNode(Node):
@@ -72,57 +65,44 @@ class PartitionNavigatorNode(Node):
         if robot_map.deployment_area is None:
             raise ConfigError(self.params.map_file, "deployment_area", "partition navigation needs the tagged area")
         self.navigator = PartitionNavigator(self.params.settings(), robot_map.deployment_area)
-        self.active: ActiveGoal | None = None
         self.odom_pose: tuple[float, float, float] | None = None
         self.cmd_pub = self.create_publisher(Twist, "/cmd_vel", COMMAND_QOS)
         self.path_pub = self.create_publisher(Path, "/planning/path", LATCHED_QOS)
         self.partitions_pub = self.create_publisher(PartitionPath, "/planning/partitions", LATCHED_QOS)
         self.create_subscription(LocalizationStatus, "/localization/status", self.on_status, SENSOR_QOS)
         self.create_subscription(Odometry, "/odom", self.on_odom, SENSOR_QOS)
-        self.action_server = ActionServer(
-            self, NavigateToPoint, "/navigate_to_point", execute_callback=self.finish,
-            goal_callback=self.on_goal, handle_accepted_callback=self.on_accepted,
-            cancel_callback=lambda _: CancelResponse.ACCEPT)
-        self.create_timer(0.1, self.supervise)
+        turn_settings = self.params.turn_settings()
+        self.goals: SingleGoalServer[NavigationGoal] = SingleGoalServer(
+            self, NavigateToPoint, "/navigate_to_point", what="navigation", busy="another goal is being navigated to",
+            check=self.refusal, new_goal=lambda handle: NavigationGoal(handle, TurnOnTheSpot(turn_settings)),
+            started=self.on_started, result=self.result,
+            stop=lambda: self.drive(0.0, 0.0), abandon=self.navigator.cancel,
+            watchdog=Watchdog(self.params.unheard_timeout_s, "/localization/status"))
         self.get_logger().info(f"deployment area {list(robot_map.deployment_area)} m; "
                                f"approximation level {self.params.approximation_level}")
 
     def destroy_node(self) -> None:
-        self.action_server.destroy()
+        self.goals.destroy()
         super().destroy_node()
 
-    def now_s(self) -> float:
-        return self.get_clock().now().nanoseconds * 1e-9
-
     # ------------------------------------------------------------------------------------ goals
-    def on_goal(self, goal: NavigateToPoint.Goal) -> GoalResponse:
+    def refusal(self, goal: NavigateToPoint.Goal) -> str | None:
         try:
-            if self.active is not None:
-                raise GoalRejected("another goal is being navigated to")
             self.navigator.check_goal((goal.target.x, goal.target.y), goal.tolerance_m)
         except GoalRejected as error:
-            self.get_logger().error(f"goal rejected: {error}")
-            return GoalResponse.REJECT
-        return GoalResponse.ACCEPT
+            return str(error)
+        return None
 
-    def on_accepted(self, handle: ServerGoalHandle) -> None:
-        target = handle.request.target
-        self.navigator.start((target.x, target.y), handle.request.tolerance_m)
-        self.active = ActiveGoal(handle, self.now_s())
+    def on_started(self, goal: NavigationGoal) -> None:
+        target = goal.handle.request.target
+        self.navigator.start((target.x, target.y), goal.handle.request.tolerance_m)
         self.get_logger().info(f"navigating to ({target.x:.3f}, {target.y:.3f})")
         self.drive(0.0, 0.0)
 
-    def conclude(self, state: str, message: str) -> None:
-        self.active.outcome = (state, message)
-        self.drive(0.0, 0.0)
-        self.active.handle.execute()
-
-    def finish(self, handle: ServerGoalHandle) -> NavigateToPoint.Result:
-        active, self.active = self.active, None
-        success, message = close_goal(self, handle, active.outcome, "navigation")
+    def result(self, goal: NavigationGoal, success: bool, message: str) -> NavigateToPoint.Result:
         navigation = self.navigator.state
         return NavigateToPoint.Result(success=success, message=message,
-                                      path_length_m=float(active.travelled_m), replans=navigation.replans,
+                                      path_length_m=float(goal.travelled_m), replans=navigation.replans,
                                       partitions_traversed=navigation.partitions_entered)
 
     # ---------------------------------------------------------------------------------- sensing
@@ -132,32 +112,26 @@ class PartitionNavigatorNode(Node):
             self.get_logger().warning("dropped an odometry message with non-finite values", throttle_duration_sec=5.0)
             return
         previous, self.odom_pose = self.odom_pose, pose
-        yaw = pose[2]
-        active = self.active
-        if active is None or active.outcome is not None:
+        active = self.goals.running
+        if active is None:
             return
         if previous is not None:
-            active.travelled_m += math.dist(previous[:2], self.odom_pose[:2])
-        if active.pending_turn_rad is not None:
-            active.turn_target_yaw = wrap_angle(yaw + active.pending_turn_rad)
-            active.pending_turn_rad = None
-        if active.turn_target_yaw is not None:
-            self.turn_step(active, yaw)
+            active.travelled_m += math.dist(previous[:2], pose[:2])
+        if active.turn.turning:
+            self.turn_step(active, pose[2])
 
-    def turn_step(self, active: ActiveGoal, yaw: float) -> None:
-        remaining = wrap_angle(active.turn_target_yaw - yaw)
-        if abs(remaining) <= self.params.turn_tolerance_rad:
-            active.turn_target_yaw = None
+    def turn_step(self, active: NavigationGoal, yaw: float) -> None:
+        rate = active.turn.yaw_rate(yaw)
+        if rate is None:
             self.apply(self.navigator.rotation_done())
-            return
-        rate = max(-self.params.turn_rate_radps, min(self.params.turn_rate_radps, self.params.turn_gain_per_s * remaining))
-        self.drive(0.0, rate)
+        else:
+            self.drive(0.0, rate)
 
     def on_status(self, msg: LocalizationStatus) -> None:
-        active = self.active
-        if active is None or active.outcome is not None:
+        active = self.goals.running
+        if active is None:
             return
-        active.last_status_s = self.now_s()
+        self.goals.heard()
         if not all(math.isfinite(v) for v in (msg.x, msg.y, msg.yaw_rad, msg.yaw_lower_rad, msg.yaw_upper_rad)):
             self.get_logger().warning("ignored a localization status with non-finite values", throttle_duration_sec=5.0)
             return
@@ -165,25 +139,24 @@ class PartitionNavigatorNode(Node):
         if estimate.partition:
             active.previous_partition = estimate.partition
         decision = self.navigator.on_estimate(estimate, active.travelled_m)
-        turning = active.turn_target_yaw is not None or active.pending_turn_rad is not None
-        if not turning or decision.finished:   # a turn in progress is finished by on_odom
+        if not active.turn.turning or decision.finished:   # a turn in progress is finished by on_odom
             self.apply(decision)
         # Re-planning is reported as such; otherwise the phase the navigator is in now (rotating once it turns).
         phase = decision.phase if decision.phase == REPLANNING else self.navigator.state.phase
         self.publish_feedback(active, phase, estimate.position, estimate.yaw)
 
     def apply(self, decision: Decision) -> None:
-        active = self.active
+        active = self.goals.active
         active.phase = decision.phase
         if decision.new_plan is not None:
             self.publish_plan(decision)
         if decision.finished:
-            self.conclude("succeeded" if decision.success else "aborted", decision.message)
+            self.goals.conclude(GoalOutcome.of(decision.success), decision.message)
         elif decision.motion.kind == ROTATE and self.odom_pose is None:
-            active.pending_turn_rad = decision.motion.rotate_by_rad
+            active.turn.start(decision.motion.rotate_by_rad, None)
             self.drive(0.0, 0.0)                # no heading to turn from yet: wait for /odom
         elif decision.motion.kind == ROTATE:
-            active.turn_target_yaw = wrap_angle(self.odom_pose[2] + decision.motion.rotate_by_rad)
+            active.turn.start(decision.motion.rotate_by_rad, self.odom_pose[2])
             self.turn_step(active, self.odom_pose[2])
         elif decision.motion.kind == FORWARD:
             self.drive(self.params.forward_speed_mps, 0.0)
@@ -201,7 +174,7 @@ class PartitionNavigatorNode(Node):
         self.path_pub.publish(path)
         self.partitions_pub.publish(partitions)
 
-    def publish_feedback(self, active: ActiveGoal, phase: str, position: tuple[float, float] | None,
+    def publish_feedback(self, active: NavigationGoal, phase: str, position: tuple[float, float] | None,
                          yaw: float | None) -> None:
         navigation = self.navigator.state
         feedback = NavigateToPoint.Feedback(phase=phase, partitions_traversed=navigation.partitions_entered,
@@ -211,20 +184,6 @@ class PartitionNavigatorNode(Node):
                                              theta=float(yaw) if yaw is not None else 0.0)
             feedback.distance_to_goal_m = float(math.dist(position, navigation.goal))
         active.handle.publish_feedback(feedback)
-
-    def supervise(self) -> None:
-        """Cancel requests and a silent localizer are noticed here, as no status may arrive to notice them."""
-        active = self.active
-        if active is None or active.outcome is not None:
-            return
-        if active.handle.is_cancel_requested:
-            self.navigator.cancel("cancelled by the client")
-            self.conclude("canceled", "cancelled by the client")
-            return
-        silent_s = self.now_s() - active.last_status_s
-        if silent_s > self.params.unheard_timeout_s:
-            self.navigator.cancel("no localization status")
-            self.conclude("aborted", f"no /localization/status for {silent_s:.1f} s")
 
 
 def main(args: list[str] | None = None) -> int:

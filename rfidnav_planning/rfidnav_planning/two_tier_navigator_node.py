@@ -7,9 +7,7 @@ and publishes its velocity command on /cmd_vel, the dead-reckoned pose on /local
 the last fix on /localization/status. When the core asks the location server something, the latest
 /wifi/scan goes to /location_server/locate, or the tag-map query to /location_server/tag_map; an unanswered
 call (a server restarting, say) is sent again after ``service_timeout_s`` while the robot stands still.
-
-As partition_navigator does, the goal is followed from its acceptance and its execute callback runs only once
-the outcome is known, so the node stays on rclpy's EventsExecutor with no coroutine waiting.
+One goal at a time and cancel (checked at each control step): rfidnav_common.goal_server.
 """
 
 from __future__ import annotations
@@ -20,25 +18,18 @@ from typing import Any
 
 from geometry_msgs.msg import Pose2D, PoseWithCovarianceStamped, Twist
 from nav_msgs.msg import Odometry
-from rclpy.action import ActionServer, CancelResponse, GoalResponse
-from rclpy.action.server import ServerGoalHandle
 from rclpy.node import Node
 from rclpy.task import Future
 from sensor_msgs.msg import Imu
 
 from rfidnav_common.geometry import quaternion_to_yaw, yaw_to_quaternion
-from rfidnav_common.ros import COMMAND_QOS, SENSOR_QOS, close_goal, declare_parameters, odometry_pose, run_node, twist
+from rfidnav_common.goal_server import ActiveGoal, GoalOutcome, SingleGoalServer
+from rfidnav_common.ros import COMMAND_QOS, SENSOR_QOS, declare_parameters, odometry_pose, run_node, twist
 from rfidnav_msgs.action import NavigateToPoint
 from rfidnav_msgs.msg import LocalizationStatus, TagReadArray, WifiScan
 from rfidnav_msgs.srv import GetTagMap, Locate
 from rfidnav_planning.parameters import TwoTierNavigatorParameters
 from rfidnav_planning.two_tier_navigation import LOCATE, Decision, MapTag, Request, TwoTierNavigator
-
-
-@dataclass
-class ActiveGoal:
-    handle: ServerGoalHandle
-    outcome: tuple[str, str] | None = None   # (succeeded | aborted | canceled, message) once concluded
 
 
 @dataclass
@@ -53,7 +44,6 @@ class TwoTierNavigatorNode(Node):
         super().__init__("two_tier_navigator", **node_options)
         self.params: TwoTierNavigatorParameters = declare_parameters(self, TwoTierNavigatorParameters)
         self.navigator = TwoTierNavigator(self.params.settings())
-        self.active: ActiveGoal | None = None
         self.call: PendingCall | None = None
         self.odom: tuple[float, float, float] | None = None
         self.compass_yaw: float | None = None
@@ -68,14 +58,15 @@ class TwoTierNavigatorNode(Node):
         self.create_subscription(WifiScan, "/wifi/scan", self.on_scan, SENSOR_QOS)
         self.locate_client = self.create_client(Locate, "/location_server/locate")
         self.tag_map_client = self.create_client(GetTagMap, "/location_server/tag_map")
-        self.action_server = ActionServer(
-            self, NavigateToPoint, "/navigate_to_point", execute_callback=self.finish,
-            goal_callback=self.on_goal, handle_accepted_callback=self.on_accepted,
-            cancel_callback=lambda _: CancelResponse.ACCEPT)
+        # Cancel is checked by control_step, before the core steps: no command follows a cancel request.
+        self.goals: SingleGoalServer[ActiveGoal] = SingleGoalServer(
+            self, NavigateToPoint, "/navigate_to_point", what="navigation", busy="another goal is being navigated to",
+            check=self.refusal, new_goal=ActiveGoal, started=self.on_started, result=self.result, stop=self.stop,
+            supervise_period_s=None)
         self.create_timer(1.0 / self.params.control_rate_hz, self.control_step)
 
     def destroy_node(self) -> None:
-        self.action_server.destroy()
+        self.goals.destroy()
         super().destroy_node()
 
     def now_s(self) -> float:
@@ -108,30 +99,21 @@ class TwoTierNavigatorNode(Node):
         self.scan = msg
 
     # -------------------------------------------------------------------------------------- goals
-    def on_goal(self, goal: NavigateToPoint.Goal) -> GoalResponse:
-        if self.active is not None:
-            self.get_logger().error("goal rejected: another goal is being navigated to")
-            return GoalResponse.REJECT
+    def refusal(self, goal: NavigateToPoint.Goal) -> str | None:
         if not (math.isfinite(goal.target.x) and math.isfinite(goal.target.y)):
-            self.get_logger().error(f"goal rejected: target ({goal.target.x}, {goal.target.y}) is not finite")
-            return GoalResponse.REJECT
-        return GoalResponse.ACCEPT
+            return f"target ({goal.target.x}, {goal.target.y}) is not finite"
+        return None
 
-    def on_accepted(self, handle: ServerGoalHandle) -> None:
-        target = handle.request.target
-        self.active = ActiveGoal(handle)
+    def on_started(self, goal: ActiveGoal) -> None:
+        target = goal.handle.request.target
         self.get_logger().info(f"navigating to ({target.x:.3f}, {target.y:.3f})")
         self.apply(self.navigator.start((target.x, target.y)))
 
-    def conclude(self, state: str, message: str) -> None:
-        self.active.outcome = (state, message)
+    def stop(self) -> None:
         self.call = None
         self.drive(0.0, 0.0)
-        self.active.handle.execute()
 
-    def finish(self, handle: ServerGoalHandle) -> NavigateToPoint.Result:
-        active, self.active = self.active, None
-        success, message = close_goal(self, handle, active.outcome, "navigation")
+    def result(self, _goal: ActiveGoal, success: bool, message: str) -> NavigateToPoint.Result:
         progress = self.navigator.progress
         return NavigateToPoint.Result(
             success=success, message=message, path_length_m=float(self.navigator.travelled_m),
@@ -140,11 +122,7 @@ class TwoTierNavigatorNode(Node):
 
     # ------------------------------------------------------------------------------------ control
     def control_step(self) -> None:
-        active = self.active
-        if active is None or active.outcome is not None:
-            return
-        if active.handle.is_cancel_requested:
-            self.conclude("canceled", "cancelled by the client")
+        if self.goals.supervise() is None:
             return
         if self.call is not None:
             self.serve(self.call)
@@ -161,7 +139,7 @@ class TwoTierNavigatorNode(Node):
 
     def apply(self, decision: Decision) -> None:
         if decision.finished:
-            self.conclude("succeeded" if decision.success else "aborted", decision.message)
+            self.goals.conclude(GoalOutcome.of(decision.success), decision.message)
             return
         if decision.request is not None:
             self.call = PendingCall(decision.request)
@@ -190,7 +168,7 @@ class TwoTierNavigatorNode(Node):
         call.future.add_done_callback(lambda future, sent=call: self.on_answer(sent, future))
 
     def on_answer(self, call: PendingCall, future: Future) -> None:
-        if self.call is not call or self.active is None or self.active.outcome is not None:
+        if self.call is not call or self.goals.running is None:
             return                               # a stale answer (re-sent, or the goal ended)
         self.call = None
         response = future.result()
@@ -215,7 +193,7 @@ class TwoTierNavigatorNode(Node):
             feedback.estimated_pose = Pose2D(x=float(estimate.position[0]), y=float(estimate.position[1]),
                                              theta=float(estimate.yaw or 0.0))
             feedback.distance_to_goal_m = float(math.dist(estimate.position, self.navigator.target))
-        self.active.handle.publish_feedback(feedback)
+        self.goals.active.handle.publish_feedback(feedback)
 
     def publish_estimate(self) -> None:
         estimate = self.navigator.estimate()
