@@ -13,7 +13,8 @@ setup(
     install_requires=["setuptools"],
     zip_safe=True,
     maintainer="rfidnav developers",
-    description="Simulator nodes of rfidnav: differential-drive robot base, UHF RFID reader with per-antenna phase, e-compass, WiFi RSS scans, sonar.",
+    description=("Simulator nodes of rfidnav: differential-drive robot base, UHF RFID reader with per-antenna phase, "
+                 "e-compass, WiFi RSS scans, sonar."),
     license="Apache-2.0",
     entry_points={"console_scripts": [
         "robot_sim = rfidnav_sim.robot_sim_node:main",

@@ -57,7 +57,7 @@ def domain():
 
 
 @pytest.fixture
-def graph(domain: int) -> Iterator["Graph"]:
+def graph(domain: int) -> Iterator[Graph]:
     """Nodes under test and a probe on one private context and executor (support.graph.Graph), closed after."""
     # Imported here, not at the top: the environment above must be set before rclpy loads.
     from support.graph import Graph

@@ -351,7 +351,8 @@ def test_short_and_missing_replies_are_counted_and_warned_about(graph: Graph, fa
     for reply_bytes in (4, 0):
         missed = base.node.missed_replies
         fake.reply_bytes = reply_bytes
-        graph.spin_until(lambda: base.node.missed_replies >= missed + 2, f"replies of {reply_bytes} bytes counted")
+        graph.spin_until(lambda missed=missed: base.node.missed_replies >= missed + 2,
+                         f"replies of {reply_bytes} bytes counted")
     graph.spin_until(lambda: graph.logged("create_base", "no usable sensor reply"), "the warning about replies")
     assert base.drive(0.1, 0.0) == (100, 100)                   # still serving commands
     fake.reply_bytes = None

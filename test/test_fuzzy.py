@@ -21,7 +21,8 @@ from rfidnav_control.fuzzy import (
 from rfidnav_experiments.bench.fuzzy import benchmark
 
 # skfuzzy 0.5.0 calls np.maximum(a, b, out) positionally, which numpy 2.4 deprecates; not ours to fix.
-pytestmark = [pytest.mark.tier("unit"), pytest.mark.filterwarnings("ignore:Passing more than 2 positional arguments:DeprecationWarning")]
+pytestmark = [pytest.mark.tier("unit"),
+              pytest.mark.filterwarnings("ignore:Passing more than 2 positional arguments:DeprecationWarning")]
 
 PI = math.pi
 TOLERANCE_RAD = 1e-3
@@ -113,6 +114,7 @@ def test_fast_path_matches_control_system_simulation(case: dict[str, Any]) -> No
     assert np.max(np.abs(fast - simulated)) < TOLERANCE_RAD
 
 
+@pytest.mark.tier("slow")
 def test_fast_path_matches_reference_on_random_inputs(case: dict[str, Any]) -> None:
     controller: FuzzyHeadingController = case["controller"]
     many = controller.evaluate_many(case["inputs"])

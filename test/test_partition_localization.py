@@ -79,7 +79,8 @@ class Robot:
         self.rounds: list[Round] = []
 
     def record(self) -> None:
-        antenna = (self.x + self.antenna_offset_m * math.cos(self.yaw), self.y + self.antenna_offset_m * math.sin(self.yaw))
+        antenna = (self.x + self.antenna_offset_m * math.cos(self.yaw),
+                   self.y + self.antenna_offset_m * math.sin(self.yaw))
         self.rounds.append(Round(read_ids(self.field, *antenna), tuple(self.odom), (self.x, self.y, self.yaw)))
 
     def drive(self, distance_m: float) -> None:

@@ -135,7 +135,7 @@ def test_a_straight_drive_gives_a_heading_that_follows_the_odometry(make_harness
     x, y = 0.001, 0.003
     for step in range(60):
         harness.send_odometry(step * 0.002, 0.0, 0.0)
-        harness.spin_until(lambda: harness.node.odom is not None and harness.node.odom[0] == step * 0.002,
+        harness.spin_until(lambda step=step: harness.node.odom is not None and harness.node.odom[0] == step * 0.002,
                            "the odometry to arrive")
         status = harness.send_round([reading(tag_id(c)) for c in FIELD.partition_at(x, y)])
         x, y = x + 0.002 * math.cos(heading), y + 0.002 * math.sin(heading)

@@ -267,7 +267,7 @@ def test_replayed_controller_reproduces_the_recorded_cmd_vel(recorded_run: Path,
         if len(replay.commands) >= len(ideal):
             break
         warnings.warn(f"replay attempt {attempt} lost {len(ideal) - len(replay.commands)} of {len(ideal)} rounds "
-                      "in transit (a process stalled)")
+                      "in transit (a process stalled)", stacklevel=1)
 
     assert replay.result.success, replay.result.message
     # The recorded run reached every tag (its goal succeeded); so must the replay, on the same rounds.

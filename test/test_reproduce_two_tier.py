@@ -14,7 +14,7 @@ from rfidnav_common.errors import ConfigError
 from rfidnav_experiments.reproduce.two_tier import reproduce_two_tier
 from support.runs import WORKSPACE
 
-pytestmark = pytest.mark.tier("unit")
+pytestmark = pytest.mark.tier("slow")   # the rows come from one reduced reproduction (~12 s)
 
 
 @pytest.fixture(scope="module")

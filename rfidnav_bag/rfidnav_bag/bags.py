@@ -163,7 +163,7 @@ def _rename_desc(desc: tuple) -> tuple:
     return desc
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def message_definition(msgtype: str) -> tuple[str, str]:
     """(ros2msg definition text with its dependencies, RIHS01 hash) of a type known to :func:`typestore`.
 

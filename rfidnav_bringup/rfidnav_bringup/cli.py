@@ -56,8 +56,9 @@ def parser() -> tuple[argparse.ArgumentParser, dict[str, Handler]]:
     verbs.add_parser("setup", help="create/refresh .venv, build rfidnav_msgs, install packages")
     demo = verbs.add_parser("demo", help=f"the {DEMO_SCENARIO} scenario over DDS, about a minute")
     add_run_options(demo, DEMO_RTF)
-    test = verbs.add_parser("test", help="the full test suite")
-    test.add_argument("pytest_args", nargs=argparse.REMAINDER, help="passed to pytest")
+    test = verbs.add_parser("test", help="ruff, mypy and the test suite (-m unit: the fast tier)")
+    test.add_argument("--no-lint", action="store_true", help="skip ruff and mypy")
+    test.add_argument("pytest_args", nargs=argparse.REMAINDER, help="passed to pytest, e.g. -m unit or a test file")
     run = verbs.add_parser("run", help="one mission through the real node graph")
     run.add_argument("scenario", help="scenario name (config/scenarios/NAME.yaml) or path")
     run.add_argument("--goal", help="mission goal as YAML, replacing the scenario's, e.g. '{tag_ids: [C1]}'")
@@ -155,10 +156,23 @@ def verb_demo(args) -> int:
     return code
 
 
+LINTERS = (("ruff", ["-m", "ruff", "check", "--quiet", "."]), ("mypy", ["-m", "mypy"]))   # ruff.toml, mypy.ini
+
+
 def verb_test(args) -> int:
+    """ruff and mypy on the workspace (unless --no-lint), then pytest: on the test files or ids given, else on
+    the whole of test/ (the tiers: ``-m unit`` and the like, see test/conftest.py)."""
+    if not args.no_lint:
+        for name, command in LINTERS:
+            code = subprocess.call([sys.executable, *command], cwd=WORKSPACE)
+            if code != 0:
+                print(f"rfidnav test: {name} found problems (exit {code}); nothing tested", file=sys.stderr)
+                return code
     env = dict(os.environ, ROS_PYTHON_CHECK_FIELDS="1", PYTHONDONTWRITEBYTECODE="1")
-    command = [sys.executable, "-m", "pytest", str(WORKSPACE / "test"), *args.pytest_args]
-    return subprocess.call(command, cwd=WORKSPACE, env=env)
+    named = [arg for arg in args.pytest_args if not arg.startswith("-") and Path(arg.split("::")[0]).exists()]
+    command = [sys.executable, "-m", "pytest", "--rootdir", str(WORKSPACE), "-c", str(WORKSPACE / "pytest.ini"),
+               *([] if named else [str(WORKSPACE / "test")]), *args.pytest_args]
+    return subprocess.call(command, env=env)
 
 
 def verb_replay(args) -> int:

@@ -30,7 +30,7 @@ class Trajectory:
     times_s: np.ndarray      # N, increasing
     xy: np.ndarray           # N x 2, map frame
 
-    def between(self, start_s: float, end_s: float) -> "Trajectory":
+    def between(self, start_s: float, end_s: float) -> Trajectory:
         keep = (self.times_s >= start_s) & (self.times_s <= end_s)
         return Trajectory(self.times_s[keep], self.xy[keep])
 

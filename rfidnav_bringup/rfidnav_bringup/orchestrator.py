@@ -18,10 +18,11 @@ import shutil
 import signal
 import sys
 import time
+from collections.abc import Callable, Collection, Iterable
 from dataclasses import dataclass, field
-from datetime import datetime, timezone
+from datetime import UTC, datetime
 from pathlib import Path
-from typing import Any, Callable, Collection, Iterable
+from typing import Any
 
 import psutil
 import rclpy
@@ -113,7 +114,7 @@ class Progress:
 
 
 def run_id(scenario: str) -> str:
-    return f"{datetime.now(timezone.utc).strftime('%Y%m%dT%H%M%SZ')}_{scenario}"
+    return f"{datetime.now(UTC).strftime('%Y%m%dT%H%M%SZ')}_{scenario}"
 
 
 class Orchestrator:

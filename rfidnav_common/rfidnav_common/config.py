@@ -9,8 +9,9 @@ from __future__ import annotations
 import dataclasses
 import math
 import typing
+from collections.abc import Iterable, Mapping
 from pathlib import Path
-from typing import Any, Iterable, Mapping
+from typing import Any
 
 import yaml
 
@@ -48,7 +49,7 @@ class Section:
         self.prefix = prefix
 
     @classmethod
-    def from_file(cls, path: Path) -> "Section":
+    def from_file(cls, path: Path) -> Section:
         data = load_yaml_file(path)
         if data is None:
             raise ConfigError(str(path), "", "file is empty")
@@ -108,10 +109,10 @@ class Section:
             raise self.error(key, f"expected true or false, got {type_name(value)}")
         return value
 
-    def section(self, key: str, default: Any = _MISSING) -> "Section":
+    def section(self, key: str, default: Any = _MISSING) -> Section:
         return Section(self.raw(key, default), self.source, self.field(key))
 
-    def sections(self, key: str, default: Any = _MISSING) -> list["Section"]:
+    def sections(self, key: str, default: Any = _MISSING) -> list[Section]:
         items = self.raw(key, default)
         if not isinstance(items, list):
             raise self.error(key, f"expected a list, got {type_name(items)}")

@@ -36,8 +36,8 @@ its covering allows) and an ID therefore decodes to exactly the position the sim
 from __future__ import annotations
 
 import math
+from collections.abc import Iterable
 from dataclasses import dataclass
-from typing import Iterable
 
 import numpy as np
 
@@ -395,7 +395,8 @@ def partitions_along_segment(deployment: Deployment, start: tuple[float, float],
     coords = [(int(i), int(j)) for i, j in candidates[hit]]
     t_in, t_out = t_in[hit], t_out[hit]
     # Sweep the interval ends in order, keeping the set of tags read; exits before entries at a tie.
-    events = sorted([(float(t), 1, c) for t, c in zip(t_in, coords)] + [(float(t), 0, c) for t, c in zip(t_out, coords)])
+    events = sorted([(float(t), 1, c) for t, c in zip(t_in, coords)]
+                    + [(float(t), 0, c) for t, c in zip(t_out, coords)])
     minimum = 1e-9 / length
     pieces: list[SegmentPiece] = []
     active: set[Coordinate] = set()

@@ -27,8 +27,8 @@ Beyond the paper, and switchable so the faithful baseline stays available:
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable
 
 import numpy as np
 

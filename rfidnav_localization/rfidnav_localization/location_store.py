@@ -14,10 +14,11 @@ from __future__ import annotations
 import math
 import sqlite3
 import time
+from collections.abc import Iterable, Iterator, Mapping
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Iterable, Iterator, Mapping, TypeVar
+from typing import TypeVar
 
 from rfidnav_common.tag_groups import SHAPES
 from rfidnav_localization.errors import StoreError

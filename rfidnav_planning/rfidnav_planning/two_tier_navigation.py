@@ -302,7 +302,7 @@ class TwoTierNavigator:
                       if math.dist(here, landmark.centre) <= spacing
                       and math.dist(landmark.centre, self.target) < remaining - self.settings.read_range_m
                       and landmark.group_id not in self.progress.visited[-1:]]
-        target_landmark = next((l for l in self.landmarks.values() if self.target_is(l)), None)
+        target_landmark = next((mark for mark in self.landmarks.values() if self.target_is(mark)), None)
         if remaining <= spacing or not candidates:
             if target_landmark is not None:
                 return self.head_for(target_landmark)

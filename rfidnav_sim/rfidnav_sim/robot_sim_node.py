@@ -1,9 +1,9 @@
 """robot_sim: differential-drive base, simulation clock, wheel odometry, ground truth, world markers.
 
 Owns simulated time: steps the base at ``step_s`` and publishes /clock (at ``odom_rate_hz``, with
-/odom and /sim/ground_truth) so that ``rtf`` seconds of sim time pass per wall second. Every other node runs with use_sim_time. With ``start_paused`` the
-clock stays at zero until ``~/start`` (std_srvs/Trigger) is called, so slow process start-up costs
-no sim time.
+/odom and /sim/ground_truth) so that ``rtf`` seconds of sim time pass per wall second. Every other node runs
+with use_sim_time. With ``start_paused`` the clock stays at zero until ``~/start`` (std_srvs/Trigger) is called,
+so slow process start-up costs no sim time.
 """
 
 from __future__ import annotations

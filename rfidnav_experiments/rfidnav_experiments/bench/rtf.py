@@ -33,7 +33,7 @@ class SweepRow:
     wall_s: float | None
     run_dirs: tuple[str, ...]
 
-    def within(self, reference: "SweepRow", tolerance: float) -> bool:
+    def within(self, reference: SweepRow, tolerance: float) -> bool:
         return self.success and self.rmse_m is not None and reference.rmse_m is not None and \
             self.rmse_m <= reference.rmse_m * (1.0 + tolerance)
 

@@ -25,9 +25,10 @@ import multiprocessing
 import statistics
 import sys
 import time
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Callable, Iterable
+from typing import Any
 
 import matplotlib
 
@@ -86,7 +87,8 @@ def localizer_settings(method: str) -> LocalizerSettings:
 def navigator_settings(method: str, level: int) -> NavigatorSettings:
     """The navigator as the node runs it beside that localizer, at approximation level ``level``: the paper's
     rules (partition_navigator.yaml) or ours (partition_navigator_filter.yaml)."""
-    path = CONFIG_DIR / "params" / ("partition_navigator.yaml" if method == "paper" else "partition_navigator_filter.yaml")
+    name = "partition_navigator.yaml" if method == "paper" else "partition_navigator_filter.yaml"
+    path = CONFIG_DIR / "params" / name
     values = {**node_parameter_values(PartitionNavigatorParameters, path, "partition_navigator"), "map_file": str(path)}
     settings = parameters_from_mapping(PartitionNavigatorParameters, values, str(path)).settings()
     return dataclasses.replace(settings, approximation_level=level)
@@ -460,8 +462,8 @@ def plot_deployments(counts, accuracy, out_dir: Path) -> Path:
     sides = list(counts)
     for layout in LAYOUTS:
         ax_count.plot([s * s for s in sides], [counts[s][layout] for s in sides], "o-", label=layout)
-        ax_loc.plot([r * 100 for r in ACCURACY_RANGES_M], [accuracy[(layout, r)].location_rel for r in ACCURACY_RANGES_M],
-                    "o-", label=layout)
+        ax_loc.plot([r * 100 for r in ACCURACY_RANGES_M],
+                    [accuracy[(layout, r)].location_rel for r in ACCURACY_RANGES_M], "o-", label=layout)
         ax_orient.plot([r * 100 for r in ACCURACY_RANGES_M],
                        [accuracy[(layout, r)].orientation_deg for r in ACCURACY_RANGES_M], "o-", label=layout)
     ax_count.set(xlabel="area [m^2]", ylabel="tags", title=f"Figs. 15, 18: tags (r = {COUNT_RANGE_M * 100:g} cm)")

@@ -18,8 +18,8 @@ the navigator sees estimates, exactly as over DDS.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable
 
 import numpy as np
 

@@ -4,11 +4,11 @@ idealised robot through a simulated building, for the paper's run and statistics
 The robot is a unicycle stepped at ``step_s`` with the wall follower's (linear, angular) command (no motor
 dynamics; odometry is the true pose). Every step the sonar model's ranges (one per transducer, measured from
 where it is mounted) are turned into distances from the robot's centre, as the follower expects, by adding
-the offsets of the shipped wall_follower parameters, as the node does; the wall-tag reader (default induction area: antenna at
-the centre, facing left, 40 x 100 cm) reads with the given miss probability, decided once per tag PASSAGE (the
-paper's read failure: a tag not read while the robot passes it) when the tag comes into reach, and drawn anew
-once it has left reach (per inventory round a tag in reach for ~40 rounds would practically never be missed).
-Each round's reads go to ``MissionExecutor.on_reads``, the follower's events to ``on_junction``, and the
+the offsets of the shipped wall_follower parameters, as the node does; the wall-tag reader (default induction
+area: antenna at the centre, facing left, 40 x 100 cm) reads with the given miss probability, decided once per
+tag PASSAGE (the paper's read failure: a tag not read while the robot passes it) when the tag comes into reach,
+and drawn anew once it has left reach (per inventory round a tag in reach for ~40 rounds would practically never
+be missed). Each round's reads go to ``MissionExecutor.on_reads``, the follower's events to ``on_junction``, and the
 decisions' ``follower_command`` to the follower (``command_turn``, ``command_stop``); the mission ends with the
 follower's ``stopped``. The mission_executor and wall_follower nodes do the same over DDS. Walls only reflect
 sonar: a robot driving into one is not stopped by the simulation (the follower's emergency stop is all there is).

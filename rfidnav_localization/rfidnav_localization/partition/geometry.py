@@ -17,9 +17,9 @@ computed once per shape and cached, so an update costs microseconds after the fi
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 from functools import lru_cache
-from typing import Sequence
 
 import numpy as np
 

@@ -5,7 +5,7 @@ kept, so a single bad or mis-programmed tag cannot throw the robot across the ro
 from __future__ import annotations
 
 import math
-from typing import Sequence
+from collections.abc import Sequence
 
 
 def _maximum_cliques(adjacent: list[set[int]]) -> list[set[int]]:
