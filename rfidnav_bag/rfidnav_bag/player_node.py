@@ -41,7 +41,7 @@ from std_srvs.srv import Trigger
 from rfidnav_bag.bags import BagInfo, RawMessage, TopicInfo, bag_info, read_raw
 from rfidnav_bag.errors import BagError
 from rfidnav_common.config import param
-from rfidnav_common.errors import ConfigError
+from rfidnav_common.errors import ConfigError, ParameterError
 from rfidnav_common.ros import declare_parameters, message_class, run_node
 
 TICK_S = 0.005  # the pacing timer's period: the worst lateness of a message [s, wall]
@@ -63,13 +63,13 @@ class PlayerParameters:
 
     def validate(self) -> None:
         if not self.bag:
-            raise ValueError("bag: required (the rosbag2 directory to play)")
+            raise ParameterError("bag", "required (the rosbag2 directory to play)")
         if not self.rate > 0.0:
-            raise ValueError(f"rate: must be > 0, got {self.rate}")
+            raise ParameterError("rate", f"must be > 0, got {self.rate}")
         if not self.clock_rate_hz > 0.0:
-            raise ValueError(f"clock_rate_hz: must be > 0, got {self.clock_rate_hz}")
+            raise ParameterError("clock_rate_hz", f"must be > 0, got {self.clock_rate_hz}")
         if not self.start_s >= 0.0:
-            raise ValueError(f"start_s: must be >= 0, got {self.start_s}")
+            raise ParameterError("start_s", f"must be >= 0, got {self.start_s}")
 
 
 def publisher_qos(topic: TopicInfo) -> QoSProfile:

@@ -44,7 +44,7 @@ from rosbags.rosbag2 import StoragePlugin, Writer, WriterError
 from rfidnav_bag.bags import message_definition, register_installed_type
 from rfidnav_bag.errors import BagError
 from rfidnav_common.config import param
-from rfidnav_common.errors import ConfigError
+from rfidnav_common.errors import ConfigError, ParameterError
 from rfidnav_common.ros import declare_parameters, events_executor, message_class, run_node
 
 # rosbag2 metadata version 9 is what Jazzy's rosbag2 writes (structured QoS in metadata.yaml).
@@ -65,11 +65,11 @@ class RecorderParameters:
 
     def validate(self) -> None:
         if not self.output_dir:
-            raise ValueError("output_dir: required (the rosbag2 directory to create)")
+            raise ParameterError("output_dir", "required (the rosbag2 directory to create)")
         if Path(self.output_dir).exists():
-            raise ValueError(f"output_dir: {self.output_dir} exists already; a bag is never overwritten")
+            raise ParameterError("output_dir", f"{self.output_dir} exists already; a bag is never overwritten")
         if not self.discovery_period_s > 0.0:
-            raise ValueError(f"discovery_period_s: must be > 0, got {self.discovery_period_s}")
+            raise ParameterError("discovery_period_s", f"must be > 0, got {self.discovery_period_s}")
 
 
 def recordable_definition(msgtype: str) -> tuple[str, str]:

@@ -31,6 +31,8 @@ from rfidnav_msgs.srv import GetTagMap, Locate
 from rfidnav_planning.parameters import TwoTierNavigatorParameters
 from rfidnav_planning.two_tier_navigation import LOCATE, Decision, MapTag, Request, TwoTierNavigator
 
+UNKNOWN_YAW_VARIANCE = 1e6    # [rad^2] on the pose when no heading, or none with a known noise, was read
+
 
 @dataclass
 class PendingCall:
@@ -47,6 +49,7 @@ class TwoTierNavigatorNode(Node):
         self.call: PendingCall | None = None
         self.odom: tuple[float, float, float] | None = None
         self.compass_yaw: float | None = None
+        self.compass_yaw_variance = UNKNOWN_YAW_VARIANCE    # from each /compass reading, where it gives one
         self.scan: WifiScan | None = None
         self.reads: list[tuple[tuple[float, float, float], list[str]]] = []   # (odometry then, tag ids)
         self.cmd_pub = self.create_publisher(Twist, "/cmd_vel", COMMAND_QOS)
@@ -85,6 +88,10 @@ class TwoTierNavigatorNode(Node):
         yaw = quaternion_to_yaw(q.x, q.y, q.z, q.w)
         if math.isfinite(yaw):
             self.compass_yaw = yaw
+            # sensor_msgs/Imu: the heading's variance is orientation_covariance[8]; -1 in [0] or 0 mean unknown.
+            variance = msg.orientation_covariance[8]
+            known = msg.orientation_covariance[0] != -1.0 and math.isfinite(variance) and variance > 0.0
+            self.compass_yaw_variance = float(variance) if known else UNKNOWN_YAW_VARIANCE
         else:
             self.get_logger().warning("dropped a compass reading with a non-finite heading", throttle_duration_sec=5.0)
 
@@ -208,7 +215,7 @@ class TwoTierNavigatorNode(Node):
         orientation.x, orientation.y, orientation.z, orientation.w = x, y, z, w
         variance = float(estimate.sd_m ** 2)
         pose.pose.covariance[0] = pose.pose.covariance[7] = variance
-        pose.pose.covariance[35] = 1e6 if estimate.yaw is None else math.radians(2.0) ** 2   # the compass's
+        pose.pose.covariance[35] = UNKNOWN_YAW_VARIANCE if estimate.yaw is None else self.compass_yaw_variance
         self.pose_pub.publish(pose)
         fix = estimate.last_fix
         status = LocalizationStatus(method="two_tier", position_valid=True, x=pose.pose.pose.position.x,
