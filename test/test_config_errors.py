@@ -17,8 +17,8 @@ from pathlib import Path
 import pytest
 
 from rfidnav_bringup.errors import LaunchError
-from rfidnav_bringup.processes import resolve_executable
-from rfidnav_bringup.scenario import load_scenario
+from rfidnav_bringup.processes import package_share, resolve_executable
+from rfidnav_bringup.scenario import CONFIG_DIR, load_scenario
 from rfidnav_common.errors import ConfigError
 from support.config_files import copy_config, edit
 from support.runs import WORKSPACE
@@ -188,6 +188,18 @@ def test_nan_is_rejected_by_name_not_by_python(config: Path):
 
 
 # ------------------------------------------------------------------------------------ unknown package/executable
+
+def test_the_config_is_found_in_the_share_directory_of_rfidnav_bringup_on_the_ament_index():
+    share = package_share("rfidnav_bringup")
+    assert CONFIG_DIR == share / "config"
+    assert (CONFIG_DIR / SCENARIO).samefile(WORKSPACE / "config" / SCENARIO)   # linked from the sources by set-up
+    assert (share / "package.xml").samefile(WORKSPACE / "rfidnav_bringup" / "package.xml")
+
+
+def test_a_package_on_no_ament_index_is_a_launch_error_naming_where_it_looked():
+    with pytest.raises(LaunchError, match=r"'nope_pkg' is in no ament index \(searched .*\); run ./rfidnav setup"):
+        package_share("nope_pkg")
+
 
 def test_unknown_package_is_a_launch_error():
     with pytest.raises(LaunchError, match=r"unknown package 'nope_pkg'"):
