@@ -17,6 +17,7 @@ setup(
     license="Apache-2.0",
     entry_points={"rfidnav.verbs": [
         "reproduce = rfidnav_experiments.verbs:add_reproduce",
+        "calibrate = rfidnav_experiments.verbs:add_calibrate",
         "survey = rfidnav_experiments.verbs:add_survey",
         "bench = rfidnav_experiments.verbs:add_bench",
     ]},

@@ -37,6 +37,22 @@ def add_reproduce(verbs: argparse._SubParsersAction) -> Handler:
     return run_reproduce
 
 
+def add_calibrate(verbs: argparse._SubParsersAction) -> Handler:
+    calibrate = verbs.add_parser("calibrate", help="fit a paper's unstated settings to its first experiment only")
+    calibrate.add_argument("name", choices=["flc"], help="flc: paper 001's phase noise and output range, fitted "
+                                                         "to Figs. 8/9 (the line experiments)")
+    calibrate.add_argument("--out", type=Path, help="the parameter file to write (default: the shipped one, "
+                                                    "config/params/flc_paper_calibrated.yaml)")
+    calibrate.add_argument("--json", action="store_true")
+    return run_calibrate
+
+
+def run_calibrate(args: argparse.Namespace) -> int:
+    from rfidnav_experiments.calibrate.flc import CALIBRATED_FILE, calibrate_flc
+
+    return calibrate_flc(out=args.out or CALIBRATED_FILE, as_json=args.json)
+
+
 def add_survey(verbs: argparse._SubParsersAction) -> Handler:
     survey = verbs.add_parser("survey", help="paper 003: build a radio map file for a scenario's world (in-process)")
     survey.add_argument("scenario", help="a scenario name or file; its world has the access points")

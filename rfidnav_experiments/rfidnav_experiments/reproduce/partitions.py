@@ -21,11 +21,10 @@ import dataclasses
 import functools
 import json
 import math
-import multiprocessing
 import statistics
 import sys
 import time
-from collections.abc import Callable, Iterable
+from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -42,7 +41,7 @@ from rfidnav_common.errors import ConfigError  # noqa: E402
 from rfidnav_common.geometry import wrap_angle  # noqa: E402
 from rfidnav_common.seeding import rng_for  # noqa: E402
 from rfidnav_common.tag_lattice import LAYOUTS, Deployment, make_deployment, partitions_along_segment  # noqa: E402
-from rfidnav_experiments.reproduce.tables import mean_or_none, progress, save, table  # noqa: E402
+from rfidnav_experiments.reproduce.tables import WORKERS, mean_or_none, run_pool, save, table  # noqa: E402
 from rfidnav_experiments.runners.partitions import random_task, run_navigation  # noqa: E402
 from rfidnav_localization.parameters import PartitionLocalizerParameters  # noqa: E402
 from rfidnav_localization.partition import LocalizerSettings, PartitionLocalizer, orientation_bounds  # noqa: E402
@@ -56,7 +55,6 @@ LEVELS = tuple(range(1, 9))
 DISTANCES_M = (1.0, 2.0, 3.0, 4.0, 5.0)
 METHODS = ("paper", "filter")
 RUNS_PER_CURVE = 250
-WORKERS = 2
 COUNT_AREAS_M = (5, 10, 15, 20, 25, 30)
 COUNT_RANGE_M = 0.2
 ACCURACY_RANGES_M = (0.02, 0.05, 0.1, 0.2, 0.5)
@@ -152,22 +150,6 @@ def run_navigation_job(job: NavigationJob) -> NavigationResult:
                          rng_for(job.seed, f"run:{job.method}:{job.read_range_m}:{job.level}:{job.index}"))
     return NavigationResult(job, run.success, run.message, run.extra_cost_pct, run.extra_cost_to_goal_pct,
                             run.final_error_m, run.replans)
-
-
-def run_pool(function: Callable, jobs: list, label: str) -> list:
-    """``function`` over ``jobs`` on both cores, with a progress line."""
-    results = []
-    started = time.monotonic()
-    # forkserver, not fork: the caller may hold DDS threads (see reproduce.run_all).
-    context = multiprocessing.get_context("forkserver")
-    context.set_forkserver_preload([__name__])
-    with context.Pool(WORKERS) as pool:
-        for done, result in enumerate(pool.imap_unordered(function, jobs, chunksize=4), start=1):
-            results.append(result)
-            if done % 20 == 0 or done == len(jobs):
-                progress(f"reproduce partitions: {label} {done}/{len(jobs)}", final=False)
-    progress(f"reproduce partitions: {label}: {len(jobs)} in {time.monotonic() - started:.0f} s", final=True)
-    return results
 
 
 @dataclass(frozen=True)
@@ -488,7 +470,7 @@ def reproduce_partitions(runs: int, out_dir: Path, as_json: bool) -> int:
     counts = tag_counts()
     accuracy = accuracy_table_data(ACCURACY_SAMPLES)
     fig11 = fig11_orientation(FIG11_RUNS)
-    results = run_pool(run_navigation_job, navigation_jobs(runs), "navigations")
+    results = run_pool(run_navigation_job, navigation_jobs(runs), "reproduce partitions: navigations")
     summaries = summarise_costs(results)
     plots = [plot_fig11(fig11, out_dir), plot_costs(summaries, out_dir), plot_deployments(counts, accuracy, out_dir)]
     notes = sys.stderr if as_json else sys.stdout
@@ -513,7 +495,7 @@ def benchmark(runs: int = RUNS_PER_CURVE, method: str = "paper") -> dict[str, fl
     """The whole grid of Figs. 12-14 for one method (3 ranges x 8 levels x ``runs``) on both cores."""
     jobs = navigation_jobs(runs, methods=(method,))
     started = time.perf_counter()
-    results = run_pool(run_navigation_job, jobs, f"bench {method}")
+    results = run_pool(run_navigation_job, jobs, f"bench partitions {method}")
     wall = time.perf_counter() - started
     return {"navigations": len(jobs), "workers": WORKERS, "wall_s": round(wall, 2),
             "navigations_per_s": round(len(jobs) / wall, 1),

@@ -1,0 +1,104 @@
+"""Paper 001's open calibration and its faithful baseline: flc_paper has nothing the paper lacks, the calibrated
+file is flc_paper with only its output range scaled and reproduces the figures it was fitted to, the evaluation
+seeds are not the calibration's, and the reproduction's conditions table lists every setting of its files."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+
+import pytest
+import yaml
+
+from rfidnav_bringup.scenario import CONFIG_DIR
+from rfidnav_common.config import node_parameter_values
+from rfidnav_control.parameters import HeadingControllerParameters
+from rfidnav_experiments.calibrate.flc import (
+    CALIBRATED_FILE,
+    CALIBRATION_SEEDS,
+    FITTED_SCENARIOS,
+    PAPER_FILE,
+    Point,
+    calibrated_reader,
+    points_of,
+    scenario_named,
+)
+from rfidnav_experiments.reproduce.flc import SOURCES, conditions, evaluation_seeds, timeout_s
+from rfidnav_experiments.runners.tag_route import controller_parameters, run_tag_route
+
+pytestmark = pytest.mark.tier("unit")
+RECORD = CALIBRATED_FILE.with_name("flc_paper_calibration.json")
+
+
+def controller_values(path) -> dict:
+    return node_parameter_values(HeadingControllerParameters, path, "heading_controller")
+
+
+def test_flc_paper_has_no_guard_the_paper_lacks_and_keeps_its_speed_and_arrival_rule() -> None:
+    for path in (PAPER_FILE, CALIBRATED_FILE):
+        values = controller_values(path)
+        assert values["receding_detection"] is False, path
+        assert values["turn_speed_fraction"] == values["approach_speed_fraction"] == 1.0, path
+        assert values["arrival"] == "first_read" and values["filter_rounds"] == 1, path
+        assert values["forward_speed_mps"] == 0.2, path
+
+
+def test_the_calibrated_controller_is_flc_paper_with_only_its_output_range_scaled() -> None:
+    paper, calibrated = controller_values(PAPER_FILE), controller_values(CALIBRATED_FILE)
+    scale = json.loads(RECORD.read_text())["chosen"]["output_scale"]
+    assert calibrated["output_range_rad"] == pytest.approx(paper["output_range_rad"] * scale)
+    assert calibrated["output_set_points"] == pytest.approx([p * scale for p in paper["output_set_points"]])
+    unchanged = set(paper) - {"output_range_rad", "output_set_points"}
+    assert {key: calibrated[key] for key in unchanged} == {key: paper[key] for key in unchanged}
+
+
+def test_the_calibrated_reader_changes_only_the_phase_noise_of_the_scenarios_reader() -> None:
+    sections = yaml.safe_load(CALIBRATED_FILE.read_text())
+    assert set(sections["rfid_reader_sim"]["ros__parameters"]) == {"phase_noise_rad_per_m"}
+    scenario = scenario_named("line_follow_90")
+    reader = calibrated_reader(scenario, 7)
+    noise = json.loads(RECORD.read_text())["chosen"]["phase_noise_rad_per_m"]
+    assert reader.phase_noise_rad_per_m == noise
+    shipped = node_parameter_values(type(reader), CONFIG_DIR / "params" / "reader_uhf_2ant.yaml", "rfid_reader_sim")
+    assert {key: getattr(reader, key) for key in shipped if key != "phase_noise_rad_per_m"} == \
+        {key: value for key, value in shipped.items() if key != "phase_noise_rad_per_m"}
+
+
+def test_the_evaluation_seeds_are_never_the_calibrations() -> None:
+    assert not set(evaluation_seeds(50)) & set(CALIBRATION_SEEDS)
+
+
+def test_the_conditions_table_lists_every_setting_of_the_reader_and_base_files_with_a_source() -> None:
+    for path, node in ((CONFIG_DIR / "params" / "reader_uhf_2ant.yaml", "rfid_reader_sim"),
+                       (CONFIG_DIR / "params" / "robot_sim.yaml", "robot_sim")):
+        keys = yaml.safe_load(path.read_text())[node]["ros__parameters"]
+        assert {f"{node}.{key}" for key in keys} <= set(SOURCES), path
+    rows = conditions()
+    assert [row.setting for row in rows] == list(SOURCES)
+    assert {row.source for row in rows} <= {"paper", "calibrated", "ours"}
+    noise = next(row for row in rows if row.setting == "rfid_reader_sim.phase_noise_rad_per_m")
+    assert noise.source == "calibrated" and len(set(noise.values.values())) == 1   # the same for both
+
+
+def test_a_point_with_a_failed_run_is_never_chosen() -> None:
+    good = Point(0.05, 0.3, {"line_follow_90": 0.034, "line_follow_0": 0.093}, 110.0, failures=0)
+    failed = dataclasses.replace(good, failures=1)
+    assert good.objective == pytest.approx(0.0) and failed.objective == float("inf")
+
+
+@pytest.mark.tier("slow")
+def test_the_calibrated_file_reproduces_the_figures_it_was_fitted_to() -> None:
+    chosen = json.loads(RECORD.read_text())["chosen"]
+    runs = []
+    for name in FITTED_SCENARIOS:
+        scenario = scenario_named(name)
+        for seed in CALIBRATION_SEEDS:      # as the reproduction builds its baseline, from the files
+            controller = controller_parameters(scenario, CALIBRATED_FILE, seed)
+            run = run_tag_route(scenario, controller, seed, reader=calibrated_reader(scenario, seed),
+                                timeout_s=timeout_s(scenario))
+            runs.append((chosen["phase_noise_rad_per_m"], chosen["output_scale"], name, run))
+    (point,) = points_of(runs)
+    assert point.failures == 0
+    for name in FITTED_SCENARIOS:
+        assert point.rmse_m[name] == pytest.approx(chosen["rmse_m"][name], rel=0.02), name
+    assert point.approach_s == pytest.approx(chosen["approach_s"], rel=0.02)
