@@ -22,8 +22,9 @@ from rfidnav_experiments.calibrate.flc import (
     calibrated_reader,
     points_of,
     scenario_named,
+    timeout_s,
 )
-from rfidnav_experiments.reproduce.flc import SOURCES, conditions, evaluation_seeds, timeout_s
+from rfidnav_experiments.reproduce.flc import SOURCES, conditions, evaluation_seeds
 from rfidnav_experiments.runners.tag_route import controller_parameters, run_tag_route
 
 pytestmark = pytest.mark.tier("unit")

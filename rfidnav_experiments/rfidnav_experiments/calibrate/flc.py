@@ -84,6 +84,11 @@ def calibrated_reader(scenario: Scenario, seed: int, path: Path = CALIBRATED_FIL
     return parameters_from_mapping(ReaderParameters, {**dataclasses.asdict(reader), **overrides}, str(path))
 
 
+def timeout_s(scenario: Scenario) -> float:
+    """The run's time limit: the scenario's, or TIMEOUT_S where that is longer."""
+    return max(TIMEOUT_S, scenario.mission.timeout_s)
+
+
 @functools.cache
 def scenario_named(name: str) -> Scenario:
     """Loading validates world, map and every parameter file: once per worker process is enough."""
@@ -97,7 +102,7 @@ def run_point(job: tuple[float, float, str, int]) -> tuple[float, float, str, Ro
     controller = scaled_controller(controller_parameters(scenario, PAPER_FILE, seed), scale)
     reader = dataclasses.replace(role_parameters(scenario, "rfid_reader_sim", seed), phase_noise_rad_per_m=noise)
     return noise, scale, name, run_tag_route(scenario, controller, seed, reader=reader,
-                                             timeout_s=max(TIMEOUT_S, scenario.mission.timeout_s))
+                                             timeout_s=timeout_s(scenario))
 
 
 def points_of(results: list[tuple[float, float, str, RouteRun]]) -> list[Point]:

@@ -49,6 +49,7 @@ from rfidnav_experiments.calibrate.flc import (  # noqa: E402
     TIMEOUT_S,
     calibrated_reader,
     scenario_named,
+    timeout_s,
 )
 from rfidnav_experiments.reproduce.tables import mean_or_none, run_pool, save, table  # noqa: E402
 from rfidnav_experiments.runners.tag_route import (  # noqa: E402
@@ -252,10 +253,6 @@ def conditions_table(rows: list[Condition]) -> list[str]:
 
 
 # ---------------------------------------------------------------------------------------------- runs
-
-def timeout_s(scenario: Scenario) -> float:
-    return max(TIMEOUT_S, scenario.mission.timeout_s)
-
 
 def params_file(params: str) -> Path:
     return PARAM_FILES[params]
