@@ -36,13 +36,13 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from rfidnav_bringup.scenario import CONFIG_DIR  # noqa: E402
-from rfidnav_common.config import node_parameter_values, parameters_from_mapping  # noqa: E402
 from rfidnav_common.errors import ConfigError  # noqa: E402
 from rfidnav_common.geometry import wrap_angle  # noqa: E402
 from rfidnav_common.seeding import rng_for  # noqa: E402
 from rfidnav_common.tag_lattice import LAYOUTS, Deployment, make_deployment, partitions_along_segment  # noqa: E402
 from rfidnav_experiments.reproduce.tables import WORKERS, mean_or_none, run_pool, save, table  # noqa: E402
 from rfidnav_experiments.runners.partitions import random_task, run_navigation  # noqa: E402
+from rfidnav_experiments.runners.shipped import file_parameters  # noqa: E402
 from rfidnav_localization.parameters import PartitionLocalizerParameters  # noqa: E402
 from rfidnav_localization.partition import LocalizerSettings, PartitionLocalizer, orientation_bounds  # noqa: E402
 from rfidnav_planning.parameters import PartitionNavigatorParameters  # noqa: E402
@@ -76,8 +76,7 @@ def localizer_settings(method: str) -> LocalizerSettings:
     """The localizer as the node runs it: config/params/partition_localizer_<method>.yaml (the paper's reads at
     the rotation axis; the filter's 25 cm ahead of it, as reader_floor_lattice.yaml has it)."""
     path = CONFIG_DIR / "params" / f"partition_localizer_{method}.yaml"
-    values = node_parameter_values(PartitionLocalizerParameters, path, "partition_localizer")
-    settings = parameters_from_mapping(PartitionLocalizerParameters, values, str(path)).settings()
+    settings = file_parameters(PartitionLocalizerParameters, path, "partition_localizer").settings()
     return dataclasses.replace(settings, deployment_area=FIELD)   # the robot's map: where the floor is tagged
 
 
@@ -87,8 +86,7 @@ def navigator_settings(method: str, level: int) -> NavigatorSettings:
     rules (partition_navigator.yaml) or ours (partition_navigator_filter.yaml)."""
     name = "partition_navigator.yaml" if method == "paper" else "partition_navigator_filter.yaml"
     path = CONFIG_DIR / "params" / name
-    values = {**node_parameter_values(PartitionNavigatorParameters, path, "partition_navigator"), "map_file": str(path)}
-    settings = parameters_from_mapping(PartitionNavigatorParameters, values, str(path)).settings()
+    settings = file_parameters(PartitionNavigatorParameters, path, "partition_navigator", map_file=str(path)).settings()
     return dataclasses.replace(settings, approximation_level=level)
 
 

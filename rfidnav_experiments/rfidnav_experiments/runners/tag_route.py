@@ -17,11 +17,11 @@ import numpy as np
 
 from rfidnav_bringup.metrics import TrackingMetrics, Trajectory, tracking_metrics
 from rfidnav_bringup.scenario import Scenario, node_parameters
-from rfidnav_common.config import node_parameter_values, parameters_from_mapping
 from rfidnav_common.seeding import rng_for
 from rfidnav_control.fuzzy import FuzzyHeadingController
 from rfidnav_control.parameters import HeadingControllerParameters
 from rfidnav_control.tag_route import Command, TagRouteFollower, observe
+from rfidnav_experiments.runners.shipped import file_parameters
 from rfidnav_sim.parameters import ReaderParameters, RobotSimParameters
 from rfidnav_sim.rfid_model import ReaderSimulator
 
@@ -48,9 +48,8 @@ def role_parameters(scenario: Scenario, executable: str, seed: int):
 def controller_parameters(scenario: Scenario, params_file: Path | None, seed: int) -> HeadingControllerParameters:
     if params_file is None:
         return role_parameters(scenario, "heading_controller", seed)
-    values = node_parameter_values(HeadingControllerParameters, params_file, "heading_controller")
-    return parameters_from_mapping(HeadingControllerParameters, {**values, "map_file": str(scenario.map_file)},
-                                   str(params_file), "heading_controller")
+    return file_parameters(HeadingControllerParameters, params_file, "heading_controller", "heading_controller",
+                           map_file=str(scenario.map_file))
 
 
 def tag_points(scenario: Scenario, route: list[str]) -> np.ndarray:
