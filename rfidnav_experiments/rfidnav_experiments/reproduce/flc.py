@@ -25,7 +25,6 @@ failure is the method's result, reported).
 from __future__ import annotations
 
 import json
-import math
 import statistics
 import sys
 from collections.abc import Iterable
@@ -37,7 +36,6 @@ import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
-from scipy import stats  # noqa: E402
 
 from rfidnav_bringup.metrics import FIRST_TAG_RADIUS_M, tracking_error  # noqa: E402
 from rfidnav_bringup.scenario import CONFIG_DIR, Scenario  # noqa: E402
@@ -51,7 +49,17 @@ from rfidnav_experiments.calibrate.flc import (  # noqa: E402
     scenario_named,
     timeout_s,
 )
-from rfidnav_experiments.reproduce.tables import mean_or_none, run_pool, save, table  # noqa: E402
+from rfidnav_experiments.reproduce.tables import (  # noqa: E402
+    Condition,
+    Interval,
+    condition_json_rows,
+    condition_lines,
+    mean_or_none,
+    paired_interval,
+    run_pool,
+    save,
+    table,
+)
 from rfidnav_experiments.runners.tag_route import (  # noqa: E402
     RouteRun,
     controller_parameters,
@@ -102,29 +110,6 @@ def role(scenario: str) -> str:
 
 
 @dataclass(frozen=True)
-class Interval:
-    """A mean with its 95 % t-interval over ``n`` values (no interval below two)."""
-    mean: float | None
-    half_width: float | None
-    n: int
-
-    @classmethod
-    def of(cls, values: list[float]) -> Interval:
-        if not values:
-            return cls(None, None, 0)
-        if len(values) < 2:
-            return cls(values[0], None, 1)
-        half = float(stats.t.ppf(0.975, len(values) - 1)) * statistics.stdev(values) / math.sqrt(len(values))
-        return cls(statistics.fmean(values), half, len(values))
-
-    def text(self, scale: float = 100.0, digits: int = 2) -> str:
-        if self.mean is None:
-            return "no success"
-        width = "" if self.half_width is None else f" ± {self.half_width * scale:.{digits}f}"
-        return f"{self.mean * scale:.{digits}f}{width} (n={self.n})"
-
-
-@dataclass(frozen=True)
 class Summary:
     """Aggregate of the runs of one (parameter set, scenario)."""
     params: str
@@ -150,14 +135,6 @@ class Summary:
 
 
 # ---------------------------------------------------------------------------------------- conditions
-
-@dataclass(frozen=True)
-class Condition:
-    setting: str                        # NODE.field, or world. / scenario. for what the scenario fixes
-    values: dict[str, Any]              # by parameter set
-    source: str                         # paper | calibrated | ours
-    note: str                           # the paper's section, the fit, or why we chose it
-
 
 # Where every physical setting of the reproduction comes from. The reader's and the base's files are listed
 # whole (a key added to one without a row here fails test_reproduce), the controllers' physical settings too.
@@ -238,20 +215,6 @@ def conditions() -> list[Condition]:
     return rows
 
 
-def conditions_table(rows: list[Condition]) -> list[str]:
-    def shown(value: Any) -> str:
-        text = f"{value:g}" if isinstance(value, float) else str(value)
-        return text if len(text) <= 40 else text[:37] + "..."
-
-    body = []
-    for row in rows:
-        same = len({repr(value) for value in row.values.values()}) == 1
-        values = [shown(row.values[BASELINE]), "same" if same else shown(row.values[TUNED])]
-        body.append([row.setting, *values, row.source, row.note])
-    return ["conditions: every physical setting of these runs and where it comes from",
-            *table(["setting", BASELINE, TUNED, "source", "why / where"], body)]
-
-
 # ---------------------------------------------------------------------------------------------- runs
 
 def params_file(params: str) -> Path:
@@ -302,21 +265,13 @@ def paired_difference(results: dict[tuple[str, str], list[RouteRun]], scenario: 
             return run.metrics.tracking_rmse_m if run.success else None
         return run.arrival_times_s[0] if run.arrival_times_s else None
 
-    baseline = {run.seed: value(run) for run in results[(BASELINE, scenario)]}
-    tuned = {run.seed: value(run) for run in results[(TUNED, scenario)]}
-    differences = []
-    for seed, ours in tuned.items():
-        theirs = baseline.get(seed)
-        if ours is not None and theirs is not None:
-            differences.append(ours - theirs)
-    return Interval.of(differences)
+    return paired_interval({run.seed: value(run) for run in results[(TUNED, scenario)]},
+                           {run.seed: value(run) for run in results[(BASELINE, scenario)]})
 
 
 def json_rows(summaries: dict[tuple[str, str], Summary], results: dict[tuple[str, str], list[RouteRun]],
               seeds: list[int], condition_rows: list[Condition]) -> list[dict[str, Any]]:
-    rows: list[dict[str, Any]] = [{"experiment": EXPERIMENT, "setting": {"condition": row.setting, "source": row.source,
-                                                   "note": row.note},
-             "metric": "condition", "ours": row.values, "paper": None} for row in condition_rows]
+    rows = condition_json_rows(EXPERIMENT, condition_rows)
     for params in PARAM_SETS:
         for scenario in SCENARIOS:
             s, paper = summaries[(params, scenario)], PAPER[scenario]
@@ -411,7 +366,7 @@ def human_report(summaries: dict[tuple[str, str], Summary], results: dict[tuple[
     lines = [f"reproduce flc: paper 001 section V, in-process; evaluation seeds {seeds[0]}-{seeds[-1]} "
              f"({len(seeds)} per setting; the calibration used seeds "
              f"{', '.join(map(str, CALIBRATION_SEEDS))}); fitted: {', '.join(FITTED_SCENARIOS)}, the rest held out",
-             "", *conditions_table(condition_rows), "", *rmse_table(summaries, results), "",
+             "", *condition_lines(condition_rows, PARAM_SETS), "", *rmse_table(summaries, results), "",
              *envelope_table(summaries), "", *first_tag_lines(summaries, results)]
     return "\n".join(lines)
 

@@ -1,13 +1,16 @@
 """What every reproduction shares: progress on stderr, figures saved alike, plain-text tables, means of maybe
-nothing."""
+nothing, 95 % intervals (paired where two methods ran on the same seeds), and the conditions table: every
+physical setting of a reproduction with where it comes from."""
 
 from __future__ import annotations
 
+import math
 import multiprocessing
 import statistics
 import sys
 import time
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Hashable, Iterable, Mapping, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -15,6 +18,7 @@ import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+from scipy import stats  # noqa: E402
 
 WORKERS = 2                             # the target machine has two cores
 
@@ -62,3 +66,83 @@ def run_pool(function: Callable[[Any], Any], jobs: Iterable[Any], label: str) ->
                 progress(f"{label}: {done}/{len(jobs)}", final=False)
     progress(f"{label}: {len(jobs)} in {time.monotonic() - started:.0f} s", final=True)
     return results
+
+
+@dataclass(frozen=True)
+class Interval:
+    """A mean with its 95 % t-interval over ``n`` values (no interval below two)."""
+    mean: float | None
+    half_width: float | None
+    n: int
+    bounds: tuple[float, float] | None = None     # an asymmetric interval (a proportion's)
+
+    @classmethod
+    def of(cls, values: Sequence[float]) -> Interval:
+        if not values:
+            return cls(None, None, 0)
+        if len(values) < 2:
+            return cls(values[0], None, 1)
+        half = float(stats.t.ppf(0.975, len(values) - 1)) * statistics.stdev(values) / math.sqrt(len(values))
+        return cls(statistics.fmean(values), half, len(values))
+
+    @classmethod
+    def of_proportion(cls, successes: int, runs: int) -> Interval:
+        """A success rate in percent with its 95 % Wilson interval (a t-interval is wrong near 0 and 100 %,
+        and the interval is not symmetric there: ``bounds`` holds it, ``half_width`` its larger side)."""
+        if runs == 0:
+            return cls(None, None, 0)
+        p, z = successes / runs, float(stats.norm.ppf(0.975))
+        centre = (p + z * z / (2 * runs)) / (1 + z * z / runs)
+        spread = z * math.sqrt(p * (1 - p) / runs + z * z / (4 * runs * runs)) / (1 + z * z / runs)
+        low, high = 100.0 * max(0.0, centre - spread), 100.0 * min(1.0, centre + spread)
+        return cls(100.0 * p, max(100.0 * p - low, high - 100.0 * p), runs, (low, high))
+
+    def text(self, scale: float = 100.0, digits: int = 2) -> str:
+        if self.mean is None:
+            return "no success"
+        if self.bounds is not None:
+            low, high = self.bounds
+            return f"{self.mean * scale:.{digits}f} [{low * scale:.{digits}f}, {high * scale:.{digits}f}] (n={self.n})"
+        width = "" if self.half_width is None else f" ± {self.half_width * scale:.{digits}f}"
+        return f"{self.mean * scale:.{digits}f}{width} (n={self.n})"
+
+
+def paired_interval(ours: Mapping[Hashable, float | None], baseline: Mapping[Hashable, float | None]) -> Interval:
+    """The mean of ``ours - baseline`` over the keys (seeds, placements) where both have a value."""
+    return Interval.of([value - baseline[key] for key, value in ours.items()
+                        if value is not None and baseline.get(key) is not None])  # type: ignore[operator]
+
+
+@dataclass(frozen=True)
+class Condition:
+    """One physical setting of a reproduction: its value for each compared method and where it comes from."""
+    setting: str                        # NODE.field, or world. / scenario. for what the scenario fixes
+    values: dict[str, Any]              # by method or parameter set
+    source: str                         # paper | calibrated | ours
+    note: str                           # the paper's section, the fit, or why we chose it
+
+
+CONDITION_SOURCES = ("paper", "calibrated", "ours")
+
+
+def condition_lines(rows: Sequence[Condition], methods: Sequence[str]) -> list[str]:
+    """The conditions table: one column per method, "same" where a value equals the first method's."""
+    def shown(value: Any) -> str:
+        text = f"{value:g}" if isinstance(value, float) else str(value)
+        return text if len(text) <= 40 else text[:37] + "..."
+
+    body = []
+    for row in rows:
+        first = repr(row.values[methods[0]])
+        values = [shown(row.values[methods[0]]),
+                  *("same" if repr(row.values[method]) == first else shown(row.values[method])
+                    for method in methods[1:])]
+        body.append([row.setting, *values, row.source, row.note])
+    return ["conditions: every physical setting of these runs and where it comes from",
+            *table(["setting", *methods, "source", "why / where"], body)]
+
+
+def condition_json_rows(experiment: str, rows: Sequence[Condition]) -> list[dict[str, Any]]:
+    """The conditions as ``--json`` rows (metric "condition"), ahead of the figures."""
+    return [{"experiment": experiment, "setting": {"condition": row.setting, "source": row.source, "note": row.note},
+             "metric": "condition", "ours": row.values, "paper": None} for row in rows]
