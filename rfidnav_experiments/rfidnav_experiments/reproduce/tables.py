@@ -109,8 +109,12 @@ class Interval:
 
 def paired_interval(ours: Mapping[Hashable, float | None], baseline: Mapping[Hashable, float | None]) -> Interval:
     """The mean of ``ours - baseline`` over the keys (seeds, placements) where both have a value."""
-    return Interval.of([value - baseline[key] for key, value in ours.items()
-                        if value is not None and baseline.get(key) is not None])  # type: ignore[operator]
+    differences = []
+    for key, value in ours.items():
+        theirs = baseline.get(key)
+        if value is not None and theirs is not None:
+            differences.append(value - theirs)
+    return Interval.of(differences)
 
 
 @dataclass(frozen=True)
