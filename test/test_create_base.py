@@ -23,6 +23,7 @@ from geometry_msgs.msg import Twist
 from nav_msgs.msg import Odometry
 from rclpy.parameter import Parameter
 
+from rfidnav_common import base_safety as safety
 from rfidnav_common.ros import COMMAND_QOS, SENSOR_QOS, odometry_pose, twist
 from rfidnav_drivers import create_oi as oi
 from rfidnav_drivers.create_base_node import CreateBaseNode, port_error
@@ -139,22 +140,25 @@ def test_sensor_reply_decoding():
 
 
 def test_condition_names_are_those_of_base_event_and_edges_are_found():
-    assert set(oi.CONDITIONS) == {BaseEvent.BUMP_LEFT, BaseEvent.BUMP_RIGHT, BaseEvent.CLIFF_LEFT,
-                                  BaseEvent.CLIFF_FRONT_LEFT, BaseEvent.CLIFF_FRONT_RIGHT, BaseEvent.CLIFF_RIGHT,
-                                  BaseEvent.WHEEL_DROP_LEFT, BaseEvent.WHEEL_DROP_RIGHT}
-    tracker = oi.ConditionTracker()
-    pressed = oi.decode_sensors(bytes([0b0010, 0, 0, 0, 0, 0, 0, 0, 0]))
+    assert set(safety.CONDITIONS) == {BaseEvent.BUMP_LEFT, BaseEvent.BUMP_RIGHT, BaseEvent.CLIFF_LEFT,
+                                      BaseEvent.CLIFF_FRONT_LEFT, BaseEvent.CLIFF_FRONT_RIGHT, BaseEvent.CLIFF_RIGHT,
+                                      BaseEvent.WHEEL_DROP_LEFT, BaseEvent.WHEEL_DROP_RIGHT}
+    assert safety.WATCHDOG == BaseEvent.WATCHDOG
+    tracker = safety.ConditionTracker()
+    pressed = oi.decode_sensors(bytes([0b0010, 0, 0, 0, 0, 0, 0, 0, 0])).conditions()
     assert tracker.update(pressed) == (["bump_left"], []) and tracker.bumped and not tracker.halted
     assert tracker.update(pressed) == ([], [])
-    assert tracker.update(oi.decode_sensors(bytes([0, 1, 0, 0, 0, 0, 0, 0, 0]))) == (["cliff_left"], ["bump_left"])
+    cliff = oi.decode_sensors(bytes([0, 1, 0, 0, 0, 0, 0, 0, 0])).conditions()
+    assert tracker.events(cliff) == [safety.BaseEventRecord("cliff_left", True, "all_motion_blocked"),
+                                     safety.BaseEventRecord("bump_left", False, "released")]
     assert tracker.halted and not tracker.bumped
 
 
 def test_motion_gate():
-    assert oi.gate_motion(0.2, 0.5, bumped=True, halted=False) == (0.0, 0.5)     # turn away on the spot
-    assert oi.gate_motion(-0.1, 0.5, bumped=True, halted=False) == (-0.1, 0.5)   # back up
-    assert oi.gate_motion(-0.1, 0.5, bumped=False, halted=True) == (0.0, 0.0)
-    assert oi.gate_motion(0.2, 0.5, bumped=False, halted=False) == (0.2, 0.5)
+    assert safety.gate_motion(0.2, 0.5, bumped=True, halted=False) == (0.0, 0.5)     # turn away on the spot
+    assert safety.gate_motion(-0.1, 0.5, bumped=True, halted=False) == (-0.1, 0.5)   # back up
+    assert safety.gate_motion(-0.1, 0.5, bumped=False, halted=True) == (0.0, 0.0)
+    assert safety.gate_motion(0.2, 0.5, bumped=False, halted=False) == (0.2, 0.5)
 
 
 def test_the_parameter_file_documents_the_code_defaults():

@@ -26,6 +26,7 @@ from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.publisher import Publisher
 
+from rfidnav_common import base_safety as safety
 from rfidnav_common.geometry import yaw_to_quaternion
 from rfidnav_common.ros import COMMAND_QOS, SENSOR_QOS, declare_parameters, run_node
 from rfidnav_drivers import create_oi as oi
@@ -38,7 +39,6 @@ WRITE_TIMEOUT_S = 0.1
 START_PAUSE_S = 0.05       # between Start and the mode: the OI needs a moment after Start (serial thread only)
 WARN_EVERY_S = 5.0
 SERIAL_ERRORS = (serial.SerialException, OSError)
-WATCHDOG = "watchdog"
 
 
 def port_error(port: str, error: OSError) -> DriverError:
@@ -76,7 +76,7 @@ class CreateBaseNode(Node):
         self.last_command_s: float | None = None          # time.monotonic(); None: no command yet
         # Serial thread only:
         self.odometry = oi.EncoderOdometry(self.geometry)
-        self.conditions = oi.ConditionTracker()
+        self.conditions = safety.ConditionTracker()
         self.watchdog_tripped = False
         self.last_reply_s: float | None = None
         self.missed_replies = 0
@@ -174,8 +174,8 @@ class CreateBaseNode(Node):
             return
         if self.watchdog_tripped:
             self.watchdog_tripped = False
-            self.publish_event(WATCHDOG, False, oi.RELEASED)
-        linear, angular = oi.gate_motion(*command, bumped=self.conditions.bumped, halted=self.conditions.halted)
+            self.publish_event(safety.WATCHDOG, False, safety.RELEASED)
+        linear, angular = safety.gate_motion(*command, bumped=self.conditions.bumped, halted=self.conditions.halted)
         if (linear, angular) != command:
             held = [name for name, active in self.conditions.active.items() if active]
             self.get_logger().warning(f"/cmd_vel ({command[0]:g} m/s, {command[1]:g} rad/s) limited to "
@@ -192,7 +192,7 @@ class CreateBaseNode(Node):
         self.watchdog_tripped = True
         self.write(oi.STOP_DRIVING)
         self.get_logger().warning(f"no /cmd_vel for {self.params.command_timeout_s:g} s: stopped the base")
-        self.publish_event(WATCHDOG, True, oi.STOPPED)
+        self.publish_event(safety.WATCHDOG, True, safety.STOPPED)
 
     def sensor_cycle(self) -> None:
         try:
@@ -218,16 +218,16 @@ class CreateBaseNode(Node):
 
     def handle_conditions(self, state: oi.SensorState) -> None:
         was_halted = self.conditions.halted
-        rising, falling = self.conditions.update(state)
-        if rising:
+        events = self.conditions.events(state.conditions())
+        if any(event.active for event in events):
             self.write(oi.STOP_DRIVING)
-        for name in rising:
-            action = oi.blocking_action(name)
-            self.get_logger().warning(f"{name}: stopped the base; {action.replace('_', ' ')} while it holds")
-            self.publish_event(name, True, action)
-        for name in falling:
-            self.get_logger().info(f"{name} cleared")
-            self.publish_event(name, False, oi.RELEASED)
+        for event in events:
+            if event.active:
+                self.get_logger().warning(f"{event.event}: stopped the base; {event.action.replace('_', ' ')} "
+                                          "while it holds")
+            else:
+                self.get_logger().info(f"{event.event} cleared")
+            self.publish_event(event.event, event.active, event.action)
         if was_halted and not self.conditions.halted and self.params.mode == "safe":
             # In Safe mode the base itself drops to Passive on a cliff or wheel drop and ignores driving until
             # it is put back into Safe mode.

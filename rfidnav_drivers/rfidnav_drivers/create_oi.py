@@ -12,6 +12,8 @@ import math
 import struct
 from dataclasses import dataclass, field
 
+from rfidnav_common import base_safety as safety
+
 # ------------------------------------------------------------------------------------------------ opcodes
 START = 128          # enter the OI (Passive mode); required before any other command
 SAFE = 131           # Safe mode: driving allowed, the base itself stops on cliffs and wheel drops
@@ -33,20 +35,6 @@ PACKET_SIZES = {BUMPS_AND_WHEEL_DROPS: 1, CLIFF_LEFT: 1, CLIFF_FRONT_LEFT: 1, CL
 SENSOR_PACKETS: tuple[int, ...] = (BUMPS_AND_WHEEL_DROPS, CLIFF_LEFT, CLIFF_FRONT_LEFT, CLIFF_FRONT_RIGHT,
                                    CLIFF_RIGHT, LEFT_ENCODER, RIGHT_ENCODER)
 ENCODER_MODULUS = 1 << 16
-
-# ------------------------------------------------------------------------------------------------ conditions
-# Names of the safety conditions, as rfidnav_msgs/BaseEvent's constants spell them.
-BUMP_LEFT, BUMP_RIGHT = "bump_left", "bump_right"
-CLIFF_LEFT_EVENT, CLIFF_FRONT_LEFT_EVENT = "cliff_left", "cliff_front_left"
-CLIFF_FRONT_RIGHT_EVENT, CLIFF_RIGHT_EVENT = "cliff_front_right", "cliff_right"
-WHEEL_DROP_LEFT, WHEEL_DROP_RIGHT = "wheel_drop_left", "wheel_drop_right"
-BUMPS = (BUMP_LEFT, BUMP_RIGHT)
-HALTS = (CLIFF_LEFT_EVENT, CLIFF_FRONT_LEFT_EVENT, CLIFF_FRONT_RIGHT_EVENT, CLIFF_RIGHT_EVENT,
-         WHEEL_DROP_LEFT, WHEEL_DROP_RIGHT)
-CONDITIONS = BUMPS + HALTS
-# What the driver does while a condition holds (BaseEvent.action).
-STOPPED, FORWARD_BLOCKED, ALL_MOTION_BLOCKED, RELEASED = "stopped", "forward_blocked", "all_motion_blocked", "released"
-
 
 def query_list_command(packets: tuple[int, ...] = SENSOR_PACKETS) -> bytes:
     """Query List for ``packets``: one request and one fixed-size reply per sensor cycle, so a reply is read
@@ -94,17 +82,6 @@ def wheel_speeds(linear_mps: float, angular_radps: float, wheel_base_m: float, m
     return WheelSpeeds(left, right)
 
 
-def gate_motion(linear_mps: float, angular_radps: float, bumped: bool, halted: bool) -> tuple[float, float]:
-    """The velocity the driver lets through while safety conditions hold: nothing on a cliff or a wheel drop
-    (any motion could drive a wheel over the edge), no forward part against a pressed bumper (turning away on
-    the spot and backing up are what gets the robot free)."""
-    if halted:
-        return 0.0, 0.0
-    if bumped and linear_mps > 0.0:
-        return 0.0, angular_radps
-    return linear_mps, angular_radps
-
-
 @dataclass(frozen=True)
 class SensorState:
     """One Query List reply of SENSOR_PACKETS."""
@@ -120,11 +97,11 @@ class SensorState:
     right_count: int
 
     def conditions(self) -> dict[str, bool]:
-        """Each safety condition (BaseEvent name) and whether it holds."""
-        return {BUMP_LEFT: self.bump_left, BUMP_RIGHT: self.bump_right,
-                CLIFF_LEFT_EVENT: self.cliff_left, CLIFF_FRONT_LEFT_EVENT: self.cliff_front_left,
-                CLIFF_FRONT_RIGHT_EVENT: self.cliff_front_right, CLIFF_RIGHT_EVENT: self.cliff_right,
-                WHEEL_DROP_LEFT: self.wheel_drop_left, WHEEL_DROP_RIGHT: self.wheel_drop_right}
+        """Each safety condition (BaseEvent name, rfidnav_common.base_safety) and whether it holds."""
+        return {safety.BUMP_LEFT: self.bump_left, safety.BUMP_RIGHT: self.bump_right,
+                safety.CLIFF_LEFT: self.cliff_left, safety.CLIFF_FRONT_LEFT: self.cliff_front_left,
+                safety.CLIFF_FRONT_RIGHT: self.cliff_front_right, safety.CLIFF_RIGHT: self.cliff_right,
+                safety.WHEEL_DROP_LEFT: self.wheel_drop_left, safety.WHEEL_DROP_RIGHT: self.wheel_drop_right}
 
 
 def decode_sensors(reply: bytes) -> SensorState:
@@ -212,31 +189,3 @@ class EncoderOdometry:
 def counts_for(distance_m: float, geometry: WheelGeometry) -> float:
     """Encoder counts for a wheel travel (the inverse of metres_per_count), for simulators and tests."""
     return distance_m / geometry.metres_per_count
-
-
-@dataclass
-class ConditionTracker:
-    """Edges of the safety conditions between sensor replies: which started and which cleared. All start
-    inactive, so a condition that holds at start-up (the robot lifted: wheels dropped) is reported at once."""
-    active: dict[str, bool] = field(default_factory=lambda: dict.fromkeys(CONDITIONS, False))
-
-    def update(self, state: SensorState) -> tuple[list[str], list[str]]:
-        """(rising, falling) condition names for the new reply, in CONDITIONS order."""
-        now = state.conditions()
-        rising = [name for name in CONDITIONS if now[name] and not self.active[name]]
-        falling = [name for name in CONDITIONS if self.active[name] and not now[name]]
-        self.active = now
-        return rising, falling
-
-    @property
-    def bumped(self) -> bool:
-        return any(self.active[name] for name in BUMPS)
-
-    @property
-    def halted(self) -> bool:
-        return any(self.active[name] for name in HALTS)
-
-
-def blocking_action(condition: str) -> str:
-    """BaseEvent.action for a condition that started: what the driver refuses while it holds."""
-    return FORWARD_BLOCKED if condition in BUMPS else ALL_MOTION_BLOCKED

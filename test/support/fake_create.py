@@ -18,6 +18,7 @@ import time
 import tty
 from dataclasses import dataclass
 
+from rfidnav_common import base_safety as safety
 from rfidnav_drivers import create_oi as oi
 
 ARGUMENT_BYTES = {oi.START: 0, oi.SAFE: 0, oi.FULL: 0, oi.STOP: 0, oi.DRIVE_DIRECT: 4, oi.SENSORS: 1}
@@ -42,7 +43,7 @@ class FakeCreate:
         self.commands: list[Command] = []
         self.unknown_bytes: list[int] = []
         self.mode = "off"
-        self.bits = dict.fromkeys(oi.CONDITIONS, False)
+        self.bits = dict.fromkeys(safety.CONDITIONS, False)
         self.left_counts = float(left_count)       # unwrapped; reported modulo 2^16
         self.right_counts = float(right_count)
         self.left_mm_s = self.right_mm_s = 0
@@ -61,7 +62,7 @@ class FakeCreate:
                 if name not in self.bits:
                     raise KeyError(name)
                 self.bits[name] = value
-            if self.mode == "safe" and any(self.bits[n] for n in oi.HALTS):
+            if self.mode == "safe" and any(self.bits[n] for n in safety.HALTS):
                 self.integrate()
                 self.left_mm_s = self.right_mm_s = 0
                 self.mode = "passive"
@@ -152,10 +153,10 @@ class FakeCreate:
     def packet(self, packet: int) -> bytes:
         b = self.bits
         if packet == oi.BUMPS_AND_WHEEL_DROPS:
-            return bytes([b[oi.BUMP_RIGHT] | b[oi.BUMP_LEFT] << 1 | b[oi.WHEEL_DROP_RIGHT] << 2
-                          | b[oi.WHEEL_DROP_LEFT] << 3])
-        cliffs = {oi.CLIFF_LEFT: oi.CLIFF_LEFT_EVENT, oi.CLIFF_FRONT_LEFT: oi.CLIFF_FRONT_LEFT_EVENT,
-                  oi.CLIFF_FRONT_RIGHT: oi.CLIFF_FRONT_RIGHT_EVENT, oi.CLIFF_RIGHT: oi.CLIFF_RIGHT_EVENT}
+            return bytes([b[safety.BUMP_RIGHT] | b[safety.BUMP_LEFT] << 1 | b[safety.WHEEL_DROP_RIGHT] << 2
+                          | b[safety.WHEEL_DROP_LEFT] << 3])
+        cliffs = {oi.CLIFF_LEFT: safety.CLIFF_LEFT, oi.CLIFF_FRONT_LEFT: safety.CLIFF_FRONT_LEFT,
+                  oi.CLIFF_FRONT_RIGHT: safety.CLIFF_FRONT_RIGHT, oi.CLIFF_RIGHT: safety.CLIFF_RIGHT}
         if packet in cliffs:
             return bytes([b[cliffs[packet]]])
         if packet in (oi.LEFT_ENCODER, oi.RIGHT_ENCODER):
