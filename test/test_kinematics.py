@@ -202,3 +202,55 @@ def test_slip_makes_odometry_wander_reproducibly():
     assert (first.odom.x, first.odom.y) != (other.odom.x, other.odom.y)
     # Truth does not depend on the odometry noise.
     assert (first.truth.x, first.truth.y) == (other.truth.x, other.truth.y)
+
+
+# ------------------------------------------------------------------------------------------ walls
+
+WALL_AHEAD = np.array([[1.0, -2.0, 1.0, 2.0]])       # a wall across the way at x = 1
+
+
+def base_among(walls: np.ndarray, start: Pose2D) -> DiffDriveBase:
+    return DiffDriveBase(start, LIMITS, OdometryDrift(), np.random.default_rng(0), walls)
+
+
+def drive_recording(base: DiffDriveBase, linear: float, angular: float, duration_s: float) -> list:
+    """``drive``, returning the base's /base/event records."""
+    events = []
+    for _ in range(round(duration_s / DT)):
+        base.set_command(linear, angular)
+        events += base.step(DT)
+    return events
+
+
+def test_a_base_driving_at_a_wall_stops_at_its_footprint_and_presses_both_bumpers() -> None:
+    base = base_among(WALL_AHEAD, Pose2D())
+    events = drive_recording(base, 0.3, 0.0, 6.0)
+    radius = LIMITS.footprint_radius_m
+    assert base.truth.x == pytest.approx(1.0 - radius, abs=0.01)
+    assert base.truth.x <= 1.0 - radius
+    assert [(e.event, e.active, e.action) for e in events] == [("bump_left", True, "forward_blocked"),
+                                                              ("bump_right", True, "forward_blocked")]
+    assert base.bumps == 1
+    assert base.odom.x == pytest.approx(base.truth.x, abs=0.01)   # stalled wheels count nothing more
+
+
+def test_a_wall_touched_on_the_left_presses_only_the_left_bumper_and_turning_away_releases_it() -> None:
+    # Heading 60 degrees left of the wall's normal: the wall is met 60 degrees to the right of straight ahead.
+    base = base_among(WALL_AHEAD, Pose2D(0.0, 0.0, math.radians(60.0)))
+    events = drive_recording(base, 0.3, 0.0, 8.0)
+    assert [e.event for e in events if e.active] == ["bump_right"]
+    turning = drive_recording(base, 0.3, 1.0, 3.0)      # forward is refused: it turns on the spot, then leaves
+    assert ("bump_right", False, "released") in [(e.event, e.active, e.action) for e in turning]
+    assert base.truth.x < 1.0 - LIMITS.footprint_radius_m
+
+
+def test_a_base_backing_into_a_wall_stalls_without_a_bumper_event() -> None:
+    base = base_among(np.array([[0.0, -2.0, 0.0, 2.0]]), Pose2D(0.5, 0.0, 0.0))     # the wall behind it
+    assert drive_recording(base, -0.3, 0.0, 4.0) == []
+    assert base.truth.x == pytest.approx(LIMITS.footprint_radius_m, abs=0.01)
+
+
+def test_without_walls_the_base_drives_anywhere() -> None:
+    base = make_base()
+    assert drive_recording(base, 0.3, 0.0, 5.0) == []
+    assert base.truth.x > 1.0

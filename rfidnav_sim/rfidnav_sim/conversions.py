@@ -8,15 +8,23 @@ from nav_msgs.msg import Odometry
 from std_msgs.msg import ColorRGBA
 from visualization_msgs.msg import Marker, MarkerArray
 
+from rfidnav_common.base_safety import BaseEventRecord
 from rfidnav_common.geometry import yaw_to_quaternion
 from rfidnav_common.tag_lattice import Deployment
-from rfidnav_msgs.msg import AccessPointRss, TagReadArray, TagReading, WifiScan
+from rfidnav_msgs.msg import AccessPointRss, BaseEvent, TagReadArray, TagReading, WifiScan
 from rfidnav_sim.kinematics import Pose2D
 from rfidnav_sim.rfid_model import Read
 from rfidnav_sim.wifi_model import RssReading
 from rfidnav_sim.world import World
 
 TAG_COLOURS = {"ceiling": ColorRGBA(r=1.0, g=0.55, b=0.0, a=1.0), "floor": ColorRGBA(r=0.1, g=0.4, b=1.0, a=1.0)}
+
+
+def base_event_message(event: BaseEventRecord, stamp: Time) -> BaseEvent:
+    msg = BaseEvent(event=event.event, active=event.active, action=event.action)
+    msg.header.stamp = stamp
+    msg.header.frame_id = "base_link"
+    return msg
 
 
 def odometry_message(pose: Pose2D, velocity: tuple[float, float], stamp: Time, frame_id: str) -> Odometry:

@@ -4,6 +4,12 @@ The commanded (v, w) becomes left/right wheel speeds, each limited in speed and 
 the limits act where a real base enforces them. Odometry integrates the same wheel speeds through
 slightly wrong wheel radii and track width (the systematic drift that makes dead reckoning fail)
 plus random per-step slip.
+
+Walls are obstacles: the base is a disc of ``footprint_radius_m``, and a step that would take it closer to a
+wall than that is not made (the wheels stall: neither the true pose nor the odometry moves). A wall touched in
+the front half presses the bumper on that side (both when it is within BOTH_BUMPERS_RAD of straight ahead), and
+the base then does what the Create driver does (rfidnav_common.base_safety): it stops, refuses forward motion
+while the bumper is pressed, and reports each press and release as a /base/event record.
 """
 
 from __future__ import annotations
@@ -13,6 +19,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from rfidnav_common.base_safety import BUMP_LEFT, BUMP_RIGHT, CONDITIONS, BaseEventRecord, ConditionTracker, gate_motion
+from rfidnav_common.geometry import nearest_on_segments
+
+CONTACT_MARGIN_M = 0.005        # a wall this much beyond the footprint still presses the bumper (no flicker)
+BOTH_BUMPERS_RAD = math.radians(20.0)   # a wall this close to straight ahead presses both bumpers
+
 
 @dataclass(frozen=True)
 class BaseLimits:
@@ -20,6 +32,7 @@ class BaseLimits:
     max_wheel_speed_mps: float = 0.5
     max_wheel_accel_mps2: float = 1.0
     command_timeout_s: float = 0.5
+    footprint_radius_m: float = 0.17    # a round base (Create 2: 34 cm across); what touches the walls
 
 
 @dataclass(frozen=True)
@@ -63,8 +76,12 @@ def unicycle_step(yaw: float, linear_mps: float, angular_radps: float, dt: float
 class DiffDriveBase:
     """Ground-truth motion and odometry of a differential-drive base, stepped at a fixed dt."""
 
-    def __init__(self, start: Pose2D, limits: BaseLimits, drift: OdometryDrift, rng: np.random.Generator) -> None:
+    def __init__(self, start: Pose2D, limits: BaseLimits, drift: OdometryDrift, rng: np.random.Generator,
+                 walls: np.ndarray | None = None) -> None:
         self.limits = limits
+        self.walls = np.zeros((0, 4)) if walls is None else np.asarray(walls, dtype=float).reshape(-1, 4)
+        self.bumpers = ConditionTracker()
+        self.bumps = 0                  # presses so far (either bumper)
         self.drift = drift
         self.rng = rng
         self.truth = Pose2D(start.x, start.y, start.yaw)
@@ -85,9 +102,11 @@ class DiffDriveBase:
         return (0.5 * (self.left_speed + self.right_speed),
                 (self.right_speed - self.left_speed) / self.limits.track_width_m)
 
-    def step(self, dt: float) -> None:
+    def step(self, dt: float) -> list[BaseEventRecord]:
+        """Advance ``dt``; the /base/event records of bumpers pressed or released in this step."""
         limits = self.limits
         linear, angular = self.command if self.command_age_s <= limits.command_timeout_s else (0.0, 0.0)
+        linear, angular = gate_motion(linear, angular, bumped=self.bumpers.bumped, halted=False)
         self.command_age_s += dt
         half_track = 0.5 * limits.track_width_m
         targets = (linear - angular * half_track, linear + angular * half_track)
@@ -101,10 +120,44 @@ class DiffDriveBase:
         self.right_speed += float(np.clip(targets[1] - self.right_speed, -max_change, max_change))
         left_m = 0.5 * (left_before + self.left_speed) * dt
         right_m = 0.5 * (right_before + self.right_speed) * dt
+        before = Pose2D(self.truth.x, self.truth.y, self.truth.yaw)
         self.truth.advance(left_m, right_m, limits.track_width_m)
+        if self.into_wall(before):
+            # The wheels stall against the wall: the step is not made, and the encoders do not count it.
+            self.truth, self.left_speed, self.right_speed = before, 0.0, 0.0
+            return self.update_bumpers()
         self.distance_travelled_m += abs(0.5 * (left_m + right_m))
         drift = self.drift
         slip = self.rng.normal(0.0, drift.slip_std, 2) if drift.slip_std > 0.0 else (0.0, 0.0)
         self.odom.advance(left_m * (1.0 + drift.left_scale_error + slip[0]),
                           right_m * (1.0 + drift.right_scale_error + slip[1]),
                           limits.track_width_m * (1.0 + drift.track_scale_error))
+        return self.update_bumpers()
+
+    def wall_distance(self, pose: Pose2D) -> tuple[float, np.ndarray]:
+        return nearest_on_segments((pose.x, pose.y), self.walls)
+
+    def into_wall(self, before: Pose2D) -> bool:
+        """Whether the step from ``before`` to the current true pose moved the footprint into a wall (moving
+        away from one it already overlaps is allowed: that is how a robot placed too close gets free)."""
+        if not len(self.walls):
+            return False
+        after, _ = self.wall_distance(self.truth)
+        return after < self.limits.footprint_radius_m and after < self.wall_distance(before)[0]
+
+    def update_bumpers(self) -> list[BaseEventRecord]:
+        pressed = dict.fromkeys(CONDITIONS, False)
+        if len(self.walls):
+            distance, point = self.wall_distance(self.truth)
+            if distance <= self.limits.footprint_radius_m + CONTACT_MARGIN_M:
+                bearing = math.remainder(math.atan2(point[1] - self.truth.y, point[0] - self.truth.x)
+                                         - self.truth.yaw, 2.0 * math.pi)
+                if abs(bearing) < math.pi / 2.0:          # the bumper covers the front half
+                    pressed[BUMP_LEFT] = bearing > -BOTH_BUMPERS_RAD
+                    pressed[BUMP_RIGHT] = bearing < BOTH_BUMPERS_RAD
+        events = self.bumpers.events(pressed)
+        if any(event.active for event in events):
+            # The Create driver stops the base on a press; a new command is needed to move again.
+            self.command, self.left_speed, self.right_speed = (0.0, 0.0), 0.0, 0.0
+            self.bumps += 1
+        return events

@@ -38,22 +38,26 @@ class RobotSimParameters:
     odom_right_scale_error: float = param("right wheel travel error of the odometry", 0.0)
     odom_track_scale_error: float = param("track width error of the odometry", 0.0)
     odom_slip_std: float = param("random relative wheel travel error per step", 0.0)
+    footprint_radius_m: float = param("radius of the round base: closer than this to a wall it stalls and "
+                                      "bumps [m]", 0.17)
 
-    def base(self) -> DiffDriveBase:
-        """The base these parameters describe, at the start pose, its odometry slip stream seeded from ``seed``:
-        the one robot_sim steps and the in-process runners step alike."""
+    def base(self, walls: np.ndarray | None = None) -> DiffDriveBase:
+        """The base these parameters describe, at the start pose, its odometry slip stream seeded from ``seed``,
+        stopped by ``walls`` (the world's N x 4 segments): the one robot_sim steps and the in-process runners
+        step alike."""
         return DiffDriveBase(
             Pose2D(self.start_x, self.start_y, math.radians(self.start_yaw_deg)),
-            BaseLimits(self.track_width_m, self.max_wheel_speed_mps, self.max_wheel_accel_mps2, self.command_timeout_s),
+            BaseLimits(self.track_width_m, self.max_wheel_speed_mps, self.max_wheel_accel_mps2, self.command_timeout_s,
+                       self.footprint_radius_m),
             OdometryDrift(self.odom_left_scale_error, self.odom_right_scale_error, self.odom_track_scale_error,
                           self.odom_slip_std),
-            rng_for(self.seed, "robot_sim.odometry"))
+            rng_for(self.seed, "robot_sim.odometry"), walls)
 
     def validate(self) -> None:
         if not self.world_file:
             raise ParameterError("world_file", "required (the world YAML to simulate)")
         require_positive(self, "step_s", "rtf", "odom_rate_hz", "track_width_m", "max_wheel_speed_mps",
-                         "max_wheel_accel_mps2", "command_timeout_s")
+                         "max_wheel_accel_mps2", "command_timeout_s", "footprint_radius_m")
         if self.odom_slip_std < 0.0:
             raise ParameterError("odom_slip_std", "must not be negative")
 

@@ -1,4 +1,6 @@
-"""robot_sim: differential-drive base, simulation clock, wheel odometry, ground truth, world markers.
+"""robot_sim: differential-drive base, simulation clock, wheel odometry, ground truth, world markers, and the
+bumper: the base stalls at the world's walls and reports each press and release on /base/event, stopping and
+refusing forward motion while pressed, as create_base does (rfidnav_sim.kinematics).
 
 Owns simulated time: steps the base at ``step_s`` and publishes /clock (at ``odom_rate_hz``, with
 /odom and /sim/ground_truth) so that ``rtf`` seconds of sim time pass per wall second. Every other node runs
@@ -19,8 +21,10 @@ from rosgraph_msgs.msg import Clock as ClockMsg
 from std_srvs.srv import Trigger
 from visualization_msgs.msg import MarkerArray
 
+from rfidnav_common.base_safety import BaseEventRecord
 from rfidnav_common.ros import COMMAND_QOS, LATCHED_QOS, SENSOR_QOS, declare_parameters, run_node, time_msg
-from rfidnav_sim.conversions import odometry_message, world_markers
+from rfidnav_msgs.msg import BaseEvent
+from rfidnav_sim.conversions import base_event_message, odometry_message, world_markers
 from rfidnav_sim.parameters import RobotSimParameters
 from rfidnav_sim.world import load_world
 
@@ -31,7 +35,7 @@ class RobotSimNode(Node):
         self.params: RobotSimParameters = declare_parameters(self, RobotSimParameters)
         p = self.params
         self.world = load_world(p.world_file)
-        self.base = p.base()
+        self.base = p.base(self.world.wall_segments())
         self.steps = 0
         self.steps_per_odom = max(1, round(1.0 / (p.odom_rate_hz * p.step_s)))
         self.running = not p.start_paused
@@ -41,6 +45,7 @@ class RobotSimNode(Node):
         self.odom_pub = self.create_publisher(Odometry, "/odom", SENSOR_QOS)
         self.truth_pub = self.create_publisher(Odometry, "/sim/ground_truth", SENSOR_QOS)
         self.markers_pub = self.create_publisher(MarkerArray, "/sim/markers", LATCHED_QOS)
+        self.event_pub = self.create_publisher(BaseEvent, "/base/event", COMMAND_QOS)
         self.create_subscription(Twist, "/cmd_vel", self.on_cmd_vel, COMMAND_QOS)
         self.create_service(Trigger, "~/start", self.on_start)
         # The clock source cannot pace itself on sim time: a steady wall timer drives the steps,
@@ -78,8 +83,10 @@ class RobotSimNode(Node):
         due = int((time.monotonic() - self.wall_origin) * p.rtf / p.step_s)
         # After a stall (a slow machine), do not burst through the backlog faster than 50 steps a tick.
         for _ in range(min(due - self.steps, 50)):
-            self.base.step(p.step_s)
+            events = self.base.step(p.step_s)
             self.steps += 1
+            for event in events:
+                self.publish_event(event)
             # /clock, /odom and ground truth share one rate: nothing in the graph needs finer time, and
             # every /clock message costs each use_sim_time node a callback.
             if self.steps % self.steps_per_odom == 0:
@@ -87,6 +94,13 @@ class RobotSimNode(Node):
                 self.publish_odometry()
         if due - self.steps > 50:
             self.wall_origin = time.monotonic() - self.steps * p.step_s / p.rtf
+
+    def publish_event(self, event: BaseEventRecord) -> None:
+        if event.active:
+            truth = self.base.truth
+            self.get_logger().warning(f"{event.event} at ({truth.x:.2f}, {truth.y:.2f}): stopped the base; "
+                                      f"{event.action.replace('_', ' ')} while it holds")
+        self.event_pub.publish(base_event_message(event, self.sim_time_msg()))
 
     def publish_clock(self) -> None:
         self.clock_pub.publish(ClockMsg(clock=self.sim_time_msg()))

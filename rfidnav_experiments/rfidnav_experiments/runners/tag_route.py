@@ -67,7 +67,7 @@ def run_tag_route(scenario: Scenario, controller: HeadingControllerParameters, s
     robot: RobotSimParameters = role_parameters(scenario, "robot_sim", seed)
     reader = reader or role_parameters(scenario, "rfid_reader_sim", seed)
     world = scenario.world
-    base = robot.base()
+    base = robot.base(world.wall_segments())
     simulator = ReaderSimulator.for_world(reader.reader_model(), world, rng_for(seed, "rfid_reader_sim"))
     follower = TagRouteFollower(controller.follower_settings(), FuzzyHeadingController(controller.fuzzy_spec()),
                                 scenario.route_map.arrival_tags)
