@@ -178,3 +178,29 @@ def test_bad_models_name_the_field() -> None:
         SonarModel([boresight_sonar()], np.empty((0, 4)), noise_fraction=-0.1)
     with pytest.raises(ValueError, match="^rays_per_beam:"):
         SonarModel([boresight_sonar()], np.empty((0, 4)), rays_per_beam=0)
+
+
+# ------------------------------------------------------------------------------------------ specular loss
+
+def test_a_ray_beyond_the_specular_angle_gets_no_echo_and_does_not_pass_through_to_a_farther_wall() -> None:
+    walls = np.array([[2.0, -5.0, 2.0, 5.0], [4.0, -9.0, 4.0, 9.0]])
+    directions = np.array([[1.0, 0.0], [SQRT_HALF, SQRT_HALF], [math.cos(math.radians(30.0)),
+                                                                 math.sin(math.radians(30.0))]])
+    origins = np.zeros((3, 2))
+    ranges = cast_rays(origins, directions, walls, specular_angle_rad=math.radians(40.0))
+    assert ranges[0] == pytest.approx(2.0)                       # normal incidence
+    assert ranges[1] == math.inf                                  # 45 degrees off the normal: reflected away
+    assert ranges[2] == pytest.approx(2.0 / math.cos(math.radians(30.0)))   # 30 degrees: still an echo
+    assert cast_rays(origins, directions, walls)[1] == pytest.approx(2.0 * math.sqrt(2.0))   # no loss at 90
+
+
+def test_a_beam_keeps_the_echo_of_its_rays_near_the_normal_and_loses_a_wall_seen_only_obliquely() -> None:
+    wall_to_the_left = [[-5.0, 1.0, 5.0, 1.0]]          # a corridor wall 1 m to the left, parallel to the robot
+    left_45 = boresight_sonar("left_45", 45.0)
+    seen = SonarModel([left_45], np.array(wall_to_the_left), 0.0, 0.0, 5, math.radians(40.0))
+    # The cone spans 32.5-57.5 degrees off the wall's normal: the 32.5-degree edge ray still echoes.
+    assert seen.ranges(0.0, 0.0, 0.0, RNG)["left_45"] == pytest.approx(1.0 / math.cos(math.radians(32.5)))
+    lost = SonarModel([left_45], np.array(wall_to_the_left), 0.0, 0.0, 5, math.radians(30.0))
+    assert lost.ranges(0.0, 0.0, 0.0, RNG)["left_45"] == math.inf
+    with pytest.raises(ValueError, match="specular_angle_rad"):
+        SonarModel([left_45], np.array(wall_to_the_left), specular_angle_rad=0.0)

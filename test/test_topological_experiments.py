@@ -1,5 +1,6 @@
 """In-process topological navigation (paper 004): rfidnav_experiments.runners.topological."""
 
+import dataclasses
 import math
 
 import numpy as np
@@ -7,16 +8,21 @@ import pytest
 
 from rfidnav_common.topological_map import load_topological_map
 from rfidnav_experiments.runners.topological import (
+    EVAL_MAP,
+    EVAL_WORLD,
     FIG5_MAP,
     FIG5_WORLD,
+    FLOORS,
+    METHODS,
     centre_sonar,
     follower_offsets,
     paper_run,
     random_missions,
     run_mission,
-    start_pose_for,
+    start_pose_before_tag,
 )
-from rfidnav_sim.sonar_model import centre_offsets
+from rfidnav_sim.building import building_floor
+from rfidnav_sim.sonar_model import cast_rays, centre_offsets
 from rfidnav_sim.world import load_world
 
 pytestmark = pytest.mark.tier("unit")
@@ -40,10 +46,13 @@ def test_the_shipped_follower_offsets_are_the_layouts_to_a_tenth_of_a_millimetre
         assert offset == pytest.approx(layout[name], abs=1e-4), name
 
 
-def test_start_pose_before_tag_23_heads_east_towards_h():
-    x, y, yaw = start_pose_for(load_topological_map(FIG5_MAP), "23")
+def test_the_start_pose_before_tag_23_is_in_its_corridor_heading_east_with_the_tag_on_the_left():
+    # Tag 23 is on the north wall (y 8.8) at x 14.2, facing south: 0.8 m out from it, 1.2 m before it.
+    x, y, yaw = start_pose_before_tag(load_world(FIG5_WORLD), "23")
     assert (x, y) == pytest.approx((13.0, 8.0))
     assert yaw == pytest.approx(0.0, abs=1e-9)
+    with pytest.raises(ValueError, match="tag 'nope'"):
+        start_pose_before_tag(load_world(FIG5_WORLD), "nope")
 
 
 def test_paper_run_turns_right_at_h_and_reaches_g():
@@ -89,7 +98,54 @@ def test_a_question_mark_hallway_is_explored_and_learned_on_the_way_to_its_far_e
     partial = tmp_path / "fig5_without_h_f.yaml"
     partial.write_text(text)
     topological_map = load_topological_map(partial)
-    run = run_mission(load_world(FIG5_WORLD), topological_map, start_pose_for(topological_map, "23"), "f",
-                      np.random.default_rng(1))
+    world = load_world(FIG5_WORLD)
+    run = run_mission(world, topological_map, start_pose_before_tag(world, "23"), "f", np.random.default_rng(1))
     assert run.success, run.message
     assert run.nodes_visited == ("h", "f") and run.turns == (("h", "straight"),)
+
+
+@pytest.mark.tier("slow")
+def test_a_route_that_needs_a_wall_driven_through_fails_visibly(tmp_path):
+    # The paper's run with the passage south of h walled off: the base stops at the wall and the robot never
+    # reaches g, where the old simulation let a robot drive through walls.
+    world = load_world(FIG5_WORLD)
+    blocked = dataclasses.replace(world, walls=(*world.walls, (15.2, 5.0, 16.8, 5.0)))
+    topological_map = load_topological_map(FIG5_MAP)
+    run = run_mission(blocked, topological_map, start_pose_before_tag(blocked, "23"), "g", np.random.default_rng(1),
+                      max_time_s=240.0)
+    assert not run.success
+    assert math.dist(run.final_position, (16.0, 0.0)) > 4.0
+    assert run.final_position[1] > 5.0 + 0.17 - 0.01          # never past the wall's line, less its footprint
+
+
+def test_the_evaluation_floor_is_not_the_floor_its_map_would_generate():
+    # The generator cannot even draw this map's floor (B-F is off its compass line); squared up, its walls are
+    # still not the drawn ones.
+    robot_map = load_topological_map(EVAL_MAP)
+    with pytest.raises(ValueError, match="off the S line"):
+        building_floor(robot_map)
+    squared = dataclasses.replace(robot_map, nodes={**robot_map.nodes, "F": dataclasses.replace(
+        robot_map.nodes["F"], position=(10.0, -8.0))})
+    generated = building_floor(squared)
+    drawn = load_world(EVAL_WORLD)
+    as_set = lambda walls: {tuple(round(float(v), 2) for v in wall) for wall in walls}   # noqa: E731
+    assert len(as_set(drawn.walls) & as_set(generated.walls)) <= 2
+    # Corridor widths, measured across the corridors at their middles: they vary from 1.4 to 2.2 m.
+    walls = drawn.wall_segments()
+    middles = {"D-A": ((0.0, 5.0), (1.0, 0.0)), "A-B": ((3.0, 0.0), (0.0, 1.0)), "B-C": ((14.0, 0.0), (0.0, 1.0)),
+               "C-E": ((20.0, 7.0), (1.0, 0.0)), "D-E": ((14.0, 10.0), (0.0, 1.0))}
+    widths = {name: float(sum(cast_rays(np.array([point, point]), np.array([direction, (-direction[0], -direction[1])]),
+                                        walls)))
+              for name, (point, direction) in middles.items()}
+    assert min(widths.values()) == pytest.approx(1.4) and max(widths.values()) == pytest.approx(2.2)
+    # B-F leaves B 20 degrees off the map's South: its walls run at -70 degrees.
+    slanted = [wall for wall in drawn.walls if wall[0] != wall[2] and wall[1] != wall[3]]
+    angles = {round(math.degrees(math.atan2(y2 - y1, x2 - x1))) for x1, y1, x2, y2 in slanted}
+    assert -70 in angles
+
+
+@pytest.mark.tier("slow")
+def test_on_the_evaluation_floor_ours_takes_no_unmapped_door_for_its_next_junction():
+    runs = random_missions(4, 0.0, seed=1001, floor=FLOORS["building_eval"], method=METHODS["ours"])
+    assert sum(run.success for run in runs) >= 3, [run.message for run in runs]
+    assert all(run.tags_missed == 0 for run in runs)     # no door or gap assumed to be a node whose tag was missed

@@ -145,6 +145,12 @@ class TopologicalMap:
 
     def hallway_length_m(self, node: str, side: str) -> float:
         """Length of the mapped hallway leaving ``node`` by ``side`` (see the module docstring)."""
+        known = self.known_length_m(node, side)
+        return DEFAULT_LENGTH_M if known is None else known
+
+    def known_length_m(self, node: str, side: str) -> float | None:
+        """The hallway's ``length_m`` at either end, else the distance between its ends' positions; None when
+        the map gives neither (its length is not known)."""
         hallway = self.nodes[node].hallways[side]
         far_end = self.nodes[hallway.neighbour]
         mirror = far_end.hallways.get(_OPPOSITE[side])
@@ -154,7 +160,7 @@ class TopologicalMap:
         here, there = self.nodes[node].position, far_end.position
         if here is not None and there is not None:
             return math.dist(here, there)
-        return DEFAULT_LENGTH_M
+        return None
 
     def edges(self) -> list[Edge]:
         """Every hallway between two mapped nodes, once."""

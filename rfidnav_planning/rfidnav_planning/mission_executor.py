@@ -28,6 +28,13 @@ Beyond the paper (ours):
   if the assumption was wrong, counts a re-plan and plans from where the robot really is. Without an
   expectation (before the first tag, or after being lost) the robot follows on. Nodes on the route with no
   side opening give no junction event, so the expectation is the first node after them that does (or the goal).
+* An opening the map does not have (a door, a gap in a wall) looks like a junction to the wall follower. Fed
+  the odometry (:meth:`on_odometry`) and where the map knows the hallways' lengths, the executor takes a
+  junction centre (or a dead end's wall) for the expected node only once the robot has come within
+  EARLY_MARGIN of the distance to it (from the tag read, or the junction centre, that set the expectation);
+  a junction well before that is an opening not on the map, followed straight on. The margin allows for map
+  lengths taken between node positions (junction widths, tags a little nearer or farther than
+  ``tag_to_node_m``) and for odometry drift, not for a floor's particular doors.
 * Off the route. Every tag plans again from its node, so a tag of an unexpected node (a missed turn, a wrong
   assumption) needs nothing special; it is counted as a re-plan when an expectation existed and was wrong.
 * ``no_opening``: the junction cannot be left the way decided, so it is taken to be an opening the map does
@@ -47,6 +54,7 @@ Tags are read many times while the robot passes; a repeat of the last tag before
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterable
 from dataclasses import dataclass, field, replace
 
@@ -57,6 +65,8 @@ TURNS = (LEFT, RIGHT, STRAIGHT, BACK)                 # the actions WallFollower
 JUNCTION_ENTERED, JUNCTION_CENTRE, TURN_DONE = "junction_entered", "junction_centre", "turn_done"
 NO_OPENING, OBSTACLE = "no_opening", "obstacle"
 EVENTS = (JUNCTION_ENTERED, JUNCTION_CENTRE, TURN_DONE, NO_OPENING, OBSTACLE)
+# A junction is the expected node only within max(metres, fraction of the distance) short of it (see above).
+EARLY_MARGIN = (1.0, 0.10)
 
 
 @dataclass(frozen=True)
@@ -109,6 +119,8 @@ class MissionState:
     outcome: Decision | None = None
     last_read: str | None = None            # the last tag id the reader reported (see on_reads)
     stop_commanded: bool = False
+    leg_from_m: float = 0.0                 # odometry distance where the expectation was set
+    leg_expected_m: float | None = None     # ... and the map's distance from there to the expected node
 
 
 class MissionExecutor:
@@ -124,6 +136,8 @@ class MissionExecutor:
         self.learned: tuple[LearnedEdge, ...] = ()
         self.explored: set[tuple[str, str]] = set()   # ? sides tried without learning them
         self.state: MissionState | None = None
+        self.odometry_m: float | None = None          # distance driven by odometry, once on_odometry is fed
+        self.last_odometry: tuple[float, float] | None = None
 
     # ---------------------------------------------------------------------------------------- inputs
     def start(self, goal_node: str) -> Decision:
@@ -160,6 +174,12 @@ class MissionExecutor:
         decision = self._arrive(node, side, f"tag {tag}", at_centre=False)
         state.awaiting = decision.action if decision.action in (LEFT, RIGHT, STRAIGHT) else None
         return decision
+
+    def on_odometry(self, x: float, y: float) -> None:
+        """The odometry position (any fixed frame): the distance driven adds up between calls."""
+        if self.last_odometry is not None:
+            self.odometry_m = (self.odometry_m or 0.0) + math.dist(self.last_odometry, (x, y))
+        self.last_odometry = (x, y)
 
     def on_reads(self, tag_ids: Iterable[str | int]) -> list[Decision]:
         """One inventory round's tag ids: a reader reports a tag every round while it is in reach, so only a tag
@@ -200,6 +220,9 @@ class MissionExecutor:
         if event == NO_OPENING:
             return self._no_opening()
         if event == OBSTACLE and self.recover_missed_tags and state.awaiting is None and self._dead_end_expected():
+            early = self._too_early()
+            if early:
+                return Decision(FOLLOW, message=f"a wall {early}")
             return self._assume_arrival("missed tag, assumed by the route at the dead end's wall")
         return Decision(FOLLOW)
 
@@ -224,7 +247,36 @@ class MissionExecutor:
                                             "the hallway stays unexplored")
         if state.expected_node is None or not self.recover_missed_tags:
             return Decision(FOLLOW, message="junction without a tag read and no expectation: following on")
+        early = self._too_early()
+        if early:
+            return Decision(FOLLOW, message=f"a junction {early}")
         return self._assume_arrival("missed tag, assumed by the route")
+
+    def _too_early(self) -> str:
+        """Why the junction (or wall) just met cannot be the expected node, or "" when it can be: fewer metres
+        driven since the expectation was set than the map's distance to it, less the margin."""
+        state = self._mission()
+        if self.odometry_m is None or state.leg_expected_m is None:
+            return ""
+        driven = self.odometry_m - state.leg_from_m
+        margin = max(EARLY_MARGIN[0], EARLY_MARGIN[1] * state.leg_expected_m)
+        if driven >= state.leg_expected_m - margin:
+            return ""
+        return (f"after {driven:.1f} m of the {state.leg_expected_m:.1f} m to '{state.expected_node}': an opening "
+                "not on the map, followed on")
+
+    def _leg_length(self, node: str, departure: str, at_centre: bool) -> float | None:
+        """The map's distance from where the robot is (at ``node``'s centre, or at its tag ``tag_to_node_m``
+        before it) to the expected node, leaving by ``departure`` through the nodes passed; None if a length
+        is not known."""
+        state = self._mission()
+        if state.expected_node == UNKNOWN:
+            return None
+        legs = [(node, departure), *((passed, opposite(side)) for passed, side in state.passing)]
+        lengths = [self.map.known_length_m(*leg) for leg in legs]
+        if any(length is None for length in lengths):
+            return None
+        return (0.0 if at_centre else self.map.tag_to_node_m) + sum(length for length in lengths if length is not None)
 
     def _assume_arrival(self, how: str) -> Decision:
         """A tag was missed: the robot is where the route leads next (the nodes passed on the way are visited)."""
@@ -278,6 +330,8 @@ class MissionExecutor:
             goes = f"exploring the '{UNKNOWN}' hallway {departure}"
         else:
             state.expected_node, state.expected_side, state.passing = self._next_sensed(node, departure)
+            state.leg_from_m = self.odometry_m or 0.0
+            state.leg_expected_m = self._leg_length(node, departure, at_centre)
             goes = f"for '{state.expected_node}'"
         message = f"{how}: at '{node}' from {side}; {action}, leaving {departure} {goes}"
         if action == STRAIGHT and not opening:

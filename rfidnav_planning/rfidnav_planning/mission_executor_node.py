@@ -3,17 +3,19 @@ tags read on /rfid/reads and the wall follower's events, and commanding the foll
 
 A thin adapter around rfidnav_planning.mission_executor.MissionExecutor, glued to the follower exactly as the
 in-process runner glues the two cores: each inventory round's tag ids go to ``on_reads``, each follower event to
-``on_junction``, each decision's ``follower_command`` to the follower; the goal ends with the follower's
-``stopped`` (the executor's stop, driven on to the node) or at once when the executor gives up. What the executor
-learns of ``?`` hallways is kept for later goals. A goal is refused for a node not in the map, while another goal
-runs, or while no wall follower listens on /wall_follower/command. A follower that says it is idle
-(/wall_follower/state) while a mission runs did not hear its command (it restarted, or its subscription matched
-after the command went out): it is told again to follow, with the turn waiting for the next junction. One goal at
-a time and cancel: rfidnav_common.goal_server.
+``on_junction`` (the odometry pose each event and state carries to ``on_odometry``, for the distance driven), each
+decision's ``follower_command`` to the follower; the goal ends with the follower's ``stopped`` (the executor's
+stop, driven on to the node) or at once when the executor gives up. What the executor learns of ``?`` hallways is
+kept for later goals. A goal is refused for a node not in the map, while another goal runs, or while no wall
+follower listens on /wall_follower/command. A follower that says it is idle (/wall_follower/state) while a mission
+runs did not hear its command (it restarted, or its subscription matched after the command went out): it is told
+again to follow, with the turn waiting for the next junction. One goal at a time and cancel:
+rfidnav_common.goal_server.
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Any
 
@@ -84,6 +86,7 @@ class MissionExecutorNode(Node):
             self.apply(decision)
 
     def on_event(self, msg: WallFollowerEvent) -> None:
+        self.feed_odometry(msg)
         if self.goals.running is None:
             return
         if msg.event == STOPPED:
@@ -123,7 +126,15 @@ class MissionExecutorNode(Node):
             last_tag=mission.last_tag or "", next_action=goal.next_action,
             tags_missed=mission.tags_missed, replans=mission.replans))
 
+    def feed_odometry(self, msg: WallFollowerEvent) -> None:
+        """The follower's odometry pose, which it reports with every event and state, for the distance driven
+        (an idle follower may have none yet: its pose is left out)."""
+        pose = msg.odom_pose
+        if msg.state != IDLE and math.isfinite(pose.x) and math.isfinite(pose.y):
+            self.executor_core.on_odometry(pose.x, pose.y)
+
     def on_follower_state(self, msg: WallFollowerEvent) -> None:
+        self.feed_odometry(msg)
         if self.goals.running is None or msg.state != IDLE:
             return
         if self.executor_core.state.stop_commanded:

@@ -82,6 +82,9 @@ class DiffDriveBase:
         self.walls = np.zeros((0, 4)) if walls is None else np.asarray(walls, dtype=float).reshape(-1, 4)
         self.bumpers = ConditionTracker()
         self.bumps = 0                  # presses so far (either bumper)
+        # How far the base may move before a wall could be within CONTACT_MARGIN_M of its footprint: the distance
+        # to the walls changes by no more than the distance moved, so until then no wall needs looking at.
+        self.clearance_m = 0.0
         self.drift = drift
         self.rng = rng
         self.truth = Pose2D(start.x, start.y, start.yaw)
@@ -116,45 +119,47 @@ class DiffDriveBase:
             targets = tuple(t * limits.max_wheel_speed_mps / peak for t in targets)
         max_change = limits.max_wheel_accel_mps2 * dt
         left_before, right_before = self.left_speed, self.right_speed
-        self.left_speed += float(np.clip(targets[0] - self.left_speed, -max_change, max_change))
-        self.right_speed += float(np.clip(targets[1] - self.right_speed, -max_change, max_change))
+        self.left_speed += min(max(targets[0] - self.left_speed, -max_change), max_change)
+        self.right_speed += min(max(targets[1] - self.right_speed, -max_change), max_change)
         left_m = 0.5 * (left_before + self.left_speed) * dt
         right_m = 0.5 * (right_before + self.right_speed) * dt
         before = Pose2D(self.truth.x, self.truth.y, self.truth.yaw)
         self.truth.advance(left_m, right_m, limits.track_width_m)
-        if self.into_wall(before):
-            # The wheels stall against the wall: the step is not made, and the encoders do not count it.
-            self.truth, self.left_speed, self.right_speed = before, 0.0, 0.0
-            return self.update_bumpers()
+        events: list[BaseEventRecord] = []
+        moved = math.hypot(self.truth.x - before.x, self.truth.y - before.y)
+        if len(self.walls) and (self.bumpers.bumped or moved >= self.clearance_m):
+            distance, point = self.wall_distance(self.truth)
+            if distance < limits.footprint_radius_m and distance < self.wall_distance(before)[0]:
+                # The wheels stall against the wall: the step is not made, and the encoders do not count it.
+                self.truth, self.left_speed, self.right_speed = before, 0.0, 0.0
+                distance, point = self.wall_distance(before)
+                left_m = right_m = 0.0
+            self.clearance_m = distance - limits.footprint_radius_m - CONTACT_MARGIN_M
+            events = self.update_bumpers(distance, point)
+        else:
+            self.clearance_m -= moved
         self.distance_travelled_m += abs(0.5 * (left_m + right_m))
         drift = self.drift
         slip = self.rng.normal(0.0, drift.slip_std, 2) if drift.slip_std > 0.0 else (0.0, 0.0)
         self.odom.advance(left_m * (1.0 + drift.left_scale_error + slip[0]),
                           right_m * (1.0 + drift.right_scale_error + slip[1]),
                           limits.track_width_m * (1.0 + drift.track_scale_error))
-        return self.update_bumpers()
+        return events
 
     def wall_distance(self, pose: Pose2D) -> tuple[float, np.ndarray]:
         return nearest_on_segments((pose.x, pose.y), self.walls)
 
-    def into_wall(self, before: Pose2D) -> bool:
-        """Whether the step from ``before`` to the current true pose moved the footprint into a wall (moving
-        away from one it already overlaps is allowed: that is how a robot placed too close gets free)."""
-        if not len(self.walls):
-            return False
-        after, _ = self.wall_distance(self.truth)
-        return after < self.limits.footprint_radius_m and after < self.wall_distance(before)[0]
-
-    def update_bumpers(self) -> list[BaseEventRecord]:
+    def update_bumpers(self, distance: float, point: np.ndarray) -> list[BaseEventRecord]:
+        """The bumpers' edges with the nearest wall ``distance`` away at ``point``: pressed where it touches the
+        front half (moving away from a wall the base already overlaps is allowed: that is how a robot placed
+        too close gets free)."""
         pressed = dict.fromkeys(CONDITIONS, False)
-        if len(self.walls):
-            distance, point = self.wall_distance(self.truth)
-            if distance <= self.limits.footprint_radius_m + CONTACT_MARGIN_M:
-                bearing = math.remainder(math.atan2(point[1] - self.truth.y, point[0] - self.truth.x)
-                                         - self.truth.yaw, 2.0 * math.pi)
-                if abs(bearing) < math.pi / 2.0:          # the bumper covers the front half
-                    pressed[BUMP_LEFT] = bearing > -BOTH_BUMPERS_RAD
-                    pressed[BUMP_RIGHT] = bearing < BOTH_BUMPERS_RAD
+        if distance <= self.limits.footprint_radius_m + CONTACT_MARGIN_M:
+            bearing = math.remainder(math.atan2(point[1] - self.truth.y, point[0] - self.truth.x)
+                                     - self.truth.yaw, 2.0 * math.pi)
+            if abs(bearing) < math.pi / 2.0:          # the bumper covers the front half
+                pressed[BUMP_LEFT] = bearing > -BOTH_BUMPERS_RAD
+                pressed[BUMP_RIGHT] = bearing < BOTH_BUMPERS_RAD
         events = self.bumpers.events(pressed)
         if any(event.active for event in events):
             # The Create driver stops the base on a press; a new command is needed to move again.

@@ -17,6 +17,7 @@ from rfidnav_common.seeding import rng_for
 from rfidnav_sim.compass_model import CompassModel
 from rfidnav_sim.kinematics import BaseLimits, DiffDriveBase, OdometryDrift, Pose2D
 from rfidnav_sim.rfid_model import Antenna, ReaderModel
+from rfidnav_sim.sonar_model import PAPER_LAYOUT, SonarModel
 
 
 @dataclass(frozen=True)
@@ -189,10 +190,20 @@ class SonarParameters:
     noise_sd_m: float = param("range noise, constant part [m]", 0.01)
     noise_fraction: float = param("range noise, part proportional to the range", 0.01)
     rays_per_beam: int = param("rays spread over each 25-degree cone; the nearest echo is reported", 5)
+    specular_angle_deg: float = param("specular loss: a ray meeting a wall further than this from the wall's "
+                                      "normal reflects away and gives no echo; 90 = every wall echoes [deg]", 90.0)
+
+    def model(self, walls: np.ndarray) -> SonarModel:
+        """paper 004's seven rangefinders among ``walls`` with these settings: the model sonar_sim fires and the
+        in-process runner fires alike."""
+        return SonarModel(PAPER_LAYOUT, walls, self.noise_sd_m, self.noise_fraction, self.rays_per_beam,
+                          math.radians(self.specular_angle_deg))
 
     def validate(self) -> None:
         if not self.world_file:
             raise ParameterError("world_file", "required (the world YAML whose walls echo)")
+        if not (math.isfinite(self.specular_angle_deg) and 0.0 < self.specular_angle_deg <= 90.0):
+            raise ParameterError("specular_angle_deg", f"must be in (0, 90], got {self.specular_angle_deg}")
         if not (math.isfinite(self.rate_hz) and self.rate_hz > 0.0):
             raise ParameterError("rate_hz", f"must be positive, got {self.rate_hz}")
         for name in ("noise_sd_m", "noise_fraction"):

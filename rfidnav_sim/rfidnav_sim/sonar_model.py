@@ -2,9 +2,11 @@
 
 A sonar sends a burst into a cone and times the first echo, so a beam reports the nearest wall anywhere in its
 cone, not the wall straight ahead: that is why a beam is cast as ``rays_per_beam`` rays spread evenly over the
-cone, edges included, and the shortest wins. Specular loss (a wall hit at a grazing angle that reflects the
-burst away and gives no echo) and multipath are not modelled: the model errs towards seeing walls, which keeps
-the wall follower's emergency stops conservative.
+cone, edges included, and the shortest wins. Specular loss: a smooth wall reflects a burst that meets it far from
+its normal away from the transducer (Leonard & Durrant-Whyte's "regions of constant depth"), so a ray whose first
+wall it meets more than ``specular_angle_rad`` off that wall's normal gives no echo (it does not pass through to a
+farther wall); a beam all of whose rays are lost reads nothing, +inf. Multipath (the lost burst's echo from a
+second wall, a range too long) is not modelled.
 
 Readings follow sensor_msgs/Range: an echo beyond ``max_range_m`` (or none) is +inf, "no detection within
 range" (REP 117); an echo closer than ``min_range_m`` is reported as ``min_range_m``, as a sonar's blanking
@@ -74,9 +76,12 @@ def centre_offsets(layout: tuple[Rangefinder, ...] = PAPER_LAYOUT) -> dict[str, 
             for r in layout}
 
 
-def cast_rays(origins: np.ndarray, directions: np.ndarray, walls: np.ndarray) -> np.ndarray:
+def cast_rays(origins: np.ndarray, directions: np.ndarray, walls: np.ndarray,
+              specular_angle_rad: float = math.pi / 2.0) -> np.ndarray:
     """Distance along each ray (K origins, K unit directions, K x 2 each) to the nearest wall (N x 4 rows
-    x1, y1, x2, y2) it hits, inf where it hits none; distances are in multiples of the directions' lengths.
+    x1, y1, x2, y2) it hits, inf where it hits none, or where it meets that wall more than
+    ``specular_angle_rad`` from the wall's normal (the unit direction's |d x w| / |w| is the cosine of that
+    angle); distances are in multiples of the directions' lengths.
 
     Ray o + t d meets wall a + s (b - a) where t = ((a - o) x w) / (d x w) and s = ((a - o) x d) / (d x w), w = b - a;
     a hit needs t >= 0 and 0 <= s <= 1 (a wall's ends belong to it, so a ray through the joint of two walls
@@ -100,14 +105,22 @@ def cast_rays(origins: np.ndarray, directions: np.ndarray, walls: np.ndarray) ->
     t = (wx * oy - wy * ox) / safe                                            # (a - o) x w / (d x w)
     s = (dx * oy - dy * ox) / safe                                            # (a - o) x d / (d x w)
     hit = ~parallel & (t >= -ON_WALL_TOLERANCE_M) & (s >= 0.0) & (s <= 1.0)
-    return np.where(hit, np.maximum(t, 0.0), np.inf).min(axis=1)
+    distances = np.where(hit, np.maximum(t, 0.0), np.inf)
+    if specular_angle_rad >= math.pi / 2.0:
+        return distances.min(axis=1)
+    nearest = distances.argmin(axis=1)
+    rows = np.arange(len(origins))
+    cos_incidence = np.abs(denominator[rows, nearest]) / np.hypot(wx, wy)[nearest]
+    echoes = cos_incidence >= math.cos(specular_angle_rad)
+    return np.where(echoes, distances[rows, nearest], np.inf)
 
 
 class SonarModel:
     """Readings of a set of rangefinders on a robot among fixed walls."""
 
     def __init__(self, rangefinders: Sequence[Rangefinder], walls: np.ndarray, noise_sd_m: float = 0.01,
-                 noise_fraction: float = 0.01, rays_per_beam: int = 5) -> None:
+                 noise_fraction: float = 0.01, rays_per_beam: int = 5,
+                 specular_angle_rad: float = math.pi / 2.0) -> None:
         names = [r.name for r in rangefinders]
         if len(set(names)) != len(names):
             raise ValueError(f"rangefinders: names must be unique, got {names}")
@@ -116,6 +129,8 @@ class SonarModel:
                 raise ValueError(f"{field}: {value} is not a finite non-negative number")
         if rays_per_beam < 1:
             raise ValueError(f"rays_per_beam: {rays_per_beam} must be at least 1")
+        if not 0.0 < specular_angle_rad <= math.pi / 2.0:
+            raise ValueError(f"specular_angle_rad: {specular_angle_rad} is not in (0, pi/2]")
         walls = np.asarray(walls, dtype=float)
         if walls.size == 0:
             walls = walls.reshape(0, 4)
@@ -126,6 +141,7 @@ class SonarModel:
         self.noise_sd_m = noise_sd_m
         self.noise_fraction = noise_fraction
         self.rays_per_beam = rays_per_beam
+        self.specular_angle_rad = specular_angle_rad
         # Every ray of every beam, beam-major (K = beams x rays_per_beam): base_link origin and bearing.
         spread = np.linspace(-1.0, 1.0, rays_per_beam) if rays_per_beam > 1 else np.zeros(1)
         self.ray_origins = np.repeat(np.array([r.position for r in self.rangefinders], dtype=float).reshape(-1, 2),
@@ -141,7 +157,8 @@ class SonarModel:
         local = self.ray_origins
         origins = np.column_stack((x + c * local[:, 0] - s * local[:, 1], y + s * local[:, 0] + c * local[:, 1]))
         bearings = yaw + self.ray_bearings
-        distances = cast_rays(origins, np.column_stack((np.cos(bearings), np.sin(bearings))), self.walls)
+        distances = cast_rays(origins, np.column_stack((np.cos(bearings), np.sin(bearings))), self.walls,
+                              self.specular_angle_rad)
         return distances.reshape(len(self.rangefinders), self.rays_per_beam).min(axis=1)
 
     def ranges(self, x: float, y: float, yaw: float, rng: np.random.Generator) -> dict[str, float]:

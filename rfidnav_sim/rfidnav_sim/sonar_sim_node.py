@@ -17,7 +17,7 @@ from rfidnav_common.ros import SENSOR_QOS, declare_parameters, odometry_pose, ru
 from rfidnav_common.seeding import rng_for
 from rfidnav_sim.parameters import SonarParameters
 from rfidnav_sim.schedule import GroundTruthSchedule
-from rfidnav_sim.sonar_model import PAPER_LAYOUT, SonarModel
+from rfidnav_sim.sonar_model import PAPER_LAYOUT
 from rfidnav_sim.world import load_world
 
 
@@ -26,8 +26,7 @@ class SonarSimNode(Node):
         super().__init__("sonar_sim", **node_options)
         self.params: SonarParameters = declare_parameters(self, SonarParameters)
         world = load_world(self.params.world_file)
-        self.model = SonarModel(PAPER_LAYOUT, world.wall_segments(),
-                                self.params.noise_sd_m, self.params.noise_fraction, self.params.rays_per_beam)
+        self.model = self.params.model(world.wall_segments())
         self.rng = rng_for(self.params.seed, "sonar_sim")
         self.schedule = GroundTruthSchedule(1.0 / self.params.rate_hz)
         self.publishers_by_name = {r.name: self.create_publisher(Range, f"/sonar/{r.name}", SENSOR_QOS)

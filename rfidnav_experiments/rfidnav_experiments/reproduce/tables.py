@@ -12,7 +12,7 @@ import time
 from collections.abc import Callable, Hashable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
 import matplotlib
 
@@ -20,6 +20,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 from scipy import stats  # noqa: E402
 
+Key = TypeVar("Key", bound=Hashable)   # what pairs two methods' values: a seed, a placement, a mission
 WORKERS = 2                             # the target machine has two cores
 
 
@@ -107,7 +108,7 @@ class Interval:
         return f"{self.mean * scale:.{digits}f}{width} (n={self.n})"
 
 
-def paired_interval(ours: Mapping[Hashable, float | None], baseline: Mapping[Hashable, float | None]) -> Interval:
+def paired_interval(ours: Mapping[Key, float | None], baseline: Mapping[Key, float | None]) -> Interval:
     """The mean of ``ours - baseline`` over the keys (seeds, placements) where both have a value."""
     differences = []
     for key, value in ours.items():

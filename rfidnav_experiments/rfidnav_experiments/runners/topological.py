@@ -1,21 +1,30 @@
-"""In-process topological navigation (paper 004): the mission executor and the sonar wall follower driving an
-idealised robot through a simulated building, for the paper's run and statistics.
+"""In-process topological navigation (paper 004): the mission executor and the sonar wall follower driving the
+simulated base through a simulated building, for the paper's run and statistics.
 
-The robot is a unicycle stepped at ``step_s`` with the wall follower's (linear, angular) command (no motor
-dynamics; odometry is the true pose). Every step the sonar model's ranges (one per transducer, measured from
-where it is mounted) are turned into distances from the robot's centre, as the follower expects, by adding
-the offsets of the shipped wall_follower parameters, as the node does; the wall-tag reader (default induction
+The robot is the base robot_sim steps (shipped config/params/robot_sim.yaml: wheel speed and acceleration limits,
+drifting wheel odometry, walls as obstacles with the bumper), stepped at its ``step_s`` under the wall
+follower's (linear, angular) command, which the follower computes at its control rate from the sonar and the
+ODOMETRY pose, as over DDS. Every control step the sonar model's ranges (shipped sonar_sim.yaml: noise,
+specular loss; one per transducer, measured from where it is mounted) are turned into distances from the
+robot's centre, as the follower expects, by adding the offsets of the shipped wall_follower parameters, as the
+node does; the wall-tag reader (default induction
 area: antenna at the centre, facing left, 40 x 100 cm) reads with the given miss probability, decided once per
 tag PASSAGE (the paper's read failure: a tag not read while the robot passes it) when the tag comes into reach,
 and drawn anew once it has left reach (per inventory round a tag in reach for ~40 rounds would practically never
 be missed). Each round's reads go to ``MissionExecutor.on_reads``, the follower's events to ``on_junction``, and the
 decisions' ``follower_command`` to the follower (``command_turn``, ``command_stop``); the mission ends with the
-follower's ``stopped``. The mission_executor and wall_follower nodes do the same over DDS. Walls only reflect
-sonar: a robot driving into one is not stopped by the simulation (the follower's emergency stop is all there is).
+follower's ``stopped``. The mission_executor and wall_follower nodes do the same over DDS. A robot that drives
+into a wall stalls there with its bumper pressed (counted in ``MissionRun.bumps``) until it turns free.
+
+Missions start where a robot would be put down: ``before_m`` before one of the floor's wall tags, at the
+follower's set distance from the wall the tag is on, heading along it — taken from the world (the simulator's
+ground truth, which the navigation never sees), so a floor whose corridors are not the map's grid places the
+robot in its corridor all the same.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -24,7 +33,7 @@ import numpy as np
 
 from rfidnav_bringup.metrics import GOAL_RADIUS_M, topological_shortest_m
 from rfidnav_bringup.scenario import CONFIG_DIR
-from rfidnav_common.topological_map import UNKNOWN, TopologicalMap, load_topological_map, opposite
+from rfidnav_common.topological_map import UNKNOWN, TopologicalMap, load_topological_map
 from rfidnav_control.parameters import SONAR_FIELDS, WallFollowerParameters
 from rfidnav_control.wall_following import (
     JUNCTION_CENTRE,
@@ -39,8 +48,7 @@ from rfidnav_control.wall_following import (
 )
 from rfidnav_experiments.runners.shipped import shipped_parameters
 from rfidnav_planning.mission_executor import STOP, TURNS, Decision, MissionExecutor
-from rfidnav_sim.kinematics import unicycle_step
-from rfidnav_sim.sonar_model import PAPER_LAYOUT, SonarModel
+from rfidnav_sim.parameters import RobotSimParameters, SonarParameters
 from rfidnav_sim.wall_tag_model import InductionArea, WallTagReader
 from rfidnav_sim.world import World, load_world
 
@@ -49,7 +57,12 @@ FIG5_MAP = CONFIG_DIR / "maps" / "building_fig5.yaml"
 FIG5_WORLD = CONFIG_DIR / "worlds" / "building_fig5.yaml"
 LARGE_MAP = CONFIG_DIR / "maps" / "building_large.yaml"
 LARGE_WORLD = CONFIG_DIR / "worlds" / "building_large.yaml"
+EVAL_MAP = CONFIG_DIR / "maps" / "building_eval.yaml"
+EVAL_WORLD = CONFIG_DIR / "worlds" / "building_eval.yaml"
 FOLLOWER = shipped_parameters(WallFollowerParameters, "wall_follower")   # its sonar topics, offsets, settings
+ROBOT = shipped_parameters(RobotSimParameters, "robot_sim", world_file="-")   # the base: limits, odometry drift
+SONAR = shipped_parameters(SonarParameters, "sonar_sim", world_file="-")     # noise, rays, specular loss
+START_BEFORE_TAG_M = 1.2                # a mission starts this far before its first tag
 
 
 @dataclass(frozen=True)
@@ -65,6 +78,7 @@ class MissionRun:
     final_position: tuple[float, float]
     turns: tuple[tuple[str, str], ...] = ()   # (node, turn) made at junction centres, and U-turns, in order
     first_node: str | None = None
+    bumps: int = 0                         # times the base's bumper was pressed against a wall
 
 
 def follower_offsets(parameters: WallFollowerParameters = FOLLOWER) -> dict[str, float]:
@@ -82,40 +96,35 @@ def centre_sonar(ranges: dict[str, float], offsets: dict[str, float],
     return Sonar(**{field: ranges[name] + offsets[name] for field, name in zip(SONAR_FIELDS, names)})
 
 
-def start_pose_for(topological_map: TopologicalMap, tag_id: str | int,
-                   before_m: float = 3.0, wall_distance_m: float = 0.8,
-                   hallway_width_m: float = 1.6) -> tuple[float, float, float]:
-    """A pose ``before_m`` before the node of ``tag_id`` (its centre, along the hallway the tag is read in),
-    ``wall_distance_m`` from the left wall, heading towards the node: the robot then reads the tag before the
-    junction. The hallway's centre line is taken to run through the node's position."""
-    located = topological_map.locate_tag(tag_id)
-    if located is None:
-        raise ValueError(f"tag '{tag_id}' is not in map '{topological_map.name}'")
-    node, arrival_side = located
-    position = topological_map.nodes[node].position
-    if position is None:
-        raise ValueError(f"node '{node}' of map '{topological_map.name}' has no position")
-    back = topological_map.direction_angle_rad(arrival_side)        # from the node into the arrival hallway
-    heading = topological_map.direction_angle_rad(opposite(arrival_side))
-    # The left wall is at +90 deg from the heading, half a hallway off the centre line.
-    lateral = hallway_width_m / 2.0 - wall_distance_m                # towards the left wall
-    x = position[0] + before_m * math.cos(back) + lateral * math.cos(heading + math.pi / 2.0)
-    y = position[1] + before_m * math.sin(back) + lateral * math.sin(heading + math.pi / 2.0)
-    return (x, y, heading)
+def start_pose_before_tag(world: World, tag_id: str, before_m: float = START_BEFORE_TAG_M,
+                          wall_distance_m: float = FOLLOWER.wall_distance_m) -> tuple[float, float, float]:
+    """A pose ``before_m`` before wall tag ``tag_id``, ``wall_distance_m`` out from its wall, heading so that the
+    wall is on the left (tags are on the arriving robot's left wall): the robot then reads the tag first."""
+    tag = next((tag for tag in world.wall_tags if tag.tag_id == tag_id), None)
+    if tag is None:
+        raise ValueError(f"tag '{tag_id}' is not on a wall of world '{world.name}'")
+    heading = math.atan2(tag.normal[1], tag.normal[0]) + math.pi / 2.0     # the normal points to the robot's right
+    x = tag.position[0] + wall_distance_m * tag.normal[0] - before_m * math.cos(heading)
+    y = tag.position[1] + wall_distance_m * tag.normal[1] - before_m * math.sin(heading)
+    return (x, y, math.remainder(heading, 2.0 * math.pi))
 
 
 def run_mission(world: World, topological_map: TopologicalMap, start_pose: tuple[float, float, float],
-                goal_node: str, rng: np.random.Generator, miss_probability: float = 0.0, step_s: float = 0.05,
+                goal_node: str, rng: np.random.Generator, miss_probability: float = 0.0,
                 max_time_s: float = 900.0, settings: WallFollowerSettings = FOLLOWER.settings(),
-                weight: str = "length", recover_missed_tags: bool = True) -> MissionRun:
-    sonar_model = SonarModel(PAPER_LAYOUT, world.wall_segments())
+                weight: str = "length", recover_missed_tags: bool = True, robot: RobotSimParameters = ROBOT,
+                sonar: SonarParameters = SONAR) -> MissionRun:
+    walls = world.wall_segments()
+    sonar_model = sonar.model(walls)
     offsets = follower_offsets()
     reader = WallTagReader(InductionArea(), world.wall_tags, passage_miss_probability=miss_probability)
     follower = WallFollower(settings)
     executor = MissionExecutor(topological_map, weight, recover_missed_tags)
     executor.start(goal_node)
     x, y, yaw = start_pose
-    path = 0.0
+    base = dataclasses.replace(robot, start_x=x, start_y=y, start_yaw_deg=math.degrees(yaw),
+                               seed=int(rng.integers(2**31))).base(walls)
+    steps_per_control = max(1, round(1.0 / (FOLLOWER.control_rate_hz * robot.step_s)))
     t = 0.0
     turns: list[tuple[str, str]] = []
     message = "timeout"
@@ -135,21 +144,24 @@ def run_mission(world: World, topological_map: TopologicalMap, start_pose: tuple
         else:
             follower.command_turn(command.action)
 
-    for _ in range(int(round(max_time_s / step_s))):
-        for decision in executor.on_reads(reader.read(x, y, yaw, rng)):
+    for _ in range(int(round(max_time_s * FOLLOWER.control_rate_hz))):
+        truth, odom = base.truth, base.odom
+        executor.on_odometry(odom.x, odom.y)
+        for decision in executor.on_reads(reader.read(truth.x, truth.y, truth.yaw, rng)):
             apply(decision, False)
-        command = follower.step(centre_sonar(sonar_model.ranges(x, y, yaw, rng), offsets), OdomPose(x, y, yaw))
+        command = follower.step(centre_sonar(sonar_model.ranges(truth.x, truth.y, truth.yaw, rng), offsets),
+                                OdomPose(odom.x, odom.y, odom.yaw))
         if command.event == STOPPED:
             finished = True
             break
         if command.event in FOLLOWER_EVENTS:
             apply(executor.on_junction(command.event), True)
-        dx, dy, dyaw = unicycle_step(yaw, command.linear, command.angular, step_s)
-        x, y = x + dx, y + dy
-        yaw = math.atan2(math.sin(yaw + dyaw), math.cos(yaw + dyaw))
-        path += math.hypot(dx, dy)
-        t += step_s
+        for _ in range(steps_per_control):
+            base.set_command(command.linear, command.angular)
+            base.step(robot.step_s)
+        t += steps_per_control * robot.step_s
 
+    x, y = base.truth.x, base.truth.y
     state = executor.state
     outcome = state.outcome
     first_node = state.nodes_visited[0] if state.nodes_visited else None
@@ -163,33 +175,60 @@ def run_mission(world: World, topological_map: TopologicalMap, start_pose: tuple
     # On the map as learned by the end: a goal reached through an explored "?" hallway has a route.
     shortest = (topological_shortest_m(executor.map, start_pose[:2], *state.first_arrival, goal_node)
                 if state.first_arrival is not None else math.nan)
-    return MissionRun(success, message, path, shortest, state.tags_missed, state.replans,
-                      tuple(state.nodes_visited), t, (x, y), tuple(turns), first_node)
+    return MissionRun(success, message, base.distance_travelled_m, shortest, state.tags_missed, state.replans,
+                      tuple(state.nodes_visited), t, (x, y), tuple(turns), first_node, base.bumps)
 
 
-def paper_run(rng: np.random.Generator, miss_probability: float = 0.0) -> MissionRun:
+@dataclass(frozen=True)
+class Method:
+    """How the mission executor routes and what it does about a junction passed without its tag."""
+    weight: str                            # "edges": fewest hallways (all the paper's robot knows); "length"
+    recover_missed_tags: bool              # False: the paper's loop (follow on until the next tag)
+
+
+METHODS = {"paper": Method("edges", False), "ours": Method("length", True)}
+
+
+@dataclass(frozen=True)
+class Floor:
+    """A floor to run missions on: what the robot knows (the map) and the simulator's ground truth (the world)."""
+    map_path: Path
+    world_path: Path
+
+
+FLOORS = {"building_large": Floor(LARGE_MAP, LARGE_WORLD), "building_eval": Floor(EVAL_MAP, EVAL_WORLD)}
+
+
+def paper_run(rng: np.random.Generator, miss_probability: float = 0.0, method: Method = METHODS["ours"]) \
+        -> MissionRun:
     """Paper 004 section 5: from before tag 23 (arriving at h from the West) to g (tag 19), a right turn at h."""
-    topological_map = load_topological_map(FIG5_MAP)
-    return run_mission(load_world(FIG5_WORLD), topological_map, start_pose_for(topological_map, "23"), "g", rng,
-                       miss_probability)
+    return run_mission(load_world(FIG5_WORLD), load_topological_map(FIG5_MAP),
+                       start_pose_before_tag(load_world(FIG5_WORLD), "23"), "g", rng, miss_probability,
+                       weight=method.weight, recover_missed_tags=method.recover_missed_tags)
 
 
-def random_missions(count: int, miss_probability: float, seed: int, map_path: Path = LARGE_MAP,
-                    world_path: Path = LARGE_WORLD, recover_missed_tags: bool = True) -> list[MissionRun]:
-    """``count`` missions on the large floor: a random start tag (on a mapped hallway) and a random goal node other
-    than the start tag's node, seeded; each mission gets its own generator."""
-    topological_map = load_topological_map(map_path)
-    world = load_world(world_path)
-    tags = sorted(tag for node in topological_map.nodes.values() for side, hallway in node.hallways.items()
+def mission_tasks(topological_map: TopologicalMap, count: int, seed: int) -> list[tuple[str, str]]:
+    """``count`` (start tag, goal node) pairs, seeded: a tag on a mapped hallway and a node other than the tag's."""
+    tags = sorted(tag for node in topological_map.nodes.values() for hallway in node.hallways.values()
                   if hallway.neighbour != UNKNOWN for tag in hallway.tags)
     choose = np.random.default_rng([seed, 0])
-    runs = []
-    for index in range(count):
+    tasks = []
+    for _ in range(count):
         tag = tags[int(choose.integers(len(tags)))]
         start_node = topological_map.locate_tag(tag)[0]
         goals = [name for name in topological_map.nodes if name != start_node]
-        goal = goals[int(choose.integers(len(goals)))]
-        runs.append(run_mission(world, topological_map, start_pose_for(topological_map, tag), goal,
-                                np.random.default_rng([seed, index + 1]), miss_probability,
-                                recover_missed_tags=recover_missed_tags))
-    return runs
+        tasks.append((tag, goals[int(choose.integers(len(goals)))]))
+    return tasks
+
+
+def random_missions(count: int, miss_probability: float, seed: int, floor: Floor = FLOORS["building_large"],
+                    method: Method = METHODS["ours"], first: int = 0) -> list[MissionRun]:
+    """Missions ``first`` .. ``first + count - 1`` of the floor's seeded task list (so a pool can share them out),
+    each with its own generator: every method and miss rate meets the same starts, goals and sensor draws."""
+    topological_map = load_topological_map(floor.map_path)
+    world = load_world(floor.world_path)
+    tasks = mission_tasks(topological_map, first + count, seed)
+    return [run_mission(world, topological_map, start_pose_before_tag(world, tag), goal,
+                        np.random.default_rng([seed, index + 1]), miss_probability, weight=method.weight,
+                        recover_missed_tags=method.recover_missed_tags)
+            for index, (tag, goal) in enumerate(tasks) if index >= first]
