@@ -197,6 +197,34 @@ def test_a_missed_tag_keeps_the_routes_expectation(fig5: TopologicalMap) -> None
     assert executor.state.nodes_visited == ["g", "h", "f"]
 
 
+def test_with_odometry_a_junction_well_short_of_the_expected_node_is_an_opening_not_on_the_map(
+        fig5: TopologicalMap) -> None:
+    executor = MissionExecutor(fig5)
+    executor.start("f")
+    executor.on_odometry(0.0, 0.0)
+    assert executor.on_tag(20).action == LEFT                     # 2 m before g; h is 2 + 8 m on
+    executor.on_odometry(2.0, 0.0)
+    assert executor.on_junction(JUNCTION_CENTRE).action == LEFT   # g's centre: the turn the tag decided
+    executor.on_junction(TURN_DONE)
+    executor.on_odometry(2.0, 3.0)                                # 5 m of the 10: a door on the left
+    door = executor.on_junction(JUNCTION_CENTRE)
+    assert door.action == FOLLOW and "opening not on the map" in door.message
+    assert executor.state.tags_missed == 0 and executor.state.expected_node == "h"
+    executor.on_odometry(2.0, 7.2)                                # 9.2 m: within the 1 m margin of h
+    assumed = executor.on_junction(JUNCTION_CENTRE)
+    assert assumed.action == RIGHT and "missed" in assumed.message
+    assert executor.state.tags_missed == 1
+
+
+def test_without_odometry_every_junction_may_be_the_expected_node(fig5: TopologicalMap) -> None:
+    executor = MissionExecutor(fig5)
+    executor.start("f")
+    executor.on_tag(20)
+    executor.on_junction(JUNCTION_CENTRE)
+    executor.on_junction(TURN_DONE)
+    assert "missed" in executor.on_junction(JUNCTION_CENTRE).message
+
+
 def test_a_missed_goal_tag_stops_at_the_goal_junction(fig5: TopologicalMap) -> None:
     executor = MissionExecutor(fig5)
     executor.start("g")
