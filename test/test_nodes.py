@@ -24,8 +24,9 @@ from rfidnav_bag.player_node import PlayerNode
 from rfidnav_common.ros import COMMAND_QOS, SENSOR_QOS, time_msg
 from rfidnav_control.heading_controller_node import HeadingControllerNode
 from rfidnav_msgs.action import FollowTagRoute
-from rfidnav_msgs.msg import TagReadArray, TagReading
+from rfidnav_msgs.msg import BaseEvent, TagReadArray, TagReading
 from rfidnav_sim.rfid_reader_sim_node import RfidReaderSimNode
+from rfidnav_sim.robot_sim_node import RobotSimNode
 from support.graph import Graph, ground_truth
 from support.runs import WORKSPACE
 
@@ -231,6 +232,34 @@ def test_reader_sim_publishes_one_round_per_period_on_the_ground_truth_clock(gra
     mean = sum(differences) / len(differences)
     assert 0.25 < mean < 0.55, differences
     assert reader.get_name() == "rfid_reader_sim"
+
+
+# ---------------------------------------------------------------------------------------------- robot_sim
+
+def test_robot_sim_stops_at_a_wall_and_reports_the_bump_on_base_event(graph: Graph, tmp_path: Path) -> None:
+    world = tmp_path / "wall.yaml"
+    world.write_text("name: wall\ntags:\n  - {id: C1, position: [0.0, 0.0, 3.0]}\nwalls:\n  - [1.0, -2.0, 1.0, 2.0]\n")
+    graph.add(RobotSimNode(context=graph.context, parameter_overrides=[
+        Parameter("world_file", value=str(world)), Parameter("rtf", value=10.0)]))
+    events: list[BaseEvent] = []
+    truth: list[Odometry] = []
+    cmd_pub = graph.probe.create_publisher(Twist, "/cmd_vel", COMMAND_QOS)
+    graph.probe.create_subscription(BaseEvent, "/base/event", events.append, COMMAND_QOS)
+    graph.probe.create_subscription(Odometry, "/sim/ground_truth", truth.append, SENSOR_QOS)
+    graph.spin_until(lambda: cmd_pub.get_subscription_count() > 0 and truth, "robot_sim's topics")
+    forward = Twist()
+    forward.linear.x = 0.3
+
+    def pressed() -> bool:
+        cmd_pub.publish(forward)          # a controller's stream of commands: the bump must stop it all the same
+        return len({e.event for e in events if e.active}) == 2
+
+    graph.spin_until(pressed, "both bumpers pressed on /base/event (the wall is straight ahead)")
+    assert {(e.event, e.action) for e in events if e.active} == {("bump_left", "forward_blocked"),
+                                                                 ("bump_right", "forward_blocked")}
+    at_bump = len(truth)
+    graph.spin_until(lambda: (cmd_pub.publish(forward), len(truth) > at_bump + 25)[1], "half a second more")
+    assert truth[-1].pose.pose.position.x <= 1.0 - 0.17 + 1e-6      # pressed against the wall, not through it
 
 
 # ------------------------------------------------------------------------------------------------- player

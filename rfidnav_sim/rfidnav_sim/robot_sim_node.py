@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import math
 import time
+from typing import Any
 
 from geometry_msgs.msg import Twist
 from nav_msgs.msg import Odometry
@@ -30,8 +31,9 @@ from rfidnav_sim.world import load_world
 
 
 class RobotSimNode(Node):
-    def __init__(self) -> None:
-        super().__init__("robot_sim")
+    def __init__(self, **node_options: Any) -> None:
+        """``node_options``: keyword arguments of rclpy's Node (``context``, ``parameter_overrides``), for tests."""
+        super().__init__("robot_sim", **node_options)
         self.params: RobotSimParameters = declare_parameters(self, RobotSimParameters)
         p = self.params
         self.world = load_world(p.world_file)
