@@ -13,6 +13,8 @@ import numpy as np
 import pytest
 from scipy import stats
 
+from rfidnav_common.polling import PollClock, Polling
+from rfidnav_common.seeding import rng_for
 from rfidnav_common.tag_groups import (
     HF_READ_RANGE_M,
     TagGroup,
@@ -20,6 +22,7 @@ from rfidnav_common.tag_groups import (
 )
 from rfidnav_control.spiral import (
     GUARANTEE_DISTANCE_IN_D,
+    SearchPolls,
     SpiralSearch,
     expected_search_length,
     length_to_radius,
@@ -103,6 +106,13 @@ def test_the_paper_cross_is_crossed_beyond_the_documented_distance_but_not_alway
     assert simulate_crossing(hidden.outline_segments(), (0.0, 0.0), 0.0, D, distance + size) is None
 
 
+def test_a_reader_range_widens_the_group_by_twice_the_range() -> None:
+    assert separation_for_group("cross", 0.29, 0.05) == pytest.approx((0.29 + 2 * math.sqrt(2) * 0.05) / math.pi ** 2)
+    assert separation_for_group("circle", 0.2, 0.05) == pytest.approx(separation_for_group("circle", 0.3))
+    with pytest.raises(ValueError, match="read_range_m"):
+        separation_for_group("cross", 0.29, -0.01)
+
+
 def test_the_paper_square_can_hide_between_turns_far_out_but_the_wider_square_cannot() -> None:
     # Centred between the turns crossing the +x axis at 20 pi d and 22 pi d, sides radial and tangential.
     centre = (21 * math.pi * D, 0.0)
@@ -135,6 +145,40 @@ def test_simulate_search_starts_in_the_spiral_frame_and_gives_up_at_max_radius()
     tag = np.array([[1.0, 2.0]]) + 6 * math.pi * D * np.array([math.cos(heading), math.sin(heading)])
     read = simulate_search(tag, (1.0, 2.0), heading, D, 0.01, 0.7, step_m=0.001)
     assert read == pytest.approx(spiral_length(6 * math.pi, D), abs=0.015)
+
+
+def polls(seed: int, speed_m_s: float = 0.2, failure: float = 0.1) -> SearchPolls:
+    return SearchPolls(speed_m_s, PollClock(Polling(0.5, 0.1, failure), rng_for(seed, "polls")))
+
+
+def test_a_polled_reader_reads_no_sooner_than_a_continuous_one_and_misses_passes_of_the_group() -> None:
+    """Polls 0.5-0.6 s apart at 0.2 m/s: the robot reads only every 10-12 cm of the spiral, so it sees the cross
+    later than a reader that reads all the way, and a pass over it between two polls not at all."""
+    rng = np.random.default_rng(11)
+    later = continuous_found = polled_found = 0
+    for trial in range(TRIALS):
+        distance, bearing, rotation, heading = 0.4, *rng.uniform(-math.pi, math.pi, 3)
+        group = TagGroup("C", "cross", (distance * math.cos(bearing), distance * math.sin(bearing)), 0.29, rotation)
+        continuous = simulate_search(group.tag_positions(), (0.0, 0.0), heading, D, HF_READ_RANGE_M, 0.9)
+        polled = simulate_search(group.tag_positions(), (0.0, 0.0), heading, D, HF_READ_RANGE_M, 0.9,
+                                 polls=polls(trial))
+        continuous_found += continuous is not None
+        polled_found += polled is not None
+        if continuous is not None and polled is not None:
+            assert polled >= continuous - 0.005            # the continuous reader's sampling step
+            later += polled > continuous + 0.05
+    assert continuous_found == TRIALS and polled_found < TRIALS
+    assert later > TRIALS // 2
+
+
+def test_the_same_poll_seed_gives_the_same_polled_search_and_polls_fall_where_the_robot_is() -> None:
+    tags = TagGroup("C", "cross", (0.25, 0.1), 0.29, 0.2).tag_positions()
+    first = simulate_search(tags, (0.0, 0.0), 0.4, D, HF_READ_RANGE_M, 0.8, polls=polls(4))
+    again = simulate_search(tags, (0.0, 0.0), 0.4, D, HF_READ_RANGE_M, 0.8, polls=polls(4))
+    assert first is not None and first == again
+    assert np.any(np.isclose(np.concatenate(list(polls(4).lengths(5.0))), first))    # a poll that read
+    every = np.concatenate(list(polls(4, failure=0.0).lengths(5.0)))
+    assert np.all(np.diff(every) >= 0.2 * 0.5 - 1e-12) and np.all(np.diff(every) <= 0.2 * 0.6 + 1e-12)
 
 
 def test_command_follows_the_curvature_of_the_path() -> None:

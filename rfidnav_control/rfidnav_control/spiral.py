@@ -7,15 +7,16 @@ turns are 2 pi d apart along every ray from the origin, until its reader reads a
 ``h + theta + atan(theta)``, the curvature ``(2 + theta^2) / (d (1 + theta^2)^(3/2))`` (2/d at the start).
 
 Lemma 1 is :func:`spiral_length`, Theorem 1 :func:`expected_search_length`; :class:`SpiralSearch` is the motion
-primitive; :func:`simulate_search` and :func:`simulate_crossing` walk the ideal spiral against tags or outlines
-for the papers' statistics. Pure module: numpy and scipy, no ROS.
+primitive; :func:`simulate_search` (with a reader that reads continuously or is polled, :class:`SearchPolls`) and
+:func:`simulate_crossing` walk the ideal spiral against tags or outlines for the papers' statistics. Pure module:
+numpy and scipy, no ROS.
 """
 
 from __future__ import annotations
 
 import math
 import numbers
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from types import MappingProxyType
 
@@ -24,6 +25,7 @@ from numpy.typing import ArrayLike
 from scipy import integrate
 from scipy.spatial import cKDTree
 
+from rfidnav_common.polling import PollClock
 from rfidnav_common.tag_groups import minimum_width
 
 WIDTH_OVER_SEPARATION = math.pi / (2.0 * math.sqrt(2.0))
@@ -102,8 +104,9 @@ def spiral_curvature(theta: ArrayLike, d: float) -> float | np.ndarray:
     return _scalar_or_array((2.0 + theta * theta) / (d * (1.0 + theta * theta) ** 1.5))
 
 
-def separation_for_group(shape: str, size_m: float) -> float:
-    """The spiral constant d (turns 2 pi d apart) for which a group of ``shape`` and ``size_m`` is crossed.
+def separation_for_group(shape: str, size_m: float, read_range_m: float = 0.0) -> float:
+    """The spiral constant d (turns 2 pi d apart) for which a group of ``shape`` and ``size_m`` is crossed; with
+    ``read_range_m`` > 0 (ours) for which the band a reader of that range reads around the outline is crossed.
 
     * circle (diameter D): d = D / (2 pi), the paper's basis, crossed wherever it lies: on the ray from the
       origin through its centre the disc covers a closed interval of length 2 pi d, which holds a crossing of
@@ -117,9 +120,13 @@ def separation_for_group(shape: str, size_m: float) -> float:
 
     Away from the origin the turns look locally like parallel lines at most 2 pi d apart, so a connected group
     wider than that in every direction cannot fit between two. A reader of range r widens every group by 2r:
-    these guarantees, for range 0, hold a fortiori for a real reader.
+    these guarantees, for range 0 (the paper's sizing), hold a fortiori for a real reader; ``read_range_m`` = r
+    spends that margin on turns 2r / (2 pi margin) further apart (the cross: d = (L + 2 sqrt(2) r) / pi^2), so
+    the spiral reaches far placements sooner, and is crossed only where the reader reads out to r.
     """
-    width = minimum_width(shape, _positive(size_m, "size_m"))
+    if not math.isfinite(read_range_m) or read_range_m < 0.0:
+        raise ValueError(f"read_range_m: expected a finite range >= 0, got {read_range_m!r}")
+    width = minimum_width(shape, _positive(size_m, "size_m")) + 2.0 * read_range_m
     margin = 1.0 if shape == "circle" else WIDTH_OVER_SEPARATION
     return width / (2.0 * math.pi * margin)
 
@@ -212,11 +219,42 @@ def _to_spiral_frame(points: np.ndarray, start: Sequence[float], heading: float)
     return (np.asarray(points, dtype=float).reshape(-1, 2) - np.asarray(start, dtype=float)) @ _rotation(-heading)
 
 
+@dataclass
+class SearchPolls:
+    """A polled reader on a simulated search: the robot drives the spiral at ``speed_m_s`` and reads only at the
+    rounds of ``clock`` that read (rfidnav_common.polling; paper 003's HF reader: every 500-600 ms, some failing),
+    its time counted from the start of the search."""
+    speed_m_s: float
+    clock: PollClock
+
+    def __post_init__(self) -> None:
+        _positive(self.speed_m_s, "speed_m_s")
+
+    def lengths(self, max_length_m: float, chunk: int = 64) -> Iterator[np.ndarray]:
+        """Arc lengths of the rounds that read, ascending, ``chunk`` rounds at a time, up to ``max_length_m``."""
+        while True:
+            lengths, time_s = [], 0.0
+            for _ in range(chunk):
+                time_s = self.clock.next_poll_s
+                self.clock.due(time_s)
+                if self.clock.reads():          # drawn at every round: paired runs fail at the same rounds
+                    lengths.append(self.speed_m_s * time_s)
+            along = np.array(lengths)
+            yield along[along <= max_length_m]
+            if self.speed_m_s * time_s > max_length_m:
+                return
+
+
 def simulate_search(group_tags: np.ndarray, start: Sequence[float], heading: float, d: float,
-                    read_range_m: float, max_radius_m: float, step_m: float = 0.005) -> float | None:
+                    read_range_m: float, max_radius_m: float, step_m: float = 0.005,
+                    polls: SearchPolls | None = None) -> float | None:
     """Length driven along the ideal spiral from ``start`` (leaving along ``heading``) until the antenna, at the
-    robot centre, is within ``read_range_m`` of a tag of ``group_tags`` (N x 2); None if none is read within
-    ``max_radius_m``. The spiral is sampled every ``step_m``, so the length is late by less than one step.
+    robot centre, is within ``read_range_m`` of a tag of ``group_tags`` (N x 2) when the reader reads; None if
+    none is read within ``max_radius_m``.
+
+    Without ``polls`` the reader reads continuously: the spiral is sampled every ``step_m``, so the length is
+    late by less than one step. With ``polls`` it reads only at those rounds, exactly where the robot is then: a
+    group the spiral crosses between two rounds that read is not seen there.
     """
     for name, value in (("d", d), ("max_radius_m", max_radius_m), ("step_m", step_m)):
         _positive(value, name)
@@ -225,10 +263,18 @@ def simulate_search(group_tags: np.ndarray, start: Sequence[float], heading: flo
     tags = _to_spiral_frame(group_tags, start, heading)
     if len(tags) == 0:
         return None
-    lengths, points = _spiral_polyline(d, max_radius_m, step_m)
-    distances, _ = cKDTree(tags).query(points)
-    hits = np.flatnonzero(distances <= read_range_m)
-    return float(lengths[hits[0]]) if len(hits) else None
+    tree = cKDTree(tags)
+    if polls is None:
+        lengths, points = _spiral_polyline(d, max_radius_m, step_m)
+        hits = np.flatnonzero(tree.query(points)[0] <= read_range_m)
+        return float(lengths[hits[0]]) if len(hits) else None
+    for lengths in polls.lengths(float(length_to_radius(max_radius_m, d))):
+        if len(lengths) == 0:
+            continue
+        hits = np.flatnonzero(tree.query(spiral_point(theta_at_length(lengths, d), d))[0] <= read_range_m)
+        if len(hits):
+            return float(lengths[hits[0]])
+    return None
 
 
 def simulate_crossing(outline: Sequence[np.ndarray], start: Sequence[float], heading: float, d: float,

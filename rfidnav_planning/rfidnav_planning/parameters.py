@@ -76,6 +76,8 @@ class TwoTierNavigatorParameters:
     search_radius_sigmas: float = param("spiral search out to this many position standard deviations", 3.0)
     search_min_radius_m: float = param("spiral search out to at least this radius [m]", 0.5)
     max_searches: int = param("give up after this many spiral searches found nothing", 10)
+    search_speed_mps: float = param("speed along the spiral [m/s]: slow enough that the polled HF reader reads "
+                                    "every crossing of a tag line", 0.14)
     read_range_m: float = param("the floor reader's range [m]: a tag fix is this good", 0.05)
     drift_per_m: float = param("dead reckoning: position sd growth per metre driven", 0.05)
     speed_mps: float = param("driving speed [m/s]", 0.2)

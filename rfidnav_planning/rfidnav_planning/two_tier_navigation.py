@@ -11,9 +11,10 @@ Flow (paper 003 section 3.2):
   that estimate (the landmarks: floor tag groups).
 * A7, tier two: drive to the nearest landmark by dead reckoning (odometry distance, compass heading); a tag
   read fixes the position to centimetres. Arriving where the landmark should be without a read starts an
-  Archimedean spiral search (rfidnav_control.spiral) sized so the group must be crossed, out to a radius
-  of ``search_radius_sigmas`` times the position's standard deviation; an exhausted spiral asks tier one
-  again.
+  Archimedean spiral search (rfidnav_control.spiral) sized so the band the reader reads around the group
+  must be crossed (ours; the paper sizes the group's outline), at ``search_speed_mps`` (slow enough that a
+  polled reader reads every crossing), out to a radius of ``search_radius_sigmas`` times the position's
+  standard deviation; an exhausted spiral asks tier one again.
 * A2/A3, the route: through intermediate landmarks chosen by geographic forwarding (Fig. 4): the next one is
   the landmark within ``landmark_spacing_m`` of the current position that is nearest to the target, if it is
   nearer to the target than the robot is; the target itself when it is within reach or no landmark helps.
@@ -23,7 +24,10 @@ Flow (paper 003 section 3.2):
 * A4, arrival: the dead-reckoned position within the go-to tolerance of the target; a target at a landmark is
   approached from a fix on one of its tags.
 
-Any known tag read on the way is a fix (it is free); unknown tags are counted and ignored.
+Every reader round that reads a new set of known tags is a fix (rfidnav_localization.tag_fix: the robot is within
+range of the tags read and out of range of their unread neighbours), on the way too (it is free); unknown tags are
+counted and ignored. The reader may be polled (paper 003: every 500-600 ms, some polls failing): a tag the robot passes
+between two polls is never seen, and the core only knows what a round reports.
 """
 
 from __future__ import annotations
@@ -37,13 +41,11 @@ from rfidnav_common.errors import ParameterError
 from rfidnav_control.go_to import GoToSettings, go_to_command
 from rfidnav_control.spiral import SpiralSearch, separation_for_group
 from rfidnav_localization.dead_reckoning import TIER_TAG, TIER_WIFI, DeadReckoning, DeadReckoningEstimate, Fix
+from rfidnav_localization.tag_fix import TagFix, tag_fix
 
 LOCATING, MAPPING, TO_LANDMARK, SEARCHING, TO_TARGET, DONE = (
     "locating", "mapping", "to_landmark", "searching", "to_target", "done")
 LOCATE, TAG_MAP = "locate", "tag_map"
-# Standard deviation of the entry point (see TwoTierNavigator.entry_point) in read ranges: over u uniform in
-# [-r, r] the along-track error sqrt(r^2 - u^2) - pi r / 4 and the across-track error u give sqrt(1 - pi^2/16 + 1/3).
-ENTRY_SPREAD = math.sqrt(1.0 - math.pi ** 2 / 16.0 + 1.0 / 3.0)
 
 
 @dataclass(frozen=True)
@@ -55,13 +57,17 @@ class TwoTierSettings:
     search_radius_sigmas: float = 3.0      # spiral out to this many position standard deviations...
     search_min_radius_m: float = 0.5       # ...but at least this far
     max_searches: int = 10                 # give up after this many exhausted spirals
+    # Ours: a polled reader (paper 003: every 500-600 ms) reads a crossing of a tag line only if a poll falls
+    # in its read band, 2 sqrt(r^2 - (s/2)^2) = 8.7 cm wide at its narrowest for tags s = 5 cm apart read within
+    # r = 5 cm: at 0.14 m/s the polls fall at most 8.4 cm apart, so a crossing is missed only by a failed poll.
+    search_speed_mps: float = 0.14
     read_range_m: float = 0.05             # the floor reader's range: a tag fix is this good
     drift_per_m: float = 0.05              # dead reckoning: position sd growth per metre (paper 003: 1 m per 20 m)
     go_to: GoToSettings = field(default_factory=GoToSettings)
 
     def validate(self) -> None:
         for name in ("landmark_spacing_m", "calibration_distance_m", "deviation_threshold_m", "tag_map_radius_m",
-                     "search_radius_sigmas", "search_min_radius_m", "read_range_m"):
+                     "search_radius_sigmas", "search_min_radius_m", "search_speed_mps", "read_range_m"):
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0.0):
                 raise ParameterError(name, f"must be a positive number, got {value}")
@@ -139,6 +145,7 @@ class TwoTierNavigator:
         self.search_start_m = 0.0
         self.checked_at_m = 0.0               # odometry distance at the last fix or tier-one check
         self.pending: Request | None = None
+        self.fix_reads: frozenset[str] = frozenset()   # the tags the round of the last tag fix read
         self.progress = Progress()
         self.outcome: Decision | None = None
 
@@ -219,21 +226,27 @@ class TwoTierNavigator:
         self.reckoning.on_odometry(odom)
         if self.pending is not None:
             return Decision(self.phase, (0.0, 0.0))          # waiting for the server: stand still
-        known = [self.tags[t] for t in tag_ids if t in self.tags]
-        self.progress.unknown_tags += len(tag_ids) - len(known)
+        known = [self.tags[t] for t in dict.fromkeys(tag_ids) if t in self.tags]
+        self.progress.unknown_tags += len(set(tag_ids)) - len(known)
         if known:
-            decision = self.on_tag(known[0])
+            decision = self.on_tags(known)
             if decision is not None:
                 return decision
         return self.drive()
 
-    def on_tag(self, tag: MapTag) -> Decision | None:
-        """A fix: the reader has just come within range of ``tag``. At the landmark headed for, the next leg
+    def on_tags(self, read: list[MapTag]) -> Decision | None:
+        """A fix from one reader round that read the known tags ``read``, unless the last fix read the same ones
+        (a reader polled faster than the robot leaves their region would pin the estimate to one point while the
+        robot drives on; dead reckoning carries it from the first). At the landmark headed for, the next leg
         starts."""
+        read_ids = frozenset(tag.tag_id for tag in read)
         last = self.reckoning.last_fix
-        if last is not None and last.tier == TIER_TAG and last.tag_id == tag.tag_id and self.phase != SEARCHING:
-            return None                 # still over the tag of the last fix: nothing new
-        self.fixed(Fix(self.entry_point(tag), self.settings.read_range_m * ENTRY_SPREAD, TIER_TAG, tag.tag_id))
+        if last is not None and last.tier == TIER_TAG and read_ids == self.fix_reads and self.phase != SEARCHING:
+            return None
+        self.fix_reads = read_ids
+        fix = self.tag_fix(read)
+        self.fixed(Fix(fix.position, fix.sd_m, TIER_TAG, fix.tag_id))
+        tag = self.tags[fix.tag_id]
         if self.phase == SEARCHING:
             self.progress.search_length_m += self.travelled_m - self.search_start_m
             self.search = None
@@ -245,17 +258,14 @@ class TwoTierNavigator:
             return self.next_leg()
         return None
 
-    def entry_point(self, tag: MapTag) -> tuple[float, float]:
-        """Where the robot most likely is on first reading ``tag``: on the edge of its read disc, behind it.
-
-        Crossing a disc of radius r at a lateral offset u (uniform: the robot aims at a group, not at a tag),
-        the first read comes sqrt(r^2 - u^2) before the tag's closest approach, pi r / 4 on average; the tag
-        position itself would be off by that much along the heading, every time."""
-        yaw = self.reckoning.yaw
-        if yaw is None:
-            return tag.position
-        back = math.pi / 4.0 * self.settings.read_range_m
-        return tag.position[0] - back * math.cos(yaw), tag.position[1] - back * math.sin(yaw)
+    def tag_fix(self, read: list[MapTag]) -> TagFix:
+        """Where the antenna was at the round that read ``read``: within range of each of them and out of range of
+        every other known tag near them (rfidnav_localization.tag_fix)."""
+        reach = 2.0 * self.settings.read_range_m
+        read_ids = {tag.tag_id for tag in read}
+        unread = [tag.position for tag in self.tags.values() if tag.tag_id not in read_ids
+                  and any(math.dist(tag.position, seen.position) <= reach for seen in read)]
+        return tag_fix([(tag.tag_id, tag.position) for tag in read], unread, self.settings.read_range_m)
 
     def drive(self) -> Decision:
         estimate = self.reckoning.estimate()
@@ -285,8 +295,8 @@ class TwoTierNavigator:
         """A7: the landmark is not where dead reckoning says: spiral out from here until a tag is read."""
         landmark = self.waypoint
         radius = max(self.settings.search_min_radius_m, self.settings.search_radius_sigmas * estimate.sd_m)
-        d = separation_for_group(landmark.shape, max(landmark.size_m, self.settings.read_range_m))
-        self.search = SpiralSearch(d, self.settings.go_to.speed_mps, radius, estimate.position, estimate.yaw)
+        d = separation_for_group(landmark.shape, landmark.size_m, self.settings.read_range_m)
+        self.search = SpiralSearch(d, self.settings.search_speed_mps, radius, estimate.position, estimate.yaw)
         self.search_start_m = self.travelled_m
         self.progress.searches += 1
         self.phase = SEARCHING

@@ -13,11 +13,13 @@ import numpy as np
 
 from rfidnav_common.config import param, require_positive
 from rfidnav_common.errors import ParameterError
+from rfidnav_common.polling import PollClock, Polling
 from rfidnav_common.seeding import rng_for
 from rfidnav_sim.compass_model import CompassModel
 from rfidnav_sim.kinematics import BaseLimits, DiffDriveBase, OdometryDrift, Pose2D
-from rfidnav_sim.rfid_model import Antenna, ReaderModel
+from rfidnav_sim.rfid_model import Antenna, PolledReader, ReaderModel, ReaderSimulator
 from rfidnav_sim.sonar_model import PAPER_LAYOUT, SonarModel
+from rfidnav_sim.world import World
 
 
 @dataclass(frozen=True)
@@ -72,7 +74,12 @@ SIDE_BEARINGS = {"left": math.pi / 2.0, "right": -math.pi / 2.0}
 class ReaderParameters:
     world_file: str = param("world YAML (ground truth: tag ids and positions)", "")
     seed: int = param("run seed; the noise and miss streams derive from it", 0)
-    rate_hz: float = param("inventory rounds per second [Hz, sim time]", 25.0)
+    rate_hz: float = param("inventory rounds per second [Hz, sim time]; a polled reader's fastest", 25.0)
+    round_jitter_s: float = param(
+        "a polled reader: each round comes 1/rate_hz plus a uniform 0..this after the one before [s] (paper 003's HF "
+        "reader: 500-600 ms); 0: rounds on the 1/rate_hz grid of sim time", 0.0)
+    round_failure_probability: float = param("probability that a whole round reads nothing, whatever is in range "
+                                             "(a failed poll)", 0.0)
     frame_id: str = param("frame of the reader; antenna positions are given in it", "base_link")
     antenna_positions: list[float] = param(
         "x, y, z of each antenna in the reader frame [m], concatenated; antenna ports are 1, 2, ... in order",
@@ -118,10 +125,25 @@ class ReaderParameters:
             raise ParameterError("channels_mhz", "at least one positive frequency is needed")
         if not 0.0 <= self.miss_probability < 1.0:
             raise ParameterError("miss_probability", f"must be in [0, 1), got {self.miss_probability}")
+        if not (math.isfinite(self.round_jitter_s) and self.round_jitter_s >= 0.0):
+            raise ParameterError("round_jitter_s",
+                                 f"must be a finite number of seconds >= 0, got {self.round_jitter_s}")
+        if not 0.0 <= self.round_failure_probability < 1.0:
+            raise ParameterError("round_failure_probability",
+                                 f"must be in [0, 1), got {self.round_failure_probability}")
         if not 0.0 <= self.passage_miss_probability <= 1.0:
             raise ParameterError("passage_miss_probability", f"must be in [0, 1], got {self.passage_miss_probability}")
         if self.phase_noise_rad_per_m < 0.0:
             raise ParameterError("phase_noise_rad_per_m", "must not be negative")
+
+    def polling(self) -> Polling:
+        return Polling(1.0 / self.rate_hz, self.round_jitter_s, self.round_failure_probability)
+
+    def simulated_reader(self, world: World, seed: int) -> PolledReader:
+        """The reader these parameters describe among ``world``'s tags, its streams seeded from ``seed``: the one
+        the rfid_reader_sim node runs and the in-process runners run alike."""
+        return PolledReader(ReaderSimulator.for_world(self.reader_model(), world, rng_for(seed, "rfid_reader_sim")),
+                            PollClock(self.polling(), rng_for(seed, "rfid_reader_sim.rounds")))
 
     def reader_model(self) -> ReaderModel:
         positions = np.reshape(self.antenna_positions, (-1, 3))

@@ -25,6 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from rfidnav_common.polling import PollClock
 from rfidnav_common.rf import round_trip_phase
 from rfidnav_common.tag_lattice import Deployment
 from rfidnav_sim.wall_tag_model import InductionArea, WallTag, WallTagReader
@@ -193,3 +194,20 @@ class ReaderSimulator:
                          + np.array([model.antennas[a].phase_offset_rad for a in antenna_index]))
         return self.reads_of([self.tag_ids[t] for t in tag_index], antenna_index, d, phase_offsets,
                              rssi[antenna_index, tag_index], frequency)
+
+
+class PolledReader:
+    """A simulated reader with its rounds: when they come and whether they read (rfidnav_common.polling), what
+    each reads (:class:`ReaderSimulator`). The rfid_reader_sim node and the in-process runners read through it
+    alike."""
+
+    def __init__(self, simulator: ReaderSimulator, clock: PollClock) -> None:
+        self.simulator = simulator
+        self.clock = clock
+
+    def round_at(self, x: float, y: float, yaw: float, now_s: float) -> list[Read] | None:
+        """The reads of the round due at ``now_s`` with the robot at (x, y, yaw), empty for a failed one; None
+        when no round is due."""
+        if not self.clock.due(now_s):
+            return None
+        return self.simulator.inventory(x, y, yaw, now_s) if self.clock.reads() else []

@@ -2,22 +2,17 @@
 
 Sensor simulators sample on /sim/ground_truth: the first pose at or after each sample's due time is the pose of
 that sample. Samples then depend only on the poses and the seed, never on process scheduling, so a run
-repeats exactly and a replay sees the same data.
+repeats exactly and a replay sees the same data. A reader's rounds may also be polled (irregular, some failing):
+rfidnav_common.polling, of which this is the regular case.
 """
 
 from __future__ import annotations
 
-import math
+from rfidnav_common.polling import PollClock, Polling
 
 
-class GroundTruthSchedule:
+class GroundTruthSchedule(PollClock):
+    """A sample every ``period_s`` on the grid: a poll clock without jitter or failures (it draws nothing)."""
+
     def __init__(self, period_s: float) -> None:
-        self.period_s = period_s
-        self.next_due_s = 0.0
-
-    def due(self, now_s: float) -> bool:
-        """Whether a sample is due at ``now_s``; if so, the next one is scheduled on the period's grid."""
-        if now_s + 1e-9 < self.next_due_s:
-            return False
-        self.next_due_s = (math.floor(now_s / self.period_s + 1e-6) + 1) * self.period_s
-        return True
+        super().__init__(Polling(period_s))

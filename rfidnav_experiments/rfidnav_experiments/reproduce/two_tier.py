@@ -1,28 +1,45 @@
 """``./rfidnav reproduce two_tier``: paper 003 section 4.2, in-process, beside the paper's figures.
 
-* Fig. 10: spiral search distance against the robot's initial distance from a 29 x 29 cm cross group (0-100
-  cm), the HF reader's 5 cm range, random bearings and group rotations; the spiral sized as the paper sizes
-  it (d = L / pi^2) and as we size it (the group widened by the reader's range on both sides). Beside it
-  Theorem 1 (the expected search length for a Gaussian tier-one error) against simulated searches whose start
-  is drawn from that Gaussian.
+Every run reads the floor tags through the HF reader of config/params/reader_hf_floor.yaml, the rfid_reader_sim
+node's over DDS: polled every 500-600 ms (paper 003 sec. 4.1), one poll in ten failing (ours), so a tag the
+robot passes between two polls is never read and a fix is known only when a poll reads it.
+
+* The conditions first: every physical setting that shapes the figures, with where it comes from (``paper``
+  and the section, or ``ours`` and why; nothing is calibrated: the paper's first experiment, Fig. 10, needs no
+  fitted setting), for the paper's method and ours.
+* Fig. 10: spiral search distance against the robot's initial distance from a 29 x 29 cm cross, the paper's
+  search (d = L / pi^2, at the robot's speed) and ours (d widened by the reader's range on both sides, at the
+  navigator's search speed) on the SAME placements (seed -> bearing, group rotation, start heading, the
+  reader's polls and failures), each point with its n and 95 % interval, the paired difference with its
+  interval, and the paper's two figures at its distances: about 120 cm at 40 cm ("less than 40 cm: no more
+  than one spiral"), about 300 cm at 50 cm ("larger than 40 cm: two spirals"). Beside it Theorem 1 against
+  simulated searches from a Gaussian start, with the continuous reader the theorem assumes.
 * Fig. 11: direct moving (dead reckoning all the way) against indirect moving (through intermediate landmarks
-  chosen by geographic forwarding) on a long route: the accumulated position error at the target.
-* Fig. 12: at each turning point of two routes through the flat, the error of WiFi fingerprinting alone
-  against the two-tier scheme (tier one, then the spiral search and a tag fix).
+  by geographic forwarding): the accumulated error at the target.
+* Fig. 12: at each turning point of two routes, the error of WiFi fingerprinting alone against the two-tier
+  scheme (tier one, then the landmark, a spiral search if needed, the tag fix): ours, and the same polls taken
+  the paper's way (the position of the tags read), paired. Our target: the median tag-fix error at the turning
+  points at most 3 cm with the reader's delay and failures, reported met or not met, never tuned to.
 * The radio map: a site survey on a 1 m grid against the robot's own survey (fingerprints at its tier-two
   fixes, paper 003's automatic radio map construction): the tier-one error at random points.
 
-The paper gives Fig. 10 in numbers (about 120 cm within 40 cm, about 300 cm beyond) and Figs. 11-12 as plots
-("indirect moving avoids larger accumulated error", "error will not be accumulated in our scheme"); RADAR's
-2-3 m is the literature's fingerprinting figure. Where the paper gives no number the JSON row's paper is null.
+Development and evaluation apart: every random draw comes from ``rng_for(seed, stream)``. The code was developed
+and its settings chosen on DEVELOPMENT_SEED; the command reports EVALUATION_SEED (EVALUATION_SEED_BASE + 1),
+chosen once and never used to tune anything.
+
+With ``--json`` the rows ``{"experiment", "setting", "metric", "ours", "paper"}`` (DESIGN.md), the conditions
+first; where the paper gives no number "paper" is null. Plots: ``two_tier_figs10_12.png`` in the output folder.
 """
 
 from __future__ import annotations
 
+import dataclasses
+import functools
 import json
 import math
 import statistics
 import sys
+from collections.abc import Hashable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -32,15 +49,38 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+from matplotlib.ticker import FixedLocator, NullLocator  # noqa: E402
+from scipy import stats  # noqa: E402
 
 from rfidnav_bringup.scenario import CONFIG_DIR  # noqa: E402
 from rfidnav_common.errors import ConfigError  # noqa: E402
+from rfidnav_common.polling import PollClock  # noqa: E402
 from rfidnav_common.robot_map import load_route_map  # noqa: E402
-from rfidnav_common.seeding import rng_for  # noqa: E402
-from rfidnav_common.tag_groups import HF_READ_RANGE_M, TagGroup  # noqa: E402
-from rfidnav_control.spiral import expected_search_length, separation_for_group, simulate_search  # noqa: E402
-from rfidnav_experiments.reproduce.tables import save, table  # noqa: E402
+from rfidnav_common.seeding import derive_seed, rng_for  # noqa: E402
+from rfidnav_common.tag_groups import TagGroup  # noqa: E402
+from rfidnav_control.spiral import (  # noqa: E402
+    SearchPolls,
+    expected_search_length,
+    separation_for_group,
+    simulate_search,
+)
+from rfidnav_experiments.reproduce.tables import (  # noqa: E402
+    Condition,
+    Interval,
+    condition_json_rows,
+    condition_lines,
+    paired_interval,
+    run_pool,
+    save,
+    table,
+)
+from rfidnav_experiments.runners.shipped import shipped_parameters  # noqa: E402
 from rfidnav_experiments.runners.two_tier import (  # noqa: E402
+    FLOOR_READER,
+    NAVIGATOR,
+    ODOMETRY_SCALE_ERROR,
+    SETTINGS,
+    STEP_S,
     Site,
     floor_extent,
     grid_radio_map,
@@ -48,55 +88,271 @@ from rfidnav_experiments.runners.two_tier import (  # noqa: E402
     run_two_tier,
 )
 from rfidnav_localization.fingerprint import RadioMap  # noqa: E402
-from rfidnav_planning.two_tier_navigation import TwoTierSettings  # noqa: E402
+from rfidnav_sim.parameters import CompassParameters, WifiSimParameters  # noqa: E402
 from rfidnav_sim.world import World, load_world  # noqa: E402
+
+EXPERIMENT = "two_tier"
+METHODS = ("paper", "ours")
+PAPER, OURS = METHODS
+DEVELOPMENT_SEED = 1                    # every figure looked at while the code and its settings were chosen
+EVALUATION_SEED_BASE = 300
+EVALUATION_SEED = EVALUATION_SEED_BASE + 1   # the reported runs: chosen once, never used to tune
 
 WORLD_FILE = CONFIG_DIR / "worlds" / "two_tier_home.yaml"
 MAP_FILE = CONFIG_DIR / "maps" / "two_tier_home.yaml"       # the landmarks as the robot knows them: its goals
-FIG10_SIZE_M = 0.29
+
+FIG10_SIZE_M = 0.29                     # paper 003 sec. 4.2: a 29 x 29 cm cross
 FIG10_DISTANCES_M = tuple(round(0.1 * k, 1) for k in range(11))
 FIG10_RUNS = 200
-PAPER_FIG10_CM = {"near": 120.0, "far": 300.0}      # within 40 cm, beyond
+FIG10_BEYOND_M = 0.5                    # a search ends this far beyond the group's distance: its turns have passed it
+PAPER_FIG10_M = {0.4: 1.20, 0.5: 3.00}  # sec. 4.2: ~120 cm within 40 cm, a jump to ~300 cm beyond
 THEOREM_SIGMAS_M = (0.25, 0.5, 1.0)
 ROUTES = {"route 1": ((1.0, 1.0, 0.3), ("T1", "T2", "T3", "T4", "T5")),
           "route 2": ((1.5, 2.0, 1.2), ("R1", "R2", "R3"))}
 LONG_ROUTE = ((1.0, 1.0, 0.0), (11.0, 1.0))
+FIG11_SPACINGS_M = {"direct": 0.1, "indirect": 4.0}    # geographic forwarding's reach: no landmark helps at 0.1 m
 RUNS = 20
 GRID_SPACING_M = 1.0
+GRID_SCANS_PER_POINT = 3
 TEST_POINTS = 300
+TARGET_FIX_ERROR_M = 0.03               # ours: median tag-fix error at the turning points
 
 
-def spiral_d(size_m: float, ours: bool) -> float:
-    """The paper's d = L / pi^2, or ours: the cross widened by the reader's range on each side."""
-    if not ours:
-        return size_m / math.pi ** 2
-    return separation_for_group("cross", size_m + 2.0 * math.sqrt(2.0) * HF_READ_RANGE_M)
+def floor_range_m() -> float:
+    """The reader's range on the floor: its 5 cm antenna range less the antenna's height above the tags."""
+    height = FLOOR_READER.antenna_positions[2]
+    return math.sqrt(FLOOR_READER.antenna_max_range_m[0] ** 2 - height ** 2)
 
 
-def fig10(runs: int, seed: int) -> dict[str, dict[float, float]]:
-    """Mean search length [m] at each initial distance, for the paper's d and ours."""
-    rng = rng_for(seed, "fig10")
-    means: dict[str, dict[float, float]] = {}
-    for ours in (False, True):
-        d = spiral_d(FIG10_SIZE_M, ours)
-        by_distance = {}
-        for distance in FIG10_DISTANCES_M:
-            lengths = []
-            for _ in range(runs):
-                bearing, rotation, heading = rng.uniform(-math.pi, math.pi, 3)
-                group = TagGroup("G", "cross", (distance * math.cos(bearing), distance * math.sin(bearing)),
-                                 FIG10_SIZE_M, rotation)
-                length = simulate_search(group.tag_positions(), (0.0, 0.0), heading, d, HF_READ_RANGE_M, 5.0)
-                lengths.append(math.inf if length is None else length)
-            by_distance[distance] = statistics.fmean(lengths)
-        means["ours" if ours else "paper d"] = by_distance
-    return means
+@dataclass(frozen=True)
+class SpiralMethod:
+    d_m: float
+    speed_mps: float
+
+
+def spiral_methods() -> dict[str, SpiralMethod]:
+    """The paper's search (d = L / pi^2, at the robot's driving speed: the paper gives no other) and ours, the
+    navigator's (the band the reader reads around the cross crossed, at its search speed)."""
+    return {PAPER: SpiralMethod(separation_for_group("cross", FIG10_SIZE_M), SETTINGS.go_to.speed_mps),
+            OURS: SpiralMethod(separation_for_group("cross", FIG10_SIZE_M, SETTINGS.read_range_m),
+                               SETTINGS.search_speed_mps)}
+
+
+# ---------------------------------------------------------------------------------------- conditions
+
+# Where every physical setting of the reproduction comes from. The files the runs use (the floor reader, the
+# navigator, the compass, the WiFi receiver, the world's WiFi) are listed key by key: a key added to one of them
+# without a row here fails test_reproduce_two_tier.
+READER_SOURCES: dict[str, tuple[str, str]] = {
+    "rfid_reader_sim.rate_hz": ("paper", "sec. 4.1 item 1: polled over RS-232 at 19,200 bps, a reply every "
+                                         "500-600 ms: at most 2 polls/s"),
+    "rfid_reader_sim.round_jitter_s": ("paper", "sec. 4.1 item 1: 500-600 ms (uniform between: ours)"),
+    "rfid_reader_sim.round_failure_probability": ("ours", "sec. 4.1 item 3: negotiations with a tag fail, no rate "
+                                                          "given; one poll in ten reads nothing"),
+    "rfid_reader_sim.frame_id": ("ours", "the robot's frame; no effect on the figures"),
+    "rfid_reader_sim.antenna_positions": ("ours", "at the robot's centre, 5 mm above the floor: the paper gives "
+                                                  "no geometry"),
+    "rfid_reader_sim.antenna_facing": ("paper", "sec. 3.3, 4.1: a reader scanning the tags on the ground"),
+    "rfid_reader_sim.antenna_max_range_m": ("paper", "sec. 4.1: 13.56 MHz, a reading range of about 5 cm"),
+    "rfid_reader_sim.antenna_half_angle_deg": ("ours", "near field: every tag within the range is read"),
+    "rfid_reader_sim.antenna_phase_offset_rad": ("ours", "HF phase: nothing reads it"),
+    "rfid_reader_sim.channels_mhz": ("paper", "sec. 4.1: 13.56 MHz"),
+    "rfid_reader_sim.hop_dwell_s": ("ours", "unused with one channel"),
+    "rfid_reader_sim.phase_noise_rad_per_m": ("ours", "HF phase: nothing reads it"),
+    "rfid_reader_sim.miss_probability": ("ours", "a poll fails whole (round_failure_probability), never tag by tag"),
+    "rfid_reader_sim.rssi_at_1m_dbm": ("ours", "only decides what is heard: every tag within 5 cm is"),
+    "rfid_reader_sim.sensitivity_dbm": ("ours", "as above"),
+    "rfid_reader_sim.pattern_exponent": ("ours", "no pattern within 5 cm"),
+}
+NAVIGATOR_SOURCES: dict[str, tuple[str, str]] = {
+    "two_tier_navigator.floor_antenna": ("ours", "the reader's one port; no effect on the figures"),
+    "two_tier_navigator.control_rate_hz": ("ours", "20 control steps/s: the in-process step"),
+    "two_tier_navigator.service_timeout_s": ("ours", "unused in-process: the server answers at once"),
+    "two_tier_navigator.map_frame": ("ours", "no effect on the figures"),
+    "two_tier_navigator.landmark_spacing_m": ("ours", "Fig. 4's tolerable distance to the next landmark: none given"),
+    "two_tier_navigator.calibration_distance_m": ("ours", "A5's 'after moving a certain distance': none given"),
+    "two_tier_navigator.deviation_threshold_m": ("ours", "A5's 'a certain threshold': none given"),
+    "two_tier_navigator.tag_map_radius_m": ("ours", "A1's local tag map: the whole flat"),
+    "two_tier_navigator.search_radius_sigmas": ("ours", "the spiral's extent: the paper gives none"),
+    "two_tier_navigator.search_min_radius_m": ("ours", "as above"),
+    "two_tier_navigator.max_searches": ("ours", "the paper's robot searches until it finds a tag"),
+    "two_tier_navigator.search_speed_mps": ("ours", "polls at most 8.4 cm apart, inside the 8.7 cm band a tag line "
+                                                    "5 cm apart is read across; the paper searches at its speed"),
+    "two_tier_navigator.read_range_m": ("paper", "sec. 4.1: about 5 cm"),
+    "two_tier_navigator.drift_per_m": ("paper", "sec. 4.1 item 2: 1 m of error after 20 m with 1 kg on board"),
+    "two_tier_navigator.speed_mps": ("ours", "the paper gives none (the Create drives up to 0.5 m/s): 10-12 cm "
+                                             "between two polls"),
+    "two_tier_navigator.turn_rate_radps": ("ours", "the paper gives none"),
+    "two_tier_navigator.heading_gain_per_s": ("ours", "the paper gives none"),
+    "two_tier_navigator.goal_tolerance_m": ("ours", "the paper gives none"),
+}
+SENSOR_SOURCES: dict[str, tuple[str, str]] = {
+    "compass_sim.rate_hz": ("ours", "the paper gives none"),
+    "compass_sim.frame_id": ("ours", "no effect on the figures"),
+    "compass_sim.noise_sd_deg": ("ours", "an e-compass's jitter: the paper gives none"),
+    "compass_sim.bias_deg": ("ours", "an uncorrected declination: the paper gives none"),
+    "wifi_sim.scan_period_s": ("ours", "unused in-process: a scan whenever tier one asks"),
+    "wifi_sim.frame_id": ("ours", "no effect on the figures"),
+    "wifi_sim.interface": ("ours", "no effect on the figures"),
+    "wifi_sim.scan_noise_sd_db": ("ours", "RSS at a fixed spot varies by 2-6 dB from scan to scan: mid-range"),
+    "wifi_sim.sensitivity_dbm": ("ours", "a laptop-class receiver"),
+    "world.wifi.path_loss_exponent": ("ours", "free space between walls (COST 231 multi-wall): the paper gives no "
+                                              "building"),
+    "world.wifi.wall_loss_db": ("ours", "light internal walls"),
+    "world.wifi.shadowing_sd_db": ("ours", "typical indoor shadowing"),
+    "world.wifi.shadowing_correlation_m": ("ours", "as above"),
+    "world.wifi.shadowing_seed": ("ours", "one fixed building"),
+    "world.access_points": ("ours", "four APs in a 12 x 8 m flat: the paper's field is not given in numbers"),
+}
+WORLD_SOURCES: dict[str, tuple[str, str]] = {
+    "world.tag_groups": ("paper", "sec. 4.1: 30 x 30 cm crosses at the turning points (Fig. 12); the tags 5 cm "
+                                  "apart (ours: no gap the 5 cm reader slips through) and the flat are ours"),
+    "robot.odometry_scale_error": ("paper", "sec. 4.1 item 2: 1 m of error per 20 m driven"),
+    "robot.motion": ("ours", "an ideal unicycle stepped at the control rate (no wheel limits)"),
+    "fig10.group": ("paper", "sec. 4.2: a 29 x 29 cm cross"),
+    "fig10.distances_m": ("paper", "sec. 4.2 compares at 40 cm (~120 cm) and 50 cm (~300 cm); the rest: ours"),
+    "fig10.distance_to": ("ours", "the group's centre: the paper does not say"),
+    "fig10.placements": ("ours", "bearing, group rotation and start heading uniform, the same for both methods"),
+    "fig10.max_radius": ("ours", "the search gives up 0.5 m beyond the group: its turns have passed it"),
+    "fig10.spiral_d_m": ("paper", "paper: sec. 3.3, d = L / pi^2; ours: the read band crossed, (L + 2 sqrt(2) r) "
+                                  "/ pi^2"),
+    "fig10.speed_mps": ("ours", "paper: the robot's speed (none given); ours: the navigator's search speed"),
+    "theorem1.reader": ("ours", "continuous: the theorem assumes the group found where the spiral reaches it"),
+    "fig12.tag_fix": ("paper", "paper: sec. 3.2 A7, the position of the tag read (the mean of the tags one poll "
+                               "reads); ours: within range of them, out of range of their neighbours"),
+    "fig12.routes": ("ours", "the paper's Fig. 12 paths are not given in numbers"),
+    "radio_map.grid": ("ours", "a 1 m grid, each fingerprint the mean of 3 scans"),
+}
+SOURCES = {**READER_SOURCES, **NAVIGATOR_SOURCES, **SENSOR_SOURCES, **WORLD_SOURCES}
+
+
+def conditions(world: World | None = None) -> list[Condition]:
+    """The table's rows, their values read from the settings the runs use."""
+    world = world or load_world(WORLD_FILE)
+    compass = shipped_parameters(CompassParameters, "compass_sim")
+    receiver = shipped_parameters(WifiSimParameters, "wifi_sim", world_file="unused")
+    methods = spiral_methods()
+    groups = sorted({(group.shape, group.size_m, group.tag_spacing_m) for group in world.tag_groups})
+    same: dict[str, Any] = {
+        "world.wifi.shadowing_seed": world.wifi_seed,
+        "world.access_points": len(world.access_points),
+        "world.tag_groups": f"{len(world.tag_groups)} x " + ", ".join(f"{shape} {size:g} m, tags {spacing:g} m apart"
+                                                                      for shape, size, spacing in groups),
+        "robot.odometry_scale_error": ODOMETRY_SCALE_ERROR,
+        "robot.motion": f"unicycle, {STEP_S:g} s steps",
+        "fig10.group": f"cross {FIG10_SIZE_M:g} m",
+        "fig10.distances_m": list(FIG10_DISTANCES_M),
+        "fig10.distance_to": "group centre",
+        "fig10.placements": f"{FIG10_RUNS} per distance",
+        "fig10.max_radius": f"distance + {FIG10_BEYOND_M:g} m",
+        "theorem1.reader": "continuous",
+        "fig12.routes": {name: list(points) for name, (_, points) in ROUTES.items()},
+        "radio_map.grid": f"{GRID_SPACING_M:g} m, {GRID_SCANS_PER_POINT} scans",
+    }
+    differing: dict[str, dict[str, Any]] = {
+        "fig10.spiral_d_m": {method: round(spiral.d_m, 5) for method, spiral in methods.items()},
+        "fig10.speed_mps": {method: spiral.speed_mps for method, spiral in methods.items()},
+        "fig12.tag_fix": {PAPER: "the tags read", OURS: "region left by the reads"},
+    }
+    rows = []
+    for key, (source, note) in SOURCES.items():
+        node, field = key.split(".", 1)
+        if key in differing:
+            values = differing[key]
+        elif key in same:
+            values = dict.fromkeys(METHODS, same[key])
+        elif node == "rfid_reader_sim":
+            values = dict.fromkeys(METHODS, getattr(FLOOR_READER, field))
+        elif node == "two_tier_navigator":
+            values = dict.fromkeys(METHODS, getattr(NAVIGATOR, field))
+        elif node == "compass_sim":
+            values = dict.fromkeys(METHODS, getattr(compass, field))
+        elif node == "wifi_sim":
+            values = dict.fromkeys(METHODS, getattr(receiver, field))
+        else:                                   # world.wifi.*: the building's propagation
+            values = dict.fromkeys(METHODS, getattr(world.wifi, field.removeprefix("wifi.")))
+        rows.append(Condition(key, values, source, note))
+    return rows
+
+
+# --------------------------------------------------------------------------------------------- Fig. 10
+
+@dataclass(frozen=True)
+class Placement:
+    """One random placement of Fig. 10: where the group lies, how it is turned, where the spiral leaves; and the
+    seed of the reader's polls. A function of (seed, distance, index) alone, so both methods search the same."""
+    distance_m: float
+    index: int
+    bearing_rad: float
+    rotation_rad: float
+    heading_rad: float
+    reader_seed: int
+
+    def group(self) -> TagGroup:
+        centre = (self.distance_m * math.cos(self.bearing_rad), self.distance_m * math.sin(self.bearing_rad))
+        return TagGroup("G", "cross", centre, FIG10_SIZE_M, self.rotation_rad)
+
+
+def fig10_placement(seed: int, distance_m: float, index: int) -> Placement:
+    stream = f"fig10:{distance_m:g}:{index}"
+    bearing, rotation, heading = rng_for(seed, stream).uniform(-math.pi, math.pi, 3)
+    return Placement(distance_m, index, float(bearing), float(rotation), float(heading),
+                     derive_seed(seed, f"{stream}:reader"))
+
+
+@dataclass(frozen=True)
+class Search:
+    method: str
+    placement: Placement
+    length_m: float | None                # None: no poll read a tag before the spiral passed the group
+
+
+def fig10_search(job: tuple[str, Placement]) -> Search:
+    """One search of Fig. 10 with the floor reader's polls and failures (module-level for the pool)."""
+    method, placement = job
+    spiral = spiral_methods()[method]
+    polls = SearchPolls(spiral.speed_mps, PollClock(FLOOR_READER.polling(), rng_for(placement.reader_seed, "polls")))
+    length = simulate_search(placement.group().tag_positions(), (0.0, 0.0), placement.heading_rad, spiral.d_m,
+                             floor_range_m(), placement.distance_m + FIG10_BEYOND_M, polls=polls)
+    return Search(method, placement, length)
+
+
+@dataclass(frozen=True)
+class SpiralPoint:
+    """Fig. 10 at one distance for one method."""
+    found: Interval                       # percent of the placements where a tag was read
+    length: Interval                      # [m] over the placements where one was
+
+
+def fig10(runs: int, seed: int) -> dict[str, dict[float, list[Search]]]:
+    """Every search, by method and distance, sorted by placement index."""
+    placements = [fig10_placement(seed, distance, index) for distance in FIG10_DISTANCES_M for index in range(runs)]
+    searches = run_pool(fig10_search, [(method, placement) for placement in placements for method in METHODS],
+                        "reproduce two_tier: Fig. 10")
+    by_method: dict[str, dict[float, list[Search]]] = {method: {d: [] for d in FIG10_DISTANCES_M} for method in METHODS}
+    for search in sorted(searches, key=lambda s: s.placement.index):
+        by_method[search.method][search.placement.distance_m].append(search)
+    return by_method
+
+
+def spiral_point(searches: list[Search]) -> SpiralPoint:
+    lengths = [s.length_m for s in searches if s.length_m is not None]
+    return SpiralPoint(Interval.of_proportion(len(lengths), len(searches)), Interval.of(lengths))
+
+
+def paired_difference(spiral: dict[str, dict[float, list[Search]]], distance: float) -> Interval:
+    """Ours minus the paper's search length [m] on the placements both found."""
+    def lengths(method: str) -> dict[Hashable, float | None]:
+        return {s.placement.index: s.length_m for s in spiral[method][distance]}
+
+    return paired_interval(lengths(OURS), lengths(PAPER))
 
 
 def theorem1(runs: int, seed: int) -> list[tuple[float, float, float, float]]:
-    """(sigma, Theorem 1 as printed, Rayleigh form, simulated) [m] for our spiral around a cross group."""
+    """(sigma, Theorem 1 as printed, Rayleigh form, simulated) [m] for our spiral around a cross group, read
+    continuously as the theorem assumes."""
     rng = rng_for(seed, "theorem1")
-    d = spiral_d(FIG10_SIZE_M, True)
+    d = spiral_methods()[OURS].d_m
     rows = []
     for sigma in THEOREM_SIGMAS_M:
         lengths = []
@@ -105,51 +361,81 @@ def theorem1(runs: int, seed: int) -> list[tuple[float, float, float, float]]:
             group = TagGroup("G", "cross", (float(offset[0]), float(offset[1])), FIG10_SIZE_M,
                              float(rng.uniform(-math.pi, math.pi)))
             length = simulate_search(group.tag_positions(), (0.0, 0.0), float(rng.uniform(-math.pi, math.pi)), d,
-                                     HF_READ_RANGE_M, 10.0 * sigma)
+                                     floor_range_m(), 10.0 * sigma)
             lengths.append(math.inf if length is None else length)
         rows.append((sigma, expected_search_length(sigma, d, as_printed=True),
                      expected_search_length(sigma, d, as_printed=False), statistics.fmean(lengths)))
     return rows
 
 
+# ------------------------------------------------------------------------------------ Figs. 11 and 12
+
+@functools.cache
+def grid_site(seed: int) -> Site:
+    """The flat with the grid survey's radio map, built once per process (the pool's workers too)."""
+    world = load_world(WORLD_FILE)
+    return Site.of(world, grid_radio_map(world, GRID_SPACING_M, rng_for(seed, "grid survey"), GRID_SCANS_PER_POINT))
+
+
 @dataclass(frozen=True)
-class RouteErrors:
-    fingerprint_m: dict[str, list[float]]     # turning point -> tier-one errors there
-    two_tier_m: dict[str, list[float]]        # turning point -> tag-fix errors on arriving there
+class Leg:
+    """One navigation to a turning point of Fig. 12."""
+    route: str
+    run: int
+    point: str
+    fingerprint_m: float                  # tier one alone at the turning point
+    fix_m: float | None                   # ours: the last tag fix on arriving (None: the leg failed)
+    tag_position_m: float | None          # the same poll taken the paper's way
+    all_fixes_m: tuple[float, ...]        # every tag fix of the leg, ours
+    all_tag_positions_m: tuple[float, ...]
 
 
-def fig12(site: Site, runs: int, seed: int) -> dict[str, RouteErrors]:
-    """Each route driven ``runs`` times leg by leg (one navigation per turning point, as in the paper)."""
+def fig12_route(job: tuple[str, int, int]) -> list[Leg]:
+    """One run of a route, leg by leg (one navigation per turning point, as in the paper)."""
+    name, run, seed = job
+    site = grid_site(seed)
     landmarks = {group.group_id: group for group in load_route_map(MAP_FILE).tag_groups}
-    results = {}
-    for name, (start, points) in ROUTES.items():
-        fingerprint = {p: [] for p in points}
-        two_tier = {p: [] for p in points}
-        for run in range(runs):
-            rng = rng_for(seed, f"fig12:{name}:{run}")
-            pose = start
-            for point in points:
-                centre = landmarks[point].centre
-                scan = {r.bssid: r.rssi_dbm for r in site.wifi.scan(*centre, rng)}
-                fingerprint[point].append(math.dist(site.radio_map.locate(scan).position, centre))
-                result = run_two_tier(site, pose, centre, TwoTierSettings(), rng)
-                if result.success and result.fix_errors_m:
-                    two_tier[point].append(result.fix_errors_m[-1])
-                heading = math.atan2(centre[1] - pose[1], centre[0] - pose[0])
-                pose = (result.final_position[0], result.final_position[1], heading)
-        results[name] = RouteErrors(fingerprint, two_tier)
-    return results
+    start, points = ROUTES[name]
+    rng = rng_for(seed, f"fig12:{name}:{run}")
+    pose = start
+    legs = []
+    for point in points:
+        centre = landmarks[point].centre
+        scan = {r.bssid: r.rssi_dbm for r in site.wifi.scan(*centre, rng)}
+        fingerprint = math.dist(site.radio_map.locate(scan).position, centre)
+        result = run_two_tier(site, pose, centre, SETTINGS, rng, derive_seed(seed, f"fig12:{name}:{run}:{point}"))
+        arrived = result.success and bool(result.fix_errors_m)
+        legs.append(Leg(name, run, point, fingerprint, result.fix_errors_m[-1] if arrived else None,
+                        result.tag_position_errors_m[-1] if arrived else None, result.fix_errors_m,
+                        result.tag_position_errors_m))
+        heading = math.atan2(centre[1] - pose[1], centre[0] - pose[0])
+        pose = (result.final_position[0], result.final_position[1], heading)
+    return legs
 
 
-def fig11(site: Site, runs: int, seed: int) -> dict[str, list[float]]:
-    """Final position error [m] of direct and indirect moving along LONG_ROUTE."""
+def fig12(runs: int, seed: int) -> list[Leg]:
+    results = run_pool(fig12_route, [(name, run, seed) for name in ROUTES for run in range(runs)],
+                       "reproduce two_tier: Fig. 12")
+    return sorted((leg for legs in results for leg in legs), key=lambda leg: (leg.route, leg.run))
+
+
+def fig11_run(job: tuple[str, int, int]) -> tuple[str, int, float | None]:
+    """Direct or indirect moving along LONG_ROUTE: the final position error [m], None if the run failed. Both
+    kinds of run ``run`` draw the same compass, WiFi and reader streams."""
+    kind, run, seed = job
     start, target = LONG_ROUTE
-    errors: dict[str, list[float]] = {"direct": [], "indirect": []}
-    for run in range(runs):
-        for kind, spacing in (("direct", 0.1), ("indirect", 4.0)):
-            settings = TwoTierSettings(landmark_spacing_m=spacing, calibration_distance_m=1000.0)
-            result = run_two_tier(site, start, target, settings, rng_for(seed, f"fig11:{run}"))
-            errors[kind].append(result.final_error_m if result.success else math.inf)
+    settings = dataclasses.replace(SETTINGS, landmark_spacing_m=FIG11_SPACINGS_M[kind], calibration_distance_m=1000.0)
+    result = run_two_tier(grid_site(seed), start, target, settings, rng_for(seed, f"fig11:{run}"),
+                          derive_seed(seed, f"fig11:{run}:reader"))
+    return kind, run, result.final_error_m if result.success else None
+
+
+def fig11(runs: int, seed: int) -> dict[str, dict[int, float | None]]:
+    results = run_pool(fig11_run, [(kind, run, seed) for run in range(runs) for kind in FIG11_SPACINGS_M],
+                       "reproduce two_tier: Fig. 11")
+    errors: dict[str, dict[int, float | None]] = {kind: {} for kind in FIG11_SPACINGS_M}
+    for kind, run, error in sorted(results, key=lambda result: result[1]):
+        errors[kind][run] = error
     return errors
 
 
@@ -164,117 +450,325 @@ def tier_one_errors(site: Site, radio_map: RadioMap, seed: int) -> list[float]:
     return errors
 
 
-def _median(values: list[float]) -> float:
-    return statistics.median(values) if values else math.nan
+# ---------------------------------------------------------------------------------------- aggregate
+
+@dataclass(frozen=True)
+class Median:
+    """A median with its distribution-free 95 % interval (order statistics: the ranks a binomial(n, 1/2) puts
+    2.5 % outside on each side; at least 95 % coverage; none below 6 values)."""
+    value: float | None
+    bounds: tuple[float, float] | None
+    n: int
+
+    @classmethod
+    def of(cls, values: Sequence[float]) -> Median:
+        ordered = sorted(values)
+        n = len(ordered)
+        if n == 0:
+            return cls(None, None, 0)
+        low_rank = int(stats.binom.ppf(0.025, n, 0.5))     # 1-based rank of the lower bound
+        bounds = (ordered[low_rank - 1], ordered[n - low_rank]) if low_rank >= 1 else None
+        return cls(float(statistics.median(ordered)), bounds, n)
+
+    def text(self, scale: float = 100.0, digits: int = 1) -> str:
+        if self.value is None:
+            return "-"
+        interval = "" if self.bounds is None else \
+            f" [{self.bounds[0] * scale:.{digits}f}, {self.bounds[1] * scale:.{digits}f}]"
+        return f"{self.value * scale:.{digits}f}{interval} (n={self.n})"
 
 
-def reproduce_two_tier(runs: int, out_dir: Path, as_json: bool, seed: int = 1, fig10_runs: int = FIG10_RUNS) -> int:
-    """Run, report and plot; 0 when the two-tier median error at the turning points is within 3 cm, else 1."""
-    if runs < 1 or fig10_runs < 1:
-        raise ConfigError("--runs", "", f"must be at least 1, got {min(runs, fig10_runs)}")
-    out_dir = Path(out_dir)
-    out_dir.mkdir(parents=True, exist_ok=True)
-    world: World = load_world(WORLD_FILE)
-    grid_map = grid_radio_map(world, GRID_SPACING_M, rng_for(seed, "grid survey"))
-    site = Site.of(world, grid_map)
-    spiral = fig10(fig10_runs, seed)
-    theorem = theorem1(fig10_runs, seed)
-    moving = fig11(site, runs, seed)
-    routes = fig12(site, runs, seed)
-    survey_map = RadioMap(robot_survey(Site.of(world, RadioMap()), load_route_map(MAP_FILE), seed))
-    radio = {"grid": tier_one_errors(site, grid_map, seed), "survey": tier_one_errors(site, survey_map, seed)}
-    rows = json_rows(spiral, theorem, moving, routes, radio)
-    (out_dir / "two_tier_rows.json").write_text(json.dumps(rows, indent=1) + "\n")
-    plot = plot_figures(spiral, moving, routes, out_dir)
-    notes = sys.stderr if as_json else sys.stdout
-    if as_json:
-        print(json.dumps(rows, indent=1))
-    else:
-        print("\n".join(report_lines(spiral, theorem, moving, routes, radio, len(grid_map), len(survey_map), runs,
-                                      fig10_runs)))
-    print(f"plot: {plot}; rows: {out_dir / 'two_tier_rows.json'}", file=notes)
-    two_tier = [e for r in routes.values() for errors in r.two_tier_m.values() for e in errors]
-    return 0 if two_tier and _median(two_tier) <= 0.03 else 1
+@dataclass(frozen=True)
+class FixFigures:
+    """Fig. 12's tag fixes: ours and the paper's way on the same polls."""
+    at_turning_points: dict[str, Median]      # by method: the last fix of each leg
+    all_fixes: dict[str, Median]              # by method: every fix of every leg
+    paired_m: Interval                        # ours minus the paper's, the last fix of each leg
+    failed_legs: int
+
+    @property
+    def target_met(self) -> bool | None:
+        value = self.at_turning_points[OURS].value
+        return None if value is None else value <= TARGET_FIX_ERROR_M
 
 
-def report_lines(spiral, theorem, moving, routes, radio, grid_count: int, survey_count: int, runs: int,
-                 fig10_runs: int) -> list[str]:
-    lines = [f"reproduce two_tier: paper 003 section 4.2, in-process ({runs} runs per route)", "",
-             f"Fig. 10: mean spiral search length [cm] from a {FIG10_SIZE_M * 100:g} cm cross, HF range "
-             f"{HF_READ_RANGE_M * 100:g} cm, {fig10_runs} random bearings and rotations per distance "
-             f"(paper: ~{PAPER_FIG10_CM['near']:g} cm within 40 cm, ~{PAPER_FIG10_CM['far']:g} cm beyond)"]
-    header = ["distance cm", *[f"{k} (d {spiral_d(FIG10_SIZE_M, k == 'ours') * 100:.2f} cm)" for k in spiral]]
-    lines += table(header, [[f"{d * 100:g}", *[f"{spiral[k][d] * 100:.0f}" for k in spiral]]
-                            for d in FIG10_DISTANCES_M])
-    lines += ["", "Theorem 1: expected search length [cm] for a Gaussian tier-one error sd sigma (our spiral)"]
+def fix_figures(legs: list[Leg]) -> FixFigures:
+    done = [leg for leg in legs if leg.fix_m is not None and leg.tag_position_m is not None]
+    ours: dict[Hashable, float | None] = {(leg.route, leg.run, leg.point): leg.fix_m for leg in legs}
+    paper: dict[Hashable, float | None] = {(leg.route, leg.run, leg.point): leg.tag_position_m for leg in legs}
+    return FixFigures(
+        {OURS: Median.of([leg.fix_m for leg in done if leg.fix_m is not None]),
+         PAPER: Median.of([leg.tag_position_m for leg in done if leg.tag_position_m is not None])},
+        {OURS: Median.of([e for leg in legs for e in leg.all_fixes_m]),
+         PAPER: Median.of([e for leg in legs for e in leg.all_tag_positions_m])},
+        paired_interval(ours, paper), len(legs) - len(done))
+
+
+def legs_at(legs: list[Leg], route: str, point: str) -> list[Leg]:
+    return [leg for leg in legs if leg.route == route and leg.point == point]
+
+
+# ------------------------------------------------------------------------------------------- report
+
+def _cm(value_m: float | None, digits: int = 0) -> str:
+    return "-" if value_m is None else f"{value_m * 100:.{digits}f}"
+
+
+def fig10_lines(spiral: dict[str, dict[float, list[Search]]], runs: int) -> list[str]:
+    methods = spiral_methods()
+    lines = [f"Fig. 10: spiral search length [cm] from a {FIG10_SIZE_M * 100:g} cm cross, {runs} random placements "
+             "per distance, the same for both; mean ± 95 % interval over the placements where a poll read a tag (n), "
+             "the share found [Wilson 95 %]; difference paired, ours minus the paper's, on the placements both found",
+             "  " + "; ".join(f"{method}: d = {spiral.d_m * 100:.2f} cm at {spiral.speed_mps:g} m/s"
+                              for method, spiral in methods.items())]
+    rows = []
+    for distance in FIG10_DISTANCES_M:
+        points = {method: spiral_point(spiral[method][distance]) for method in METHODS}
+        paper = PAPER_FIG10_M.get(distance)
+        rows.append([f"{distance * 100:g}", "-" if paper is None else f"~{paper * 100:.0f}",
+                     *(points[m].length.text(100.0, 0) for m in METHODS),
+                     *(points[m].found.text(1.0, 1) for m in METHODS),
+                     paired_difference(spiral, distance).text(100.0, 0)])
+    lines += table(["distance cm", "paper's figure", PAPER, OURS, f"{PAPER} found %", f"{OURS} found %",
+                    "difference"], rows)
+    return lines
+
+
+def fig10_against_paper(spiral: dict[str, dict[float, list[Search]]]) -> list[str]:
+    lines = ["Fig. 10 at the paper's distances (sec. 4.2):"]
+    for distance, paper in PAPER_FIG10_M.items():
+        points = {method: spiral_point(spiral[method][distance]) for method in METHODS}
+        parts = []
+        for method in METHODS:
+            mean = points[method].length.mean
+            off = "-" if mean is None else f"{(mean / paper - 1.0) * 100:+.0f} %"
+            parts.append(f"{method} {points[method].length.text(100.0, 0)} cm ({off})")
+        lines.append(f"  {distance * 100:g} cm: paper ~{paper * 100:.0f} cm; " + "; ".join(parts)
+                     + f"; ours minus paper {paired_difference(spiral, distance).text(100.0, 0)} cm")
+    return lines
+
+
+def fix_lines(legs: list[Leg], fixes: FixFigures) -> list[str]:
+    lines = ["Fig. 12: position error [cm] at the turning points: median [95 % interval] (n); fingerprinting "
+             "alone, the two-tier scheme's last tag fix on arriving, ours and the paper's way on the same polls"]
+    for route, (_, points) in ROUTES.items():
+        lines += [f"{route}:"]
+        lines += table(["turning point", "fingerprinting", f"two-tier {OURS}", f"two-tier {PAPER}"],
+                       [[point, Median.of([leg.fingerprint_m for leg in legs_at(legs, route, point)]).text(100.0, 0),
+                         Median.of([leg.fix_m for leg in legs_at(legs, route, point) if leg.fix_m is not None]).text(),
+                         Median.of([leg.tag_position_m for leg in legs_at(legs, route, point)
+                                    if leg.tag_position_m is not None]).text()] for point in points])
+    met = fixes.target_met
+    verdict = "-" if met is None else ("met" if met else "not met")
+    fingerprinting = Median.of([leg.fingerprint_m for leg in legs])
+    lines += [f"all turning points: fingerprinting median {fingerprinting.text(100.0, 0)} cm (RADAR: 2-3 m)",
+              f"  tag fix, ours: {fixes.at_turning_points[OURS].text()} cm; the paper's way (the tags read): "
+              f"{fixes.at_turning_points[PAPER].text()} cm; ours minus the paper's, paired: {fixes.paired_m.text()} cm",
+              f"  every tag fix on the way: ours {fixes.all_fixes[OURS].text()} cm, the paper's way "
+              f"{fixes.all_fixes[PAPER].text()} cm; legs that did not arrive with a fix: {fixes.failed_legs}",
+              f"target (ours, median tag-fix error at the turning points <= {TARGET_FIX_ERROR_M * 100:g} cm with the "
+              f"reader's delay and failures): {verdict}"]
+    return lines
+
+
+def report_lines(condition_rows: list[Condition], spiral, theorem, moving, legs: list[Leg], fixes: FixFigures,
+                 radio, grid_count: int, survey_count: int, runs: int, fig10_runs: int, seed: int) -> list[str]:
+    role = "evaluation" if seed == EVALUATION_SEED else "development" if seed == DEVELOPMENT_SEED else "other"
+    lines = [f"reproduce two_tier: paper 003 section 4.2, in-process; seed {seed} ({role}: the settings were chosen "
+             f"on seed {DEVELOPMENT_SEED}, the evaluation seed is {EVALUATION_SEED}); {runs} runs per route",
+             "", *condition_lines(condition_rows, METHODS), "", *fig10_lines(spiral, fig10_runs), "",
+             *fig10_against_paper(spiral), "",
+             "Theorem 1: expected search length [cm] for a Gaussian tier-one error sd sigma (our spiral, a reader that "
+             "reads continuously, as the theorem assumes)"]
     lines += table(["sigma cm", "as printed", "Rayleigh form", "simulated", "simulated / Rayleigh"],
                    [[f"{s * 100:g}", f"{p * 100:.0f}", f"{r * 100:.0f}", f"{m * 100:.0f}", f"{m / r:.2f}"]
                     for s, p, r, m in theorem])
-    lines += ["", f"Fig. 11: final position error [cm] from {LONG_ROUTE[0][:2]} to {LONG_ROUTE[1]} "
-                  "(paper: indirect moving accumulates less error)"]
-    lines += table(["moving", "median", "mean", "max"],
-                   [[kind, f"{_median(v) * 100:.1f}", f"{statistics.fmean(v) * 100:.1f}", f"{max(v) * 100:.1f}"]
-                    for kind, v in moving.items()])
-    lines += ["", "Fig. 12: position error [cm] at the turning points, median over the runs "
-                  "(paper: two-tier errors do not accumulate; fingerprinting alone stays at metre level)"]
-    for name, errors in routes.items():
-        lines += [f"{name}:"]
-        lines += table(["turning point", "fingerprinting", "two-tier"],
-                       [[p, f"{_median(errors.fingerprint_m[p]) * 100:.0f}",
-                         f"{_median(errors.two_tier_m[p]) * 100:.1f}"] for p in errors.fingerprint_m])
-    all_fp = [e for r in routes.values() for v in r.fingerprint_m.values() for e in v]
-    all_tt = [e for r in routes.values() for v in r.two_tier_m.values() for e in v]
-    lines += [f"all turning points: fingerprinting median {_median(all_fp) * 100:.0f} cm (RADAR: 2-3 m), two-tier "
-              f"median {_median(all_tt) * 100:.1f} cm (target <= 3 cm)", "",
-              f"radio map: tier-one error [cm] at {TEST_POINTS} random points"]
+    lines += ["", f"Fig. 11: final position error [cm] from {LONG_ROUTE[0][:2]} to {LONG_ROUTE[1]}: median [95 % "
+                  "interval] (n); paper: indirect moving accumulates less error"]
+    lines += table(["moving", "median", "mean", "max", "failed"],
+                   [[kind, Median.of(done(errors)).text(), Interval.of(done(errors)).text(100.0, 1),
+                     _cm(max(done(errors), default=None), 1), str(len(errors) - len(done(errors)))]
+                    for kind, errors in moving.items()])
+    difference = paired_interval(moving["indirect"], moving["direct"])
+    lines += [f"indirect minus direct, paired (same streams): {difference.text(100.0, 1)} cm", ""]
+    lines += fix_lines(legs, fixes)
+    lines += ["", f"radio map: tier-one error [cm] at {TEST_POINTS} random points"]
     lines += table(["radio map", "fingerprints", "median", "mean", "p90"],
-                   [[kind, str(count), f"{_median(v) * 100:.0f}", f"{statistics.fmean(v) * 100:.0f}",
+                   [[kind, str(count), Median.of(v).text(100.0, 0), f"{statistics.fmean(v) * 100:.0f}",
                      f"{np.percentile(v, 90) * 100:.0f}"]
                     for (kind, v), count in zip(radio.items(), (grid_count, survey_count))])
     return lines
 
 
-def json_rows(spiral, theorem, moving, routes, radio) -> list[dict[str, Any]]:
-    rows: list[dict[str, Any]] = []
-    for kind, by_distance in spiral.items():
-        for distance, mean in by_distance.items():
-            paper = None if distance == 0.4 else PAPER_FIG10_CM["near" if distance < 0.4 else "far"] / 100.0
-            rows.append({"experiment": "fig10_spiral", "setting": {"spiral": kind, "distance_m": distance},
-                         "metric": "search_length_m", "ours": mean, "paper": paper})
+def done(errors: dict[int, float | None]) -> list[float]:
+    return [error for error in errors.values() if error is not None]
+
+
+# --------------------------------------------------------------------------------------------- JSON
+
+def row(experiment: str, setting: dict[str, Any], metric: str, ours: Any, paper: Any = None) -> dict[str, Any]:
+    return {"experiment": experiment, "setting": setting, "metric": metric, "ours": ours, "paper": paper}
+
+
+def json_rows(condition_rows: list[Condition], spiral, theorem, moving, legs: list[Leg], fixes: FixFigures,
+              radio, seed: int) -> list[dict[str, Any]]:
+    rows = condition_json_rows(EXPERIMENT, condition_rows)
+    for method in METHODS:
+        for distance in FIG10_DISTANCES_M:
+            searched = spiral_point(spiral[method][distance])
+            setting = {"method": method, "distance_m": distance, "seed": seed, "placements": searched.found.n,
+                       "found": searched.length.n}
+            rows += [row("fig10_spiral", setting, "search_length_m", searched.length.mean,
+                         PAPER_FIG10_M.get(distance)),
+                     row("fig10_spiral", setting, "search_length_ci95_m", searched.length.half_width),
+                     row("fig10_spiral", setting, "found_pct", searched.found.mean)]
+    for distance in FIG10_DISTANCES_M:
+        difference = paired_difference(spiral, distance)
+        setting = {"method": f"{OURS} - {PAPER}", "distance_m": distance, "seed": seed, "pairs": difference.n}
+        rows += [row("fig10_spiral", setting, "paired_difference_m", difference.mean),
+                 row("fig10_spiral", setting, "paired_difference_ci95_m", difference.half_width)]
     for sigma, printed, rayleigh, simulated in theorem:
-        rows.append({"experiment": "theorem1", "setting": {"sigma_m": sigma}, "metric": "search_length_m",
-                     "ours": simulated, "paper": printed, "rayleigh_m": rayleigh})
+        rows += [row("theorem1", {"sigma_m": sigma, "seed": seed}, "search_length_m", simulated, printed),
+                 row("theorem1", {"sigma_m": sigma, "seed": seed}, "rayleigh_expectation_m", rayleigh)]
     for kind, errors in moving.items():
-        rows.append({"experiment": "fig11_moving", "setting": {"moving": kind}, "metric": "median_error_m",
-                     "ours": _median(errors), "paper": None})
-    for name, errors in routes.items():
-        for point in errors.fingerprint_m:
-            for method, values in (("fingerprinting", errors.fingerprint_m[point]),
-                                   ("two_tier", errors.two_tier_m[point])):
-                rows.append({"experiment": "fig12_turning_points",
-                             "setting": {"route": name, "point": point, "method": method},
-                             "metric": "median_error_m", "ours": _median(values), "paper": None})
+        median = Median.of(done(errors))
+        rows.append(row("fig11_moving", {"moving": kind, "seed": seed, "n": median.n}, "median_error_m",
+                        median.value))
+    for route, (_, points) in ROUTES.items():
+        for point in points:
+            here = legs_at(legs, route, point)
+            for method, values in (("fingerprinting", [leg.fingerprint_m for leg in here]),
+                                   (f"two_tier {OURS}", [leg.fix_m for leg in here if leg.fix_m is not None]),
+                                   (f"two_tier {PAPER}", [leg.tag_position_m for leg in here
+                                                          if leg.tag_position_m is not None])):
+                median = Median.of(values)
+                rows.append(row("fig12_turning_points", {"route": route, "point": point, "method": method,
+                                                         "seed": seed, "n": median.n}, "median_error_m", median.value))
+    for method in METHODS:
+        median = fixes.at_turning_points[method]
+        rows += [row("tag_fix", {"method": method, "fixes": "at the turning points", "seed": seed, "n": median.n},
+                     "median_error_m", median.value),      # the paper claims centimetres, no number
+                 row("tag_fix", {"method": method, "fixes": "at the turning points", "seed": seed, "n": median.n},
+                     "median_error_ci95_m", None if median.bounds is None else list(median.bounds)),
+                 row("tag_fix", {"method": method, "fixes": "all", "seed": seed, "n": fixes.all_fixes[method].n},
+                     "median_error_m", fixes.all_fixes[method].value)]
+    paired = {"method": f"{OURS} - {PAPER}", "fixes": "at the turning points", "seed": seed, "pairs": fixes.paired_m.n}
+    rows += [row("tag_fix", paired, "paired_difference_m", fixes.paired_m.mean),
+             row("tag_fix", paired, "paired_difference_ci95_m", fixes.paired_m.half_width),
+             row("tag_fix", {"method": OURS, "seed": seed, "target_m": TARGET_FIX_ERROR_M}, "target_met",
+                 fixes.target_met)]
     for kind, errors in radio.items():
-        rows.append({"experiment": "radio_map", "setting": {"map": kind}, "metric": "median_error_m",
-                     "ours": _median(errors), "paper": None})
+        rows.append(row("radio_map", {"map": kind, "seed": seed, "n": len(errors)}, "median_error_m",
+                        statistics.median(errors)))
     return rows
 
 
-def plot_figures(spiral, moving, routes, out_dir: Path) -> Path:
-    figure, axes = plt.subplots(1, 3, figsize=(15, 4.5))
-    for kind, by_distance in spiral.items():
-        axes[0].plot([d * 100 for d in by_distance], [v * 100 for v in by_distance.values()], "o-", label=kind)
-    axes[0].axhline(PAPER_FIG10_CM["near"], color="grey", linestyle=":", label="paper, < 40 cm")
-    axes[0].axhline(PAPER_FIG10_CM["far"], color="grey", linestyle="--", label="paper, beyond")
-    axes[0].set(xlabel="initial distance [cm]", ylabel="search length [cm]", title="Fig. 10: spiral search")
-    axes[0].legend()
-    axes[1].boxplot([[v * 100 for v in moving[k]] for k in moving], tick_labels=list(moving))
-    axes[1].set(ylabel="final error [cm]", title="Fig. 11: direct vs indirect moving")
-    points = [(name, p) for name, r in routes.items() for p in r.fingerprint_m]
+# -------------------------------------------------------------------------------------------- plots
+
+COLOURS = {PAPER: "tab:blue", OURS: "tab:red"}
+FIG12_TICKS_CM = (1, 3, 10, 30, 100, 300)
+
+
+def plot_fig10(axes: plt.Axes, difference_axes: plt.Axes, spiral: dict[str, dict[float, list[Search]]],
+               runs: int) -> None:
+    for offset, method in zip((-0.6, 0.6), METHODS):
+        points = [spiral_point(spiral[method][d]) for d in FIG10_DISTANCES_M]
+        x = [d * 100 + offset for d in FIG10_DISTANCES_M]
+        means = [np.nan if p.length.mean is None else p.length.mean * 100 for p in points]
+        half = [0.0 if p.length.half_width is None else p.length.half_width * 100 for p in points]
+        axes.errorbar(x, means, yerr=half, fmt="o-", color=COLOURS[method], capsize=3, markersize=4,
+                      label=f"{method} (mean, 95 % interval)")
+        for xi, mean, point in zip(x, means, points):
+            if math.isfinite(mean):
+                axes.annotate(str(point.length.n), (xi, mean), textcoords="offset points", fontsize=6,
+                              xytext=(-12 if method == PAPER else 4, 4), color=COLOURS[method])
+    axes.plot([d * 100 for d in PAPER_FIG10_M], [v * 100 for v in PAPER_FIG10_M.values()], "k*", markersize=11,
+              label="paper, sec. 4.2")
+    axes.set(xlabel="initial distance to the group's centre [cm]", ylabel="search length [cm]",
+             title=f"Fig. 10: {runs} placements per distance (numbers: n found)")
+    axes.legend(fontsize=8)
+    axes.grid(True, alpha=0.3)
+    differences = [paired_difference(spiral, d) for d in FIG10_DISTANCES_M]
+    difference_axes.errorbar([d * 100 for d in FIG10_DISTANCES_M],
+                             [np.nan if i.mean is None else i.mean * 100 for i in differences],
+                             yerr=[0.0 if i.half_width is None else i.half_width * 100 for i in differences],
+                             fmt="o-", color="tab:purple", capsize=3, markersize=4)
+    for distance, interval in zip(FIG10_DISTANCES_M, differences):
+        if interval.mean is not None:
+            difference_axes.annotate(str(interval.n), (distance * 100, interval.mean * 100), fontsize=6,
+                                     textcoords="offset points", xytext=(4, 4))
+    difference_axes.axhline(0.0, color="0.5", linewidth=0.8)
+    difference_axes.set(xlabel="initial distance [cm]", ylabel="ours - paper [cm]",
+                        title="Fig. 10, paired: ours minus the paper's (numbers: pairs)")
+    difference_axes.grid(True, alpha=0.3)
+
+
+def plot_fig11(axes: plt.Axes, moving: dict[str, dict[int, float | None]]) -> None:
+    values = [[e * 100 for e in done(errors)] for errors in moving.values()]
+    axes.boxplot(values, tick_labels=[f"{kind}\nn={len(v)}" for kind, v in zip(moving, values)])
+    axes.set(ylabel="final error [cm]", title="Fig. 11: direct vs indirect moving")
+    axes.grid(True, axis="y", alpha=0.3)
+
+
+def plot_fig12(axes: plt.Axes, legs: list[Leg]) -> None:
+    points = [(route, point) for route, (_, route_points) in ROUTES.items() for point in route_points]
     x = np.arange(len(points))
-    axes[2].bar(x - 0.2, [_median(routes[n].fingerprint_m[p]) * 100 for n, p in points], 0.4, label="fingerprinting")
-    axes[2].bar(x + 0.2, [_median(routes[n].two_tier_m[p]) * 100 for n, p in points], 0.4, label="two-tier")
-    axes[2].set_xticks(x, [p for _, p in points])
-    axes[2].set(ylabel="median error [cm]", yscale="log", title="Fig. 12: error at the turning points")
-    axes[2].legend()
+    series = {"fingerprinting": lambda leg: leg.fingerprint_m, f"two-tier {OURS}": lambda leg: leg.fix_m,
+              f"two-tier {PAPER}": lambda leg: leg.tag_position_m}
+    for offset, (label, value) in zip((-0.27, 0.0, 0.27), series.items()):
+        medians = [Median.of([v for v in map(value, legs_at(legs, route, point)) if v is not None])
+                   for route, point in points]
+        centres = np.array([np.nan if m.value is None else m.value * 100 for m in medians])
+        low = [0.0 if m.bounds is None or m.value is None else (m.value - m.bounds[0]) * 100 for m in medians]
+        high = [0.0 if m.bounds is None or m.value is None else (m.bounds[1] - m.value) * 100 for m in medians]
+        axes.errorbar(x + offset, centres, yerr=[low, high], fmt="o", capsize=3, markersize=4, label=label)
+    counts = [len([leg for leg in legs_at(legs, route, point) if leg.fix_m is not None]) for route, point in points]
+    axes.set_xticks(x, [f"{point}\nn={n}" for (_, point), n in zip(points, counts)], fontsize=8)
+    axes.set_yscale("log")
+    axes.yaxis.set_major_locator(FixedLocator(FIG12_TICKS_CM))
+    axes.yaxis.set_minor_locator(NullLocator())
+    axes.set_yticklabels([str(tick) for tick in FIG12_TICKS_CM])
+    axes.set(ylabel="error [cm], median and 95 % interval", title="Fig. 12: error at the turning points")
+    axes.legend(fontsize=8)
+    axes.grid(True, axis="y", alpha=0.3)
+
+
+def plot_figures(spiral, moving, legs: list[Leg], runs: int, out_dir: Path) -> Path:
+    figure, axes = plt.subplots(2, 2, figsize=(14, 10))
+    plot_fig10(axes[0][0], axes[1][0], spiral, runs)
+    plot_fig11(axes[0][1], moving)
+    plot_fig12(axes[1][1], legs)
     return save(figure, out_dir / "two_tier_figs10_12.png", dpi=110)
+
+
+# --------------------------------------------------------------------------------------------- verb
+
+def reproduce_two_tier(runs: int, out_dir: Path, as_json: bool, seed: int = EVALUATION_SEED,
+                       fig10_runs: int = FIG10_RUNS) -> int:
+    """Run, report and plot; 0 when our median tag-fix error at the turning points meets the target, else 1."""
+    if runs < 1 or fig10_runs < 1:
+        raise ConfigError("--runs", "", f"must be at least 1, got {min(runs, fig10_runs)}")
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    world = load_world(WORLD_FILE)
+    condition_rows = conditions(world)
+    site = grid_site(seed)
+    spiral = fig10(fig10_runs, seed)
+    theorem = theorem1(fig10_runs, seed)
+    moving = fig11(runs, seed)
+    legs = fig12(runs, seed)
+    fixes = fix_figures(legs)
+    survey_map = RadioMap(robot_survey(Site.of(world, RadioMap()), load_route_map(MAP_FILE), seed))
+    radio = {"grid": tier_one_errors(site, site.radio_map, seed), "survey": tier_one_errors(site, survey_map, seed)}
+    rows = json_rows(condition_rows, spiral, theorem, moving, legs, fixes, radio, seed)
+    (out_dir / "two_tier_rows.json").write_text(json.dumps(rows, indent=1) + "\n")
+    plot = plot_figures(spiral, moving, legs, fig10_runs, out_dir)
+    # Only the JSON goes to stdout with --json, so a program can parse it whole.
+    notes = sys.stderr if as_json else sys.stdout
+    if as_json:
+        print(json.dumps(rows, indent=1))
+    else:
+        print("\n".join(report_lines(condition_rows, spiral, theorem, moving, legs, fixes, radio,
+                                      len(site.radio_map), len(survey_map), runs, fig10_runs, seed)))
+    print(f"plot: {plot}; rows: {out_dir / 'two_tier_rows.json'}", file=notes)
+    return 0 if fixes.target_met else 1

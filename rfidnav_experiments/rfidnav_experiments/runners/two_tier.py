@@ -1,11 +1,13 @@
 """In-process two-tier navigation (paper 003): the navigator core of the DDS node driving an idealised robot
 through a simulated flat, for the paper's statistics.
 
-The robot is a unicycle stepped at ``STEP_S`` with the commanded velocities (no motor dynamics). What the
-navigator sees is simulated as the nodes simulate it: wheel odometry whose distance is off by
-``odometry_scale_error`` (paper 003: about 1 m per 20 m with a load), the e-compass (rfidnav_sim.compass_model),
-the HF floor reader (every tag within its range of the robot's centre) and the location server (the WiFi
-model's scan at the true position matched against a radio map). Only the simulation knows the true pose.
+The robot is a unicycle stepped at the navigator's control rate with the commanded velocities (no motor
+dynamics). The navigator is the two_tier_navigator node's, with its shipped parameters
+(config/params/two_tier_navigator.yaml). What it sees is simulated as the nodes simulate it: wheel odometry whose
+distance is off by ``odometry_scale_error`` (paper 003: about 1 m per 20 m with a load), the e-compass of
+compass_sim.yaml, the HF floor reader of reader_hf_floor.yaml (the rfid_reader_sim node's reader: polled every
+500-600 ms, some polls failing; a poll falls on the first step at or after its time) and the location server
+(the WiFi model's scan at the true position matched against a radio map). Only the simulation knows the true pose.
 """
 
 from __future__ import annotations
@@ -16,33 +18,39 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from rfidnav_bringup.scenario import CONFIG_DIR
 from rfidnav_common.errors import ConfigError
 from rfidnav_common.robot_map import RouteMap
-from rfidnav_common.seeding import rng_for
+from rfidnav_common.seeding import derive_seed, rng_for
 from rfidnav_common.tag_groups import HF_READ_RANGE_M
-from rfidnav_experiments.runners.shipped import shipped_parameters
+from rfidnav_experiments.runners.shipped import file_parameters, shipped_parameters
 from rfidnav_localization.dead_reckoning import TIER_TAG, Fix
 from rfidnav_localization.errors import LocateError
 from rfidnav_localization.fingerprint import Fingerprint, LocateSettings, RadioMap
+from rfidnav_planning.parameters import TwoTierNavigatorParameters
 from rfidnav_planning.two_tier_navigation import LOCATE, MapTag, Request, TwoTierNavigator, TwoTierSettings
 from rfidnav_sim.compass_model import CompassModel
 from rfidnav_sim.kinematics import unicycle_step
-from rfidnav_sim.parameters import CompassParameters, WifiSimParameters
+from rfidnav_sim.parameters import CompassParameters, ReaderParameters, WifiSimParameters
 from rfidnav_sim.wifi_model import WifiModel
 from rfidnav_sim.world import World
 
-STEP_S = 0.05                      # control and simulation step (20 Hz)
+NAVIGATOR = shipped_parameters(TwoTierNavigatorParameters, "two_tier_navigator")    # the node's, as shipped
+SETTINGS = NAVIGATOR.settings()
+STEP_S = 1.0 / NAVIGATOR.control_rate_hz    # control and simulation step
 SURVEY_FRESH_M = 2.0               # survey only within this odometry distance of a tag fix (sd ~ 10 cm)
+ODOMETRY_SCALE_ERROR = 0.05        # odometry distance 5 % long: paper 003 sec. 4.1, 1 m of error per 20 m
 COMPASS = shipped_parameters(CompassParameters, "compass_sim").model()   # the compass_sim node's
+FLOOR_READER_FILE = CONFIG_DIR / "params" / "reader_hf_floor.yaml"       # two_tier_home's rfid_reader role
+FLOOR_READER = file_parameters(ReaderParameters, FLOOR_READER_FILE, "rfid_reader_sim", world_file="unused")
 
 
 @dataclass(frozen=True)
 class Site:
-    """A world as the experiments use it: its WiFi, its floor tags, and the location server's two maps."""
+    """A world as the experiments use it: its WiFi and the location server's two maps (its floor tags are read
+    by the floor reader, from the world)."""
     world: World
     wifi: WifiModel
-    tag_ids: tuple[str, ...]
-    tag_positions: np.ndarray             # N x 2
     tag_map: tuple[MapTag, ...]           # what the server serves (every tag of every group)
     radio_map: RadioMap
 
@@ -50,9 +58,7 @@ class Site:
     def of(cls, world: World, radio_map: RadioMap) -> Site:
         tags = [MapTag(tag_id, position, group.group_id, group.shape)
                 for group in world.tag_groups for tag_id, position in group.tags()]
-        return cls(world, wifi_model(world),
-                   tuple(tag.tag_id for tag in tags), np.array([tag.position for tag in tags], dtype=float),
-                   tuple(tags), radio_map)
+        return cls(world, wifi_model(world), tuple(tags), radio_map)
 
     def tags_near(self, centre: tuple[float, float], radius_m: float) -> list[MapTag]:
         return [tag for tag in self.tag_map if math.dist(tag.position, centre) <= radius_m]
@@ -101,6 +107,7 @@ class TwoTierRun:
     target: tuple[float, float]
     path_length_m: float
     fix_errors_m: tuple[float, ...]        # true distance from each tier-two fix's position (at the fix)
+    tag_position_errors_m: tuple[float, ...]   # the same fixes taken at the tags read (their centroid): the paper's
     tier_one_errors_m: tuple[float, ...]   # true distance from each tier-one answer
     searches: int
     search_length_m: float
@@ -114,23 +121,29 @@ class TwoTierRun:
 
 
 def run_two_tier(site: Site, start: tuple[float, float, float], target: tuple[float, float],
-                 settings: TwoTierSettings, rng: np.random.Generator, odometry_scale_error: float = 0.05,
-                 compass: CompassModel = COMPASS, locate: LocateSettings = LocateSettings(),
-                 max_time_s: float = 1800.0, survey_spacing_m: float | None = None,
-                 known_start: Fix | None = None) -> TwoTierRun:
-    """One navigation from ``start`` (true pose) to ``target``. With ``survey_spacing_m`` the robot also surveys
-    (paper 003's automatic radio map construction): a scan every that many metres while its position is fresh
-    from a tag fix (within SURVEY_FRESH_M), recorded at the position it believes (never the true one) and added
-    to the site's radio map at once, as the add_fingerprint service does."""
+                 settings: TwoTierSettings, rng: np.random.Generator, reader_seed: int,
+                 odometry_scale_error: float = ODOMETRY_SCALE_ERROR, compass: CompassModel = COMPASS,
+                 locate: LocateSettings = LocateSettings(), max_time_s: float = 1800.0,
+                 survey_spacing_m: float | None = None, known_start: Fix | None = None) -> TwoTierRun:
+    """One navigation from ``start`` (true pose) to ``target``, the compass and WiFi drawn from ``rng``, the floor
+    reader's streams seeded from ``reader_seed`` (as the rfid_reader_sim node seeds them from its seed). With
+    ``survey_spacing_m`` the robot also surveys (paper 003's automatic radio map construction): a scan every that
+    many metres while its position is fresh from a tag fix (within SURVEY_FRESH_M), recorded at the position it
+    believes (never the true one) and added to the site's radio map at once, as the add_fingerprint service
+    does."""
     x, y, yaw = start
+    reader = FLOOR_READER.simulated_reader(site.world, reader_seed)
+    floor_port = NAVIGATOR.floor_antenna
+    positions = {tag.tag_id: tag.position for tag in site.tag_map}
     survey: list[tuple[tuple[float, float], dict[str, float]]] = []
     surveyed_at_m = -math.inf
     odom = (0.0, 0.0, 0.0)
     navigator = TwoTierNavigator(settings)
     decision = navigator.start(target, known_start)
     fix_errors: list[float] = []
+    tag_position_errors: list[float] = []
     tier_one_errors: list[float] = []
-    fixes_seen = 0
+    fixes_seen = len(navigator.progress.fixes)      # a known start is no fix of the reader's
     time_s = path_m = 0.0
     while not decision.finished and time_s < max_time_s:
         if decision.request is not None:
@@ -144,13 +157,15 @@ def run_two_tier(site: Site, start: tuple[float, float, float], target: tuple[fl
         odom = (odom[0] + dx, odom[1] + dy, odom[2] + dyaw)
         path_m += abs(linear) * STEP_S
         time_s += STEP_S
-        reads = [site.tag_ids[i] for i in np.flatnonzero(
-            np.hypot(site.tag_positions[:, 0] - x, site.tag_positions[:, 1] - y) <= HF_READ_RANGE_M)]
+        round_reads = reader.round_at(x, y, yaw, time_s) or []
+        reads = [read.tag_id for read in round_reads if read.antenna == floor_port]
         decision = navigator.step(odom, compass.measure(yaw, rng), reads)
         fixes = navigator.progress.fixes
         for fix in fixes[fixes_seen:]:
             if fix.tag_id:
                 fix_errors.append(math.dist(fix.position, (x, y)))
+                read_at = np.mean([positions[tag_id] for tag_id in reads if tag_id in positions], axis=0)
+                tag_position_errors.append(math.dist(read_at, (x, y)))
         fixes_seen = len(fixes)
         estimate = navigator.estimate()
         if (survey_spacing_m is not None and estimate.last_fix is not None and estimate.last_fix.tag_id
@@ -165,7 +180,8 @@ def run_two_tier(site: Site, start: tuple[float, float, float], target: tuple[fl
         decision = navigator.finish(False, f"timed out after {max_time_s:g} s")
     progress = navigator.progress
     return TwoTierRun(decision.success, decision.message, (x, y), target, path_m, tuple(fix_errors),
-                      tuple(tier_one_errors), progress.searches, progress.search_length_m, tuple(progress.visited),
+                      tuple(tag_position_errors), tuple(tier_one_errors), progress.searches,
+                      progress.search_length_m, tuple(progress.visited),
                       time_s, tuple(survey))
 
 
@@ -191,9 +207,9 @@ def robot_survey(site: Site, robot_map: RouteMap, seed: int, spacing_m: float = 
     first = robot_map.tag_groups[0].centre
     pose = (first[0], first[1], 0.0)
     known = Fix(first, HF_READ_RANGE_M, TIER_TAG, f"{robot_map.tag_groups[0].group_id} (dock)")
-    for group in robot_map.tag_groups[1:]:
-        run = run_two_tier(site, pose, group.centre, TwoTierSettings(), rng, survey_spacing_m=spacing_m,
-                           known_start=known)
+    for leg, group in enumerate(robot_map.tag_groups[1:]):
+        run = run_two_tier(site, pose, group.centre, SETTINGS, rng, derive_seed(seed, f"robot survey:{leg}"),
+                           survey_spacing_m=spacing_m, known_start=known)
         pose = (run.final_position[0], run.final_position[1], 0.0)
         known = None if not run.success else Fix(group.centre, HF_READ_RANGE_M, TIER_TAG, group.group_id)
     return list(site.radio_map.fingerprints)
