@@ -66,6 +66,15 @@ class Pose2D:
         self.yaw = math.remainder(self.yaw + turn, 2.0 * math.pi)
 
 
+def moves_into_wall(walls: np.ndarray, before: tuple[float, float], after: tuple[float, float],
+                    footprint_radius_m: float) -> bool:
+    """Whether moving a round base of ``footprint_radius_m`` from ``before`` to ``after`` takes it into one of
+    ``walls`` (N x 4, N >= 1): closer than its radius and closer than it was (moving away from a wall it already
+    overlaps is allowed: that is how a robot put down too close gets free)."""
+    distance, _ = nearest_on_segments(after, walls)
+    return distance < footprint_radius_m and distance < nearest_on_segments(before, walls)[0]
+
+
 def unicycle_step(yaw: float, linear_mps: float, angular_radps: float, dt: float) -> tuple[float, float, float]:
     """(dx, dy, dyaw) of an ideal unicycle over ``dt``, moving along the mid-step heading: the robot of the
     in-process runners where the base's wheel limits and motor dynamics do not matter."""
@@ -128,12 +137,12 @@ class DiffDriveBase:
         events: list[BaseEventRecord] = []
         moved = math.hypot(self.truth.x - before.x, self.truth.y - before.y)
         if len(self.walls) and (self.bumpers.bumped or moved >= self.clearance_m):
-            distance, point = self.wall_distance(self.truth)
-            if distance < limits.footprint_radius_m and distance < self.wall_distance(before)[0]:
+            if moves_into_wall(self.walls, (before.x, before.y), (self.truth.x, self.truth.y),
+                               limits.footprint_radius_m):
                 # The wheels stall against the wall: the step is not made, and the encoders do not count it.
                 self.truth, self.left_speed, self.right_speed = before, 0.0, 0.0
-                distance, point = self.wall_distance(before)
                 left_m = right_m = 0.0
+            distance, point = self.wall_distance(self.truth)
             self.clearance_m = distance - limits.footprint_radius_m - CONTACT_MARGIN_M
             events = self.update_bumpers(distance, point)
         else:

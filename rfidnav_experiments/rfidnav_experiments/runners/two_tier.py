@@ -1,13 +1,15 @@
-"""In-process two-tier navigation (paper 003): the navigator core of the DDS node driving an idealised robot
-through a simulated flat, for the paper's statistics.
+"""In-process two-tier navigation (paper 003): the navigator core of the DDS node driving an idealised robot through a
+simulated flat, for the paper's statistics.
 
-The robot is a unicycle stepped at the navigator's control rate with the commanded velocities (no motor
-dynamics). The navigator is the two_tier_navigator node's, with its shipped parameters
-(config/params/two_tier_navigator.yaml). What it sees is simulated as the nodes simulate it: wheel odometry whose
-distance is off by ``odometry_scale_error`` (paper 003: about 1 m per 20 m with a load), the e-compass of
-compass_sim.yaml, the HF floor reader of reader_hf_floor.yaml (the rfid_reader_sim node's reader: polled every
-500-600 ms, some polls failing; a poll falls on the first step at or after its time) and the location server
-(the WiFi model's scan at the true position matched against a radio map). Only the simulation knows the true pose.
+The robot is a unicycle stepped at the navigator's control rate with the commanded velocities (no motor dynamics),
+as round as robot_sim's base: a step into one of the flat's walls is not made (and not counted by the odometry), as
+robot_sim stalls its base there; ``TwoTierRun.bumps`` counts those steps. The navigator is the two_tier_navigator
+node's, with its shipped parameters (config/params/two_tier_navigator.yaml). What it sees is simulated as the nodes
+simulate it: wheel odometry whose distance is off by ``odometry_scale_error`` (paper 003: about 1 m per 20 m with a
+load), the e-compass of compass_sim.yaml, the HF floor reader of reader_hf_floor.yaml (the rfid_reader_sim node's
+reader: polled every 500-600 ms, some polls failing; a poll falls on the first step at or after its time) and the
+location server (the WiFi model's scan at the true position matched against a radio map). Only the simulation knows
+the true pose.
 """
 
 from __future__ import annotations
@@ -30,8 +32,8 @@ from rfidnav_localization.fingerprint import Fingerprint, LocateSettings, RadioM
 from rfidnav_planning.parameters import TwoTierNavigatorParameters
 from rfidnav_planning.two_tier_navigation import LOCATE, MapTag, Request, TwoTierNavigator, TwoTierSettings
 from rfidnav_sim.compass_model import CompassModel
-from rfidnav_sim.kinematics import unicycle_step
-from rfidnav_sim.parameters import CompassParameters, ReaderParameters, WifiSimParameters
+from rfidnav_sim.kinematics import moves_into_wall, unicycle_step
+from rfidnav_sim.parameters import CompassParameters, ReaderParameters, RobotSimParameters, WifiSimParameters
 from rfidnav_sim.wifi_model import WifiModel
 from rfidnav_sim.world import World
 
@@ -41,6 +43,7 @@ STEP_S = 1.0 / NAVIGATOR.control_rate_hz    # control and simulation step
 SURVEY_FRESH_M = 2.0               # survey only within this odometry distance of a tag fix (sd ~ 10 cm)
 ODOMETRY_SCALE_ERROR = 0.05        # odometry distance 5 % long: paper 003 sec. 4.1, 1 m of error per 20 m
 COMPASS = shipped_parameters(CompassParameters, "compass_sim").model()   # the compass_sim node's
+FOOTPRINT_RADIUS_M = shipped_parameters(RobotSimParameters, "robot_sim", world_file="-").footprint_radius_m
 FLOOR_READER_FILE = CONFIG_DIR / "params" / "reader_hf_floor.yaml"       # two_tier_home's rfid_reader role
 FLOOR_READER = file_parameters(ReaderParameters, FLOOR_READER_FILE, "rfid_reader_sim", world_file="unused")
 
@@ -114,6 +117,7 @@ class TwoTierRun:
     visited: tuple[str, ...]
     duration_s: float
     survey: tuple[tuple[tuple[float, float], dict[str, float]], ...] = ()   # (estimated position, scan)
+    bumps: int = 0                         # steps refused because they drove into a wall
 
     @property
     def final_error_m(self) -> float:
@@ -145,12 +149,16 @@ def run_two_tier(site: Site, start: tuple[float, float, float], target: tuple[fl
     tier_one_errors: list[float] = []
     fixes_seen = len(navigator.progress.fixes)      # a known start is no fix of the reader's
     time_s = path_m = 0.0
+    walls, bumps = site.world.wall_segments(), 0
     while not decision.finished and time_s < max_time_s:
         if decision.request is not None:
             decision = answer(site, navigator, decision.request, (x, y), rng, locate, tier_one_errors)
             continue
         linear, angular = decision.command
         dx, dy, dyaw = unicycle_step(yaw, linear, angular, STEP_S)
+        if len(walls) and moves_into_wall(walls, (x, y), (x + dx, y + dy), FOOTPRINT_RADIUS_M):
+            bumps += 1
+            linear = dx = dy = 0.0                      # stalled against the wall: it only turns
         x, y, yaw = x + dx, y + dy, yaw + dyaw
         # Odometry: the same motion with the distance off by the scale error.
         dx, dy, dyaw = unicycle_step(odom[2], linear * (1.0 + odometry_scale_error), angular, STEP_S)
@@ -182,7 +190,7 @@ def run_two_tier(site: Site, start: tuple[float, float, float], target: tuple[fl
     return TwoTierRun(decision.success, decision.message, (x, y), target, path_m, tuple(fix_errors),
                       tuple(tag_position_errors), tuple(tier_one_errors), progress.searches,
                       progress.search_length_m, tuple(progress.visited),
-                      time_s, tuple(survey))
+                      time_s, tuple(survey), bumps)
 
 
 def answer(site: Site, navigator: TwoTierNavigator, request: Request, true_position: tuple[float, float],
