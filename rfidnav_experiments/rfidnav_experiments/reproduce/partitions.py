@@ -41,7 +41,7 @@ import math
 import statistics
 import sys
 import time
-from collections.abc import Hashable, Iterable
+from collections.abc import Hashable, Iterable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -436,8 +436,8 @@ def oracle_interval(groups: dict[Key, list[NavigationResult]], r: float, level: 
 
 @dataclass(frozen=True)
 class OrientationErrors:
-    paper_deg: dict[int, float]      # mean |error| after k partitions traversed
-    filter_deg: dict[int, float]
+    paper_deg: dict[int, Interval]      # |error| after k partitions traversed
+    filter_deg: dict[int, Interval]     # over the lines where the filter had a heading by then
     lines: int
 
 
@@ -480,8 +480,8 @@ def fig11_orientation(runs: int, seed: int = DEVELOPMENT_SEED) -> OrientationErr
                                             odom)
             if k in filtered and estimate.yaw is not None:
                 filtered[k].append(abs(math.degrees(wrap_angle(estimate.yaw - heading))))
-    return OrientationErrors({k: statistics.fmean(v) for k, v in paper.items()},
-                             {k: statistics.fmean(v) for k, v in filtered.items() if v}, runs)
+    return OrientationErrors({k: Interval.of(v) for k, v in paper.items()},
+                             {k: Interval.of(v) for k, v in filtered.items() if v}, runs)
 
 
 # ------------------------------------------------------------------------------ deployments (Figs. 15-20)
@@ -498,10 +498,9 @@ def saved_pct(counts: dict[int, dict[str, int]], layout: str) -> float:
 
 @dataclass(frozen=True)
 class Accuracy:
-    location_cm: float       # mean distance from a random point to its partition's centre
-    location_rel: float      # the same in units of r
-    orientation_deg: float   # mean |heading error| after moving into the next partition
-    samples: int
+    location_m: Interval        # distance from a random point to its partition's centre
+    location_rel: Interval      # the same in units of r
+    orientation_deg: Interval   # |heading error| after moving into the next partition
 
 
 def deployment_accuracy(layout: str, r: float, samples: int, seed: int = DEVELOPMENT_SEED) -> Accuracy:
@@ -518,8 +517,7 @@ def deployment_accuracy(layout: str, r: float, samples: int, seed: int = DEVELOP
         _, heading, _, pieces = straight_traversal(field, rng, 1)
         bounds = orientation_bounds(field.lattice, r, [pieces[0].tags, pieces[1].tags])
         orientation.append(abs(math.degrees(wrap_angle(0.5 * (bounds[0] + bounds[1]) - heading))))
-    mean_location = statistics.fmean(location)
-    return Accuracy(100.0 * mean_location, mean_location / r, statistics.fmean(orientation), samples)
+    return Accuracy(Interval.of(location), Interval.of([d / r for d in location]), Interval.of(orientation))
 
 
 def accuracy_table_data(samples: int, seed: int = DEVELOPMENT_SEED) -> dict[tuple[str, float], Accuracy]:
@@ -640,10 +638,10 @@ def cost_tables(summaries: dict[Key, CostSummary], runs: int) -> list[str]:
 
 
 def fig11_lines(errors: OrientationErrors) -> list[str]:
-    rows = [[str(k), f"{errors.paper_deg[k]:.2f}", f"{errors.filter_deg[k]:.2f}" if k in errors.filter_deg else "-"]
-            for k in FIG11_PARTITIONS]
-    return [f"Fig. 11: mean orientation error [deg] after k partitions traversed, r = {FIG11_RANGE_M * 100:g} cm, "
-            f"{errors.lines} lines (paper: falls quickly, little gain after about 6)",
+    rows = [[str(k), errors.paper_deg[k].text(1.0, 2), errors.filter_deg[k].text(1.0, 2) if k in errors.filter_deg
+             else "-"] for k in FIG11_PARTITIONS]
+    return [f"Fig. 11: orientation error [deg] after k partitions traversed, r = {FIG11_RANGE_M * 100:g} cm, mean ± "
+            f"95 % over {errors.lines} random lines (n) (paper: falls quickly, little gain after about 6)",
             *table(["k", "paper bounds", "filter"], rows)]
 
 
@@ -664,17 +662,15 @@ def count_lines(counts: dict[int, dict[str, int]]) -> list[str]:
 
 
 def accuracy_lines(accuracy: dict[tuple[str, float], Accuracy]) -> list[str]:
-    header = ["r", *(f"{layout} loc cm (/r)" for layout in LAYOUTS), *(f"{layout} orient deg" for layout in LAYOUTS)]
+    header = ["r", *(f"{layout} loc / r" for layout in LAYOUTS), *(f"{layout} orient deg" for layout in LAYOUTS)]
     rows = []
     for r in ACCURACY_RANGES_M:
-        rows.append([f"{r * 100:g} cm",
-                     *(f"{accuracy[(layout, r)].location_cm:.2f} ({accuracy[(layout, r)].location_rel:.2f})"
-                       for layout in LAYOUTS),
-                     *(f"{accuracy[(layout, r)].orientation_deg:.1f}" for layout in LAYOUTS)])
-    samples = next(iter(accuracy.values())).samples
-    return ["Figs. 16, 17, 19, 20: mean location error (point to partition centre) and orientation error (one "
-            f"partition crossed), {samples} samples each", "(paper: grid locates better than triangular, triangular "
-            "orients better than grid, compressed improves both)", *table(header, rows)]
+        rows.append([f"{r * 100:g} cm", *(accuracy[(layout, r)].location_rel.text(1.0, 3) for layout in LAYOUTS),
+                     *(accuracy[(layout, r)].orientation_deg.text(1.0, 1) for layout in LAYOUTS)])
+    return ["Figs. 16, 17, 19, 20: location error (a random point to its partition's centre, in read ranges) and "
+            "orientation error (one partition crossed), mean ± 95 % over n random samples", "(paper: grid locates "
+            "better than triangular, triangular orients better than grid, compressed improves both)",
+            *table(header, rows)]
 
 
 def human_report(condition_rows: list[Condition], summaries: dict[Key, CostSummary],
@@ -751,12 +747,12 @@ def json_rows(condition_rows: list[Condition], summaries: dict[Key, CostSummary]
         row("partitions.fig12_14", setting, "final_error_m", s.final_error_mean_m)
     if fig11 is not None:
         for k in FIG11_PARTITIONS:
-            setting = {"partitions": k, "read_range_m": FIG11_RANGE_M, "lines": fig11.lines}
-            row("partitions.fig11", {"method": PAPER, **setting}, "orientation_error_rad",
-                math.radians(fig11.paper_deg[k]))
+            setting = {"partitions": k, "read_range_m": FIG11_RANGE_M}
+            rows.extend(interval_rows("partitions.fig11", {"method": PAPER, **setting}, "orientation_error_deg",
+                                      fig11.paper_deg[k]))
             if k in fig11.filter_deg:
-                row("partitions.fig11", {"method": FILTER, **setting}, "orientation_error_rad",
-                    math.radians(fig11.filter_deg[k]))
+                rows.extend(interval_rows("partitions.fig11", {"method": FILTER, **setting}, "orientation_error_deg",
+                                          fig11.filter_deg[k]))
     if counts is not None:
         for side, c in counts.items():
             for layout in LAYOUTS:
@@ -767,9 +763,9 @@ def json_rows(condition_rows: list[Condition], summaries: dict[Key, CostSummary]
                 PAPER_SAVED_PCT[layout])
     if accuracy is not None:
         for (layout, r), a in accuracy.items():
-            setting = {"layout": layout, "read_range_m": r, "samples": a.samples}
-            row("partitions.fig16_20", setting, "location_error_m", a.location_cm / 100.0)
-            row("partitions.fig16_20", setting, "orientation_error_rad", math.radians(a.orientation_deg))
+            setting = {"layout": layout, "read_range_m": r}
+            rows.extend(interval_rows("partitions.fig16_20", setting, "location_error_m", a.location_m))
+            rows.extend(interval_rows("partitions.fig16_20", setting, "orientation_error_deg", a.orientation_deg))
     return rows
 
 
@@ -831,14 +827,23 @@ def plot_costs(summaries: dict[Key, CostSummary], runs: int, out_dir: Path) -> P
     return save(figure, out_dir / "partitions_fig12_14_cost.png", dpi=90)
 
 
+def plot_with_intervals(ax: Any, xs: Sequence[float], intervals: Sequence[Interval], style: str, label: str) -> None:
+    """Means joined by a line, each with its 95 % interval as an error bar."""
+    ax.errorbar(xs, [np.nan if i.mean is None else i.mean for i in intervals],
+                yerr=[i.half_width or 0.0 for i in intervals], fmt=style, capsize=3, markersize=4, label=label)
+
+
 def plot_fig11(errors: OrientationErrors, out_dir: Path) -> Path:
     figure, ax = plt.subplots(figsize=(6, 4))
     ks = list(FIG11_PARTITIONS)
-    ax.plot(ks, [errors.paper_deg[k] for k in ks], "o-", label=f"paper bounds (sec. 4.2), n = {errors.lines}")
-    ax.plot([k for k in ks if k in errors.filter_deg], [errors.filter_deg[k] for k in ks if k in errors.filter_deg],
-            "s-", label=f"particle filter, n <= {errors.lines}")
+    plot_with_intervals(ax, ks, [errors.paper_deg[k] for k in ks], "o-",
+                        f"paper bounds (sec. 4.2), n = {errors.lines} per point")
+    filter_ks = [k for k in ks if k in errors.filter_deg]
+    counts = sorted({errors.filter_deg[k].n for k in filter_ks})
+    plot_with_intervals(ax, filter_ks, [errors.filter_deg[k] for k in filter_ks], "s-",
+                        f"particle filter, n = {counts[0]}-{counts[-1]} per point" if counts else "particle filter")
     ax.set_xlabel("partitions traversed")
-    ax.set_ylabel("mean orientation error [deg]")
+    ax.set_ylabel("orientation error [deg], mean ± 95 %")
     ax.set_title(f"Fig. 11: r = {FIG11_RANGE_M * 100:g} cm")
     ax.grid(True, alpha=0.3)
     ax.legend()
@@ -850,17 +855,18 @@ def plot_deployments(counts: dict[int, dict[str, int]], accuracy: dict[tuple[str
     figure, (ax_count, ax_loc, ax_orient) = plt.subplots(1, 3, figsize=(15, 4.5))
     sides = list(counts)
     ranges_cm = [r * 100 for r in ACCURACY_RANGES_M]
-    samples = next(iter(accuracy.values())).samples
     for layout in LAYOUTS:
         ax_count.plot([s * s for s in sides], [counts[s][layout] for s in sides], "o-", label=layout)
-        ax_loc.plot(ranges_cm, [accuracy[(layout, r)].location_rel for r in ACCURACY_RANGES_M], "o-",
-                    label=f"{layout}, n = {samples} per point")
-        ax_orient.plot(ranges_cm, [accuracy[(layout, r)].orientation_deg for r in ACCURACY_RANGES_M], "o-",
-                       label=f"{layout}, n = {samples} per point")
+        samples = accuracy[(layout, ACCURACY_RANGES_M[0])].location_rel.n
+        plot_with_intervals(ax_loc, ranges_cm, [accuracy[(layout, r)].location_rel for r in ACCURACY_RANGES_M], "o-",
+                            f"{layout}, n = {samples} per point")
+        plot_with_intervals(ax_orient, ranges_cm, [accuracy[(layout, r)].orientation_deg for r in ACCURACY_RANGES_M],
+                            "o-", f"{layout}, n = {samples} per point")
     ax_count.set(xlabel="area [m^2]", ylabel="tags (exact count)",
                  title=f"Figs. 15, 18: tags (r = {COUNT_RANGE_M * 100:g} cm)")
-    ax_loc.set(xlabel="read range r [cm]", ylabel="mean location error / r", title="Figs. 16, 19: location error")
-    ax_orient.set(xlabel="read range r [cm]", ylabel="mean orientation error [deg]",
+    ax_loc.set(xlabel="read range r [cm]", ylabel="location error / r, mean ± 95 %",
+               title="Figs. 16, 19: location error")
+    ax_orient.set(xlabel="read range r [cm]", ylabel="orientation error [deg], mean ± 95 %",
                   title="Figs. 17, 20: orientation error (1 partition)")
     for ax in (ax_loc, ax_orient):
         # A log axis labels its minor ticks too (3, 4, 6, ... on top of each other): label the ranges measured only.
