@@ -839,9 +839,11 @@ def plot_fig11(errors: OrientationErrors, out_dir: Path) -> Path:
     plot_with_intervals(ax, ks, [errors.paper_deg[k] for k in ks], "o-",
                         f"paper bounds (sec. 4.2), n = {errors.lines} per point")
     filter_ks = [k for k in ks if k in errors.filter_deg]
+    # The filter may have no heading yet after the first partitions of some lines: those points average fewer.
     counts = sorted({errors.filter_deg[k].n for k in filter_ks})
+    spread = "-" if not counts else str(counts[0]) if len(counts) == 1 else f"{counts[0]}-{counts[-1]}"
     plot_with_intervals(ax, filter_ks, [errors.filter_deg[k] for k in filter_ks], "s-",
-                        f"particle filter, n = {counts[0]}-{counts[-1]} per point" if counts else "particle filter")
+                        f"particle filter, n = {spread} per point")
     ax.set_xlabel("partitions traversed")
     ax.set_ylabel("orientation error [deg], mean ± 95 %")
     ax.set_title(f"Fig. 11: r = {FIG11_RANGE_M * 100:g} cm")
