@@ -378,7 +378,8 @@ def group(results: Iterable[NavigationResult]) -> dict[Key, list[NavigationResul
     return {key: sorted(runs, key=lambda result: result.job.index) for key, runs in groups.items()}
 
 
-FIGURES = ("extra_cost_pct", "extra_time_cost_pct", "extra_cost_to_goal_pct")
+# The two costs reported side by side: the result's field and the summary's.
+COSTS = (("extra_cost_pct", "cost"), ("extra_time_cost_pct", "time_cost"))
 
 
 @dataclass(frozen=True)
@@ -560,7 +561,7 @@ def headline_lines(summaries: dict[Key, CostSummary], groups: dict[Key, list[Nav
     rows = []
     for r in NAVIGATION_RANGES_M:
         paper, ours = summaries[(PAPER, r, level)], summaries[(FILTER, r, level)]
-        for figure, attribute in (("extra_cost_pct", "cost"), ("extra_time_cost_pct", "time_cost")):
+        for figure, attribute in COSTS:
             paper_cost, our_cost = getattr(paper, attribute), getattr(ours, attribute)
             target = target_pct(r, paper_cost.mean)
             difference = paired_difference(groups, FILTER, PAPER, r, level, figure)
@@ -585,7 +586,7 @@ def ablation_lines(summaries: dict[Key, CostSummary], groups: dict[Key, list[Nav
     rows = []
     for r in NAVIGATION_RANGES_M:
         boom = summaries[(ABLATION, r, level)]
-        for figure, attribute in (("extra_cost_pct", "cost"), ("extra_time_cost_pct", "time_cost")):
+        for figure, attribute in COSTS:
             rows.append([f"{r * 100:g} cm", COST_NAMES[figure], getattr(boom, attribute).text(1.0, 2),
                          paired_difference(groups, ABLATION, FILTER, r, level, figure).text(1.0, 2),
                          paired_difference(groups, ABLATION, PAPER, r, level, figure).text(1.0, 2)])
@@ -703,7 +704,7 @@ def headline_json_rows(summaries: dict[Key, CostSummary], groups: dict[Key, list
                               oracle_interval(groups, r, level))
         for method in METHODS:
             s = summaries[(method, r, level)]
-            for figure, attribute in (("extra_cost_pct", "cost"), ("extra_time_cost_pct", "time_cost")):
+            for figure, attribute in COSTS:
                 # The paper's one number: Fig. 12's band, for its translational cost at 2 cm.
                 paper = list(PAPER_BAND_2CM_PCT) if (r == 0.02 and figure == "extra_cost_pct") else None
                 rows += interval_rows("partitions.headline", {**setting, "method": method}, figure,
@@ -714,7 +715,7 @@ def headline_json_rows(summaries: dict[Key, CostSummary], groups: dict[Key, list
                 rows += interval_rows("partitions.headline", {**setting, "ours": ours, "baseline": baseline},
                                       f"paired_difference_{figure}",
                                       paired_difference(groups, ours, baseline, r, level, figure))
-        for figure, attribute in (("extra_cost_pct", "cost"), ("extra_time_cost_pct", "time_cost")):
+        for figure, attribute in COSTS:
             ours_cost = getattr(summaries[(FILTER, r, level)], attribute)
             target = target_pct(r, getattr(summaries[(PAPER, r, level)], attribute).mean)
             rows.append({"experiment": "partitions.headline", "setting": {**setting, "method": FILTER},
