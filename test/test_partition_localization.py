@@ -405,7 +405,7 @@ def test_settings_and_parameters_name_the_bad_field() -> None:
         parameters_from_mapping(PartitionLocalizerParameters, {"particles": 3}, "test.yaml")
 
 
-@pytest.mark.parametrize("name, method", [("paper", "paper"), ("filter", "filter")])
+@pytest.mark.parametrize("name, method", [("paper", "paper"), ("filter", "filter"), ("filter_paper_robot", "filter")])
 def test_parameter_files_set_every_parameter_and_the_paper_file_equals_the_defaults(name: str, method: str) -> None:
     path = WORKSPACE / f"config/params/partition_localizer_{name}.yaml"
     values = node_parameter_values(PartitionLocalizerParameters, path, "partition_localizer")

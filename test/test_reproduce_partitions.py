@@ -1,5 +1,8 @@
-"""``./rfidnav reproduce partitions`` on a reduced grid: rows, tables, plots and the settings it shares with
-the nodes' parameter files."""
+"""``./rfidnav reproduce partitions``: the paper's localizer and our filter compared on the same robot (antenna
+geometry, motion primitives, speeds) from the nodes' parameter files, the boom-and-spin robot as an ablation that
+differs in nothing else, a conditions table that lists every setting, a time cost that charges turns, evaluation
+tasks apart from the development ones, paired differences on the same tasks; and a reduced run's rows, tables and
+plots."""
 
 from __future__ import annotations
 
@@ -8,33 +11,97 @@ import math
 from pathlib import Path
 
 import pytest
+import yaml
 
+from rfidnav_bringup.metrics import extra_time_cost_pct
+from rfidnav_common.errors import ConfigError
 from rfidnav_experiments.reproduce import partitions as rp
+from rfidnav_experiments.reproduce.tables import CONDITION_SOURCES
 from rfidnav_localization.partition import LocalizerSettings
 
 pytestmark = pytest.mark.tier("unit")
 
 
-def test_experiments_use_the_nodes_parameter_files() -> None:
-    paper, ours = rp.localizer_settings("paper"), rp.localizer_settings("filter")
+def file_values(method: str, which: int) -> dict:
+    """The ros__parameters of a method's localizer (0) or navigator (1) file, as written."""
+    node = ("partition_localizer", "partition_navigator")[which]
+    return yaml.safe_load(rp.params_path(rp.METHOD_FILES[method][which]).read_text())[node]["ros__parameters"]
+
+
+def test_the_experiments_use_the_nodes_parameter_files() -> None:
     # The paper file is the defaults; the tagged area is the robot map's (partition_field's 5 x 5 m).
-    assert paper == LocalizerSettings(deployment_area=(0.0, 0.0, 5.0, 5.0))
-    assert ours.method == "filter" and ours.antenna_offset_m == pytest.approx(0.25)
-    assert rp.navigator_settings("paper", 3).approximation_level == 3
-    assert rp.navigator_settings("paper", 3).deviation_check == "partition"
-    assert rp.navigator_settings("filter", 5).spin_quarter_turns > 0
+    assert rp.localizer_settings(rp.PAPER) == LocalizerSettings(deployment_area=(0.0, 0.0, 5.0, 5.0))
+    assert rp.localizer_settings(rp.FILTER).method == rp.localizer_settings(rp.ABLATION).method == "filter"
+    assert rp.navigator_settings(rp.PAPER, 3).approximation_level == 3
+    assert rp.navigator_settings(rp.PAPER, 3).deviation_check == "partition"
+    assert rp.navigator_settings(rp.FILTER, 5).deviation_check == "pose"
+    assert rp.headline_level() == file_values(rp.PAPER, 1)["approximation_level"] == 4
+
+
+def test_the_filter_and_the_paper_localizer_run_on_the_same_robot_with_the_same_motion_primitives() -> None:
+    paper, ours = rp.localizer_settings(rp.PAPER), rp.localizer_settings(rp.FILTER)
+    assert paper.antenna_offset_m == ours.antenna_offset_m == 0.0          # on the rotation axis, as the paper's agent
+    for level in rp.LEVELS:
+        assert rp.navigator_settings(rp.PAPER, level).spin_quarter_turns == 0
+        assert rp.navigator_settings(rp.FILTER, level).spin_quarter_turns == 0
+    assert rp.robot_speeds(rp.PAPER) == rp.robot_speeds(rp.FILTER)
+
+
+def test_the_ablation_differs_from_the_filter_only_in_the_boom_and_the_spin() -> None:
+    for which, expected in ((0, {"antenna", "antenna_offset_m"}), (1, {"spin_quarter_turns"})):
+        filter_values, ablation_values = file_values(rp.FILTER, which), file_values(rp.ABLATION, which)
+        assert set(filter_values) == set(ablation_values)
+        assert {key for key in filter_values if filter_values[key] != ablation_values[key]} == expected
+    assert rp.localizer_settings(rp.ABLATION).antenna_offset_m == pytest.approx(0.25)
+    assert rp.navigator_settings(rp.ABLATION, 4).spin_quarter_turns > 0
+    assert rp.method_levels(rp.ABLATION) == (rp.headline_level(),)
+
+
+def test_the_conditions_table_lists_every_setting_of_the_localizer_and_navigator_files_with_a_source() -> None:
+    for method in rp.METHODS:
+        for which, node in enumerate(("partition_localizer", "partition_navigator")):
+            keys = {f"{node}.{key}" for key in file_values(method, which)}
+            assert keys <= set(rp.SOURCES), (method, keys - set(rp.SOURCES))
+    rows = rp.conditions(runs=10)
+    assert [row.setting for row in rows] == list(rp.SOURCES)
+    assert {row.source for row in rows} <= set(CONDITION_SOURCES)
+    assert all(set(row.values) == set(rp.METHODS) and row.note for row in rows)
+    offset = next(row for row in rows if row.setting == "partition_localizer.antenna_offset_m").values
+    assert offset[rp.PAPER] == offset[rp.FILTER] == 0.0 and offset[rp.ABLATION] == pytest.approx(0.25)
+    assert next(row for row in rows if row.setting == "runs.per_curve").values[rp.PAPER] == 10
+
+
+def test_the_time_cost_charges_rotation() -> None:
+    # On the straight line itself, a quarter turn at 0.8 rad/s costs (pi/2 / 0.8) s against 2 m / 0.2 m/s = 10 s.
+    assert extra_time_cost_pct(2.0, 0.0, 2.0, 0.2, 0.8) == 0.0
+    assert extra_time_cost_pct(2.0, math.pi / 2, 2.0, 0.2, 0.8) == pytest.approx(100.0 * (math.pi / 2 / 0.8) / 10.0)
+    # A navigation turns (towards the goal at least): its time cost exceeds its path cost by exactly its turns' time.
+    job = rp.NavigationJob(rp.PAPER, 0.2, 4, 2, rp.DEVELOPMENT_SEED)
+    run = rp.navigate(job)
+    speeds = rp.robot_speeds(rp.PAPER)
+    assert run.success and run.turned_rad > 0.0
+    assert run.travel_time_s > run.straight_distance_m / speeds.speed_mps
+    turns_pct = 100.0 * (run.turned_rad / speeds.turn_rate_radps) / (run.straight_distance_m / speeds.speed_mps)
+    assert run.extra_time_cost_pct == pytest.approx(run.extra_cost_pct + turns_pct)
+    assert rp.oracle_time_cost_pct(job) > 0.0
+
+
+def test_the_evaluation_tasks_are_not_the_development_tasks() -> None:
+    assert rp.EVALUATION_SEED != rp.DEVELOPMENT_SEED
+    assert {job.seed for job in rp.evaluation_jobs(5)} == {rp.EVALUATION_SEED}
+    assert {job.seed for job in rp.navigation_jobs(5)} == {rp.DEVELOPMENT_SEED}      # what the tests develop on
+    for r in rp.NAVIGATION_RANGES_M:
+        development = {rp.task_of(rp.NavigationJob(rp.PAPER, r, 4, index, rp.DEVELOPMENT_SEED)) for index in range(20)}
+        evaluation = {rp.task_of(rp.NavigationJob(rp.PAPER, r, 4, index, rp.EVALUATION_SEED)) for index in range(20)}
+        assert not development & evaluation
 
 
 def test_every_level_and_method_faces_the_same_tasks() -> None:
     jobs = rp.navigation_jobs(10, ranges=(0.2,), levels=(1, 8))
-    assert len(jobs) == 2 * 2 * 10
-    by_task: dict[int, set[float]] = {}
-    for job in jobs:
-        by_task.setdefault(job.index, set()).add(job.distance_m)
-    assert all(len(distances) == 1 for distances in by_task.values())
+    assert len(jobs) == 3 * 2 * 10
     assert sorted({job.distance_m for job in jobs}) == list(rp.DISTANCES_M)
     # Same (r, index): the same start and goal, whatever the method and level; other indices differ.
-    tasks = {job.index: set() for job in jobs}
+    tasks: dict[int, set] = {job.index: set() for job in jobs}
     for job in jobs:
         tasks[job.index].add(rp.task_of(job))
     assert all(len(task) == 1 for task in tasks.values())
@@ -42,8 +109,27 @@ def test_every_level_and_method_faces_the_same_tasks() -> None:
     for job in jobs:
         (sx, sy, _), goal = rp.task_of(job)
         assert math.dist((sx, sy), goal) == pytest.approx(job.distance_m)
-    results = [rp.run_navigation_job(job) for job in jobs if job.index == 3]
-    assert all(r.success for r in results), [r.message for r in results]
+    # The default grid: the paper at every level, the filter at some (the headline's among them), the ablation at
+    # the headline level only.
+    levels = {(job.method, job.level) for job in rp.navigation_jobs(5)}
+    assert {level for method, level in levels if method == rp.PAPER} == set(rp.LEVELS)
+    assert {level for method, level in levels if method == rp.FILTER} == set(rp.FILTER_LEVELS)
+    assert {level for method, level in levels if method == rp.ABLATION} == {rp.headline_level()}
+
+
+def result(method: str, index: int, cost: float, success: bool = True) -> rp.NavigationResult:
+    job = rp.NavigationJob(method, 0.2, 4, index, rp.EVALUATION_SEED)
+    return rp.NavigationResult(job, success, "", cost, 2.0 * cost, cost, 0.0, 0)
+
+
+def test_paired_differences_are_taken_task_by_task_over_the_tasks_both_completed() -> None:
+    groups = rp.group([result(rp.PAPER, 0, 10.0), result(rp.PAPER, 1, 20.0), result(rp.PAPER, 2, 30.0),
+                       result(rp.FILTER, 2, 1.0), result(rp.FILTER, 1, 4.0), result(rp.FILTER, 0, 5.0, success=False)])
+    difference = rp.paired_difference(groups, rp.FILTER, rp.PAPER, 0.2, 4, "extra_cost_pct")
+    assert difference.n == 2 and difference.mean == pytest.approx(((4.0 - 20.0) + (1.0 - 30.0)) / 2)
+    assert difference.half_width is not None and difference.half_width > 0.0
+    time_difference = rp.paired_difference(groups, rp.FILTER, rp.PAPER, 0.2, 4, "extra_time_cost_pct")
+    assert time_difference.mean == pytest.approx(2.0 * difference.mean)
 
 
 def test_tag_counts_report_what_the_lattices_give() -> None:
@@ -56,38 +142,52 @@ def test_tag_counts_report_what_the_lattices_give() -> None:
 
 def test_deployment_accuracy_orders_the_layouts_as_the_paper_does() -> None:
     accuracy = {layout: rp.deployment_accuracy(layout, 0.2, 200) for layout in ("grid", "triangular", "compressed")}
-    assert accuracy["grid"].location_cm < accuracy["triangular"].location_cm            # Fig. 16
-    assert accuracy["compressed"].location_cm < accuracy["triangular"].location_cm      # Fig. 19
-    assert accuracy["triangular"].orientation_deg < accuracy["grid"].orientation_deg    # Fig. 17
-    assert all(0.0 < a.location_cm < 20.0 for a in accuracy.values())
+    location = {layout: a.location_m.mean for layout, a in accuracy.items()}
+    orientation = {layout: a.orientation_deg.mean for layout, a in accuracy.items()}
+    assert location["grid"] < location["triangular"]                # Fig. 16
+    assert location["compressed"] < location["triangular"]          # Fig. 19
+    assert orientation["triangular"] < orientation["grid"]          # Fig. 17
+    assert all(0.0 < a.location_m.mean < 0.2 and a.location_m.n == 200 and a.location_m.half_width > 0.0
+               for a in accuracy.values())
 
 
 @pytest.mark.tier("slow")
-def test_reduced_reproduction_writes_rows_tables_and_plots(tmp_path: Path, monkeypatch, capsys) -> None:
+def test_reduced_reproduction_writes_conditions_rows_tables_and_plots(tmp_path: Path, monkeypatch, capsys) -> None:
     monkeypatch.setattr(rp, "NAVIGATION_RANGES_M", (0.2, 0.5))
     monkeypatch.setattr(rp, "LEVELS", (2, 4))
     monkeypatch.setattr(rp, "FIG11_RUNS", 10)
     monkeypatch.setattr(rp, "ACCURACY_SAMPLES", 20)
-    monkeypatch.setattr(rp, "ACCURACY_RANGES_M", (0.2,))
+    monkeypatch.setattr(rp, "ACCURACY_RANGES_M", (0.2, 0.5))
     code = rp.reproduce_partitions(runs=5, out_dir=tmp_path, as_json=True)
-    out = capsys.readouterr().out
-    rows = json.loads(out)
+    rows = json.loads(capsys.readouterr().out)
     assert rows == json.loads((tmp_path / "partitions_rows.json").read_text())
     assert code == 0
-    assert {row["experiment"] for row in rows} == {"partitions.fig11", "partitions.fig12_14", "partitions.levels_ge_4",
-                                                  "partitions.fig15_18", "partitions.fig16_20"}
     assert all(set(row) == {"experiment", "setting", "metric", "ours", "paper"} for row in rows)
-    costs = [row for row in rows if row["metric"] == "extra_cost_pct" and row["experiment"] == "partitions.fig12_14"]
-    assert len(costs) == 2 * 2 * 2 * len(rp.DISTANCES_M)
+    conditions = [row for row in rows if row["metric"] == "condition"]
+    assert rows[:len(conditions)] == conditions and len(conditions) == len(rp.SOURCES)
+    assert {row["experiment"] for row in rows} == {"partitions", "partitions.headline", "partitions.fig11",
+                                                  "partitions.fig12_14", "partitions.fig15_18", "partitions.fig16_20"}
+    headline = {(row["metric"], row["setting"].get("method"), row["setting"]["read_range_m"]): row["ours"]
+                for row in rows if row["experiment"] == "partitions.headline"}
+    for r in (0.2, 0.5):
+        for method in rp.METHODS:
+            assert headline[("extra_time_cost_pct_n", method, r)] == 5
+            assert headline[("extra_time_cost_pct", method, r)] > headline[("extra_cost_pct", method, r)]
+        assert isinstance(headline[("target_extra_time_cost_pct_met", rp.FILTER, r)], bool)
+    paired = [row for row in rows if row["metric"] == "paired_difference_extra_time_cost_pct"]
+    assert {(row["setting"]["ours"], row["setting"]["baseline"]) for row in paired} == \
+        {(rp.FILTER, rp.PAPER), (rp.ABLATION, rp.FILTER), (rp.ABLATION, rp.PAPER)}
+    costs = [row for row in rows if row["metric"] == "extra_cost_pct" and row["experiment"] == "partitions.fig12_14"
+             and "distance_m" in row["setting"]]
+    assert len(costs) == 2 * (2 + 2 + 1) * len(rp.DISTANCES_M)
     assert all(row["ours"] is None or math.isfinite(row["ours"]) for row in costs)
     saved = {row["setting"]["layout"]: row for row in rows if row["metric"] == "saved_vs_grid_pct"}
     assert saved["triangular"]["paper"] == 31.0 and saved["compressed"]["paper"] == 9.0
-    for name in ("partitions_fig11_orientation.png", "partitions_fig12_14_cost.png",
-                 "partitions_fig15_20_deployments.png"):
+    for name in ("partitions_headline.png", "partitions_fig11_orientation.png", "partitions_fig12_14_cost.png",
+                 "partitions_fig15_20_deployments.png", "partitions_trajectories.png"):
         assert (tmp_path / name).stat().st_size > 10_000
 
 
 def test_too_few_runs_is_a_clear_error(tmp_path: Path) -> None:
-    from rfidnav_common.errors import ConfigError
     with pytest.raises(ConfigError, match="--runs"):
         rp.reproduce_partitions(runs=2, out_dir=tmp_path, as_json=False)

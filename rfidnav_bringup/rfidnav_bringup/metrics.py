@@ -114,6 +114,21 @@ def partition_metrics(trajectory: Trajectory, mission_start_s: float, mission_en
                             replans)
 
 
+def travel_time_s(path_length_m: float, turned_rad: float, speed_mps: float, turn_rate_radps: float) -> float:
+    """How long a robot that drives at ``speed_mps`` and turns on the spot at ``turn_rate_radps`` takes to drive
+    ``path_length_m`` and turn through ``turned_rad`` in all (the sum of every turn's magnitude)."""
+    return path_length_m / speed_mps + turned_rad / turn_rate_radps
+
+
+def extra_time_cost_pct(path_length_m: float, turned_rad: float, straight_distance_m: float, speed_mps: float,
+                        turn_rate_radps: float) -> float:
+    """Paper 000's extra cost in time: (travel time - |SD| / speed) / (|SD| / speed) in percent, against driving
+    the straight line at the same speed. A turn on the spot is free in (l - |SD|) / |SD|; here it costs its time,
+    so a robot cannot buy its heading with spins the path length does not see."""
+    straight_s = straight_distance_m / speed_mps
+    return 100.0 * (travel_time_s(path_length_m, turned_rad, speed_mps, turn_rate_radps) - straight_s) / straight_s
+
+
 @dataclass(frozen=True)
 class Fix:
     """A tier-two fix as the navigator reported it (/localization/status): when, which tag, where it thought."""

@@ -78,7 +78,8 @@ def add_bench(verbs: argparse._SubParsersAction) -> Handler:
     bench.add_argument("--evaluations", type=int, default=2000, help="flc: evaluations per timing")
     bench.add_argument("--plans", type=int, default=200, help="planner: random segments planned")
     bench.add_argument("--runs", type=int, default=250, help="partitions: runs per (read range, level)")
-    bench.add_argument("--method", choices=["paper", "filter"], default="paper", help="partitions: localizer method")
+    bench.add_argument("--method", choices=["paper", "filter", "filter_boom_spin"], default="paper",
+                       help="partitions: the configuration (reproduce partitions' METHOD_FILES)")
     bench.add_argument("--scenario", default="hallway", help="rtf: the scenario to run")
     bench.add_argument("--rtfs", type=float_list, default=[1.0, 3.0, 5.0, 8.0, 12.0], help="rtf: e.g. 1,2,5")
     bench.add_argument("--tolerance", type=float, default=0.10, help="rtf: allowed RMSE growth over RTF 1")

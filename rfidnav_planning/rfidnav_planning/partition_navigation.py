@@ -24,10 +24,11 @@ Phases (paper 000 sections 5.2 and 6.3):
 The goal's partition is the set of tags that read the goal point; the robot computes it from the
 lattice the tags describe (layout and spacing in every ID), not from a map of tag positions.
 
-Ours, beside the particle filter (config/params/partition_navigator_filter.yaml), three settings change:
-``spin_quarter_turns`` localizes by turning on the spot first (an antenna ahead of the rotation axis sweeps
-partition boundaries, so the heading is learnt without driving in an unknown direction, which is what the
-paper's extra cost mostly pays for); ``deviation_check: pose`` re-plans when the pose estimate would miss the
+Ours, beside the particle filter (config/params/partition_navigator_filter_paper_robot.yaml on the paper's robot,
+partition_navigator_filter.yaml with a second antenna ahead of the axis), settings change:
+``spin_quarter_turns`` (the latter only) localizes by turning on the spot first (an antenna ahead of the rotation
+axis sweeps partition boundaries, so the heading is learnt without driving in an unknown direction; the turns cost
+time the path length does not show); ``deviation_check: pose`` re-plans when the pose estimate would miss the
 goal rather than on every partition off the plan; ``arrival: position`` stops when the estimated centre is
 near the goal rather than when the antenna reads the goal's partition.
 """

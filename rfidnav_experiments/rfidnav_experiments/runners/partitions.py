@@ -2,7 +2,9 @@
 DDS nodes driving an idealised robot, as the paper's simulation does, thousands of times a minute.
 
 The robot is a point with a heading that drives straight at constant speed and turns on the spot exactly
-as the navigator asks (paper 000 section 6.2 studies the imprecision of partitions, not of motors). Its
+as the navigator asks (paper 000 section 6.2 studies the imprecision of partitions, not of motors), at the
+navigator node's forward speed and yaw-rate limit (:class:`RobotSpeeds`): the run's travel time charges
+every turn, which its path length does not. Its
 floor antenna reads at the centre or ``antenna_offset_m`` ahead of it, and sees every partition it
 crosses: the simulation walks the antenna's path (a straight line when driving, an arc in 2-degree chords
 when turning) partition boundary by partition boundary (:func:`rfidnav_common.tag_lattice.
@@ -23,14 +25,31 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from rfidnav_bringup.metrics import extra_time_cost_pct, travel_time_s
 from rfidnav_common.tag_lattice import Deployment, partitions_along_segment
 from rfidnav_localization.partition import LocalizerSettings, PartitionLocalizer
+from rfidnav_planning.parameters import PartitionNavigatorParameters
 from rfidnav_planning.partition_navigation import FORWARD, ROTATE, Decision, NavigatorSettings, PartitionNavigator
 
-SPEED_MPS = 0.2                 # paper 001's speed; only the stamps depend on it
 INSIDE_M = 1e-7                 # how far past a boundary the round on entering a partition is taken
 TURN_CHORD_RAD = math.radians(2.0)
 DEFAULT_ROUND_SPACING_M = 0.02  # at most this far between rounds (a reader's 25 Hz at 0.2 m/s: 8 mm)
+
+
+@dataclass(frozen=True)
+class RobotSpeeds:
+    """How fast the idealised robot drives and turns on the spot: the navigator node's ``forward_speed_mps`` and
+    ``turn_rate_radps`` (the DDS node turns at that limit but for its last degrees, where it slows to stop on the
+    target heading: not charged here)."""
+    speed_mps: float
+    turn_rate_radps: float
+
+    @classmethod
+    def of(cls, parameters: PartitionNavigatorParameters) -> RobotSpeeds:
+        return cls(parameters.forward_speed_mps, parameters.turn_rate_radps)
+
+
+NODE_DEFAULT_SPEEDS = RobotSpeeds.of(PartitionNavigatorParameters())
 
 
 @dataclass(frozen=True)
@@ -41,6 +60,8 @@ class NavigationRun:
     goal: tuple[float, float]
     path_length_m: float
     straight_distance_m: float
+    turned_rad: float               # every turn's magnitude, summed
+    speeds: RobotSpeeds
     final_position: tuple[float, float]
     replans: int
     partitions_entered: int
@@ -50,6 +71,17 @@ class NavigationRun:
     def extra_cost_pct(self) -> float:
         """Paper 000 section 6.2: (l - |SD|) / |SD| in percent."""
         return 100.0 * (self.path_length_m - self.straight_distance_m) / self.straight_distance_m
+
+    @property
+    def travel_time_s(self) -> float:
+        return travel_time_s(self.path_length_m, self.turned_rad, self.speeds.speed_mps, self.speeds.turn_rate_radps)
+
+    @property
+    def extra_time_cost_pct(self) -> float:
+        """The extra cost in time, turns charged at the robot's turn rate (:func:`rfidnav_bringup.metrics.
+        extra_time_cost_pct`)."""
+        return extra_time_cost_pct(self.path_length_m, self.turned_rad, self.straight_distance_m,
+                                   self.speeds.speed_mps, self.speeds.turn_rate_radps)
 
     @property
     def final_error_m(self) -> float:
@@ -64,15 +96,18 @@ class NavigationRun:
 
 
 class IdealRobot:
-    """True pose, odometry (relative to the start, with an optional relative error) and distance driven."""
+    """True pose, odometry (relative to the start, with an optional relative error), distance driven, angle
+    turned and the time both took."""
 
     def __init__(self, x: float, y: float, yaw: float, odometry_noise: float, rng: np.random.Generator,
-                 antenna_offset_m: float = 0.0) -> None:
+                 speeds: RobotSpeeds, antenna_offset_m: float = 0.0) -> None:
         self.x, self.y, self.yaw = x, y, yaw
         self.antenna_offset_m = antenna_offset_m
+        self.speeds = speeds
         self.start = (x, y, yaw)
         self.odom = [0.0, 0.0, 0.0]
         self.travelled_m = 0.0
+        self.turned_rad = 0.0
         self.time_s = 0.0
         self.noise = odometry_noise
         self.rng = rng
@@ -82,14 +117,15 @@ class IdealRobot:
         self.x += distance * math.cos(self.yaw)
         self.y += distance * math.sin(self.yaw)
         self.travelled_m += distance
-        self.time_s += distance / SPEED_MPS
+        self.time_s += distance / self.speeds.speed_mps
         measured = distance * (1.0 + self.noise * self.rng.standard_normal()) if self.noise else distance
         self.odom[0] += measured * math.cos(self.odom[2])
         self.odom[1] += measured * math.sin(self.odom[2])
 
     def turn(self, angle: float) -> None:
         self.yaw += angle
-        self.time_s += abs(angle) / 1.0
+        self.turned_rad += abs(angle)
+        self.time_s += abs(angle) / self.speeds.turn_rate_radps
         self.odom[2] += angle * (1.0 + self.noise * self.rng.standard_normal()) if self.noise else angle
         self.trajectory.append((self.x, self.y))
 
@@ -104,10 +140,10 @@ class IdealRobot:
 def run_navigation(deployment: Deployment, start: tuple[float, float, float], goal: tuple[float, float],
                    localizer_settings: LocalizerSettings, navigator_settings: NavigatorSettings,
                    rng: np.random.Generator, round_spacing_m: float | None = None,
-                   odometry_noise: float = 0.0) -> NavigationRun:
+                   odometry_noise: float = 0.0, speeds: RobotSpeeds = NODE_DEFAULT_SPEEDS) -> NavigationRun:
     """One navigation from ``start`` (x, y, yaw; ground truth) to ``goal``; the antenna offset is the
-    localizer's (the robot is built as the localizer believes)."""
-    robot = IdealRobot(*start, odometry_noise, rng, localizer_settings.antenna_offset_m)
+    localizer's (the robot is built as the localizer believes), the speeds the navigator node's."""
+    robot = IdealRobot(*start, odometry_noise, rng, speeds, localizer_settings.antenna_offset_m)
     localizer = PartitionLocalizer(localizer_settings, rng)
     navigator = PartitionNavigator(navigator_settings, deployment.area)
     lattice = deployment.lattice
@@ -132,8 +168,8 @@ def run_navigation(deployment: Deployment, start: tuple[float, float, float], go
     robot.trajectory.append((robot.x, robot.y))
     state = navigator.state
     return NavigationRun(decision.success, decision.message, (start[0], start[1]), goal, robot.travelled_m,
-                         math.dist(start[:2], goal), (robot.x, robot.y), state.replans, state.partitions_entered,
-                         np.array(robot.trajectory))
+                         math.dist(start[:2], goal), robot.turned_rad, speeds, (robot.x, robot.y), state.replans,
+                         state.partitions_entered, np.array(robot.trajectory))
 
 
 def turn_observing(deployment: Deployment, robot: IdealRobot, angle: float, observe: Callable[[], Decision]) -> None:
