@@ -79,6 +79,8 @@ class MissionRun:
     turns: tuple[tuple[str, str], ...] = ()   # (node, turn) made at junction centres, and U-turns, in order
     first_node: str | None = None
     bumps: int = 0                         # times the base's bumper was pressed against a wall
+    arrived: bool = False                  # the executor's success, wherever the robot stopped
+    goal_distance_m: float = math.nan      # from where it stopped to the goal node's position
 
 
 def follower_offsets(parameters: WallFollowerParameters = FOLLOWER) -> dict[str, float]:
@@ -175,8 +177,10 @@ def run_mission(world: World, topological_map: TopologicalMap, start_pose: tuple
     # On the map as learned by the end: a goal reached through an explored "?" hallway has a route.
     shortest = (topological_shortest_m(executor.map, start_pose[:2], *state.first_arrival, goal_node)
                 if state.first_arrival is not None else math.nan)
+    arrived = bool(outcome is not None and outcome.success)
     return MissionRun(success, message, base.distance_travelled_m, shortest, state.tags_missed, state.replans,
-                      tuple(state.nodes_visited), t, (x, y), tuple(turns), first_node, base.bumps)
+                      tuple(state.nodes_visited), t, (x, y), tuple(turns), first_node, base.bumps, arrived,
+                      math.dist((x, y), goal_xy) if goal_xy is not None else math.nan)
 
 
 @dataclass(frozen=True)
