@@ -43,6 +43,8 @@ class RobotSimParameters:
     odom_slip_std: float = param("random relative wheel travel error per step", 0.0)
     footprint_radius_m: float = param("radius of the round base: closer than this to a wall it stalls and "
                                       "bumps [m]", 0.17)
+    walls_stop_base: bool = param("false: the walls only echo sonar and the base drives through them (for a "
+                                  "navigator that cannot get round a wall, see two_tier_home)", True)
 
     def base(self, walls: np.ndarray | None = None) -> DiffDriveBase:
         """The base these parameters describe, at the start pose, its odometry slip stream seeded from ``seed``,
@@ -54,7 +56,7 @@ class RobotSimParameters:
                        self.footprint_radius_m),
             OdometryDrift(self.odom_left_scale_error, self.odom_right_scale_error, self.odom_track_scale_error,
                           self.odom_slip_std),
-            rng_for(self.seed, "robot_sim.odometry"), walls)
+            rng_for(self.seed, "robot_sim.odometry"), walls if self.walls_stop_base else None)
 
     def validate(self) -> None:
         if not self.world_file:

@@ -168,6 +168,7 @@ SOURCES: dict[str, tuple[str, str]] = {
     "robot_sim.odom_track_scale_error": ("ours", "as above"),
     "robot_sim.odom_slip_std": ("ours", "as above"),
     "robot_sim.footprint_radius_m": ("ours", "a 34 cm round base: the hallway's walls stop it and press its bumper"),
+    "robot_sim.walls_stop_base": ("ours", "walls are obstacles"),
     "heading_controller.forward_speed_mps": ("paper", "sec. V: fixed to 0.2 m/s"),
     "heading_controller.turn_speed_fraction": ("paper", "flc_paper: constant speed (sec. V); flc_tuned: ours, "
                                                         "slows while turning at the limit"),

@@ -136,6 +136,7 @@ SOURCES: dict[str, tuple[str, str]] = {
     "robot_sim.odom_track_scale_error": ("ours", "as above"),
     "robot_sim.odom_slip_std": ("ours", "as above"),
     "robot_sim.footprint_radius_m": ("ours", "a 34 cm round base; walls stop it and press its bumper"),
+    "robot_sim.walls_stop_base": ("ours", "walls are obstacles"),
     "sonar_sim.rate_hz": ("ours", "in-process the sonar is read every control step (20 Hz)"),
     "sonar_sim.frame_prefix": ("ours", "names only"),
     "sonar_sim.noise_sd_m": ("ours", "timing jitter"),
