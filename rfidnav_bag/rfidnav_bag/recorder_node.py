@@ -34,7 +34,6 @@ from typing import Any
 import rclpy
 from rclpy.clock import Clock, ClockType
 from rclpy.executors import Executor
-from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.signals import SignalHandlerOptions
 from rclpy.subscription import Subscription
@@ -46,6 +45,7 @@ from rfidnav_bag.errors import BagError
 from rfidnav_common.config import param
 from rfidnav_common.errors import ConfigError, ParameterError
 from rfidnav_common.ros import declare_parameters, events_executor, message_class, run_node
+from rfidnav_common.stepped_node import SteppedNode
 
 # rosbag2 metadata version 9 is what Jazzy's rosbag2 writes (structured QoS in metadata.yaml).
 BAG_VERSION = 9
@@ -126,7 +126,7 @@ def _describe(qos: QoSProfile) -> str:
     return f"{qos.reliability.name.lower()}, {qos.durability.name.lower()}"
 
 
-class RecorderNode(Node):
+class RecorderNode(SteppedNode):
     def __init__(self) -> None:
         super().__init__("recorder")
         self.params: RecorderParameters = declare_parameters(self, RecorderParameters)

@@ -19,6 +19,7 @@ from importlib.metadata import entry_points
 from pathlib import Path
 
 from rfidnav_common.errors import ConfigError, RfidnavError
+from rfidnav_common.step_ledger import CLOCKS
 
 WORKSPACE = Path(__file__).resolve().parents[2]
 DEMO_SCENARIO = "hallway"
@@ -35,8 +36,23 @@ def key_value(text: str) -> tuple[str, str]:
     return role, value
 
 
+def rtf_value(text: str) -> float:
+    """``--rtf``: a number, or ``max`` (infinite: as fast as the stepped graph answers)."""
+    if text == "max":
+        return math.inf
+    try:
+        return float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number or 'max', got '{text}'") from None
+
+
 def add_run_options(parser: argparse.ArgumentParser, default_rtf: float) -> None:
-    parser.add_argument("--rtf", type=float, default=default_rtf, help="real-time factor (sim s per wall s)")
+    parser.add_argument("--rtf", type=rtf_value, default=default_rtf,
+                        help="real-time factor (sim s per wall s): a ceiling with the stepped clock, which 'max' "
+                             "lifts; the rate itself with --clock free")
+    parser.add_argument("--clock", choices=CLOCKS, default="stepped",
+                        help="stepped (default): the simulator waits for our nodes to answer each step, so a run "
+                             "follows its seed, not the machine's load; free: free-running at the RTF")
     parser.add_argument("--seed", type=int, default=1, help="run seed (every node derives its own)")
     parser.add_argument("--out", type=Path, default=WORKSPACE / "bags", help="folder for the run folder")
     parser.add_argument("--robot", metavar="PROFILE",
@@ -135,10 +151,10 @@ def verb_run(args, scenario_name: str | None = None) -> int:
     scenario = load_scenario(scenario_name or args.scenario, swaps=dict(args.swap),
                              param_files={role: Path(file) for role, file in args.params}, goal=goal,
                              robot_profile_name=getattr(args, "robot", None))
-    if not math.isfinite(args.rtf) or args.rtf <= 0:
-        raise ConfigError("--rtf", "", f"must be a positive number, got {args.rtf}")
-    options = RunOptions(rtf=args.rtf, seed=args.seed, out_dir=args.out, record=not args.no_record,
-                         quiet=args.quiet)
+    if math.isnan(args.rtf) or args.rtf <= 0:
+        raise ConfigError("--rtf", "", f"must be a positive number or max, got {args.rtf}")
+    options = RunOptions(rtf=args.rtf, clock=args.clock, seed=args.seed, out_dir=args.out,
+                         record=not args.no_record, quiet=args.quiet)
     summary = Orchestrator(scenario, options).run()
     print_summary(summary)
     return 0 if summary.success else 1

@@ -3,16 +3,23 @@
 Order of events: lease a DDS domain; write each node's resolved parameter file; start the recorder
 and wait until it is in the graph; start the nodes; wait until every node is in the graph, the
 mission's action server answers and the recorder subscribes to every topic it will record (not the
-excluded ones, nor those of a type it cannot store); start the simulation clock; send the goal and
-show its feedback on one progress line; on result, timeout or Ctrl-C cancel the goal, stop the
-nodes (SIGINT, then SIGKILL), stop the recorder last so it finalizes the bag; compute the metrics
-from the bag and write summary.json.
+excluded ones, nor those of a type it cannot store); start the simulation clock and send the goal
+(with the stepped clock the goal first, so that it starts at sim time 0 whatever the load), and show
+its feedback on one progress line; on result, timeout or Ctrl-C cancel the goal, stop the nodes
+(SIGINT, then SIGKILL), stop the recorder last so it finalizes the bag; compute the metrics from the
+bag and write summary.json.
+
+Clocks (``RunOptions.clock``): ``stepped`` (the default for simulated runs) makes robot_sim wait, at every
+publication, for the answers of our nodes of the simulated loop and the recorder (rfidnav_common.stepped_node);
+drivers and nodes given as command lines run free beside them. ``free`` keeps the free-running clock at the
+RTF. A run without the simulated base (hardware) runs in real time.
 """
 
 from __future__ import annotations
 
 import functools
 import json
+import math
 import os
 import shutil
 import signal
@@ -45,19 +52,23 @@ from rfidnav_bringup.scenario import (
     injected_parameters,
     node_parameters,
 )
-from rfidnav_common.errors import RfidnavError
+from rfidnav_common.errors import ConfigError, RfidnavError
 from rfidnav_common.ros import events_executor, fill_message, interface_class
+from rfidnav_common.step_ledger import CLOCKS
+from rfidnav_common.stepped_node import STEP_ACK_TOPIC
 
 READY_TIMEOUT_S = 90.0
 STOP_GRACE_S = 5.0
 RECORDER_ROLE = "recorder"
 RESEND_ATTEMPTS = 6
 RESEND_TIMEOUT_S = 5.0
+STEPPING_CLOCK_SOURCE = ("rfidnav_sim", "robot_sim")   # the clock source that can step
 
 
 @dataclass(frozen=True)
 class RunOptions:
-    rtf: float = 1.0
+    rtf: float = 1.0                         # real-time factor; a ceiling with the stepped clock, inf: none
+    clock: str = "stepped"                   # CLOCKS: stepped, or free-running at the RTF
     seed: int = 1
     out_dir: Path = Path("bags")
     record: bool = True
@@ -126,6 +137,13 @@ class Orchestrator:
         self.outcome = MissionOutcome()
         self.progress = Progress(options.quiet)
         self.interrupted = False
+        self.clock, self.clock_note = choose_clock(scenario, options)
+        participants = [f"/{spec.name}" for spec in scenario.step_participants()]
+        if options.record:
+            participants.append(f"/{RECORDER_ROLE}")
+        self.stepped_with: tuple[str, ...] | None = tuple(participants) if self.clock == "stepped" else None
+        # The answers to the stepped clock are bookkeeping, not data: left out of the bag.
+        self.record_exclude = options.record_exclude + ((STEP_ACK_TOPIC,) if self.stepped_with else ())
 
     # ----------------------------------------------------------------- set-up
     def prepare(self, env: dict[str, str]) -> None:
@@ -133,7 +151,7 @@ class Orchestrator:
         for source, name in ((self.scenario.world_file, "world.yaml"), (self.scenario.map_file, "map.yaml")):
             shutil.copyfile(source, self.run_dir / name)
         document = self.scenario.resolved_document()
-        document["run"] = {"seed": self.options.seed, "rtf": self.options.rtf}
+        document["run"] = {"seed": self.options.seed, "rtf": rtf_text(self.options.rtf), "clock": self.clock}
         (self.run_dir / "scenario.yaml").write_text(yaml.safe_dump(document, sort_keys=False))
         params_dir = self.run_dir / "params"
         params_dir.mkdir()
@@ -141,8 +159,10 @@ class Orchestrator:
             command = resolve_executable("rfidnav_bag", "recorder") + [
                 "--ros-args", "-p", f"output_dir:={self.run_dir / 'bag'}",
                 "-p", f"stamp_from_clock_topic:={str(self.scenario.simulated).lower()}"]
-            if self.options.record_exclude:
-                command += ["-p", f"exclude_topics:={json.dumps(list(self.options.record_exclude))}"]
+            if self.stepped_with is not None:
+                command += ["-p", "stepped_clock:=true"]
+            if self.record_exclude:
+                command += ["-p", f"exclude_topics:={json.dumps(list(self.record_exclude))}"]
             self.processes[RECORDER_ROLE] = NodeProcess(RECORDER_ROLE, command, self.log_path(RECORDER_ROLE), env)
         for role, spec in self.scenario.nodes.items():
             command = self.node_command(spec, params_dir)
@@ -156,19 +176,20 @@ class Orchestrator:
         if spec.package is None:
             return list(spec.command)
         command = [*spec.command, "--ros-args"]
-        parameters = node_parameters(self.scenario, spec, self.options.seed, self.options.rtf, self.run_dir)
+        parameters = node_parameters(self.scenario, spec, self.options.seed, self.options.rtf, self.run_dir,
+                                     self.stepped_with)
+        injected = injected_parameters(self.scenario, spec, self.options.seed, self.options.rtf,
+                                       stepped_with=self.stepped_with)
         if parameters is not None:
             node_name = KNOWN_NODES[(spec.package, spec.executable)][0]
             values = dict(parameters.__dict__)
-            values.update({k: v for k, v in injected_parameters(self.scenario, spec, self.options.seed,
-                                                                 self.options.rtf).items() if k not in values})
+            values.update({k: v for k, v in injected.items() if k not in values})
             file = params_dir / f"{spec.role}.yaml"
             file.write_text(dump_parameters(node_name, values))
             return command + ["--params-file", str(file)]
         for file in spec.param_files:
             command += ["--params-file", str(file)]
-        for key, value in {**spec.overrides, **injected_parameters(self.scenario, spec, self.options.seed,
-                                                                   self.options.rtf)}.items():
+        for key, value in {**spec.overrides, **injected}.items():
             command += ["-p", f"{key}:={json.dumps(value)}"]
         return command
 
@@ -187,7 +208,7 @@ class Orchestrator:
         try:
             self.prepare(env)
             self.say(f"run {self.run_dir.name}: domain {lease.domain_id}, seed {self.options.seed}, "
-                     f"RTF {self.options.rtf:g}")
+                     f"RTF {rtf_text(self.options.rtf)}, {self.clock} clock{self.clock_note}")
             self.start_graph(node, executor)
             if not self.interrupted:
                 self.fly_mission(node, executor)
@@ -245,6 +266,10 @@ class Orchestrator:
             self.spin_until(executor, lambda: not self.unrecorded_topics(node), READY_TIMEOUT_S,
                             lambda: f"the recorder to subscribe to {', '.join(self.unrecorded_topics(node))}")
         self.write_graph(node)
+        if self.stepped_with is None:
+            self.start_clock(node, executor)
+
+    def start_clock(self, node: Node, executor: Executor) -> None:
         clock_roles = [spec for spec in self.scenario.nodes.values() if spec.clock_source and spec.name]
         if clock_roles:
             start = node.create_client(Trigger, f"/{clock_roles[0].name}/start")
@@ -279,7 +304,7 @@ class Orchestrator:
         """Published topics the recorder will record but does not subscribe to yet."""
         published = [(topic, types) for topic, types in node.get_topic_names_and_types()
                      if node.get_publishers_info_by_topic(topic)]
-        return [topic for topic in topics_to_record(published, self.options.record_exclude, recordable_type)
+        return [topic for topic in topics_to_record(published, self.record_exclude, recordable_type)
                 if not any(info.node_name == "recorder" for info in node.get_subscriptions_info_by_topic(topic))]
 
     def fly_mission(self, node: Node, executor: Executor) -> None:
@@ -291,11 +316,13 @@ class Orchestrator:
         handle = self.send_goal(executor, goal)
         if handle is None:
             return
+        if self.stepped_with is not None:
+            self.start_clock(node, executor)
         result_future = handle.get_result_async()
         self.outcome.cpu_at_start = self.cpu_seconds()
         role = self.mission_role()
         restarts = self.processes[role].restarts if role else 0
-        wall_limit = mission.timeout_s / self.options.rtf * 3.0 + 60.0
+        wall_limit = mission.timeout_s / (self.options.rtf if math.isfinite(self.options.rtf) else 1.0) * 3.0 + 60.0
         while not result_future.done():
             executor.spin_once(timeout_sec=0.05)
             elapsed_sim = sim_seconds(node) - self.outcome.started_sim_s
@@ -384,6 +411,16 @@ class Orchestrator:
                 "graph_cpu_s": round(total, 3),
                 "graph_cpu_percent_of_one_core": round(100.0 * total / wall_s, 1) if wall_s > 0 else None}
 
+    def clock_summary(self) -> dict[str, Any]:
+        """Which clock ran, and for the stepped clock who it waited for and which roles ran free beside it."""
+        summary: dict[str, Any] = {"mode": self.clock}
+        if self.stepped_with is not None:
+            summary["participants"] = list(self.stepped_with)
+            summary["free_running_roles"] = sorted(
+                role for role, spec in self.scenario.nodes.items()
+                if not spec.clock_source and f"/{spec.name}" not in self.stepped_with)
+        return summary
+
     def mission_role(self) -> str | None:
         """The role serving the mission's action: the scenario's mission.server, else the first non-simulator."""
         if self.scenario.mission.server is not None:
@@ -435,7 +472,8 @@ class Orchestrator:
             "success": self.outcome.success,
             "message": self.outcome.message,
             "seed": self.options.seed,
-            "rtf": self.options.rtf,
+            "rtf": rtf_text(self.options.rtf),
+            "clock": self.clock_summary(),
             "sim_duration_s": sim_duration,
             "wall_duration_s": round((self.outcome.ended_wall or time.monotonic()) - self.outcome.started_wall, 3)
             if self.outcome.started_wall else None,
@@ -464,6 +502,24 @@ def recordable_type(msgtype: str) -> bool:
     except BagError:
         return False
     return True
+
+
+def choose_clock(scenario: Scenario, options: RunOptions) -> tuple[str, str]:
+    """The clock that runs (stepped, free or real time) and, when it is not the one asked for, why."""
+    if options.clock not in CLOCKS:
+        raise ConfigError("--clock", "", f"unknown clock '{options.clock}' (known: {', '.join(CLOCKS)})")
+    if not scenario.simulated:
+        return "real time", " (no simulated base: hardware)"
+    source = next(spec for spec in scenario.nodes.values() if spec.clock_source)
+    if options.clock == "stepped" and (source.package, source.executable) != STEPPING_CLOCK_SOURCE:
+        return "free", f" (the clock source {source.role} cannot step)"
+    if options.clock == "free" and not math.isfinite(options.rtf):
+        raise ConfigError("--rtf", "", "max needs the stepped clock (the free-running clock keeps a fixed RTF)")
+    return options.clock, ""
+
+
+def rtf_text(rtf: float) -> str | float:
+    return rtf if math.isfinite(rtf) else "max"
 
 
 def child_environment(domain_id: int) -> dict[str, str]:

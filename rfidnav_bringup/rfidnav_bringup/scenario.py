@@ -63,6 +63,9 @@ KNOWN_NODES: dict[tuple[str, str], tuple[str, type]] = {
     ("rfidnav_drivers", "create_base"): ("create_base", CreateBaseParameters),
     ("rfidnav_drivers", "wifi_scanner"): ("wifi_scanner", WifiScannerParameters),
 }
+# Packages whose nodes derive rfidnav_common.stepped_node.SteppedNode and so can answer the stepped clock; the
+# drivers talk to hardware on its own time and never take part.
+STEPPED_PACKAGES = ("rfidnav_sim", "rfidnav_control", "rfidnav_localization", "rfidnav_planning")
 METRIC_GROUPS = ("tracking", "partition", "two_tier", "topological")
 
 
@@ -105,6 +108,12 @@ class Scenario:
     world: World = field(repr=False)
     route_map: RouteMap | None = field(repr=False)          # papers 000, 001, 003
     topological_map: TopologicalMap | None = field(default=None, repr=False)   # paper 004: a map with nodes
+
+    def step_participants(self) -> list[NodeSpec]:
+        """The roles a stepped clock waits for: our nodes of the simulated loop, not the clock source itself, not a
+        driver, not a node given as a command line (a user's own node, which runs free beside them)."""
+        return [spec for spec in self.nodes.values() if spec.package in STEPPED_PACKAGES and spec.name
+                and not spec.clock_source and (spec.package, spec.executable) in KNOWN_NODES]
 
     @property
     def simulated(self) -> bool:
@@ -345,13 +354,20 @@ def _check_goal_area(scenario: Scenario, mission: Section) -> None:
 
 
 def injected_parameters(scenario: Scenario, spec: NodeSpec, seed: int, rtf: float,
-                        run_dir: Path | None = None) -> dict[str, Any]:
+                        run_dir: Path | None = None, stepped_with: tuple[str, ...] | None = None) -> dict[str, Any]:
     """What the orchestrator gives each node on top of its files: the world only to simulator nodes, the run's
-    folder to nodes that declare ``run_dir`` (where they keep files, e.g. the location server's database)."""
+    folder to nodes that declare ``run_dir`` (where they keep files, e.g. the location server's database).
+
+    ``stepped_with``: the stepped clock's participants (fully qualified node names), None for the free-running
+    clock. A participant takes its time from the stamps it handles; every other node runs with use_sim_time.
+    ``rtf`` may be infinite (as fast as the stepped graph answers), which the clock source reads as 0."""
     injected: dict[str, Any] = {"seed": seed}
     if run_dir is not None:
         injected["run_dir"] = str(run_dir)
-    if not spec.clock_source and scenario.simulated:
+    participant = stepped_with is not None and spec.name is not None and f"/{spec.name}" in stepped_with
+    if participant:
+        injected["stepped_clock"] = True
+    elif not spec.clock_source and scenario.simulated:
         injected["use_sim_time"] = True
     if spec.sim:
         injected["world_file"] = str(scenario.world_file)
@@ -359,12 +375,15 @@ def injected_parameters(scenario: Scenario, spec: NodeSpec, seed: int, rtf: floa
         injected["map_file"] = str(scenario.map_file)
     if spec.clock_source:
         x, y, yaw_deg = scenario.robot
-        injected.update(start_x=x, start_y=y, start_yaw_deg=yaw_deg, rtf=float(rtf), start_paused=True)
+        injected.update(start_x=x, start_y=y, start_yaw_deg=yaw_deg, rtf=float(rtf) if rtf != float("inf") else 0.0,
+                        start_paused=True)
+        if stepped_with is not None:
+            injected.update(stepped_clock=True, step_participants=list(stepped_with))
     return injected
 
 
 def node_parameters(scenario: Scenario, spec: NodeSpec, seed: int, rtf: float,
-                    run_dir: Path | None = None) -> Any | None:
+                    run_dir: Path | None = None, stepped_with: tuple[str, ...] | None = None) -> Any | None:
     """Validate a known node's parameter files, overrides and injected values; None for nodes we do not know.
 
     Later files override earlier ones and the scenario's overrides override the files; a bad value is reported
@@ -382,7 +401,8 @@ def node_parameters(scenario: Scenario, spec: NodeSpec, seed: int, rtf: float,
         values.update(layer_values)
         origins.update(dict.fromkeys(layer_values, (layer.source, layer.prefix)))
     declared = {name for name in cls.__dataclass_fields__}
-    values.update({k: v for k, v in injected_parameters(scenario, spec, seed, rtf, run_dir).items() if k in declared})
+    values.update({k: v for k, v in injected_parameters(scenario, spec, seed, rtf, run_dir, stepped_with).items()
+                   if k in declared})
     # A problem no single value explains: the one file that gave values, else the scenario entry naming them.
     given = set(origins.values())
     source, prefix = given.pop() if len(given) == 1 else (str(scenario.path), f"nodes.{spec.role}")

@@ -12,11 +12,11 @@ from dataclasses import dataclass
 from typing import Any
 
 from geometry_msgs.msg import Twist
-from rclpy.node import Node
 
 from rfidnav_common.goal_server import ActiveGoal, GoalOutcome, SingleGoalServer, Watchdog
 from rfidnav_common.robot_map import load_route_map
 from rfidnav_common.ros import COMMAND_QOS, SENSOR_QOS, declare_parameters, run_node, seconds_of, twist
+from rfidnav_common.stepped_node import SteppedNode
 from rfidnav_control.fuzzy import FuzzyHeadingController
 from rfidnav_control.parameters import HeadingControllerParameters
 from rfidnav_control.tag_route import Command, TagRouteFollower, observe
@@ -30,7 +30,7 @@ class RouteGoal(ActiveGoal):
     tags_reached: int = 0
 
 
-class HeadingControllerNode(Node):
+class HeadingControllerNode(SteppedNode):
     def __init__(self, **node_options: Any) -> None:
         """``node_options``: keyword arguments of rclpy's Node (``context``, ``parameter_overrides``), for tests."""
         super().__init__("heading_controller", **node_options)

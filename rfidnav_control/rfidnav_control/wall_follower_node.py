@@ -18,10 +18,10 @@ from typing import Any
 
 from geometry_msgs.msg import Pose2D, Twist
 from nav_msgs.msg import Odometry
-from rclpy.node import Node
 from sensor_msgs.msg import Range
 
 from rfidnav_common.ros import COMMAND_QOS, SENSOR_QOS, declare_parameters, odometry_pose, run_node, twist
+from rfidnav_common.stepped_node import SteppedNode
 from rfidnav_control.parameters import SONAR_FIELDS, WallFollowerParameters
 from rfidnav_control.wall_following import ACTIONS, STOPPED, OdomPose, Sonar, WallFollower
 from rfidnav_msgs.msg import WallFollowerCommand, WallFollowerEvent
@@ -30,7 +30,7 @@ STATE_PERIOD_S = 0.5
 IDLE = "idle"
 
 
-class WallFollowerNode(Node):
+class WallFollowerNode(SteppedNode):
     def __init__(self, **node_options: Any) -> None:
         """``node_options``: keyword arguments of rclpy's Node (``context``, ``parameter_overrides``), for tests."""
         super().__init__("wall_follower", **node_options)

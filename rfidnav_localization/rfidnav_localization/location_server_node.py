@@ -21,10 +21,9 @@ import math
 from pathlib import Path
 from typing import Any
 
-from rclpy.node import Node
-
 from rfidnav_common.robot_map import RouteMap, load_route_map
 from rfidnav_common.ros import declare_parameters, run_node, seconds_of
+from rfidnav_common.stepped_node import SteppedNode
 from rfidnav_localization.conversions import floor_tag_message, scan_rss
 from rfidnav_localization.errors import LocateError, StoreError
 from rfidnav_localization.fingerprint import Fingerprint, RadioMap
@@ -34,7 +33,7 @@ from rfidnav_localization.radio_map_file import load_radio_map
 from rfidnav_msgs.srv import AddFingerprint, GetTagMap, Locate
 
 
-class LocationServerNode(Node):
+class LocationServerNode(SteppedNode):
     def __init__(self, **node_options: Any) -> None:
         super().__init__("location_server", **node_options)
         self.params: LocationServerParameters = declare_parameters(self, LocationServerParameters)

@@ -15,11 +15,11 @@ from typing import Any
 
 from geometry_msgs.msg import PoseWithCovarianceStamped
 from nav_msgs.msg import Odometry
-from rclpy.node import Node
 
 from rfidnav_common.geometry import quaternion_to_yaw
 from rfidnav_common.ros import SENSOR_QOS, declare_parameters, run_node, seconds_of
 from rfidnav_common.seeding import rng_for
+from rfidnav_common.stepped_node import SteppedNode
 from rfidnav_localization.conversions import pose_message, status_message
 from rfidnav_localization.parameters import PartitionLocalizerParameters
 from rfidnav_localization.partition import PartitionLocalizer
@@ -36,7 +36,7 @@ def finite_reading(reading: Any) -> bool:
                                                    reading.frequency_hz))
 
 
-class PartitionLocalizerNode(Node):
+class PartitionLocalizerNode(SteppedNode):
     def __init__(self, **node_options: Any) -> None:
         """``node_options``: keyword arguments of rclpy's Node (``context``, ``parameter_overrides``), for tests."""
         super().__init__(NODE_NAME, **node_options)

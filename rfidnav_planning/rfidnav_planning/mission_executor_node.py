@@ -19,10 +19,9 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
-from rclpy.node import Node
-
 from rfidnav_common.goal_server import ActiveGoal, GoalOutcome, SingleGoalServer
 from rfidnav_common.ros import COMMAND_QOS, SENSOR_QOS, declare_parameters, run_node
+from rfidnav_common.stepped_node import SteppedNode
 from rfidnav_common.topological_map import load_topological_map
 from rfidnav_msgs.action import NavigateToNode
 from rfidnav_msgs.msg import TagReadArray, WallFollowerCommand, WallFollowerEvent
@@ -38,7 +37,7 @@ class MissionGoal(ActiveGoal):
     next_action: str = FOLLOW
 
 
-class MissionExecutorNode(Node):
+class MissionExecutorNode(SteppedNode):
     def __init__(self, **node_options: Any) -> None:
         """``node_options``: keyword arguments of rclpy's Node (``context``, ``parameter_overrides``), for tests."""
         super().__init__("mission_executor", **node_options)

@@ -16,7 +16,6 @@ from typing import Any
 
 from geometry_msgs.msg import Pose2D, Twist
 from nav_msgs.msg import Odometry, Path
-from rclpy.node import Node
 
 from rfidnav_common.errors import ConfigError
 from rfidnav_common.goal_server import ActiveGoal, GoalOutcome, SingleGoalServer, Watchdog
@@ -31,6 +30,7 @@ from rfidnav_common.ros import (
     seconds_of,
     twist,
 )
+from rfidnav_common.stepped_node import SteppedNode
 from rfidnav_common.tag_lattice import Coordinate
 from rfidnav_msgs.action import NavigateToPoint
 from rfidnav_msgs.msg import LocalizationStatus, PartitionPath
@@ -56,7 +56,7 @@ class NavigationGoal(ActiveGoal):
     travelled_m: float = 0.0
 
 
-class PartitionNavigatorNode(Node):
+class PartitionNavigatorNode(SteppedNode):
     def __init__(self, **node_options: Any) -> None:
         """``node_options``: keyword arguments of rclpy's Node (``context``, ``parameter_overrides``), for tests."""
         super().__init__("partition_navigator", **node_options)

@@ -18,13 +18,13 @@ from typing import Any
 
 from geometry_msgs.msg import Pose2D, PoseWithCovarianceStamped, Twist
 from nav_msgs.msg import Odometry
-from rclpy.node import Node
 from rclpy.task import Future
 from sensor_msgs.msg import Imu
 
 from rfidnav_common.geometry import quaternion_to_yaw, yaw_to_quaternion
 from rfidnav_common.goal_server import ActiveGoal, GoalOutcome, SingleGoalServer
 from rfidnav_common.ros import COMMAND_QOS, SENSOR_QOS, declare_parameters, odometry_pose, run_node, twist
+from rfidnav_common.stepped_node import SteppedNode
 from rfidnav_msgs.action import NavigateToPoint
 from rfidnav_msgs.msg import LocalizationStatus, TagReadArray, WifiScan
 from rfidnav_msgs.srv import GetTagMap, Locate
@@ -41,7 +41,7 @@ class PendingCall:
     future: Future | None = None
 
 
-class TwoTierNavigatorNode(Node):
+class TwoTierNavigatorNode(SteppedNode):
     def __init__(self, **node_options: Any) -> None:
         super().__init__("two_tier_navigator", **node_options)
         self.params: TwoTierNavigatorParameters = declare_parameters(self, TwoTierNavigatorParameters)

@@ -12,19 +12,19 @@ import math
 from typing import Any
 
 from nav_msgs.msg import Odometry
-from rclpy.node import Node
 from sensor_msgs.msg import Imu
 
 from rfidnav_common.geometry import yaw_to_quaternion
 from rfidnav_common.ros import SENSOR_QOS, declare_parameters, odometry_pose, run_node, seconds_of
 from rfidnav_common.seeding import rng_for
+from rfidnav_common.stepped_node import SteppedNode
 from rfidnav_sim.parameters import CompassParameters
 from rfidnav_sim.schedule import GroundTruthSchedule
 
 UNKNOWN_ANGLE_VARIANCE = math.pi ** 2     # roll and pitch: not measured
 
 
-class CompassSimNode(Node):
+class CompassSimNode(SteppedNode):
     def __init__(self, **node_options: Any) -> None:
         super().__init__("compass_sim", **node_options)
         self.params: CompassParameters = declare_parameters(self, CompassParameters)

@@ -29,7 +29,11 @@ class RobotSimParameters:
     start_y: float = param("start position y in the map frame [m]", 0.0)
     start_yaw_deg: float = param("start heading, CCW from the map's x axis [deg]", 0.0)
     step_s: float = param("fixed physics step [s]", 0.01)
-    rtf: float = param("real-time factor: sim seconds per wall second", 1.0)
+    rtf: float = param("real-time factor: sim seconds per wall second; with the stepped clock a ceiling, and 0 "
+                       "as fast as the participants answer", 1.0)
+    step_participants: list[str] = param(
+        "stepped clock: the fully qualified names of the nodes whose answers on /sim/step_ack each step waits "
+        "for (rfidnav_common.stepped_node); set by the orchestrator", [])
     start_paused: bool = param("hold the clock at zero until ~/start is called", False)
     odom_rate_hz: float = param("rate of /clock, /odom and /sim/ground_truth [Hz, sim time]", 50.0)
     seed: int = param("run seed; the odometry slip stream derives from it", 0)
@@ -61,7 +65,10 @@ class RobotSimParameters:
     def validate(self) -> None:
         if not self.world_file:
             raise ParameterError("world_file", "required (the world YAML to simulate)")
-        require_positive(self, "step_s", "rtf", "odom_rate_hz", "track_width_m", "max_wheel_speed_mps",
+        if not self.rtf >= 0.0:
+            raise ParameterError("rtf", f"must be positive, or 0 for as fast as the stepped graph answers: "
+                                        f"got {self.rtf}")
+        require_positive(self, "step_s", "odom_rate_hz", "track_width_m", "max_wheel_speed_mps",
                          "max_wheel_accel_mps2", "command_timeout_s", "footprint_radius_m")
         if self.odom_slip_std < 0.0:
             raise ParameterError("odom_slip_std", "must not be negative")

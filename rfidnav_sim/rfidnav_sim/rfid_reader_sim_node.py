@@ -12,16 +12,16 @@ from __future__ import annotations
 from typing import Any
 
 from nav_msgs.msg import Odometry
-from rclpy.node import Node
 
 from rfidnav_common.ros import SENSOR_QOS, declare_parameters, odometry_pose, run_node, seconds_of
+from rfidnav_common.stepped_node import SteppedNode
 from rfidnav_msgs.msg import TagReadArray
 from rfidnav_sim.conversions import reads_message
 from rfidnav_sim.parameters import ReaderParameters
 from rfidnav_sim.world import load_world
 
 
-class RfidReaderSimNode(Node):
+class RfidReaderSimNode(SteppedNode):
     def __init__(self, **node_options: Any) -> None:
         """``node_options``: keyword arguments of rclpy's Node (``context``, ``parameter_overrides``), for tests."""
         super().__init__("rfid_reader_sim", **node_options)

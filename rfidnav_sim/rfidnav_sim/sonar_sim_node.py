@@ -10,18 +10,18 @@ from __future__ import annotations
 from typing import Any
 
 from nav_msgs.msg import Odometry
-from rclpy.node import Node
 from sensor_msgs.msg import Range
 
 from rfidnav_common.ros import SENSOR_QOS, declare_parameters, odometry_pose, run_node, seconds_of
 from rfidnav_common.seeding import rng_for
+from rfidnav_common.stepped_node import SteppedNode
 from rfidnav_sim.parameters import SonarParameters
 from rfidnav_sim.schedule import GroundTruthSchedule
 from rfidnav_sim.sonar_model import PAPER_LAYOUT
 from rfidnav_sim.world import load_world
 
 
-class SonarSimNode(Node):
+class SonarSimNode(SteppedNode):
     def __init__(self, **node_options: Any) -> None:
         super().__init__("sonar_sim", **node_options)
         self.params: SonarParameters = declare_parameters(self, SonarParameters)

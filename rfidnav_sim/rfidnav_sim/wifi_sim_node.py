@@ -12,10 +12,10 @@ import dataclasses
 from typing import Any
 
 from nav_msgs.msg import Odometry
-from rclpy.node import Node
 
 from rfidnav_common.ros import SENSOR_QOS, declare_parameters, odometry_pose, run_node, seconds_of
 from rfidnav_common.seeding import rng_for
+from rfidnav_common.stepped_node import SteppedNode
 from rfidnav_msgs.msg import WifiScan
 from rfidnav_sim.conversions import wifi_scan_message
 from rfidnav_sim.parameters import WifiSimParameters
@@ -24,7 +24,7 @@ from rfidnav_sim.wifi_model import WifiModel
 from rfidnav_sim.world import load_world
 
 
-class WifiSimNode(Node):
+class WifiSimNode(SteppedNode):
     def __init__(self, **node_options: Any) -> None:
         super().__init__("wifi_sim", **node_options)
         self.params: WifiSimParameters = declare_parameters(self, WifiSimParameters)

@@ -1,0 +1,198 @@
+"""SteppedNode: the rclpy Node every rfidnav node derives from, and its part in the stepped simulation clock.
+
+With the parameter ``stepped_clock`` false (hardware, replay, the free-running clock) it is a plain rclpy Node.
+With it true (the orchestrator sets it on every participant of a stepped simulated run) the node takes part in
+lockstep without code of its own:
+
+- every subscription callback and every publish is counted, per resolved topic, and after each callback (or a
+  publish from outside one: an action callback) the node publishes its cumulative counts on ``/sim/step_ack``
+  (rfidnav_msgs/StepAck); the simulator advances time only when every counted message has been handled
+  (rfidnav_common.step_ledger);
+- its clock is simulated time taken from the stamps of the messages it handles (``header.stamp``, or a
+  ``/clock`` message's ``clock``), so it needs no ``/clock`` subscription;
+- timers on its clock (``create_timer`` without a ``clock``) fire when a handled message moves that time past
+  their due time, before the message's own callback runs: a timer due at ``t`` sees the inputs of the steps
+  before ``t`` and never some of ``t``'s, whatever order the messages of one step arrive in.
+
+A node that is not ours (a hardware driver, a user's node) simply is no participant: nothing waits for it.
+"""
+
+from __future__ import annotations
+
+import random
+from collections.abc import Callable
+from typing import Any
+
+from rcl_interfaces.msg import ParameterDescriptor
+from rclpy.node import Node
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.time import Time
+
+from rfidnav_common.step_ledger import StepReport
+from rfidnav_msgs.msg import StepAck
+
+STEP_ACK_TOPIC = "/sim/step_ack"
+STEPPED_CLOCK_PARAMETER = "stepped_clock"
+# Topics no participant's publisher counts (logs, parameter events, an action's own topics): handling them
+# cannot complete a step, so they are not counted and cost no answer.
+UNCOUNTED_TOPICS = ("/rosout", "/parameter_events", STEP_ACK_TOPIC)
+ACTION_TOPIC_MARK = "/_action/"
+# Counts are cumulative, so only a node's latest answer matters: a participant keeps one. Transient local, so
+# that the answer a node gives on starting (which inputs it has) reaches a simulator that discovers it later.
+STEP_ACK_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1, reliability=ReliabilityPolicy.RELIABLE,
+                          durability=DurabilityPolicy.TRANSIENT_LOCAL)
+# The simulator's side: one topic without keys is one instance for all writers, so the reader's depth must hold
+# an answer of every participant at once, or one node's answer overwrites another's.
+STEP_ACK_READER_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=100,
+                                 reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+
+
+class SimTimer:
+    """A timer on a stepped node's simulated time: fired by the node as handled stamps pass its due time."""
+
+    def __init__(self, period_ns: int, callback: Callable[[], Any], first_due_ns: int) -> None:
+        self.period_ns = period_ns
+        self.callback = callback
+        self.due_ns = first_due_ns
+        self.canceled = False
+
+    def cancel(self) -> None:
+        self.canceled = True
+
+    def reset(self) -> None:
+        self.canceled = False
+
+    def is_canceled(self) -> bool:
+        return self.canceled
+
+    def fire_if_due(self, now_ns: int) -> None:
+        """One call however many periods went by (as an rcl timer that fell behind), then the next due time on
+        its grid after ``now_ns``."""
+        if self.canceled or now_ns < self.due_ns:
+            return
+        self.due_ns += self.period_ns * ((now_ns - self.due_ns) // self.period_ns + 1)
+        self.callback()
+
+
+def message_stamp_ns(message: Any) -> int | None:
+    """The simulated time a message carries: its header's stamp, or a /clock message's time; None without."""
+    header = getattr(message, "header", None)
+    stamp = getattr(header, "stamp", None) if header is not None else getattr(message, "clock", None)
+    if stamp is None or not hasattr(stamp, "nanosec"):
+        return None
+    return stamp.sec * 1_000_000_000 + stamp.nanosec
+
+
+class SteppedNode(Node):
+    """An rclpy Node that answers the stepped simulation clock when its ``stepped_clock`` parameter is true."""
+
+    # The simulator owns the clock and reads its own counts: it answers no one.
+    answers_steps = True
+    # Until the parameter is read: what rclpy's Node creates for itself (parameter events) is not counted.
+    stepped = False
+
+    def __init__(self, node_name: str, **node_options: Any) -> None:
+        super().__init__(node_name, **node_options)
+        self.stepped = bool(self.declare_parameter(
+            STEPPED_CLOCK_PARAMETER, False,
+            ParameterDescriptor(description="take part in the stepped simulation clock: count messages, "
+                                            "answer on /sim/step_ack, take time from handled stamps")).value)
+        self.consumed_counts: dict[str, int] = {}
+        self.produced_counts: dict[str, int] = {}
+        self.sim_timers: list[SimTimer] = []
+        self.sim_time_ns = 0
+        if not self.stepped:
+            return
+        self.incarnation = random.SystemRandom().getrandbits(63)
+        # Simulated time without a /clock subscription: the clock reads what the adapter sets from the stamps
+        # it handles (rclpy's TimeSource does the same from /clock; this is its private switch).
+        clock = self.get_clock()
+        clock._set_ros_time_is_active(True)
+        clock.set_ros_time_override(Time(nanoseconds=0, clock_type=clock.clock_type))
+        self.in_callback = False
+        if self.answers_steps:
+            self.ack_publisher = super().create_publisher(StepAck, STEP_ACK_TOPIC, STEP_ACK_QOS)
+
+    # -------------------------------------------------------------------------------- rclpy overrides
+    def create_subscription(self, msg_type: Any, topic: str, callback: Callable[[Any], Any], qos_profile: Any,
+                            **kwargs: Any) -> Any:
+        resolved = self.resolve_topic_name(topic)
+        if not self.stepped or resolved in UNCOUNTED_TOPICS or ACTION_TOPIC_MARK in resolved:
+            return super().create_subscription(msg_type, topic, callback, qos_profile, **kwargs)
+        self.consumed_counts.setdefault(resolved, 0)
+
+        def counted(message: Any) -> None:
+            self.in_callback = True
+            try:
+                stamp_ns = message_stamp_ns(message) if not isinstance(message, bytes) else None
+                if stamp_ns is not None:
+                    self.advance_time(stamp_ns)
+                callback(message)
+            finally:
+                self.consumed_counts[resolved] += 1
+                self.in_callback = False
+                self.changed()
+
+        self.changed()   # a new input: the simulator learns to wait for it
+        return super().create_subscription(msg_type, topic, counted, qos_profile, **kwargs)
+
+    def create_publisher(self, msg_type: Any, topic: str, qos_profile: Any, **kwargs: Any) -> Any:
+        publisher = super().create_publisher(msg_type, topic, qos_profile, **kwargs)
+        if not self.stepped:
+            return publisher
+        resolved = publisher.topic_name
+        self.produced_counts.setdefault(resolved, 0)
+        publish = publisher.publish
+
+        def counted(message: Any) -> None:
+            publish(message)
+            self.produced_counts[resolved] += 1
+            if not self.in_callback:   # within a callback the answer after it counts this too
+                self.changed()
+
+        publisher.publish = counted
+        return publisher
+
+    def create_timer(self, timer_period_sec: float, callback: Callable[[], Any], callback_group: Any = None,
+                     clock: Any = None, autostart: bool = True) -> Any:
+        if not self.stepped or clock is not None:
+            return super().create_timer(timer_period_sec, callback, callback_group, clock, autostart)
+        period_ns = max(1, round(timer_period_sec * 1e9))
+        timer = SimTimer(period_ns, callback, self.sim_time_ns + period_ns)
+        timer.canceled = not autostart
+        self.sim_timers.append(timer)
+        return timer
+
+    # ------------------------------------------------------------------------------------- stepping
+    def advance_time(self, stamp_ns: int) -> None:
+        """Move this node's simulated time to ``stamp_ns`` (never back) and fire the timers now due."""
+        if stamp_ns <= self.sim_time_ns:
+            return
+        self.sim_time_ns = stamp_ns
+        clock = self.get_clock()
+        clock.set_ros_time_override(Time(nanoseconds=stamp_ns, clock_type=clock.clock_type))
+        for timer in list(self.sim_timers):
+            timer.fire_if_due(stamp_ns)
+
+    def changed(self) -> None:
+        """A count changed: answer with all counts (they are cumulative, so every answer is complete)."""
+        if self.answers_steps:
+            self.ack_publisher.publish(step_ack_message(self.step_report(), self.sim_time_ns))
+
+    def step_report(self) -> StepReport:
+        return StepReport(self.get_fully_qualified_name(), self.incarnation, dict(self.consumed_counts),
+                          dict(self.produced_counts))
+
+
+def step_ack_message(report: StepReport, time_ns: int) -> StepAck:
+    message = StepAck(node=report.node, incarnation=report.incarnation,
+                      consumed_topics=list(report.consumed), consumed_counts=list(report.consumed.values()),
+                      produced_topics=list(report.produced), produced_counts=list(report.produced.values()))
+    message.time.sec, message.time.nanosec = divmod(time_ns, 1_000_000_000)
+    return message
+
+
+def step_report_of(message: StepAck) -> StepReport:
+    return StepReport(message.node, message.incarnation,
+                      dict(zip(message.consumed_topics, message.consumed_counts, strict=True)),
+                      dict(zip(message.produced_topics, message.produced_counts, strict=True)))
