@@ -14,16 +14,22 @@ lockstep without code of its own:
   their due time, before the message's own callback runs: a timer due at ``t`` sees the inputs of the steps
   before ``t`` and never some of ``t``'s, whatever order the messages of one step arrive in.
 
+A node whose answers the loop does not wait on (the recorder) sets ``step_slack``: it may fall that many messages
+behind on an input before it holds a step, and it answers every ``step_slack // 2`` messages or, when idle,
+within ``SLACK_ANSWER_PERIOD_S`` of wall time, instead of after every callback.
+
 A node that is not ours (a hardware driver, a user's node) simply is no participant: nothing waits for it.
 """
 
 from __future__ import annotations
 
 import random
+import time
 from collections.abc import Callable
 from typing import Any
 
 from rcl_interfaces.msg import ParameterDescriptor
+from rclpy.clock import Clock, ClockType
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.time import Time
@@ -37,6 +43,7 @@ STEPPED_CLOCK_PARAMETER = "stepped_clock"
 # cannot complete a step, so they are not counted and cost no answer.
 UNCOUNTED_TOPICS = ("/rosout", "/parameter_events", STEP_ACK_TOPIC)
 ACTION_TOPIC_MARK = "/_action/"
+SLACK_ANSWER_PERIOD_S = 0.02
 # Counts are cumulative, so only a node's latest answer matters: a participant keeps one. Transient local, so
 # that the answer a node gives on starting (which inputs it has) reaches a simulator that discovers it later.
 STEP_ACK_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1, reliability=ReliabilityPolicy.RELIABLE,
@@ -88,6 +95,7 @@ class SteppedNode(Node):
 
     # The simulator owns the clock and reads its own counts: it answers no one.
     answers_steps = True
+    step_slack = 0
     # Until the parameter is read: what rclpy's Node creates for itself (parameter events) is not counted.
     stepped = False
 
@@ -110,8 +118,13 @@ class SteppedNode(Node):
         clock._set_ros_time_is_active(True)
         clock.set_ros_time_override(Time(nanoseconds=0, clock_type=clock.clock_type))
         self.in_callback = False
+        self.unanswered_changes = 0
+        self.answered_at = time.monotonic()
         if self.answers_steps:
             self.ack_publisher = super().create_publisher(StepAck, STEP_ACK_TOPIC, STEP_ACK_QOS)
+            if self.step_slack:
+                super().create_timer(SLACK_ANSWER_PERIOD_S, self.answer_if_idle,
+                                     clock=Clock(clock_type=ClockType.STEADY_TIME))
 
     # -------------------------------------------------------------------------------- rclpy overrides
     def create_subscription(self, msg_type: Any, topic: str, callback: Callable[[Any], Any], qos_profile: Any,
@@ -175,17 +188,30 @@ class SteppedNode(Node):
             timer.fire_if_due(stamp_ns)
 
     def changed(self) -> None:
-        """A count changed: answer with all counts (they are cumulative, so every answer is complete)."""
-        if self.answers_steps:
-            self.ack_publisher.publish(step_ack_message(self.step_report(), self.sim_time_ns))
+        """A count changed: answer with all counts (they are cumulative, so every answer is complete), at once
+        or, with slack, once enough changed."""
+        if not self.answers_steps:
+            return
+        self.unanswered_changes += 1
+        if self.unanswered_changes > self.step_slack // 2:
+            self.answer()
+
+    def answer_if_idle(self) -> None:
+        if self.unanswered_changes and time.monotonic() - self.answered_at >= SLACK_ANSWER_PERIOD_S:
+            self.answer()
+
+    def answer(self) -> None:
+        self.unanswered_changes = 0
+        self.answered_at = time.monotonic()
+        self.ack_publisher.publish(step_ack_message(self.step_report(), self.sim_time_ns))
 
     def step_report(self) -> StepReport:
         return StepReport(self.get_fully_qualified_name(), self.incarnation, dict(self.consumed_counts),
-                          dict(self.produced_counts))
+                          dict(self.produced_counts), self.step_slack)
 
 
 def step_ack_message(report: StepReport, time_ns: int) -> StepAck:
-    message = StepAck(node=report.node, incarnation=report.incarnation,
+    message = StepAck(node=report.node, incarnation=report.incarnation, slack=report.slack,
                       consumed_topics=list(report.consumed), consumed_counts=list(report.consumed.values()),
                       produced_topics=list(report.produced), produced_counts=list(report.produced.values()))
     message.time.sec, message.time.nanosec = divmod(time_ns, 1_000_000_000)
@@ -195,4 +221,4 @@ def step_ack_message(report: StepReport, time_ns: int) -> StepAck:
 def step_report_of(message: StepAck) -> StepReport:
     return StepReport(message.node, message.incarnation,
                       dict(zip(message.consumed_topics, message.consumed_counts, strict=True)),
-                      dict(zip(message.produced_topics, message.produced_counts, strict=True)))
+                      dict(zip(message.produced_topics, message.produced_counts, strict=True)), message.slack)

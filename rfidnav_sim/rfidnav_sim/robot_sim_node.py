@@ -147,7 +147,7 @@ class RobotSimNode(SteppedNode):
 
     def step_answered(self) -> bool:
         self.ledger.report(self.step_report())
-        if self.ledger.unanswered():
+        if not self.ledger.answered():
             return False
         self.waiting_since = time.monotonic()
         return True
