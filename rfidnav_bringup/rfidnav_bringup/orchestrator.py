@@ -133,7 +133,9 @@ class Orchestrator:
         self.scenario = scenario
         self.options = options
         self.run_dir = unique_dir(options.out_dir / run_id(scenario.name))
-        self.processes: dict[str, NodeProcess] = {}
+        self.processes: dict[str, NodeProcess] = {}       # by process: a role's name, or its group's
+        self.domain: dict[str, Any] | None = None    # the ROS domain it ran in, and the ones it skipped
+        self.process_of = {role: spec.process or role for role, spec in scenario.nodes.items()}
         self.outcome = MissionOutcome()
         self.progress = Progress(options.quiet)
         self.interrupted = False
@@ -164,13 +166,31 @@ class Orchestrator:
             if self.record_exclude:
                 command += ["-p", f"exclude_topics:={json.dumps(list(self.record_exclude))}"]
             self.processes[RECORDER_ROLE] = NodeProcess(RECORDER_ROLE, command, self.log_path(RECORDER_ROLE), env)
+        groups: dict[str, list[NodeSpec]] = {}
         for role, spec in self.scenario.nodes.items():
-            command = self.node_command(spec, params_dir)
-            self.processes[role] = NodeProcess(role, command, self.log_path(role), env, spec.respawn,
-                                               spec.max_respawns)
+            groups.setdefault(self.process_of[role], []).append(spec)
+        for key, specs in groups.items():
+            if len(specs) == 1 and specs[0].process is None:
+                spec = specs[0]
+                command = self.node_command(spec, params_dir)
+                self.processes[key] = NodeProcess(key, command, self.log_path(key), env, spec.respawn,
+                                                  spec.max_respawns)
+            else:
+                self.processes[key] = NodeProcess(key, self.container_command(specs, params_dir),
+                                                  self.log_path(key), env)
 
     def log_path(self, role: str) -> Path:
         return self.run_dir / "logs" / f"{role}.log"
+
+    def container_command(self, specs: list[NodeSpec], params_dir: Path) -> list[str]:
+        """One process for roles that share a ``process``: rfidnav_bringup.container with each node's parameter
+        file (keyed by its node name) as a global argument."""
+        command = [sys.executable, "-m", "rfidnav_bringup.container"]
+        files: list[str] = []
+        for spec in specs:
+            command += ["--node", f"{spec.package}:{spec.executable}"]
+            files += self.node_command(spec, params_dir)[len(spec.command) + 1:]
+        return command + ["--ros-args", *files]
 
     def node_command(self, spec: NodeSpec, params_dir: Path) -> list[str]:
         if spec.package is None:
@@ -196,6 +216,7 @@ class Orchestrator:
     # ----------------------------------------------------------------- run
     def run(self) -> RunSummary:
         lease = DomainLease()
+        self.domain = {"id": lease.domain_id, "skipped": {str(d): nodes for d, nodes in lease.skipped.items()}}
         env = child_environment(lease.domain_id)
         os.environ.update({k: env[k] for k in ("ROS_DOMAIN_ID", "ROS_AUTOMATIC_DISCOVERY_RANGE")})
         context = Context()
@@ -207,6 +228,9 @@ class Orchestrator:
         previous_handler = signal.signal(signal.SIGINT, self.on_interrupt)
         try:
             self.prepare(env)
+            if lease.skipped:
+                self.say(f"skipped ROS domains in use by nodes not of this run: {lease.describe_skipped()}",
+                         always=True)
             self.say(f"run {self.run_dir.name}: domain {lease.domain_id}, seed {self.options.seed}, "
                      f"RTF {rtf_text(self.options.rtf)}, {self.clock} clock{self.clock_note}")
             self.start_graph(node, executor)
@@ -253,8 +277,9 @@ class Orchestrator:
             self.processes[RECORDER_ROLE].start()
             self.spin_until(executor, lambda: "recorder" in node.get_node_names(), READY_TIMEOUT_S,
                             "the recorder to join the graph")
-        for role in self.scenario.nodes:
-            self.processes[role].start()
+        for key, process in self.processes.items():
+            if key != RECORDER_ROLE:
+                process.start()
         expected = {spec.name for spec in self.scenario.nodes.values() if spec.name}
         self.spin_until(executor, lambda: expected <= set(node.get_node_names()), READY_TIMEOUT_S,
                         f"nodes {', '.join(sorted(expected))} to join the graph")
@@ -321,6 +346,7 @@ class Orchestrator:
         result_future = handle.get_result_async()
         self.outcome.cpu_at_start = self.cpu_seconds()
         role = self.mission_role()
+        role = self.process_of[role] if role else None
         restarts = self.processes[role].restarts if role else 0
         wall_limit = mission.timeout_s / (self.options.rtf if math.isfinite(self.options.rtf) else 1.0) * 3.0 + 60.0
         while not result_future.done():
@@ -364,7 +390,7 @@ class Orchestrator:
         handle = send.result()
         if not handle.accepted:
             role = self.mission_role()
-            detail = f"\n{self.processes[role].last_lines(5)}" if role else ""
+            detail = f"\n{self.processes[self.process_of[role]].last_lines(5)}" if role else ""
             raise ReadinessError(f"goal rejected by {self.scenario.mission.action}{detail}")
         return handle
 
@@ -474,6 +500,7 @@ class Orchestrator:
             "seed": self.options.seed,
             "rtf": rtf_text(self.options.rtf),
             "clock": self.clock_summary(),
+            "ros_domain": self.domain,
             "sim_duration_s": sim_duration,
             "wall_duration_s": round((self.outcome.ended_wall or time.monotonic()) - self.outcome.started_wall, 3)
             if self.outcome.started_wall else None,

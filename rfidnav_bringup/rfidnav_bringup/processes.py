@@ -1,7 +1,8 @@
 """Node processes: resolving ``package executable`` like ``ros2 run``, starting with logs, stopping politely.
 
 Also hands out DDS domain ids: each run holds an exclusive lock on one id for its lifetime, so
-concurrent runs (and test sessions) on one machine never hear each other.
+concurrent runs (and test sessions) on one machine never hear each other, and passes over an id in which
+nodes are already heard (a graph that does not know our locks), so that no foreign node joins a run.
 """
 
 from __future__ import annotations
@@ -12,6 +13,8 @@ import signal
 import subprocess
 import sys
 import tempfile
+import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from importlib import metadata
 from pathlib import Path
@@ -24,11 +27,46 @@ from rfidnav_bringup.errors import LaunchError
 RUN_DOMAINS = range(51, 102)   # 1-50 are left to test sessions; 0-101 avoid the ephemeral port range
 
 
-class DomainLease:
-    """An exclusive ROS_DOMAIN_ID for this process's lifetime (released on close or exit)."""
+DISCOVERY_WINDOW_S = 1.0   # how long a probe listens for nodes already in a domain (localhost discovery: ~0.1 s)
 
-    def __init__(self, candidates: range = RUN_DOMAINS) -> None:
+
+def nodes_in_domain(domain: int, window_s: float = DISCOVERY_WINDOW_S) -> list[str]:
+    """The ROS nodes already in DDS domain ``domain`` on this machine, heard within ``window_s``: a graph that
+    ignores our lock files (another checkout, a user's own nodes, a run whose orchestrator was killed).
+
+    Absence cannot be waited for as a condition, so an empty domain costs the whole window; a node is found as
+    soon as discovery reports it."""
+    import rclpy
+    from rclpy.context import Context
+    from rclpy.node import Node
+
+    context = Context()
+    rclpy.init(context=context, domain_id=domain)
+    try:
+        probe = Node("rfidnav_domain_probe", context=context, start_parameter_services=False,
+                     enable_rosout=False)
+        deadline = time.monotonic() + window_s
+        found: list[str] = []
+        while not found and time.monotonic() < deadline:
+            found = [f"{ns.rstrip('/')}/{name}" for name, ns in probe.get_node_names_and_namespaces()
+                     if name != probe.get_name()]
+            if not found:
+                time.sleep(0.05)   # polling the graph cache: discovery fills it in the background
+        probe.destroy_node()
+        return found
+    finally:
+        rclpy.try_shutdown(context=context)
+
+
+class DomainLease:
+    """An exclusive ROS_DOMAIN_ID for this process's lifetime (released on close or exit): one whose lock file no
+    other run holds and in which no node is heard (:func:`nodes_in_domain`); ``skipped`` says which were passed
+    over because of foreign nodes."""
+
+    def __init__(self, candidates: range = RUN_DOMAINS,
+                 occupants: Callable[[int], list[str]] = nodes_in_domain) -> None:
         self.handle: IO[str] | None = None
+        self.skipped: dict[int, list[str]] = {}
         for domain in candidates:
             handle = open(Path(tempfile.gettempdir()) / f"rfidnav-domain-{domain}.lock", "w")
             try:
@@ -36,9 +74,19 @@ class DomainLease:
             except BlockingIOError:
                 handle.close()
                 continue
+            found = occupants(domain)
+            if found:
+                self.skipped[domain] = found
+                handle.close()
+                continue
             self.handle, self.domain_id = handle, domain
             return
-        raise LaunchError(f"all ROS domain ids {candidates.start}-{candidates.stop - 1} are in use by other runs")
+        raise LaunchError(f"all ROS domain ids {candidates.start}-{candidates.stop - 1} are in use by other runs"
+                          + (f" or by nodes not ours ({self.describe_skipped()})" if self.skipped else ""))
+
+    def describe_skipped(self) -> str:
+        return "; ".join(f"domain {domain}: {', '.join(nodes[:3])}{' ...' if len(nodes) > 3 else ''}"
+                         for domain, nodes in self.skipped.items())
 
     def close(self) -> None:
         if self.handle is not None:

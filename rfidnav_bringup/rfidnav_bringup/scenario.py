@@ -83,6 +83,7 @@ class NodeSpec:
     clock_source: bool                       # publishes /clock; not given use_sim_time
     respawn: bool
     max_respawns: int
+    process: str | None = None               # roles with the same name share one OS process (container.py)
 
 
 @dataclass(frozen=True)
@@ -131,7 +132,7 @@ class Scenario:
                 "command": " ".join(shlex.quote(c) for c in spec.command) if spec.package is None else None,
                 "name": spec.name, "params": [str(p) for p in spec.param_files], "overrides": spec.overrides,
                 "sim": spec.sim, "clock_source": spec.clock_source, "respawn": spec.respawn,
-                "max_respawns": spec.max_respawns}.items() if value not in (None, {}, [])}
+                "max_respawns": spec.max_respawns, "process": spec.process}.items() if value not in (None, {}, [])}
                 for role, spec in self.nodes.items()},
             "mission": {key: value for key, value in {
                 "action": self.mission.action, "type": self.mission.action_type, "server": self.mission.server,
@@ -220,6 +221,9 @@ def load_scenario(name_or_path: str, swaps: dict[str, str] | None = None,
         nodes[role] = replace(nodes[role], param_files=(Path(file).resolve(),))
     if sum(spec.clock_source for spec in nodes.values()) > 1:
         raise section.error("nodes", "only one node can be the clock_source")
+    for role, spec in nodes.items():
+        if spec.process is not None and spec.process in nodes and nodes[spec.process].process != spec.process:
+            raise section.error(f"nodes.{role}.process", f"'{spec.process}' is the name of another role's process")
     mission = section.section("mission")
     mission.reject_unknown(("action", "type", "server", "goal", "timeout_s"))
     if goal is None:
@@ -252,7 +256,7 @@ def load_scenario(name_or_path: str, swaps: dict[str, str] | None = None,
 
 def _node_spec(role: str, entry: Section, base: Path) -> NodeSpec:
     entry.reject_unknown(("package", "executable", "command", "name", "params", "overrides", "sim",
-                          "clock_source", "respawn", "max_respawns"))
+                          "clock_source", "respawn", "max_respawns", "process"))
     if entry.has("command"):
         package = executable = None
         command = _program(tuple(shlex.split(entry.string("command"))), entry.source, entry.field("command"))
@@ -272,12 +276,20 @@ def _node_spec(role: str, entry: Section, base: Path) -> NodeSpec:
     overrides = entry.raw("overrides", {})
     if not isinstance(overrides, dict):
         raise entry.error("overrides", "expected a mapping of parameter names to values")
+    process = entry.raw("process", None)
+    if process is not None:
+        if not isinstance(process, str) or not process.isidentifier():
+            raise entry.error("process", "expected a name (letters, digits, _) shared by the roles of one process")
+        if package is None or (package, executable) not in KNOWN_NODES:
+            raise entry.error("process", "only our nodes (package and executable) can share a process")
+        if entry.boolean("respawn", False):
+            raise entry.error("process", "a role that respawns needs a process of its own")
     return NodeSpec(
         role=role, package=package, executable=executable, command=command,
         name=entry.string("name", executable) if package is not None else entry.raw("name", None),
         param_files=files, overrides=dict(overrides), sim=entry.boolean("sim", False),
         clock_source=entry.boolean("clock_source", False), respawn=entry.boolean("respawn", False),
-        max_respawns=entry.integer("max_respawns", 3, minimum=0))
+        max_respawns=entry.integer("max_respawns", 3, minimum=0), process=process)
 
 
 def _swapped(spec: NodeSpec, replacement: str) -> NodeSpec:
@@ -285,9 +297,11 @@ def _swapped(spec: NodeSpec, replacement: str) -> NodeSpec:
     if ":" in replacement and " " not in replacement:
         package, executable = replacement.split(":", 1)
         command = _resolved(package, executable, "--swap", spec.role)
-        return replace(spec, package=package, executable=executable, command=command, name=executable)
+        return replace(spec, package=package, executable=executable, command=command, name=executable,
+                       process=None)
     command = _program(tuple(shlex.split(replacement)), "--swap", spec.role)
-    return replace(spec, package=None, executable=None, command=command, name=None, param_files=(), overrides={})
+    return replace(spec, package=None, executable=None, command=command, name=None, param_files=(), overrides={},
+                   process=None)
 
 
 def _resolved(package: str, executable: str, source: str, prefix: str) -> tuple[str, ...]:

@@ -15,6 +15,11 @@ last the goal is still the active one (a new goal is rejected) but no longer run
 
 A cancel request and a silent input are noticed by :meth:`SingleGoalServer.supervise` (on its own timer, or
 called by the node's control loop), as no message may arrive to notice them.
+
+Feedback (:meth:`SingleGoalServer.publish_feedback`) is throttled to what a person reads: it goes out at once
+when anything but a floating-point field changes (a new target, phase or node: what the reports and metrics
+read from the bag), otherwise at most every ``FEEDBACK_PERIOD_S`` of the node's time. Each message costs every
+subscriber (the recorder, the client) a wake-up, and a controller steps at 25 Hz.
 """
 
 from __future__ import annotations
@@ -50,6 +55,21 @@ class ActiveGoal:
 
 
 GoalT = TypeVar("GoalT", bound=ActiveGoal)
+FEEDBACK_PERIOD_S = 0.5
+FLOATING_TYPES = ("double", "float")
+
+
+def discrete_fields(message: Any) -> tuple[Any, ...]:
+    """The values of a message's fields that are not floating point, nested messages' included (a change of
+    any of them is an event, not noise)."""
+    values: list[Any] = []
+    for name, kind in message.get_fields_and_field_types().items():
+        value = getattr(message, name)
+        if hasattr(value, "get_fields_and_field_types"):
+            values.append(discrete_fields(value))
+        elif kind not in FLOATING_TYPES:
+            values.append(value if not isinstance(value, list) else tuple(value))
+    return tuple(values)
 
 
 @dataclass(frozen=True)
@@ -80,6 +100,7 @@ class SingleGoalServer(Generic[GoalT]):
         self.check, self.new_goal, self.started, self.result = check, new_goal, started, result
         self.stop, self.abandon, self.watchdog = stop, abandon, watchdog
         self.active: GoalT | None = None            # accepted, until its execute callback has run
+        self.feedback_sent: tuple[float, tuple[Any, ...]] | None = None   # when, and its discrete fields
         self.outcome: tuple[GoalOutcome, str] | None = None   # once concluded
         self.action_server = ActionServer(
             node, action_type, action_name, execute_callback=self.finish, goal_callback=self.on_goal,
@@ -101,6 +122,16 @@ class SingleGoalServer(Generic[GoalT]):
         """The running goal's input arrived: the watchdog starts counting again."""
         if self.active is not None:
             self.active.last_heard_s = self.now_s()
+
+    def publish_feedback(self, feedback: Any) -> None:
+        """Publish the active goal's feedback if it says something new or FEEDBACK_PERIOD_S went by."""
+        now_s, discrete = self.now_s(), discrete_fields(feedback)
+        if self.feedback_sent is not None:
+            sent_s, sent_discrete = self.feedback_sent
+            if discrete == sent_discrete and now_s - sent_s < FEEDBACK_PERIOD_S:
+                return
+        self.feedback_sent = (now_s, discrete)
+        self.active.handle.publish_feedback(feedback)
 
     def conclude(self, outcome: GoalOutcome, message: str) -> None:
         """End the running goal with ``outcome``: stop the robot and let the action server run the execute
@@ -136,7 +167,7 @@ class SingleGoalServer(Generic[GoalT]):
 
     def on_accepted(self, handle: ServerGoalHandle) -> None:
         # Active before ``started`` runs: starting may already conclude the goal.
-        self.active, self.outcome = self.new_goal(handle), None
+        self.active, self.outcome, self.feedback_sent = self.new_goal(handle), None, None
         self.active.last_heard_s = self.now_s()
         self.started(self.active)
 

@@ -96,21 +96,31 @@ def run_node(make_node: Callable[[], Node], args: list[str] | None = None,
     the exit code), always destroy the node and shut down.
 
     A configuration problem found while constructing the node is printed as one line and exits 2."""
+    return run_nodes([make_node], args, make_executor, spin, signal_handler_options)
+
+
+def run_nodes(make_nodes: list[Callable[[], Node]], args: list[str] | None = None,
+              make_executor: Callable[[], Executor] = events_executor,
+              spin: Callable[[Executor, Node], int] = spin_until_shutdown,
+              signal_handler_options: SignalHandlerOptions = SignalHandlerOptions.ALL) -> int:
+    """run_node for several nodes in one process and on one executor (rfidnav_bringup.container); ``spin`` is
+    given the first."""
     rclpy.init(args=args, signal_handler_options=signal_handler_options)
-    node = None
+    nodes: list[Node] = []
     executor = make_executor()
     code = 0
     try:
-        node = make_node()
-        executor.add_node(node)
-        code = spin(executor, node)
+        for make_node in make_nodes:
+            nodes.append(make_node())
+            executor.add_node(nodes[-1])
+        code = spin(executor, nodes[0])
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     except RfidnavError as error:
         print(f"[FATAL] {error}", file=sys.stderr, flush=True)
         return 2
     finally:
-        if node is not None:
+        for node in nodes:
             node.destroy_node()
         executor.shutdown()
         rclpy.try_shutdown()

@@ -125,6 +125,7 @@ class SteppedNode(Node):
             if self.step_slack:
                 super().create_timer(SLACK_ANSWER_PERIOD_S, self.answer_if_idle,
                                      clock=Clock(clock_type=ClockType.STEADY_TIME))
+            self.changed()   # present from the start, even a node that consumes nothing (a service node)
 
     # -------------------------------------------------------------------------------- rclpy overrides
     def create_subscription(self, msg_type: Any, topic: str, callback: Callable[[Any], Any], qos_profile: Any,
@@ -201,6 +202,8 @@ class SteppedNode(Node):
             self.answer()
 
     def answer(self) -> None:
+        if not self.context.ok():   # shutting down (Ctrl-C came during a callback): nobody waits any more
+            return
         self.unanswered_changes = 0
         self.answered_at = time.monotonic()
         self.ack_publisher.publish(step_ack_message(self.step_report(), self.sim_time_ns))

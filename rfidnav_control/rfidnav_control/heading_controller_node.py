@@ -100,7 +100,7 @@ class HeadingControllerNode(SteppedNode):
             target_index=command.target_index, target_tag_id=command.target_tag_id,
             phase_difference_rad=command.phase_difference_rad, heading_change_rad=command.heading_change_rad,
             mode=command.mode)
-        goal.handle.publish_feedback(feedback)
+        self.goals.publish_feedback(feedback)
 
 
 def main(args: list[str] | None = None) -> int:

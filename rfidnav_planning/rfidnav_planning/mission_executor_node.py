@@ -120,7 +120,7 @@ class MissionExecutorNode(SteppedNode):
     def publish_feedback(self) -> None:
         mission = self.executor_core.state
         goal = self.goals.active
-        goal.handle.publish_feedback(NavigateToNode.Feedback(
+        self.goals.publish_feedback(NavigateToNode.Feedback(
             current_node=mission.current_node or "", arrival_direction=mission.arrival_side or "",
             last_tag=mission.last_tag or "", next_action=goal.next_action,
             tags_missed=mission.tags_missed, replans=mission.replans))

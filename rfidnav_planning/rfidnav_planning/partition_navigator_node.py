@@ -183,7 +183,7 @@ class PartitionNavigatorNode(SteppedNode):
             feedback.estimated_pose = Pose2D(x=float(position[0]), y=float(position[1]),
                                              theta=float(yaw) if yaw is not None else 0.0)
             feedback.distance_to_goal_m = float(math.dist(position, navigation.goal))
-        active.handle.publish_feedback(feedback)
+        self.goals.publish_feedback(feedback)
 
 
 def main(args: list[str] | None = None) -> int:

@@ -200,7 +200,7 @@ class TwoTierNavigatorNode(SteppedNode):
             feedback.estimated_pose = Pose2D(x=float(estimate.position[0]), y=float(estimate.position[1]),
                                              theta=float(estimate.yaw or 0.0))
             feedback.distance_to_goal_m = float(math.dist(estimate.position, self.navigator.target))
-        self.goals.active.handle.publish_feedback(feedback)
+        self.goals.publish_feedback(feedback)
 
     def publish_estimate(self) -> None:
         estimate = self.navigator.estimate()
