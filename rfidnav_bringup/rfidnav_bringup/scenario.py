@@ -84,6 +84,7 @@ class NodeSpec:
     respawn: bool
     max_respawns: int
     process: str | None = None               # roles with the same name share one OS process (container.py)
+    stepped: bool | None = None              # take part in the stepped clock; None: ours of the loop do
 
 
 @dataclass(frozen=True)
@@ -112,9 +113,14 @@ class Scenario:
 
     def step_participants(self) -> list[NodeSpec]:
         """The roles a stepped clock waits for: our nodes of the simulated loop, not the clock source itself, not a
-        driver, not a node given as a command line (a user's own node, which runs free beside them)."""
-        return [spec for spec in self.nodes.values() if spec.package in STEPPED_PACKAGES and spec.name
-                and not spec.clock_source and (spec.package, spec.executable) in KNOWN_NODES]
+        driver, not a node given as a command line (a user's own node, which runs free beside them) unless its
+        entry says ``stepped: true`` (it derives rfidnav_common.stepped_node.SteppedNode); ``stepped: false``
+        lets one of ours run free."""
+        def takes_part(spec: NodeSpec) -> bool:
+            if spec.stepped is not None:
+                return spec.stepped
+            return spec.package in STEPPED_PACKAGES and (spec.package, spec.executable) in KNOWN_NODES
+        return [spec for spec in self.nodes.values() if spec.name and not spec.clock_source and takes_part(spec)]
 
     @property
     def simulated(self) -> bool:
@@ -132,7 +138,8 @@ class Scenario:
                 "command": " ".join(shlex.quote(c) for c in spec.command) if spec.package is None else None,
                 "name": spec.name, "params": [str(p) for p in spec.param_files], "overrides": spec.overrides,
                 "sim": spec.sim, "clock_source": spec.clock_source, "respawn": spec.respawn,
-                "max_respawns": spec.max_respawns, "process": spec.process}.items() if value not in (None, {}, [])}
+                "max_respawns": spec.max_respawns, "process": spec.process, "stepped": spec.stepped}.items()
+                if value not in (None, {}, [])}
                 for role, spec in self.nodes.items()},
             "mission": {key: value for key, value in {
                 "action": self.mission.action, "type": self.mission.action_type, "server": self.mission.server,
@@ -256,7 +263,7 @@ def load_scenario(name_or_path: str, swaps: dict[str, str] | None = None,
 
 def _node_spec(role: str, entry: Section, base: Path) -> NodeSpec:
     entry.reject_unknown(("package", "executable", "command", "name", "params", "overrides", "sim",
-                          "clock_source", "respawn", "max_respawns", "process"))
+                          "clock_source", "respawn", "max_respawns", "process", "stepped"))
     if entry.has("command"):
         package = executable = None
         command = _program(tuple(shlex.split(entry.string("command"))), entry.source, entry.field("command"))
@@ -289,7 +296,8 @@ def _node_spec(role: str, entry: Section, base: Path) -> NodeSpec:
         name=entry.string("name", executable) if package is not None else entry.raw("name", None),
         param_files=files, overrides=dict(overrides), sim=entry.boolean("sim", False),
         clock_source=entry.boolean("clock_source", False), respawn=entry.boolean("respawn", False),
-        max_respawns=entry.integer("max_respawns", 3, minimum=0), process=process)
+        max_respawns=entry.integer("max_respawns", 3, minimum=0), process=process,
+        stepped=entry.boolean("stepped", False) if entry.has("stepped") else None)
 
 
 def _swapped(spec: NodeSpec, replacement: str) -> NodeSpec:
@@ -298,10 +306,10 @@ def _swapped(spec: NodeSpec, replacement: str) -> NodeSpec:
         package, executable = replacement.split(":", 1)
         command = _resolved(package, executable, "--swap", spec.role)
         return replace(spec, package=package, executable=executable, command=command, name=executable,
-                       process=None)
+                       process=None, stepped=None)
     command = _program(tuple(shlex.split(replacement)), "--swap", spec.role)
     return replace(spec, package=None, executable=None, command=command, name=None, param_files=(), overrides={},
-                   process=None)
+                   process=None, stepped=None)
 
 
 def _resolved(package: str, executable: str, source: str, prefix: str) -> tuple[str, ...]:

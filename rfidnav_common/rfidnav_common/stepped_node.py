@@ -122,10 +122,13 @@ class SteppedNode(Node):
         self.answered_at = time.monotonic()
         if self.answers_steps:
             self.ack_publisher = super().create_publisher(StepAck, STEP_ACK_TOPIC, STEP_ACK_QOS)
+            steady = Clock(clock_type=ClockType.STEADY_TIME)
             if self.step_slack:
-                super().create_timer(SLACK_ANSWER_PERIOD_S, self.answer_if_idle,
-                                     clock=Clock(clock_type=ClockType.STEADY_TIME))
-            self.changed()   # present from the start, even a node that consumes nothing (a service node)
+                super().create_timer(SLACK_ANSWER_PERIOD_S, self.answer_if_idle, clock=steady)
+            # The first answer says which topics the node consumes, so it waits until the node's constructor has
+            # made them all: it goes out when the executor first runs, even from a node that consumes nothing.
+            self.announced = False
+            self.announce_timer = super().create_timer(0.0, self.announce, clock=steady)
 
     # -------------------------------------------------------------------------------- rclpy overrides
     def create_subscription(self, msg_type: Any, topic: str, callback: Callable[[Any], Any], qos_profile: Any,
@@ -191,11 +194,17 @@ class SteppedNode(Node):
     def changed(self) -> None:
         """A count changed: answer with all counts (they are cumulative, so every answer is complete), at once
         or, with slack, once enough changed."""
-        if not self.answers_steps:
+        if not self.answers_steps or not self.announced:
             return
         self.unanswered_changes += 1
         if self.unanswered_changes > self.step_slack // 2:
             self.answer()
+
+    def announce(self) -> None:
+        self.announce_timer.cancel()
+        self.destroy_timer(self.announce_timer)
+        self.announced = True
+        self.answer()
 
     def answer_if_idle(self) -> None:
         if self.unanswered_changes and time.monotonic() - self.answered_at >= SLACK_ANSWER_PERIOD_S:

@@ -1,0 +1,99 @@
+"""The stepped clock's bookkeeping (rfidnav_common.step_ledger): when a step counts as answered."""
+
+from __future__ import annotations
+
+import pytest
+
+from rfidnav_common.step_ledger import StepLedger, StepReport
+
+pytestmark = pytest.mark.tier("unit")
+
+SIM, READER, CONTROLLER, RECORDER = "/robot_sim", "/rfid_reader_sim", "/heading_controller", "/recorder"
+
+
+def report(node: str, consumed: dict[str, int], produced: dict[str, int] | None = None, incarnation: int = 1,
+           slack: int = 0) -> StepReport:
+    return StepReport(node, incarnation, consumed, produced or {}, slack)
+
+
+def started_ledger() -> StepLedger:
+    """The simulator, a reader and a controller, all heard from once before anything was published."""
+    ledger = StepLedger([SIM, READER, CONTROLLER])
+    ledger.report(report(SIM, {"/cmd_vel": 0}, {"/sim/ground_truth": 0}))
+    ledger.report(report(READER, {"/sim/ground_truth": 0}, {"/rfid/reads": 0}))
+    ledger.report(report(CONTROLLER, {"/rfid/reads": 0}, {"/cmd_vel": 0}))
+    return ledger
+
+
+def test_a_step_waits_for_participants_never_heard_from() -> None:
+    ledger = StepLedger([SIM, READER])
+    ledger.report(report(SIM, {}, {}))
+    assert not ledger.answered()
+    assert [u.describe() for u in ledger.unanswered()] == [f"{READER} (not heard from yet)"]
+
+
+def test_a_step_is_answered_only_once_the_whole_chain_has_handled_it() -> None:
+    ledger = started_ledger()
+    assert ledger.answered()
+    ledger.report(report(SIM, {"/cmd_vel": 0}, {"/sim/ground_truth": 1}))          # the step's ground truth
+    assert [(u.node, u.topic, u.behind) for u in ledger.unanswered()] == [(READER, "/sim/ground_truth", 1)]
+    ledger.report(report(READER, {"/sim/ground_truth": 1}, {"/rfid/reads": 1}))      # it read a round
+    assert [(u.node, u.topic) for u in ledger.unanswered()] == [(CONTROLLER, "/rfid/reads")]
+    ledger.report(report(CONTROLLER, {"/rfid/reads": 1}, {"/cmd_vel": 1}))           # and commanded
+    # The command is counted as sent, but has not reached the simulator yet.
+    assert [(u.node, u.topic) for u in ledger.unanswered()] == [(SIM, "/cmd_vel")]
+    ledger.report(report(SIM, {"/cmd_vel": 1}, {"/sim/ground_truth": 1}))
+    assert ledger.answered() and ledger.unanswered() == []
+
+
+def test_a_node_that_publishes_nothing_in_answer_completes_the_step_by_its_count_alone() -> None:
+    ledger = started_ledger()
+    ledger.report(report(SIM, {"/cmd_vel": 0}, {"/sim/ground_truth": 1}))
+    ledger.report(report(READER, {"/sim/ground_truth": 1}, {"/rfid/reads": 0}))     # no round due
+    assert ledger.answered()
+
+
+def test_nodes_that_are_no_participants_are_ignored() -> None:
+    ledger = started_ledger()
+    assert ledger.report(report("/llrp_reader", {}, {"/rfid/reads": 5})) is False
+    assert ledger.answered()
+
+
+def test_slack_lets_a_recorder_lag_that_many_messages() -> None:
+    ledger = StepLedger([SIM, RECORDER])
+    ledger.report(report(SIM, {}, {"/odom": 0}))
+    ledger.report(report(RECORDER, {"/odom": 0}, slack=2))
+    ledger.report(report(SIM, {}, {"/odom": 2}))
+    assert ledger.answered()
+    ledger.report(report(SIM, {}, {"/odom": 3}))
+    assert [(u.node, u.behind) for u in ledger.unanswered()] == [(RECORDER, 3)]
+
+
+def test_a_restarted_participant_owes_nothing_from_before_and_its_old_messages_stay_counted() -> None:
+    ledger = started_ledger()
+    ledger.report(report(SIM, {"/cmd_vel": 0}, {"/sim/ground_truth": 1}))
+    ledger.report(report(READER, {"/sim/ground_truth": 1}, {"/rfid/reads": 1}))
+    ledger.report(report(CONTROLLER, {"/rfid/reads": 1}, {"/cmd_vel": 1}))
+    ledger.report(report(SIM, {"/cmd_vel": 1}, {"/sim/ground_truth": 1}))
+    # The controller dies with a round in flight; its new process has handled nothing.
+    ledger.report(report(SIM, {"/cmd_vel": 1}, {"/sim/ground_truth": 2}))
+    ledger.report(report(READER, {"/sim/ground_truth": 2}, {"/rfid/reads": 2}))
+    ledger.report(report(CONTROLLER, {"/rfid/reads": 0}, {"/cmd_vel": 0}, incarnation=2))
+    assert ledger.answered()
+    # Its first new command is a new debt of the simulator's: the old one is still counted.
+    ledger.report(report(CONTROLLER, {"/rfid/reads": 0}, {"/cmd_vel": 1}, incarnation=2))
+    assert ledger.published("/cmd_vel") == 2
+    assert [(u.node, u.topic) for u in ledger.unanswered()] == [(SIM, "/cmd_vel")]
+
+
+def test_an_input_first_reported_late_owes_only_what_comes_after() -> None:
+    ledger = StepLedger([SIM, READER, RECORDER])
+    ledger.report(report(READER, {"/sim/ground_truth": 0}, {"/rfid/reads": 0}))
+    ledger.report(report(RECORDER, {}))                               # no subscription yet
+    ledger.report(report(SIM, {"/cmd_vel": 0}, {"/sim/ground_truth": 4}))
+    ledger.report(report(READER, {"/sim/ground_truth": 4}, {"/rfid/reads": 0}))
+    ledger.report(report(RECORDER, {"/sim/ground_truth": 0}))       # subscribed after four went by
+    assert ledger.answered()
+    ledger.report(report(SIM, {"/cmd_vel": 0}, {"/sim/ground_truth": 5}))
+    ledger.report(report(READER, {"/sim/ground_truth": 5}, {"/rfid/reads": 0}))
+    assert [(u.node, u.behind) for u in ledger.unanswered()] == [(RECORDER, 1)]

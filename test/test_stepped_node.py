@@ -1,0 +1,132 @@
+"""The stepped clock's node side (rfidnav_common.stepped_node) and robot_sim stepping on answers, in-process on a
+private context, stepped with ``spin_once`` until a stated condition holds; and the domain lease's probe."""
+
+from __future__ import annotations
+
+from geometry_msgs.msg import Twist
+from nav_msgs.msg import Odometry
+from rclpy.context import Context
+from rclpy.node import Node
+from rclpy.parameter import Parameter
+import pytest
+import rclpy
+from std_srvs.srv import Trigger
+
+from rfidnav_bringup.errors import LaunchError
+from rfidnav_bringup.processes import DomainLease
+from rfidnav_common.ros import COMMAND_QOS, SENSOR_QOS
+from rfidnav_common.stepped_node import STEP_ACK_QOS, STEP_ACK_TOPIC, SteppedNode, step_report_of
+from rfidnav_msgs.msg import StepAck
+from rfidnav_sim.robot_sim_node import RobotSimNode
+from support.graph import Graph, ground_truth
+from support.runs import WORKSPACE
+
+pytestmark = pytest.mark.tier("node")
+
+WORLD = WORKSPACE / "config/worlds/line_follow.yaml"
+
+
+class Recording(SteppedNode):
+    """A participant that logs what it saw in order: timer firings (with its clock) and messages."""
+
+    def __init__(self, context: Context) -> None:
+        super().__init__("participant", context=context,
+                         parameter_overrides=[Parameter("stepped_clock", value=True)])
+        self.seen: list[tuple[str, float]] = []
+        self.pub = self.create_publisher(Twist, "/cmd_vel", COMMAND_QOS)
+        self.create_subscription(Odometry, "/sim/ground_truth", self.on_truth, SENSOR_QOS)
+        self.create_timer(0.1, self.on_timer)
+
+    def now_s(self) -> float:
+        return self.get_clock().now().nanoseconds * 1e-9
+
+    def on_timer(self) -> None:
+        self.seen.append(("timer", round(self.now_s(), 3)))
+
+    def on_truth(self, msg: Odometry) -> None:
+        self.seen.append(("truth", round(self.now_s(), 3)))
+        self.pub.publish(Twist())
+
+
+def answers(graph: Graph) -> list[StepAck]:
+    received: list[StepAck] = []
+    graph.probe.create_subscription(StepAck, STEP_ACK_TOPIC, received.append, STEP_ACK_QOS)
+    return received
+
+
+def test_a_stepped_node_takes_time_from_stamps_fires_due_timers_first_and_answers_with_its_counts(graph) -> None:
+    received = answers(graph)
+    node = graph.add(Recording(graph.context))
+    truth = graph.probe.create_publisher(Odometry, "/sim/ground_truth", SENSOR_QOS)
+    graph.spin_until(lambda: truth.get_subscription_count() == 1 and received, "the participant's first answer")
+    assert step_report_of(received[-1]).consumed == {"/sim/ground_truth": 0}
+    for stamp_s in (0.04, 0.08, 0.12, 0.16, 0.24):
+        truth.publish(ground_truth(0.0, 0.0, 0.0, stamp_s))
+    graph.spin_until(lambda: len(node.seen) >= 7, "five messages and two timer periods")
+    # The 0.1 s timer fires on the 0.12 message, before it is handled, and the 0.2 s one on the 0.24 message.
+    assert node.seen == [("truth", 0.04), ("truth", 0.08), ("timer", 0.12), ("truth", 0.12), ("truth", 0.16),
+                         ("timer", 0.24), ("truth", 0.24)]
+    graph.spin_until(lambda: step_report_of(received[-1]).consumed["/sim/ground_truth"] == 5, "the last answer")
+    last = step_report_of(received[-1])
+    assert last.node == "/participant" and last.produced == {"/cmd_vel": 5}
+
+
+def test_a_node_without_the_parameter_is_a_plain_node(graph) -> None:
+    received = answers(graph)
+    node = graph.add(SteppedNode("plain", context=graph.context))
+    timer = node.create_timer(0.1, lambda: None)
+    assert not node.stepped and hasattr(timer, "timer_period_ns")   # an rclpy timer, not the adapter's
+    graph.spin_until(lambda: graph.probe.count_publishers(STEP_ACK_TOPIC) == 0, "no answer publisher")
+    assert received == []
+
+
+def robot_sim(graph: Graph, participants: list[str]) -> RobotSimNode:
+    return graph.add(RobotSimNode(context=graph.context, parameter_overrides=[
+        Parameter("world_file", value=str(WORLD)), Parameter("stepped_clock", value=True),
+        Parameter("step_participants", value=participants), Parameter("rtf", value=0.0),
+        Parameter("start_paused", value=True)]))
+
+
+def test_robot_sim_steps_only_as_far_as_its_participants_have_answered(graph) -> None:
+    """A participant that never handles what it is sent holds the clock where it is: the simulator waits for it,
+    however long, instead of letting time run on without it."""
+    sim = robot_sim(graph, ["/participant"])
+    start = graph.probe.create_client(Trigger, "/robot_sim/start")
+    graph.spin_until(start.service_is_ready, "the start service")
+    start.call_async(Trigger.Request())
+    graph.spin_until(lambda: sim.running, "the clock to be started")
+    for _ in range(50):
+        graph.executor.spin_once(timeout_sec=0.01)
+    assert sim.steps == 0 and [u.describe() for u in sim.ledger.unanswered()] == ["/participant (not heard from yet)"]
+    node = graph.add(Recording(graph.context))
+    # Now every ground truth is answered (with a command): time moves, one publication at a time.
+    graph.spin_until(lambda: sim.steps >= 40, "the clock to move once the participant answers")
+    truths = [entry for entry in node.seen if entry[0] == "truth"]
+    assert truths and sim.ledger.published("/sim/ground_truth") - len(truths) <= 1
+
+
+def test_robot_sim_refuses_rtf_zero_without_the_stepped_clock(graph) -> None:
+    from rfidnav_common.errors import ConfigError
+    with pytest.raises(ConfigError, match="stepped clock"):
+        RobotSimNode(context=graph.context, parameter_overrides=[
+            Parameter("world_file", value=str(WORLD)), Parameter("rtf", value=0.0)])
+
+
+def test_a_domain_in_use_by_a_foreign_node_is_skipped_and_named() -> None:
+    free = DomainLease(range(30, 51))
+    domain = free.domain_id
+    free.close()
+    context = Context()
+    rclpy.init(context=context, domain_id=domain)
+    foreign = Node("somebody_elses_node", context=context)
+    try:
+        with pytest.raises(LaunchError, match="somebody_elses_node"):
+            DomainLease(range(domain, domain + 1))
+        lease = DomainLease(range(domain, 51))
+        try:
+            assert lease.domain_id != domain and lease.skipped[domain] == ["/somebody_elses_node"]
+        finally:
+            lease.close()
+    finally:
+        foreign.destroy_node()
+        context.try_shutdown()
