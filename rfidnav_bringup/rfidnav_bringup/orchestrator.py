@@ -193,8 +193,8 @@ class Orchestrator:
         return command + ["--ros-args", *files]
 
     def node_command(self, spec: NodeSpec, params_dir: Path) -> list[str]:
-        if spec.package is None:
-            return list(spec.command)
+        if spec.package is None and not (spec.stepped or spec.param_files or spec.overrides):
+            return list(spec.command)   # a command line as given: it may be no ROS node of ours at all
         command = [*spec.command, "--ros-args"]
         parameters = node_parameters(self.scenario, spec, self.options.seed, self.options.rtf, self.run_dir,
                                      self.stepped_with)

@@ -1,0 +1,78 @@
+"""The stepped clock over real DDS (./rfidnav run): the same seed gives the same commands at any RTF and with a
+slow node, because the simulator steps only once every participant has answered.
+
+Commands are compared as the bag recorded them on /cmd_vel (the recorder is a participant too, so it loses
+none), field for field, bit for bit.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+import pytest
+import yaml
+
+from rfidnav_bag.bags import read_messages
+from support.runs import WORKSPACE, run_scenario
+
+pytestmark = pytest.mark.tier("graph")
+
+SCENARIO = "line_follow_0"
+METRIC_TOLERANCE = 0.01   # the issue's "within 1 %"; measured 0.15 % on this short route
+
+
+def commands(run: Path) -> list[tuple[float, float]]:
+    return [(msg.linear.x, msg.angular.z) for _, _, msg in read_messages(run / "bag", ["/cmd_vel"])]
+
+
+def summary(run: Path) -> dict:
+    return json.loads((run / "summary.json").read_text())
+
+
+@pytest.fixture(scope="module")
+def max_run(tmp_path_factory) -> Path:
+    return run_scenario(tmp_path_factory.mktemp("max"), SCENARIO, "--rtf", "max", "--seed", "3")
+
+
+def test_a_stepped_run_says_which_clock_ran_and_who_it_waited_for(max_run: Path) -> None:
+    clock = summary(max_run)["clock"]
+    assert clock["mode"] == "stepped"
+    assert sorted(clock["participants"]) == ["/heading_controller", "/recorder", "/rfid_reader_sim"]
+    assert summary(max_run)["rtf"] == "max" and summary(max_run)["success"] is True
+
+
+def test_rtf_max_and_rtf_3_give_the_same_commands_for_the_same_seed(max_run: Path, tmp_path: Path) -> None:
+    paced = run_scenario(tmp_path, SCENARIO, "--rtf", "3", "--seed", "3")
+    assert len(commands(max_run)) > 100
+    assert commands(paced) == commands(max_run)
+    # The metrics read the mission's end from the log time of the final goal status, an action topic outside
+    # the stepping, which the recorder stamps with the latest /clock it has handled: a step or two either way.
+    assert summary(paced)["metrics"]["tracking_rmse_m"] == pytest.approx(
+        summary(max_run)["metrics"]["tracking_rmse_m"], rel=METRIC_TOLERANCE)
+
+
+def test_a_slow_participant_slows_the_run_but_does_not_change_its_commands(max_run: Path, tmp_path: Path) -> None:
+    document = yaml.safe_load((WORKSPACE / "config/scenarios" / f"{SCENARIO}.yaml").read_text())
+    base = WORKSPACE / "config/scenarios"
+    for key in ("world", "map"):
+        document[key] = str((base / document[key]).resolve())
+    for entry in document["nodes"].values():
+        entry["params"] = str((base / entry["params"]).resolve())
+    document["nodes"]["heading_controller"] = {
+        "command": f"{sys.executable} {WORKSPACE / 'test/support/slow_heading_controller.py'}",
+        "name": "heading_controller", "stepped": True, "params": document["nodes"]["heading_controller"]["params"]}
+    scenario = tmp_path / "slow.yaml"
+    scenario.write_text(yaml.safe_dump(document))
+    slow = run_scenario(tmp_path / "runs", str(scenario), "--rtf", "max", "--seed", "3")
+    assert "/heading_controller" in summary(slow)["clock"]["participants"]
+    rounds = len(commands(slow))
+    # Each round cost the controller 30 ms of wall time on top: the whole run waited for it.
+    assert summary(slow)["wall_duration_s"] > rounds * 0.03
+    assert commands(slow) == commands(max_run)
+
+
+def test_the_free_running_clock_is_still_there(tmp_path: Path) -> None:
+    run = run_scenario(tmp_path, SCENARIO, "--clock", "free", "--rtf", "5", "--seed", "3")
+    assert summary(run)["clock"] == {"mode": "free"} and summary(run)["success"] is True
