@@ -13,6 +13,16 @@ from rfidnav_bringup.cli import WORKSPACE, Handler
 from rfidnav_common.errors import ConfigError
 
 
+def rtf_list(text: str) -> list[float]:
+    """``--rtfs``: comma-separated positive numbers, ``max`` among them (infinite: the stepped clock unbounded)."""
+    from rfidnav_bringup.cli import rtf_value
+
+    values = [rtf_value(part) for part in text.split(",")]
+    if not all(value > 0 for value in values):
+        raise argparse.ArgumentTypeError(f"expected positive numbers or max, got '{text}'")
+    return values
+
+
 def float_list(text: str) -> list[float]:
     try:
         values = [float(part) for part in text.split(",")]
@@ -81,7 +91,13 @@ def add_bench(verbs: argparse._SubParsersAction) -> Handler:
     bench.add_argument("--method", choices=["paper", "filter", "filter_boom_spin"], default="paper",
                        help="partitions: the configuration (reproduce partitions' METHOD_FILES)")
     bench.add_argument("--scenario", default="hallway", help="rtf: the scenario to run")
-    bench.add_argument("--rtfs", type=float_list, default=[1.0, 3.0, 5.0, 8.0, 12.0], help="rtf: e.g. 1,2,5")
+    bench.add_argument("--rtfs", type=rtf_list, default=[1.0, 3.0, 5.0, 8.0, 12.0],
+                       help="rtf: e.g. 1,2,5 or 1,5,max; the lowest is the reference")
+    bench.add_argument("--clock", choices=("free", "stepped"), default="free",
+                       help="rtf: the clock of the runs (free: how high an RTF the free-running clock stands; "
+                            "stepped: whether the figures follow the seed at every RTF)")
+    bench.add_argument("--hogs", type=int, default=0,
+                       help="rtf: busy-loop processes kept running through the sweep (a loaded machine)")
     bench.add_argument("--tolerance", type=float, default=0.10, help="rtf: allowed RMSE growth over RTF 1")
     bench.add_argument("--seeds", type=int, default=3, help="rtf: runs per RTF (seeds 1..N)")
     bench.add_argument("--out", type=Path, default=WORKSPACE / "bags" / "bench_rtf")
@@ -175,6 +191,7 @@ def bench_rtf(args: argparse.Namespace) -> int:
     from rfidnav_bringup.scenario import load_scenario
     from rfidnav_experiments.bench.rtf import highest_usable_rtf, report, sweep
 
-    rows = sweep(load_scenario(args.scenario), args.rtfs, list(range(1, args.seeds + 1)), args.out)
+    rows = sweep(load_scenario(args.scenario), args.rtfs, list(range(1, args.seeds + 1)), args.out, args.clock,
+                 args.hogs)
     print(report(args.scenario, rows, args.tolerance, args.json))
     return 0 if highest_usable_rtf(rows, args.tolerance) else 1

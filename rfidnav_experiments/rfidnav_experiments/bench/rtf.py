@@ -1,17 +1,26 @@
 """``./rfidnav bench rtf``: one scenario over real DDS at rising real-time factors.
 
-The simulator keeps the requested RTF whether or not the rest of the graph keeps up, so on a busy machine a
-high RTF turns compute latency into sim-time latency and tracking degrades. This finds the highest RTF at
-which the runs still succeed with their mean tracking RMSE within ``tolerance`` of the RTF 1 runs' (each
-lower RTF too), and reports the graph's CPU use at every RTF from summary.json. Over DDS the same seed does
-not give the same run (rounds and commands interleave differently), so one run per RTF mostly measures that
-spread: use several seeds.
+With the free-running clock (``--clock free``, the default here) the simulator keeps the requested RTF whether
+or not the rest of the graph keeps up, so on a busy machine a high RTF turns compute latency into sim-time
+latency and tracking degrades. This finds the highest RTF at which the runs still succeed with their mean
+tracking RMSE within ``tolerance`` of the lowest RTF's runs (each lower RTF too), and reports the graph's CPU at
+every RTF from summary.json. Over DDS with that clock the same seed does not give the same run (rounds and
+commands interleave differently): use several seeds.
+
+With the stepped clock (``--clock stepped``) the RTF is a ceiling (``max``: none) and the same seed should give
+the same figures at every RTF and load; ``--hogs N`` keeps N busy loops running to load the machine. Beside the
+RMSE each row gives the achieved speed (sim seconds per wall second) and the graph's CPU per simulated second.
 """
 
 from __future__ import annotations
 
 import json
+import math
 import statistics
+import subprocess
+import sys
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -19,8 +28,6 @@ from typing import Any
 from rfidnav_bringup.orchestrator import Orchestrator, RunOptions
 from rfidnav_bringup.scenario import Scenario
 from rfidnav_common.errors import ConfigError
-
-REFERENCE_RTF = 1.0
 
 
 @dataclass(frozen=True)
@@ -32,6 +39,11 @@ class SweepRow:
     cpu_percent_of_one_core: float | None
     wall_s: float | None
     run_dirs: tuple[str, ...]
+    clock: str = "free"
+    sim_per_wall: float | None = None        # achieved speed: sim seconds per wall second of the mission
+    cpu_s_per_sim_s: float | None = None     # the graph's CPU (all processes) per simulated second
+    process_cpu_s_per_sim_s: dict[str, float] | None = None
+    rmses_m: tuple[float | None, ...] = ()   # each seed's, to see identical figures as identical
 
     def within(self, reference: SweepRow, tolerance: float) -> bool:
         return self.success and self.rmse_m is not None and reference.rmse_m is not None and \
@@ -42,31 +54,63 @@ def _mean(values: list[float | None]) -> float | None:
     return round(statistics.fmean(values), 6) if values and None not in values else None
 
 
-def sweep(scenario: Scenario, rtfs: list[float], seeds: list[int], out_dir: Path) -> list[SweepRow]:
-    if REFERENCE_RTF not in rtfs:
-        raise ConfigError("--rtfs", "", f"must include the reference RTF {REFERENCE_RTF:g}")
+@contextmanager
+def cpu_hogs(count: int) -> Iterator[None]:
+    """``count`` busy-loop processes for the duration (the issue's ``python3 -c 'while 1: pass'``), ended by PID."""
+    hogs = [subprocess.Popen([sys.executable, "-c", "while 1: pass"]) for _ in range(count)]
+    try:
+        yield
+    finally:
+        for hog in hogs:
+            hog.kill()
+            hog.wait()
+
+
+def _per_sim_s(document: dict[str, Any]) -> tuple[float | None, float | None, dict[str, float]]:
+    cpu, sim_s = document.get("cpu") or {}, document.get("sim_duration_s")
+    if not cpu or not sim_s:
+        return None, None, {}
+    per_process = {role: round(value / sim_s, 4) for role, value in cpu["process_cpu_s"].items() if value is not None}
+    return round(sim_s / cpu["mission_wall_s"], 2), round(cpu["graph_cpu_s"] / sim_s, 4), per_process
+
+
+def sweep(scenario: Scenario, rtfs: list[float], seeds: list[int], out_dir: Path, clock: str = "free",
+          hogs: int = 0) -> list[SweepRow]:
+    if clock == "free" and not all(math.isfinite(rtf) for rtf in rtfs):
+        raise ConfigError("--rtfs", "", "max needs the stepped clock (--clock stepped)")
     rows = []
-    for rtf in sorted(set(rtfs)):
-        documents, run_dirs = [], []
-        for seed in seeds:
-            orchestrator = Orchestrator(scenario, RunOptions(rtf=rtf, seed=seed, out_dir=out_dir, quiet=True))
-            summary = orchestrator.run()
-            if orchestrator.interrupted:   # Ctrl-C stops the sweep, not just the run in progress
-                raise KeyboardInterrupt
-            documents.append(summary.document)
-            run_dirs.append(str(summary.run_dir))
-            print(f"bench rtf: RTF {rtf:g} seed {seed}: {'success' if summary.success else 'FAILED'}", flush=True)
-        rows.append(SweepRow(
-            rtf, all(d["success"] for d in documents),
-            _mean([d["metrics"].get("tracking_rmse_m") for d in documents]),
-            _mean([(d.get("cpu") or {}).get("graph_cpu_percent_of_one_core") for d in documents]),
-            _mean([d.get("wall_duration_s") for d in documents]), tuple(run_dirs)))
+    with cpu_hogs(hogs):
+        for rtf in sorted(set(rtfs)):
+            documents, run_dirs = [], []
+            for seed in seeds:
+                orchestrator = Orchestrator(scenario, RunOptions(rtf=rtf, clock=clock, seed=seed, out_dir=out_dir,
+                                                                 quiet=True))
+                summary = orchestrator.run()
+                if orchestrator.interrupted:   # Ctrl-C stops the sweep, not just the run in progress
+                    raise KeyboardInterrupt
+                documents.append(summary.document)
+                run_dirs.append(str(summary.run_dir))
+                print(f"bench rtf: RTF {rtf:g} seed {seed}: {'success' if summary.success else 'FAILED'}",
+                      flush=True)
+            speeds = [_per_sim_s(d) for d in documents]
+            per_process: dict[str, list[float]] = {}
+            for _, _, processes in speeds:
+                for role, value in processes.items():
+                    per_process.setdefault(role, []).append(value)
+            rows.append(SweepRow(
+                rtf, all(d["success"] for d in documents),
+                _mean([d["metrics"].get("tracking_rmse_m") for d in documents]),
+                _mean([(d.get("cpu") or {}).get("graph_cpu_percent_of_one_core") for d in documents]),
+                _mean([d.get("wall_duration_s") for d in documents]), tuple(run_dirs), clock,
+                _mean([speed for speed, _, _ in speeds]), _mean([cpu for _, cpu, _ in speeds]),
+                {role: round(statistics.fmean(values), 4) for role, values in per_process.items()},
+                tuple(d["metrics"].get("tracking_rmse_m") for d in documents)))
     return rows
 
 
 def highest_usable_rtf(rows: list[SweepRow], tolerance: float) -> SweepRow | None:
     """The highest RTF whose runs, and every lower RTF's, are within tolerance of the reference."""
-    reference = next(row for row in rows if row.rtf == REFERENCE_RTF)
+    reference = min(rows, key=lambda r: r.rtf)
     best = None
     for row in sorted(rows, key=lambda r: r.rtf):
         if not row.within(reference, tolerance):
@@ -76,25 +120,30 @@ def highest_usable_rtf(rows: list[SweepRow], tolerance: float) -> SweepRow | Non
 
 
 def report(scenario: str, rows: list[SweepRow], tolerance: float, as_json: bool) -> str:
-    reference = next(row for row in rows if row.rtf == REFERENCE_RTF)
+    reference = min(rows, key=lambda r: r.rtf)
     best = highest_usable_rtf(rows, tolerance)
     if as_json:
         document: dict[str, Any] = {
             "scenario": scenario, "tolerance": tolerance,
             "highest_rtf": best.rtf if best else None,
             "graph_cpu_percent_of_one_core_there": best.cpu_percent_of_one_core if best else None,
-            "rows": [{**row.__dict__, "run_dirs": list(row.run_dirs)} for row in rows]}
+            "rows": [{**row.__dict__, "rtf": row.rtf if math.isfinite(row.rtf) else "max",
+                      "run_dirs": list(row.run_dirs)} for row in rows]}
         return json.dumps(document)
-    lines = [f"{scenario} over DDS, mean over {len(reference.run_dirs)} seed(s) per RTF: RMSE against RTF "
-             f"{REFERENCE_RTF:g}, graph CPU during the mission (100% = one core)",
-             f"{'RTF':>5}  {'success':>7}  {'RMSE cm':>8}  {'vs RTF 1':>8}  {'CPU %':>6}  {'wall s':>7}  runs"]
+    lines = [f"{scenario} over DDS, {reference.clock} clock, mean over {len(reference.run_dirs)} seed(s) per RTF: "
+             f"RMSE against RTF {reference.rtf:g}, graph CPU during the mission (100% = one core), speed in sim s "
+             f"per wall s, graph CPU-s per sim s",
+             f"{'RTF':>5}  {'success':>7}  {'RMSE cm':>8}  {'vs ref':>7}  {'CPU %':>6}  {'wall s':>7}  {'speed':>6}  "
+             f"{'CPU/sim':>7}  runs"]
     for row in rows:
-        ratio = f"{row.rmse_m / reference.rmse_m:.2f}x" if row.rmse_m and reference.rmse_m else "-"
-        rmse = f"{100 * row.rmse_m:.2f}" if row.rmse_m is not None else "-"
+        ratio = f"{row.rmse_m / reference.rmse_m:.4f}x" if row.rmse_m and reference.rmse_m else "-"
+        rmse = f"{100 * row.rmse_m:.4f}" if row.rmse_m is not None else "-"
         cpu = f"{row.cpu_percent_of_one_core:.1f}" if row.cpu_percent_of_one_core is not None else "-"
         wall = f"{row.wall_s:.1f}" if row.wall_s is not None else "-"
-        lines.append(f"{row.rtf:>5g}  {str(row.success):>7}  {rmse:>8}  {ratio:>8}  {cpu:>6}  {wall:>7}  "
-                     f"{' '.join(row.run_dirs)}")
-    lines.append(f"highest RTF within {100 * tolerance:.0f}% of the RTF 1 RMSE: "
+        speed = f"{row.sim_per_wall:.1f}" if row.sim_per_wall is not None else "-"
+        per_sim = f"{row.cpu_s_per_sim_s:.3f}" if row.cpu_s_per_sim_s is not None else "-"
+        lines.append(f"{row.rtf:>5g}  {str(row.success):>7}  {rmse:>8}  {ratio:>7}  {cpu:>6}  {wall:>7}  "
+                     f"{speed:>6}  {per_sim:>7}  {' '.join(row.run_dirs)}")
+    lines.append(f"highest RTF within {100 * tolerance:.0f}% of the RTF {reference.rtf:g} RMSE: "
                  + (f"{best.rtf:g}, graph CPU {best.cpu_percent_of_one_core:.1f}% of one core" if best else "none"))
     return "\n".join(lines)
