@@ -3,13 +3,13 @@ private context, stepped with ``spin_once`` until a stated condition holds; and 
 
 from __future__ import annotations
 
+import pytest
+import rclpy
 from geometry_msgs.msg import Twist
 from nav_msgs.msg import Odometry
 from rclpy.context import Context
 from rclpy.node import Node
 from rclpy.parameter import Parameter
-import pytest
-import rclpy
 from std_srvs.srv import Trigger
 
 from rfidnav_bringup.errors import LaunchError

@@ -6,7 +6,7 @@ import dataclasses
 import importlib
 import sys
 import typing
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from typing import Any
 
 import rclpy
@@ -99,7 +99,7 @@ def run_node(make_node: Callable[[], Node], args: list[str] | None = None,
     return run_nodes([make_node], args, make_executor, spin, signal_handler_options)
 
 
-def run_nodes(make_nodes: list[Callable[[], Node]], args: list[str] | None = None,
+def run_nodes(make_nodes: Sequence[Callable[[], Node]], args: list[str] | None = None,
               make_executor: Callable[[], Executor] = events_executor,
               spin: Callable[[Executor, Node], int] = spin_until_shutdown,
               signal_handler_options: SignalHandlerOptions = SignalHandlerOptions.ALL) -> int:

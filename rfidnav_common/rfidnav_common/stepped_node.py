@@ -26,16 +26,16 @@ from __future__ import annotations
 import random
 import time
 from collections.abc import Callable
-from typing import Any
+from typing import Any, cast
 
 from rcl_interfaces.msg import ParameterDescriptor
-from rclpy.clock import Clock, ClockType
+from rclpy.clock import Clock, ClockType, ROSClock
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.time import Time
 
 from rfidnav_common.step_ledger import StepReport
-from rfidnav_msgs.msg import StepAck
+from rfidnav_msgs.msg import StepAck  # type: ignore[attr-defined]  # generated
 
 STEP_ACK_TOPIC = "/sim/step_ack"
 STEPPED_CLOCK_PARAMETER = "stepped_clock"
@@ -114,7 +114,7 @@ class SteppedNode(Node):
         self.incarnation = random.SystemRandom().getrandbits(63)
         # Simulated time without a /clock subscription: the clock reads what the adapter sets from the stamps
         # it handles (rclpy's TimeSource does the same from /clock; this is its private switch).
-        clock = self.get_clock()
+        clock = cast(ROSClock, self.get_clock())   # a ROS-time clock: the node's own
         clock._set_ros_time_is_active(True)
         clock.set_ros_time_override(Time(nanoseconds=0, clock_type=clock.clock_type))
         self.in_callback = False
@@ -167,7 +167,7 @@ class SteppedNode(Node):
             if not self.in_callback:   # within a callback the answer after it counts this too
                 self.changed()
 
-        publisher.publish = counted
+        publisher.publish = counted  # type: ignore[method-assign, assignment]  # the counting adapter
         return publisher
 
     def create_timer(self, timer_period_sec: float, callback: Callable[[], Any], callback_group: Any = None,
@@ -186,7 +186,7 @@ class SteppedNode(Node):
         if stamp_ns <= self.sim_time_ns:
             return
         self.sim_time_ns = stamp_ns
-        clock = self.get_clock()
+        clock = cast(ROSClock, self.get_clock())
         clock.set_ros_time_override(Time(nanoseconds=stamp_ns, clock_type=clock.clock_type))
         for timer in list(self.sim_timers):
             timer.fire_if_due(stamp_ns)

@@ -129,7 +129,7 @@ class RobotSimNode(SteppedNode):
             return
         p = self.params
         due = int((time.monotonic() - self.wall_origin) * p.rtf / p.step_s) if p.rtf > 0.0 else None
-        if not self.stepped:
+        if due is not None and not self.stepped:
             # After a stall (a slow machine), do not burst through the backlog faster than 50 steps a tick.
             for _ in range(min(due - self.steps, 50)):
                 self.step()
