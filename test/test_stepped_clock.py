@@ -8,9 +8,13 @@ none), field for field, bit for bit.
 from __future__ import annotations
 
 import json
+import os
+import subprocess
 import sys
+import time
 from pathlib import Path
 
+import psutil
 import pytest
 import yaml
 
@@ -53,13 +57,19 @@ def test_rtf_max_and_rtf_3_give_the_same_commands_for_the_same_seed(max_run: Pat
         summary(max_run)["metrics"]["tracking_rmse_m"], rel=METRIC_TOLERANCE)
 
 
-def test_a_slow_participant_slows_the_run_but_does_not_change_its_commands(max_run: Path, tmp_path: Path) -> None:
+def scenario_document() -> dict:
+    """The scenario as a mapping with absolute paths, to be changed and written elsewhere."""
     document = yaml.safe_load((WORKSPACE / "config/scenarios" / f"{SCENARIO}.yaml").read_text())
     base = WORKSPACE / "config/scenarios"
     for key in ("world", "map"):
         document[key] = str((base / document[key]).resolve())
     for entry in document["nodes"].values():
         entry["params"] = str((base / entry["params"]).resolve())
+    return document
+
+
+def test_a_slow_participant_slows_the_run_but_does_not_change_its_commands(max_run: Path, tmp_path: Path) -> None:
+    document = scenario_document()
     document["nodes"]["heading_controller"] = {
         "command": f"{sys.executable} {WORKSPACE / 'test/support/slow_heading_controller.py'}",
         "name": "heading_controller", "stepped": True, "params": document["nodes"]["heading_controller"]["params"]}
@@ -76,3 +86,32 @@ def test_a_slow_participant_slows_the_run_but_does_not_change_its_commands(max_r
 def test_the_free_running_clock_is_still_there(tmp_path: Path) -> None:
     run = run_scenario(tmp_path, SCENARIO, "--clock", "free", "--rtf", "5", "--seed", "3")
     assert summary(run)["clock"] == {"mode": "free"} and summary(run)["success"] is True
+
+
+def test_a_participant_that_dies_ends_the_run_naming_it_instead_of_holding_the_clock(tmp_path: Path) -> None:
+    document = scenario_document()
+    document["nodes"]["heading_controller"]["respawn"] = False
+    scenario = tmp_path / "mortal.yaml"
+    scenario.write_text(yaml.safe_dump(document))
+    out = tmp_path / "runs"
+    env = dict(os.environ)
+    env.pop("ROS_DOMAIN_ID", None)
+    command = [sys.executable, "-m", "rfidnav_bringup.cli", "run", str(scenario), "--rtf", "2", "--out", str(out),
+               "--no-record", "--quiet"]
+    with subprocess.Popen(command, cwd=WORKSPACE, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                          text=True) as cli:
+        deadline = time.monotonic() + 180
+        started = False
+        while time.monotonic() < deadline and cli.poll() is None and not started:
+            logs = list(out.glob("*/logs/heading_controller.log"))
+            started = bool(logs) and "following 2 tags" in logs[0].read_text()
+            time.sleep(0.2)   # polling a file another process writes; no ROS readiness signal reaches here
+        assert started, "the mission never started"
+        victims = [p for p in psutil.Process(cli.pid).children(recursive=True)
+                   if any("heading_controller" in part for part in p.cmdline())]
+        assert len(victims) == 1, victims
+        victims[0].kill()
+        output, _ = cli.communicate(timeout=120)
+    assert cli.returncode == 1, output
+    summary = json.loads(next(out.glob("*/summary.json")).read_text())
+    assert summary["success"] is False and "node heading_controller exited" in summary["message"]

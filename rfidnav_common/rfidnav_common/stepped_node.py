@@ -18,6 +18,9 @@ A node whose answers the loop does not wait on (the recorder) sets ``step_slack`
 behind on an input before it holds a step, and it answers every ``step_slack // 2`` messages or, when idle,
 within ``SLACK_ANSWER_PERIOD_S`` of wall time, instead of after every callback.
 
+A participant in the simulator's own process (a container, rfidnav_bringup.container) hands its counts to the
+simulator directly instead of over DDS: both run on one executor thread, so the counts read are current.
+
 A node that is not ours (a hardware driver, a user's node) simply is no participant: nothing waits for it.
 """
 
@@ -44,6 +47,8 @@ STEPPED_CLOCK_PARAMETER = "stepped_clock"
 UNCOUNTED_TOPICS = ("/rosout", "/parameter_events", STEP_ACK_TOPIC)
 ACTION_TOPIC_MARK = "/_action/"
 SLACK_ANSWER_PERIOD_S = 0.02
+# The clock owner (robot_sim) of each rclpy context, for participants in its process.
+_CLOCK_OWNERS: dict[int, SteppedNode] = {}
 # Counts are cumulative, so only a node's latest answer matters: a participant keeps one. Transient local, so
 # that the answer a node gives on starting (which inputs it has) reaches a simulator that discovers it later.
 STEP_ACK_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1, reliability=ReliabilityPolicy.RELIABLE,
@@ -120,7 +125,9 @@ class SteppedNode(Node):
         self.in_callback = False
         self.unanswered_changes = 0
         self.answered_at = time.monotonic()
-        if self.answers_steps:
+        if not self.answers_steps:
+            _CLOCK_OWNERS[id(self.context)] = self
+        else:
             self.ack_publisher = super().create_publisher(StepAck, STEP_ACK_TOPIC, STEP_ACK_QOS)
             steady = Clock(clock_type=ClockType.STEADY_TIME)
             if self.step_slack:
@@ -215,7 +222,19 @@ class SteppedNode(Node):
             return
         self.unanswered_changes = 0
         self.answered_at = time.monotonic()
-        self.ack_publisher.publish(step_ack_message(self.step_report(), self.sim_time_ns))
+        owner = _CLOCK_OWNERS.get(id(self.context))
+        if owner is not None:
+            owner.take_answer(self.step_report())
+        else:
+            self.ack_publisher.publish(step_ack_message(self.step_report(), self.sim_time_ns))
+
+    def take_answer(self, report: StepReport) -> None:
+        """The clock owner's side: a participant's counts (from /sim/step_ack, or directly in its process)."""
+
+    def destroy_node(self) -> None:
+        if _CLOCK_OWNERS.get(id(self.context)) is self:
+            del _CLOCK_OWNERS[id(self.context)]
+        super().destroy_node()
 
     def step_report(self) -> StepReport:
         return StepReport(self.get_fully_qualified_name(), self.incarnation, dict(self.consumed_counts),

@@ -33,7 +33,7 @@ from visualization_msgs.msg import MarkerArray
 from rfidnav_common.base_safety import BaseEventRecord
 from rfidnav_common.errors import ConfigError
 from rfidnav_common.ros import COMMAND_QOS, LATCHED_QOS, SENSOR_QOS, declare_parameters, run_node, time_msg
-from rfidnav_common.step_ledger import StepLedger
+from rfidnav_common.step_ledger import StepLedger, StepReport
 from rfidnav_common.stepped_node import STEP_ACK_READER_QOS, STEP_ACK_TOPIC, SteppedNode, step_report_of
 from rfidnav_msgs.msg import BaseEvent, StepAck
 from rfidnav_sim.conversions import base_event_message, odometry_message, world_markers
@@ -113,7 +113,10 @@ class RobotSimNode(SteppedNode):
         return response
 
     def on_step_ack(self, message: StepAck) -> None:
-        if self.ledger.report(step_report_of(message)):
+        self.take_answer(step_report_of(message))
+
+    def take_answer(self, report: StepReport) -> None:
+        if self.ledger.report(report):
             self.advance()
 
     def changed(self) -> None:
