@@ -1,4 +1,5 @@
-"""``./rfidnav run``: one mission through the real node graph, every node its own OS process.
+"""``./rfidnav run``: one mission through the real node graph, every role its own OS process (or its
+group's: ``process:`` in the scenario, rfidnav_bringup.container).
 
 Order of events: lease a DDS domain; write each node's resolved parameter file; start the recorder
 and wait until it is in the graph; start the nodes; wait until every node is in the graph, the
@@ -246,6 +247,9 @@ class Orchestrator:
             executor.shutdown()
             node.destroy_node()
             rclpy.try_shutdown(context=context)
+            # Destroyed, not only shut down: its DDS participant would stay in the domain (and a sweep running one
+            # run after another in this process would find its own last run there).
+            context.destroy()
             lease.close()
         return self.write_summary()
 
