@@ -139,8 +139,11 @@ def test_controller_steers_towards_the_tag_and_reports_each_arrival(graph: Graph
                            *target_round("C2", 0.2)])
     graph.spin_until(lambda: controller.feedback and controller.feedback[-1].target_tag_id == "C2",
                      "feedback naming C2 as the target after F1 was read")
-    assert [f.target_index for f in controller.feedback][:4] == [0, 0, 0, 0]
-    assert {f.mode for f in controller.feedback[:3]} == {"seeking"}
+    # Feedback is throttled (rfidnav_common.goal_server): rounds that change only floats within 0.5 s send none.
+    before_arrival = controller.feedback[:-1]
+    assert before_arrival and {f.target_index for f in before_arrival} == {0}
+    # The first rounds seek; the round that missed C1 is a change of mode, so it is reported at once.
+    assert before_arrival[0].mode == "seeking" and before_arrival[-1].mode == "unheard"
 
     controller.send_round([reading("F2", 3, 2.0)])
     graph.spin_until(result_future.done, "the route's result after F2 was read")

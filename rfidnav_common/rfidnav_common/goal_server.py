@@ -123,10 +123,11 @@ class SingleGoalServer(Generic[GoalT]):
         if self.active is not None:
             self.active.last_heard_s = self.now_s()
 
-    def publish_feedback(self, feedback: Any) -> None:
-        """Publish the active goal's feedback if it says something new or FEEDBACK_PERIOD_S went by."""
+    def publish_feedback(self, feedback: Any, always: bool = False) -> None:
+        """Publish the active goal's feedback if it says something new or FEEDBACK_PERIOD_S went by, or ``always``
+        (a node whose feedback marks its own rare decisions, as the mission executor's junctions)."""
         now_s, discrete = self.now_s(), discrete_fields(feedback)
-        if self.feedback_sent is not None:
+        if self.feedback_sent is not None and not always:
             sent_s, sent_discrete = self.feedback_sent
             if discrete == sent_discrete and now_s - sent_s < FEEDBACK_PERIOD_S:
                 return

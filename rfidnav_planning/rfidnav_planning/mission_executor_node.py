@@ -123,7 +123,7 @@ class MissionExecutorNode(SteppedNode):
         self.goals.publish_feedback(NavigateToNode.Feedback(
             current_node=mission.current_node or "", arrival_direction=mission.arrival_side or "",
             last_tag=mission.last_tag or "", next_action=goal.next_action,
-            tags_missed=mission.tags_missed, replans=mission.replans))
+            tags_missed=mission.tags_missed, replans=mission.replans), always=True)   # one per decision
 
     def feed_odometry(self, msg: WallFollowerEvent) -> None:
         """The follower's odometry pose, which it reports with every event and state, for the distance driven
