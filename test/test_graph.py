@@ -6,20 +6,15 @@ One run of line_follow_90 is shared by the tests of this module (it takes ~40 s 
 from __future__ import annotations
 
 import json
-import os
-import subprocess
-import sys
-import time
 from pathlib import Path
 
-import psutil
 import pytest
 from mcap.reader import make_reader
 from mcap_ros2.decoder import DecoderFactory
 
 from rfidnav_bag.bags import bag_info, read_messages
 from rfidnav_bringup.report import run_metrics
-from support.runs import WORKSPACE, run_cli, run_scenario
+from support.runs import WORKSPACE, run_cli, run_killing_the_controller, run_scenario
 
 pytestmark = pytest.mark.tier("graph")
 
@@ -123,28 +118,8 @@ def test_a_killed_controller_is_respawned_and_given_the_mission_again(tmp_path: 
     """heading_controller is `respawn: true`: killed mid-mission, it is restarted, the goal is sent again and
     the mission still succeeds, with the restart counted in summary.json."""
     out = tmp_path / "runs"
-    env = dict(os.environ)
-    env.pop("ROS_DOMAIN_ID", None)
-    command = [sys.executable, "-m", "rfidnav_bringup.cli", "run", "line_follow_90", "--rtf", str(GRAPH_TEST_RTF),
-               "--out", str(out), "--no-record", "--quiet"]
-    with subprocess.Popen(command, cwd=WORKSPACE, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
-                          text=True) as cli:
-        controller_log = None
-        deadline = time.monotonic() + 180
-        # Wait for the controller to start following (its log says so), then kill it hard.
-        while time.monotonic() < deadline and cli.poll() is None:
-            logs = list(out.glob("*/logs/heading_controller.log"))
-            if logs and "following 2 tags" in logs[0].read_text():
-                controller_log = logs[0]
-                break
-            time.sleep(0.2)   # polling a file another process writes; no ROS readiness signal reaches here
-        assert controller_log is not None, "the mission never started"
-        victims = [p for p in psutil.Process(cli.pid).children(recursive=True)
-                   if any("heading_controller" in part for part in p.cmdline())]
-        assert len(victims) == 1, victims
-        victims[0].kill()
-        output, _ = cli.communicate(timeout=300)
-    assert cli.returncode == 0, output
+    returncode, output = run_killing_the_controller(out, "line_follow_90", "--rtf", str(GRAPH_TEST_RTF))
+    assert returncode == 0, output
     assert "re-sending the goal to the restarted heading_controller" in output
     summary = json.loads(next(out.glob("*/summary.json")).read_text())
     assert summary["success"] is True

@@ -8,18 +8,14 @@ none), field for field, bit for bit.
 from __future__ import annotations
 
 import json
-import os
-import subprocess
 import sys
-import time
 from pathlib import Path
 
-import psutil
 import pytest
 import yaml
 
 from rfidnav_bag.bags import read_messages
-from support.runs import WORKSPACE, run_scenario
+from support.runs import WORKSPACE, run_killing_the_controller, run_scenario
 
 pytestmark = pytest.mark.tier("graph")
 
@@ -94,24 +90,7 @@ def test_a_participant_that_dies_ends_the_run_naming_it_instead_of_holding_the_c
     scenario = tmp_path / "mortal.yaml"
     scenario.write_text(yaml.safe_dump(document))
     out = tmp_path / "runs"
-    env = dict(os.environ)
-    env.pop("ROS_DOMAIN_ID", None)
-    command = [sys.executable, "-m", "rfidnav_bringup.cli", "run", str(scenario), "--rtf", "2", "--out", str(out),
-               "--no-record", "--quiet"]
-    with subprocess.Popen(command, cwd=WORKSPACE, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
-                          text=True) as cli:
-        deadline = time.monotonic() + 180
-        started = False
-        while time.monotonic() < deadline and cli.poll() is None and not started:
-            logs = list(out.glob("*/logs/heading_controller.log"))
-            started = bool(logs) and "following 2 tags" in logs[0].read_text()
-            time.sleep(0.2)   # polling a file another process writes; no ROS readiness signal reaches here
-        assert started, "the mission never started"
-        victims = [p for p in psutil.Process(cli.pid).children(recursive=True)
-                   if any("heading_controller" in part for part in p.cmdline())]
-        assert len(victims) == 1, victims
-        victims[0].kill()
-        output, _ = cli.communicate(timeout=120)
-    assert cli.returncode == 1, output
+    returncode, output = run_killing_the_controller(out, str(scenario), "--rtf", "2", timeout=120)
+    assert returncode == 1, output
     summary = json.loads(next(out.glob("*/summary.json")).read_text())
     assert summary["success"] is False and "node heading_controller exited" in summary["message"]

@@ -15,25 +15,18 @@ import argparse
 import importlib
 import inspect
 import sys
-from importlib import metadata
 
 from rclpy.node import Node
 
 from rfidnav_bringup.errors import LaunchError
+from rfidnav_bringup.processes import console_script
 from rfidnav_common.ros import run_nodes
 
 
 def node_class(package: str, executable: str) -> type[Node]:
     """The Node subclass that ``package``'s console script ``executable`` runs: the one defined in the module
-    its entry point names. Unknown ones are a LaunchError."""
-    try:
-        scripts = {ep.name: ep for ep in metadata.distribution(package).entry_points
-                   if ep.group == "console_scripts"}
-    except metadata.PackageNotFoundError:
-        raise LaunchError(f"container: unknown package '{package}'") from None
-    if executable not in scripts:
-        raise LaunchError(f"container: package '{package}' has no executable '{executable}'")
-    module = importlib.import_module(scripts[executable].value.split(":")[0])
+    its entry point names. Unknown ones are a LaunchError (processes.UnknownExecutableError)."""
+    module = importlib.import_module(console_script(package, executable).value.split(":")[0])
     classes = [cls for _, cls in inspect.getmembers(module, inspect.isclass)
                if issubclass(cls, Node) and cls.__module__ == module.__name__]
     if len(classes) != 1:

@@ -128,6 +128,17 @@ def resolve_executable(package: str, executable: str) -> list[str]:
         candidate = prefix / "lib" / package / executable
         if candidate.is_file() and os.access(candidate, os.X_OK):
             return [str(candidate)]
+    entry_point = console_script(package, executable)
+    script = Path(sys.prefix) / "bin" / executable
+    if script.is_file():
+        return [str(script)]
+    module, function = entry_point.value.split(":")
+    return [sys.executable, "-c", f"import sys; from {module} import {function}; sys.exit({function}())"]
+
+
+def console_script(package: str, executable: str) -> metadata.EntryPoint:
+    """The console_scripts entry point ``executable`` of installed package ``package``; an unknown package or
+    executable is an :class:`UnknownExecutableError`."""
     try:
         distribution = metadata.distribution(package)
     except metadata.PackageNotFoundError:
@@ -137,11 +148,7 @@ def resolve_executable(package: str, executable: str) -> list[str]:
     if executable not in scripts:
         raise UnknownExecutableError("executable", f"package '{package}' has no executable '{executable}' "
                                      f"(it has: {', '.join(sorted(scripts)) or 'none'})")
-    script = Path(sys.prefix) / "bin" / executable
-    if script.is_file():
-        return [str(script)]
-    module, function = scripts[executable].value.split(":")
-    return [sys.executable, "-c", f"import sys; from {module} import {function}; sys.exit({function}())"]
+    return scripts[executable]
 
 
 @dataclass

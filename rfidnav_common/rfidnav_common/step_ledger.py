@@ -15,7 +15,7 @@ reports) never hold a step, so such a node runs free-running beside the stepped 
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass, field
 
 # The simulation clocks a run can have: stepped (this ledger decides each step), or free-running at a fixed RTF.
@@ -90,24 +90,21 @@ class StepLedger:
 
     def unanswered(self) -> list[Unanswered]:
         """Who still has to answer: participants never heard from, then inputs with unhandled messages."""
-        waiting = [Unanswered(name, "", 0) for name, entry in self.participants.items() if entry.report is None]
+        return list(self._waiting())
+
+    def answered(self) -> bool:
+        """Whether the step is done: :meth:`unanswered` is empty (stopping at the first that is not)."""
+        return next(self._waiting(), None) is None
+
+    def _waiting(self) -> Iterator[Unanswered]:
+        for name, entry in self.participants.items():
+            if entry.report is None:
+                yield Unanswered(name, "", 0)
         for name, entry in self.participants.items():
             report = entry.report
             if report is None:
                 continue
             for topic, consumed in report.consumed.items():
-                behind = self.totals.get(topic, 0) - entry.baseline[topic] - consumed
+                behind = self.published(topic) - entry.baseline[topic] - consumed
                 if behind > report.slack:
-                    waiting.append(Unanswered(name, topic, behind))
-        return waiting
-
-    def answered(self) -> bool:
-        """Whether the step is done: :meth:`unanswered` is empty (without building the list)."""
-        for entry in self.participants.values():
-            report = entry.report
-            if report is None:
-                return False
-            for topic, consumed in report.consumed.items():
-                if self.totals.get(topic, 0) - entry.baseline[topic] - consumed > report.slack:
-                    return False
-        return True
+                    yield Unanswered(name, topic, behind)

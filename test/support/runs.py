@@ -7,7 +7,10 @@ import json
 import os
 import subprocess
 import sys
+import time
 from pathlib import Path
+
+import psutil
 
 WORKSPACE = Path(__file__).resolve().parents[2]
 
@@ -41,3 +44,28 @@ def navigation_subscriptions(run: Path, navigation_nodes: tuple[str, ...]) -> di
         assert "world_file" not in (run / "params" / f"{name}.yaml").read_text(), name
         subscriptions[name] = set(topics)
     return subscriptions
+
+
+def run_killing_the_controller(out: Path, scenario: str, *options: str, timeout: float = 300) -> tuple[int, str]:
+    """``./rfidnav run SCENARIO OPTIONS --out OUT --no-record --quiet`` in which heading_controller is killed
+    hard once its log says it follows the route: the CLI's exit code and output."""
+    env = dict(os.environ)
+    env.pop("ROS_DOMAIN_ID", None)   # the orchestrator leases its own domain
+    command = [sys.executable, "-m", "rfidnav_bringup.cli", "run", scenario, *options, "--out", str(out),
+               "--no-record", "--quiet"]
+    with subprocess.Popen(command, cwd=WORKSPACE, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                          text=True) as cli:
+        started = False
+        deadline = time.monotonic() + 180
+        while time.monotonic() < deadline and cli.poll() is None and not started:
+            logs = list(out.glob("*/logs/heading_controller.log"))
+            started = bool(logs) and "following 2 tags" in logs[0].read_text()
+            if not started:
+                time.sleep(0.2)   # polling a file another process writes; no ROS readiness signal reaches here
+        assert started, "the mission never started"
+        victims = [p for p in psutil.Process(cli.pid).children(recursive=True)
+                   if any("heading_controller" in part for part in p.cmdline())]
+        assert len(victims) == 1, victims
+        victims[0].kill()
+        output, _ = cli.communicate(timeout=timeout)
+    return cli.returncode, output
