@@ -175,9 +175,19 @@ def verb_demo(args) -> int:
 LINTERS = (("ruff", ["-m", "ruff", "check", "--quiet", "."]), ("mypy", ["-m", "mypy"]))   # ruff.toml, mypy.ini
 
 
+def pytest_command(pytest_args: list[str], cwd: Path) -> list[str]:
+    """pytest on exactly what it is given, from the workspace (so that pytest.ini's ``testpaths``, the whole of
+    test/, applies when no file or id is given); a file or id that exists from ``cwd`` is made absolute."""
+    def absolute(arg: str) -> str:
+        path = arg.split("::", 1)[0]
+        return str(cwd / arg) if not arg.startswith("-") and path and (cwd / path).exists() else arg
+
+    return [sys.executable, "-m", "pytest", *(absolute(arg) for arg in pytest_args)]
+
+
 def verb_test(args) -> int:
-    """ruff and mypy on the workspace (unless --no-lint), then pytest: on the test files or ids given, else on
-    the whole of test/ (the tiers: ``-m unit`` and the like, see test/conftest.py)."""
+    """ruff and mypy on the workspace (unless --no-lint), then pytest (the tiers: ``-m unit`` and the like, see
+    test/conftest.py)."""
     if not args.no_lint:
         for name, command in LINTERS:
             code = subprocess.call([sys.executable, *command], cwd=WORKSPACE)
@@ -185,10 +195,7 @@ def verb_test(args) -> int:
                 print(f"rfidnav test: {name} found problems (exit {code}); nothing tested", file=sys.stderr)
                 return code
     env = dict(os.environ, ROS_PYTHON_CHECK_FIELDS="1", PYTHONDONTWRITEBYTECODE="1")
-    named = [arg for arg in args.pytest_args if not arg.startswith("-") and Path(arg.split("::")[0]).exists()]
-    command = [sys.executable, "-m", "pytest", "--rootdir", str(WORKSPACE), "-c", str(WORKSPACE / "pytest.ini"),
-               *([] if named else [str(WORKSPACE / "test")]), *args.pytest_args]
-    return subprocess.call(command, env=env)
+    return subprocess.call(pytest_command(args.pytest_args, Path.cwd()), env=env, cwd=WORKSPACE)
 
 
 def verb_replay(args) -> int:

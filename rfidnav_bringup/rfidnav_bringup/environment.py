@@ -191,18 +191,34 @@ def set_up(workspace: Path, quiet: bool = False) -> None:
     link_shares(workspace)
 
 
+SETUP_HELP = ("create or refresh .venv, install the pinned requirements, build the interface packages with CMake and "
+              "install the rfidnav packages; each step is skipped while its inputs are unchanged")
+
+
+def setup_parser() -> argparse.ArgumentParser:
+    return argparse.ArgumentParser(prog="rfidnav setup", description=SETUP_HELP,
+                                   epilog="Every other verb runs the set-up first, so it is needed only to "
+                                          "prepare a machine ahead of time.")
+
+
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("workspace", type=Path)
-    parser.add_argument("--verb", default="setup", help="the verb being run (setup prints what it did)")
-    args = parser.parse_args(argv)
+    """``environment.py WORKSPACE [VERB ARGS...]``: the set-up, before any verb. The verb's own arguments are the
+    command line's, not this script's; ``setup`` has only ``--help`` (which prints and sets nothing up)."""
+    argv = sys.argv[1:] if argv is None else argv
+    if not argv:
+        print("usage: environment.py WORKSPACE [VERB [ARGS...]]", file=sys.stderr)
+        return 2
+    workspace, command_line = Path(argv[0]).resolve(), argv[1:]
+    setting_up = command_line[:1] == ["setup"]
+    if setting_up:
+        setup_parser().parse_args(command_line[1:])   # --help exits 0 here; anything else is an error (exit 2)
     try:
-        set_up(args.workspace.resolve())
+        set_up(workspace)
     except SetupStepFailed as error:
         print(f"rfidnav: {error}", file=sys.stderr)
         return 1
-    if args.verb == "setup":
-        print(f"rfidnav setup: ready ({args.workspace.resolve() / '.venv'}, Python {sysconfig.get_python_version()})")
+    if setting_up:
+        print(f"rfidnav setup: ready ({workspace / '.venv'}, Python {sysconfig.get_python_version()})")
     return 0
 
 

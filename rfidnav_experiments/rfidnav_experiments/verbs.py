@@ -35,25 +35,34 @@ def float_list(text: str) -> list[float]:
 
 def add_reproduce(verbs: argparse._SubParsersAction) -> Handler:
     reproduce = verbs.add_parser("reproduce", help="the papers' experiments in-process, beside the papers' figures")
-    reproduce.add_argument("name", choices=["flc", "partitions", "two_tier", "topological"],
-                           help="flc: paper 001 sec. V; partitions: paper 000 sec. 6; two_tier: paper 003 sec. 4.2; "
-                                "topological: paper 004 sec. 5 and missions under read failures")
-    reproduce.add_argument("--seeds", type=int, default=10, help="flc: seeds per setting")
-    reproduce.add_argument("--runs", type=int, help="partitions: runs per (read range, level, method), default 250; "
-                                                    "two_tier: runs per route, default 20; topological: missions "
-                                                    "per miss rate, default 100")
-    reproduce.add_argument("--out", type=Path, default=WORKSPACE / "bags" / "reproduce")
-    reproduce.add_argument("--json", action="store_true")
+    names = reproduce.add_subparsers(dest="name", required=True, metavar="EXPERIMENT")
+    common = argparse.ArgumentParser(add_help=False)
+    common.add_argument("--out", type=Path, default=WORKSPACE / "bags" / "reproduce",
+                        help="folder for the rows, tables and plots")
+    common.add_argument("--json", action="store_true", help="print the rows as JSON on stdout")
+    flc = names.add_parser("flc", parents=[common], help="paper 001 sec. V: the fuzzy heading controller's "
+                                                         "line and route experiments")
+    flc.add_argument("--seeds", type=int, default=10, help="seeds per setting")
+    partitions = names.add_parser("partitions", parents=[common], help="paper 000 sec. 6: navigations by "
+                                                                       "partitions, Figs. 11-14")
+    partitions.add_argument("--runs", type=int, help="runs per (read range, level, method), default 250")
+    two_tier = names.add_parser("two_tier", parents=[common], help="paper 003 sec. 4.2: WiFi fingerprints and "
+                                                                   "tag groups, Figs. 10-12")
+    two_tier.add_argument("--runs", type=int, help="runs per route, default 20")
+    topological = names.add_parser("topological", parents=[common], help="paper 004 sec. 5: topological "
+                                                                         "missions under read failures")
+    topological.add_argument("--runs", type=int, help="missions per miss rate, default 100")
     return run_reproduce
 
 
 def add_calibrate(verbs: argparse._SubParsersAction) -> Handler:
     calibrate = verbs.add_parser("calibrate", help="fit a paper's unstated settings to its first experiment only")
-    calibrate.add_argument("name", choices=["flc"], help="flc: paper 001's phase noise and output range, fitted "
-                                                         "to Figs. 8/9 (the line experiments)")
-    calibrate.add_argument("--out", type=Path, help="the parameter file to write (default: the shipped one, "
-                                                    "config/params/flc_paper_calibrated.yaml)")
-    calibrate.add_argument("--json", action="store_true")
+    names = calibrate.add_subparsers(dest="name", required=True, metavar="SETTING")
+    flc = names.add_parser("flc", help="paper 001's phase noise and output range, fitted to Figs. 8/9 (the line "
+                                       "experiments)")
+    flc.add_argument("--out", type=Path, help="the parameter file to write (default: the shipped one, "
+                                              "config/params/flc_paper_calibrated.yaml)")
+    flc.add_argument("--json", action="store_true")
     return run_calibrate
 
 
@@ -78,29 +87,34 @@ def add_survey(verbs: argparse._SubParsersAction) -> Handler:
 
 def add_bench(verbs: argparse._SubParsersAction) -> Handler:
     bench = verbs.add_parser("bench", help="performance benchmarks (JSON figures)")
-    bench.add_argument("name", choices=["flc", "rtf", "planner", "partitions", "location_server", "llrp"],
-                       help="flc: fuzzy fast path vs scikit-fuzzy; rtf: a scenario over DDS at rising RTF; "
-                            "planner: Algorithm 1 and a reader round in a 30 x 30 m field at r = 2 cm; "
-                            "partitions: the navigations of paper 000 Figs. 12-14 in-process; "
-                            "location_server: paper 003's tier-one locate over DDS; "
-                            "llrp: the llrp_reader driver against llrpkit's LLRP emulator (latency, lossless rate)")
-    bench.add_argument("--json", action="store_true")
-    bench.add_argument("--evaluations", type=int, default=2000, help="flc: evaluations per timing")
-    bench.add_argument("--plans", type=int, default=200, help="planner: random segments planned")
-    bench.add_argument("--runs", type=int, default=250, help="partitions: runs per (read range, level)")
-    bench.add_argument("--method", choices=["paper", "filter", "filter_boom_spin"], default="paper",
-                       help="partitions: the configuration (reproduce partitions' METHOD_FILES)")
-    bench.add_argument("--scenario", default="hallway", help="rtf: the scenario to run")
-    bench.add_argument("--rtfs", type=rtf_list, default=[1.0, 3.0, 5.0, 8.0, 12.0],
-                       help="rtf: e.g. 1,2,5 or 1,5,max; the lowest is the reference")
-    bench.add_argument("--clock", choices=("free", "stepped"), default="free",
-                       help="rtf: the clock of the runs (free: how high an RTF the free-running clock stands; "
-                            "stepped: whether the figures follow the seed at every RTF)")
-    bench.add_argument("--hogs", type=int, default=0,
-                       help="rtf: busy-loop processes kept running through the sweep (a loaded machine)")
-    bench.add_argument("--tolerance", type=float, default=0.10, help="rtf: allowed RMSE growth over RTF 1")
-    bench.add_argument("--seeds", type=int, default=3, help="rtf: runs per RTF (seeds 1..N)")
-    bench.add_argument("--out", type=Path, default=WORKSPACE / "bags" / "bench_rtf")
+    names = bench.add_subparsers(dest="name", required=True, metavar="BENCHMARK")
+    common = argparse.ArgumentParser(add_help=False)
+    common.add_argument("--json", action="store_true", help="print the figures as JSON on stdout")
+    flc = names.add_parser("flc", parents=[common], help="the fuzzy controller's fast path against scikit-fuzzy")
+    flc.add_argument("--evaluations", type=int, default=2000, help="evaluations per timing")
+    rtf = names.add_parser("rtf", parents=[common], help="a scenario over DDS at rising RTF")
+    rtf.add_argument("--scenario", default="hallway", help="the scenario to run")
+    rtf.add_argument("--rtfs", type=rtf_list, default=[1.0, 3.0, 5.0, 8.0, 12.0],
+                     help="e.g. 1,2,5 or 1,5,max; the lowest is the reference")
+    rtf.add_argument("--clock", choices=("free", "stepped"), default="free",
+                     help="the clock of the runs (free: how high an RTF the free-running clock stands; stepped: "
+                          "whether the figures follow the seed at every RTF)")
+    rtf.add_argument("--hogs", type=int, default=0,
+                     help="busy-loop processes kept running through the sweep (a loaded machine)")
+    rtf.add_argument("--tolerance", type=float, default=0.10, help="allowed RMSE growth over the lowest RTF")
+    rtf.add_argument("--seeds", type=int, default=3, help="runs per RTF (seeds 1..N)")
+    rtf.add_argument("--out", type=Path, default=WORKSPACE / "bags" / "bench_rtf", help="folder for the runs")
+    planner = names.add_parser("planner", parents=[common], help="Algorithm 1 and a reader round in a 30 x 30 m "
+                                                                 "field at r = 2 cm")
+    planner.add_argument("--plans", type=int, default=200, help="random segments planned")
+    partitions = names.add_parser("partitions", parents=[common], help="the navigations of paper 000 Figs. 12-14 "
+                                                                       "in-process")
+    partitions.add_argument("--runs", type=int, default=250, help="runs per (read range, level)")
+    partitions.add_argument("--method", choices=["paper", "filter", "filter_boom_spin"], default="paper",
+                            help="the configuration (reproduce partitions' METHOD_FILES)")
+    names.add_parser("location_server", parents=[common], help="paper 003's tier-one locate over DDS")
+    names.add_parser("llrp", parents=[common], help="the llrp_reader driver against llrpkit's LLRP emulator "
+                                                    "(latency, lossless rate)")
     return run_bench
 
 
@@ -124,6 +138,7 @@ def run_reproduce(args: argparse.Namespace) -> int:
 
 def run_survey(args: argparse.Namespace) -> int:
     from rfidnav_bringup.scenario import load_scenario
+    from rfidnav_common.progress import stage
     from rfidnav_experiments.runners.two_tier import survey
     from rfidnav_localization.radio_map_file import write_radio_map
 
@@ -131,15 +146,26 @@ def run_survey(args: argparse.Namespace) -> int:
     if scenario.route_map is None:
         raise ConfigError(str(scenario.map_file), "", "a survey needs a route map with tag_groups (this is a "
                                                      "topological map)")
-    fingerprints, description = survey(scenario.world, scenario.route_map, args.grid, args.seed)
+    with stage(f"survey {scenario.name}"):
+        fingerprints, description = survey(scenario.world, scenario.route_map, args.grid, args.seed)
     write_radio_map(args.out, fingerprints, description)
     print(f"{len(fingerprints)} fingerprints ({description}) -> {args.out}")
     return 0
 
 
 def run_bench(args: argparse.Namespace) -> int:
+    """The benchmark ``args.name``; those without a pool of runs (which shows its own count) show a spinner."""
+    from rfidnav_common.progress import stage
+
     if args.name == "rtf":
         return bench_rtf(args)
+    if args.name == "partitions":
+        return bench_partitions(args)
+    with stage(f"bench {args.name}"):
+        return timed_bench(args)
+
+
+def timed_bench(args: argparse.Namespace) -> int:
     if args.name == "location_server":
         from rfidnav_experiments.bench.location_server import benchmark as location_benchmark
 
@@ -153,7 +179,7 @@ def run_bench(args: argparse.Namespace) -> int:
         from rfidnav_experiments.bench.llrp import bench_llrp
 
         return bench_llrp(as_json=args.json)
-    if args.name in ("planner", "partitions"):
+    if args.name == "planner":
         return bench_partitions(args)
     from rfidnav_experiments.bench.fuzzy import benchmark
 

@@ -28,6 +28,7 @@ from typing import Any
 from rfidnav_bringup.orchestrator import Orchestrator, RunOptions
 from rfidnav_bringup.scenario import Scenario
 from rfidnav_common.errors import ConfigError
+from rfidnav_common.progress import progress
 
 
 @dataclass(frozen=True)
@@ -79,7 +80,7 @@ def sweep(scenario: Scenario, rtfs: list[float], seeds: list[int], out_dir: Path
     if clock == "free" and not all(math.isfinite(rtf) for rtf in rtfs):
         raise ConfigError("--rtfs", "", "max needs the stepped clock (--clock stepped)")
     rows = []
-    with cpu_hogs(hogs):
+    with cpu_hogs(hogs), progress(f"bench rtf {scenario.name} ({clock} clock)", len(set(rtfs)) * len(seeds)) as advance:
         for rtf in sorted(set(rtfs)):
             documents, run_dirs = [], []
             for seed in seeds:
@@ -90,8 +91,7 @@ def sweep(scenario: Scenario, rtfs: list[float], seeds: list[int], out_dir: Path
                     raise KeyboardInterrupt
                 documents.append(summary.document)
                 run_dirs.append(str(summary.run_dir))
-                print(f"bench rtf: RTF {rtf:g} seed {seed}: {'success' if summary.success else 'FAILED'}",
-                      flush=True)
+                advance(1)
             speeds = [_per_sim_s(d) for d in documents]
             per_process: dict[str, list[float]] = {}
             for _, _, processes in speeds:

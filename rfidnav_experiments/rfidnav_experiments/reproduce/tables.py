@@ -1,5 +1,5 @@
-"""What every reproduction shares: progress on stderr, figures saved alike, plain-text tables, means of maybe
-nothing, 95 % intervals (paired where two methods ran on the same seeds), and the conditions table: every
+"""What every reproduction shares: a pool with progress on stderr, figures saved alike, plain-text tables, means of
+maybe nothing, 95 % intervals (paired where two methods ran on the same seeds), and the conditions table: every
 physical setting of a reproduction with where it comes from."""
 
 from __future__ import annotations
@@ -7,8 +7,6 @@ from __future__ import annotations
 import math
 import multiprocessing
 import statistics
-import sys
-import time
 from collections.abc import Callable, Hashable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -20,16 +18,10 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 from scipy import stats  # noqa: E402
 
+from rfidnav_common.progress import progress  # noqa: E402
+
 Key = TypeVar("Key", bound=Hashable)   # what pairs two methods' values: a seed, a placement, a mission
 WORKERS = 2                             # the target machine has two cores
-
-
-def progress(line: str, final: bool) -> None:
-    # One overwritten line on a terminal; in a log only the final line, not hundreds.
-    if sys.stderr.isatty():
-        print(f"\r\033[K{line}", end="\n" if final else "", file=sys.stderr, flush=True)
-    elif final:
-        print(line, file=sys.stderr, flush=True)
 
 
 def save(figure: plt.Figure, path: Path, dpi: int) -> Path:
@@ -57,15 +49,12 @@ def run_pool(function: Callable[[Any], Any], jobs: Iterable[Any], label: str) ->
     copy of those can hang; the server imports the function's module once and forks the workers from it."""
     jobs = list(jobs)
     results = []
-    started = time.monotonic()
     context = multiprocessing.get_context("forkserver")
     context.set_forkserver_preload([function.__module__])
-    with context.Pool(WORKERS) as pool:
-        for done, result in enumerate(pool.imap_unordered(function, jobs, chunksize=4), start=1):
+    with context.Pool(WORKERS) as pool, progress(label, len(jobs)) as advance:
+        for result in pool.imap_unordered(function, jobs, chunksize=4):
             results.append(result)
-            if done % 20 == 0 or done == len(jobs):
-                progress(f"{label}: {done}/{len(jobs)}", final=False)
-    progress(f"{label}: {len(jobs)} in {time.monotonic() - started:.0f} s", final=True)
+            advance(1)
     return results
 
 
