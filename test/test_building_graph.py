@@ -11,7 +11,10 @@ import pytest
 from mcap.reader import make_reader
 from mcap_ros2.decoder import DecoderFactory
 
+from rfidnav_bag.bags import read_messages
 from rfidnav_bringup.report import run_metrics
+from rfidnav_sim.sonar_model import PAPER_LAYOUT
+from support.frames import frame_tree
 from support.runs import WORKSPACE, navigation_subscriptions, run_scenario
 
 pytestmark = pytest.mark.tier("graph")
@@ -79,3 +82,11 @@ def test_the_bag_holds_sonar_tags_commands_and_events_that_third_party_readers_d
     assert {"23", "19"} <= tags
     assert commands[0] == "follow" and "right" in commands and commands[-1] == "stop"
     assert events.index("junction_centre") < events.index("turn_done") < events.index("stopped")
+
+
+def test_every_sonar_frame_resolves_to_the_map(paper_run: Path) -> None:
+    tree = frame_tree(paper_run)
+    topics = [f"/sonar/{rangefinder.name}" for rangefinder in PAPER_LAYOUT]
+    sonar_frames = {m.header.frame_id for _, _, m in read_messages(paper_run / "bag", topics)}
+    assert len(sonar_frames) == 7 and "sonar_front" in sonar_frames
+    assert {tree.root_of(frame) for frame in sonar_frames} == {"map"}

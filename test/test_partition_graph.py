@@ -15,6 +15,7 @@ from mcap_ros2.decoder import DecoderFactory
 
 from rfidnav_bringup.report import run_metrics
 from rfidnav_common.tag_lattice import decode_tag_id, make_deployment
+from support.frames import assert_estimates_are_published_as_map_to_odom
 from support.runs import navigation_subscriptions, run_cli, run_scenario
 
 pytestmark = pytest.mark.tier("graph")
@@ -80,3 +81,7 @@ def test_a_goal_off_the_deployment_is_refused_before_anything_starts(tmp_path: P
     assert result.returncode == 2
     assert "outside the map's deployment_area" in result.stderr and "Traceback" not in result.stderr
     assert not list(tmp_path.iterdir())
+
+
+def test_the_localizers_estimate_is_published_as_map_to_odom(field_run: Path) -> None:
+    assert assert_estimates_are_published_as_map_to_odom(field_run) > 10

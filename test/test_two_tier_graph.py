@@ -13,6 +13,7 @@ from mcap.reader import make_reader
 from mcap_ros2.decoder import DecoderFactory
 
 from rfidnav_bringup.report import run_metrics
+from support.frames import assert_estimates_are_published_as_map_to_odom, frame_tree
 from support.runs import navigation_subscriptions, run_scenario
 
 pytestmark = pytest.mark.tier("graph")
@@ -63,3 +64,8 @@ def test_the_bag_holds_scans_compass_and_tiers_that_third_party_readers_decode(h
                     assert len(decoded.access_points) == 4
     assert counts["/wifi/scan"] > 10 and counts["/compass"] > 100
     assert {1, 2} <= tiers
+
+
+def test_the_navigators_estimate_is_map_to_odom_and_the_compass_frame_resolves(home_run: Path) -> None:
+    assert assert_estimates_are_published_as_map_to_odom(home_run) > 10
+    assert frame_tree(home_run).root_of("compass") == "map"

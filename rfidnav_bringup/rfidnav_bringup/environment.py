@@ -26,6 +26,9 @@ from pathlib import Path
 PYTHON_PACKAGES = ("rfidnav_common", "rfidnav_sim", "rfidnav_control", "rfidnav_localization", "rfidnav_planning",
                    "rfidnav_drivers", "rfidnav_bag", "rfidnav_bringup", "rfidnav_experiments")   # bottom up
 INTERFACE_PACKAGE = "rfidnav_msgs"
+# Standard interface packages the Jazzy wheels on PyPI lack, vendored (with the standard definitions) and built
+# only where nothing provides them: tf2_msgs for /tf and /tf_static.
+VENDORED_INTERFACES = (("tf2_msgs", "rfidnav_msgs/vendor/tf2_msgs"),)
 
 
 class SetupStepFailed(Exception):
@@ -72,6 +75,9 @@ class Stamps:
         path = self.directory / step
         return path.is_file() and path.read_text() == value
 
+    def has(self, step: str) -> bool:
+        return (self.directory / step).is_file()
+
     def record(self, step: str, value: str) -> None:
         self.directory.mkdir(parents=True, exist_ok=True)
         (self.directory / step).write_text(value)
@@ -117,25 +123,44 @@ def ensure_requirements(workspace: Path, stamps: Stamps, env: dict[str, str], sa
 
 
 def ensure_interfaces(workspace: Path, stamps: Stamps, env: dict[str, str], say) -> None:
+    """Step (3): the vendored standard interfaces the wheels lack, then rfidnav_msgs."""
     venv, python = venv_paths(workspace)
-    source = workspace / INTERFACE_PACKAGE
-    value = digest(files_under(source))
-    if stamps.matches("interfaces", value):
+    for name, source in VENDORED_INTERFACES:
+        stamp = f"interfaces-{name}"
+        if not stamps.has(stamp) and installed(python, env, name):
+            continue                                   # the wheels (or a system) provide it: theirs is used
+        build_interface_package(workspace, stamps, env, say, name, workspace / source, stamp)
+    build_interface_package(workspace, stamps, env, say, INTERFACE_PACKAGE, workspace / INTERFACE_PACKAGE,
+                            "interfaces")
+
+
+def installed(python: Path, env: dict[str, str], package: str) -> bool:
+    return subprocess.run([str(python), "-c", f"import {package}.msg"], env=env, capture_output=True,
+                          check=False).returncode == 0
+
+
+def build_interface_package(workspace: Path, stamps: Stamps, env: dict[str, str], say, name: str, source: Path,
+                            stamp: str) -> None:
+    """Configure, build and install one ament_cmake interface package into the venv, unless its files (and
+    rfidnav_msgs/cmake, which every one includes) are unchanged since the last build."""
+    venv, python = venv_paths(workspace)
+    value = digest(list({*files_under(source), *files_under(workspace / INTERFACE_PACKAGE / "cmake")}))
+    if stamps.matches(stamp, value):
         return
-    say(f"building {INTERFACE_PACKAGE} with CMake (about 30 s)")
-    build = workspace / "build" / INTERFACE_PACKAGE
+    say(f"building {name} with CMake (1-4 min)")
+    build = workspace / "build" / name
     build.mkdir(parents=True, exist_ok=True)
-    log = workspace / "build" / f"{INTERFACE_PACKAGE}.log"
+    log = workspace / "build" / f"{name}.log"
     log.write_text("")
     advice = ("check that gcc/g++ and CMake are installed and that the .msg/.action files parse; "
               f"the full log is {log}")
-    run_step("interfaces: cmake configure",
+    run_step(f"interfaces: {name}: cmake configure",
              ["cmake", str(source), f"-DCMAKE_INSTALL_PREFIX={venv}", f"-DPython3_EXECUTABLE={python}",
               "-DCMAKE_BUILD_TYPE=Release", "-DBUILD_TESTING=OFF"], env, log, advice, cwd=build)
-    run_step("interfaces: build", ["cmake", "--build", ".", "--parallel", str(os.cpu_count() or 2)],
+    run_step(f"interfaces: {name}: build", ["cmake", "--build", ".", "--parallel", str(os.cpu_count() or 2)],
              env, log, advice, cwd=build)
-    run_step("interfaces: install", ["cmake", "--install", "."], env, log, advice, cwd=build)
-    stamps.record("interfaces", value)
+    run_step(f"interfaces: {name}: install", ["cmake", "--install", "."], env, log, advice, cwd=build)
+    stamps.record(stamp, value)
 
 
 def ensure_packages(workspace: Path, stamps: Stamps, env: dict[str, str], say) -> None:

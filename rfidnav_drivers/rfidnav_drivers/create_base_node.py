@@ -25,10 +25,13 @@ from nav_msgs.msg import Odometry
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.publisher import Publisher
+from tf2_msgs.msg import TFMessage
 
 from rfidnav_common import base_safety as safety
+from rfidnav_common.frames import Frame
 from rfidnav_common.geometry import yaw_to_quaternion
 from rfidnav_common.ros import COMMAND_QOS, SENSOR_QOS, declare_parameters, run_node
+from rfidnav_common.transforms import TF_QOS, tf_message
 from rfidnav_drivers import create_oi as oi
 from rfidnav_drivers.errors import DriverError
 from rfidnav_drivers.parameters import CreateBaseParameters
@@ -83,6 +86,7 @@ class CreateBaseNode(Node):
         self.io_errors = 0
 
         self.odom_pub = self.create_publisher(Odometry, "/odom", SENSOR_QOS)
+        self.tf_pub = self.create_publisher(TFMessage, "/tf", TF_QOS) if self.params.publish_tf else None
         self.event_pub = self.create_publisher(BaseEvent, "/base/event", COMMAND_QOS)
         self.create_subscription(Twist, "/cmd_vel", self.on_cmd_vel, COMMAND_QOS)
         self.wake = threading.Event()
@@ -251,6 +255,10 @@ class CreateBaseNode(Node):
         msg.twist.twist.linear.x = step.linear_mps
         msg.twist.twist.angular.z = step.angular_radps
         self.publish(self.odom_pub, msg)
+        if self.tf_pub is not None:     # odom -> base_link (REP 105), from the serial thread as /odom is
+            frame = Frame.planar(self.params.odom_frame, self.params.base_frame, (step.pose.x, step.pose.y,
+                                                                                   step.pose.yaw))
+            self.publish(self.tf_pub, tf_message([frame], msg.header.stamp))
 
     def publish(self, publisher: Publisher, msg: Any) -> None:
         """Publish from the serial thread; after Ctrl-C the context is shut down before destroy_node stops the

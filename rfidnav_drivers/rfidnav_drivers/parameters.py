@@ -58,6 +58,7 @@ class CreateBaseParameters:
     command_timeout_s: float = param("watchdog: stop when no /cmd_vel arrived for this long [s]", 0.5)
     odom_frame: str = param("frame of /odom", "odom")
     base_frame: str = param("the robot's frame (child of /odom)", "base_link")
+    publish_tf: bool = param("publish odom -> base_link on /tf with each /odom (REP 105)", True)
 
     def validate(self) -> None:
         if not self.port:

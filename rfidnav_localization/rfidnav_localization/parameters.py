@@ -28,6 +28,8 @@ class PartitionLocalizerParameters:
     method: str = param("paper (partition centre, sec. 4.2 orientation bounds) or filter (particle filter)", "paper")
     antenna: int = param("reader port of the downward antenna that reads the floor tags", 1)
     map_frame: str = param("frame of the published pose", "map")
+    publish_tf: bool = param("publish map -> odom on /tf from each estimate with a heading (REP 105); turn it off "
+                             "where another localizer's estimate drives the mission", True)
     seed: int = param("run seed; the node draws its own random stream from it", 0)
     turn_threshold_rad: float = param(
         "odometry heading change that ends a straight stretch (the partitions traversed start again) [rad]", 0.05)

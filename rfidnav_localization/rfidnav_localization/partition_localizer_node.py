@@ -20,6 +20,7 @@ from rfidnav_common.geometry import quaternion_to_yaw
 from rfidnav_common.ros import SENSOR_QOS, declare_parameters, run_node, seconds_of
 from rfidnav_common.seeding import rng_for
 from rfidnav_common.stepped_node import SteppedNode
+from rfidnav_common.transforms import FrameBroadcaster
 from rfidnav_localization.conversions import pose_message, status_message
 from rfidnav_localization.parameters import PartitionLocalizerParameters
 from rfidnav_localization.partition import PartitionLocalizer
@@ -47,6 +48,7 @@ class PartitionLocalizerNode(SteppedNode):
         self.dropped_odometry = 0
         self.rounds = 0
         self.pose_pub = self.create_publisher(PoseWithCovarianceStamped, "/localization/pose", SENSOR_QOS)
+        self.frames = FrameBroadcaster(self) if self.params.publish_tf else None   # map -> odom
         self.status_pub = self.create_publisher(LocalizationStatus, "/localization/status", SENSOR_QOS)
         self.create_subscription(Odometry, "/odom", self.on_odometry, SENSOR_QOS)
         self.create_subscription(TagReadArray, "/rfid/reads", self.on_reads, SENSOR_QOS)
@@ -86,6 +88,9 @@ class PartitionLocalizerNode(SteppedNode):
                                       f"the others read ({estimate.rogue_count} so far)", throttle_duration_sec=5.0)
         if estimate.position is not None:
             self.pose_pub.publish(pose_message(estimate, msg.header.stamp, self.params.map_frame))
+            if self.frames is not None and estimate.yaw is not None:
+                self.frames.send_map_to_odom(self.params.map_frame, (*estimate.position, estimate.yaw),
+                                             self.odom or ODOMETRY_ORIGIN, msg.header.stamp)
         self.status_pub.publish(status_message(estimate, msg.header.stamp, self.params.map_frame))
 
 

@@ -68,6 +68,8 @@ class TwoTierNavigatorParameters:
     control_rate_hz: float = param("control steps per second [Hz, sim time]", 20.0)
     service_timeout_s: float = param("a location server call unanswered this long is sent again [s]", 2.0)
     map_frame: str = param("frame of the published pose", "map")
+    publish_tf: bool = param("publish map -> odom on /tf from each estimate with a heading (REP 105); turn it off "
+                             "where another localizer's estimate drives the mission", True)
     landmark_spacing_m: float = param("geographic forwarding: the tolerable distance to the next landmark [m]", 4.0)
     calibration_distance_m: float = param("A5: a tier-one check after driving this far without a fix [m]", 6.0)
     deviation_threshold_m: float = param("A5: re-fix at a landmark when tier one disagrees by more than this [m]",

@@ -16,6 +16,7 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
+from builtin_interfaces.msg import Time
 from geometry_msgs.msg import Pose2D, PoseWithCovarianceStamped, Twist
 from nav_msgs.msg import Odometry
 from rclpy.task import Future
@@ -25,6 +26,7 @@ from rfidnav_common.geometry import quaternion_to_yaw, yaw_to_quaternion
 from rfidnav_common.goal_server import ActiveGoal, GoalOutcome, SingleGoalServer
 from rfidnav_common.ros import COMMAND_QOS, SENSOR_QOS, declare_parameters, odometry_pose, run_node, twist
 from rfidnav_common.stepped_node import SteppedNode
+from rfidnav_common.transforms import FrameBroadcaster
 from rfidnav_msgs.action import NavigateToPoint
 from rfidnav_msgs.msg import LocalizationStatus, TagReadArray, WifiScan
 from rfidnav_msgs.srv import GetTagMap, Locate
@@ -48,12 +50,14 @@ class TwoTierNavigatorNode(SteppedNode):
         self.navigator = TwoTierNavigator(self.params.settings())
         self.call: PendingCall | None = None
         self.odom: tuple[float, float, float] | None = None
+        self.odom_stamp = Time()
         self.compass_yaw: float | None = None
         self.compass_yaw_variance = UNKNOWN_YAW_VARIANCE    # from each /compass reading, where it gives one
         self.scan: WifiScan | None = None
         self.reads: list[tuple[tuple[float, float, float], list[str]]] = []   # (odometry then, tag ids)
         self.cmd_pub = self.create_publisher(Twist, "/cmd_vel", COMMAND_QOS)
         self.pose_pub = self.create_publisher(PoseWithCovarianceStamped, "/localization/pose", SENSOR_QOS)
+        self.frames = FrameBroadcaster(self) if self.params.publish_tf else None   # map -> odom
         self.status_pub = self.create_publisher(LocalizationStatus, "/localization/status", SENSOR_QOS)
         self.create_subscription(Odometry, "/odom", self.on_odom, SENSOR_QOS)
         self.create_subscription(Imu, "/compass", self.on_compass, SENSOR_QOS)
@@ -79,7 +83,7 @@ class TwoTierNavigatorNode(SteppedNode):
     def on_odom(self, msg: Odometry) -> None:
         pose = odometry_pose(msg)
         if all(math.isfinite(v) for v in pose):
-            self.odom = pose
+            self.odom, self.odom_stamp = pose, msg.header.stamp
         else:
             self.get_logger().warning("dropped an odometry message with non-finite values", throttle_duration_sec=5.0)
 
@@ -217,6 +221,11 @@ class TwoTierNavigatorNode(SteppedNode):
         pose.pose.covariance[0] = pose.pose.covariance[7] = variance
         pose.pose.covariance[35] = UNKNOWN_YAW_VARIANCE if estimate.yaw is None else self.compass_yaw_variance
         self.pose_pub.publish(pose)
+        if self.frames is not None and estimate.yaw is not None and self.odom is not None:
+            # Stamped with the odometry it rests on: the step timer fires before the /odom that passed its due
+            # time is handled, so "now" is up to one odometry period later than the pose the estimate is for.
+            self.frames.send_map_to_odom(self.params.map_frame, (*map(float, estimate.position), estimate.yaw),
+                                         self.odom, self.odom_stamp)
         fix = estimate.last_fix
         status = LocalizationStatus(method="two_tier", position_valid=True, x=pose.pose.pose.position.x,
                                     y=pose.pose.pose.position.y, orientation_valid=estimate.yaw is not None,

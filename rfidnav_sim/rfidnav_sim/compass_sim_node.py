@@ -18,6 +18,7 @@ from rfidnav_common.geometry import yaw_to_quaternion
 from rfidnav_common.ros import SENSOR_QOS, declare_parameters, odometry_pose, run_node, seconds_of
 from rfidnav_common.seeding import rng_for
 from rfidnav_common.stepped_node import SteppedNode
+from rfidnav_common.transforms import publish_static_frames
 from rfidnav_sim.parameters import CompassParameters
 from rfidnav_sim.schedule import GroundTruthSchedule
 
@@ -32,6 +33,7 @@ class CompassSimNode(SteppedNode):
         self.rng = rng_for(self.params.seed, "compass_sim")
         self.schedule = GroundTruthSchedule(1.0 / self.params.rate_hz)
         self.publisher = self.create_publisher(Imu, "/compass", SENSOR_QOS)
+        publish_static_frames(self, self.params.frames())
         self.create_subscription(Odometry, "/sim/ground_truth", self.on_ground_truth, SENSOR_QOS)
 
     def on_ground_truth(self, msg: Odometry) -> None:

@@ -13,6 +13,7 @@ import numpy as np
 
 from rfidnav_common.config import param, require_positive
 from rfidnav_common.errors import ParameterError
+from rfidnav_common.frames import BASE_FRAME, MAP_FRAME, ODOM_FRAME, Frame
 from rfidnav_common.polling import PollClock, Polling
 from rfidnav_common.seeding import rng_for
 from rfidnav_sim.compass_model import CompassModel
@@ -35,6 +36,10 @@ class RobotSimParameters:
         "stepped clock: the fully qualified names of the nodes whose answers on /sim/step_ack each step waits "
         "for (rfidnav_common.stepped_node); set by the orchestrator", [])
     start_paused: bool = param("hold the clock at zero until ~/start is called", False)
+    map_to_odom_at_start: bool = param(
+        "publish map -> odom on /tf_static as the start pose (where odometry starts, known to the robot): for "
+        "missions without a localizer, so that viewers can place odom in the map; leave it off where a localizer "
+        "publishes map -> odom", False)
     odom_rate_hz: float = param("rate of /clock, /odom and /sim/ground_truth [Hz, sim time]", 50.0)
     seed: int = param("run seed; the odometry slip stream derives from it", 0)
     track_width_m: float = param("distance between the wheels [m]", 0.30)
@@ -62,6 +67,9 @@ class RobotSimParameters:
                           self.odom_slip_std),
             rng_for(self.seed, "robot_sim.odometry"), walls if self.walls_stop_base else None)
 
+    def start_frame(self) -> Frame:
+        return Frame.planar(MAP_FRAME, ODOM_FRAME, (self.start_x, self.start_y, math.radians(self.start_yaw_deg)))
+
     def validate(self) -> None:
         if not self.world_file:
             raise ParameterError("world_file", "required (the world YAML to simulate)")
@@ -77,6 +85,9 @@ class RobotSimParameters:
 
 FACINGS = ("up", "down", "left", "right")
 SIDE_BEARINGS = {"left": math.pi / 2.0, "right": -math.pi / 2.0}
+# The turn from base_link's x axis to each facing (a sensor frame's x is its boresight): pitch -90 deg points x up.
+BORESIGHT_TURNS = {"up": {"pitch": -math.pi / 2.0}, "down": {"pitch": math.pi / 2.0},
+                   "left": {"yaw": SIDE_BEARINGS["left"]}, "right": {"yaw": SIDE_BEARINGS["right"]}}
 
 
 @dataclass(frozen=True)
@@ -90,6 +101,8 @@ class ReaderParameters:
     round_failure_probability: float = param("probability that a whole round reads nothing, whatever is in range "
                                              "(a failed poll)", 0.0)
     frame_id: str = param("frame of the reader; antenna positions are given in it", "base_link")
+    antenna_frame_prefix: str = param("frame of antenna port N: PREFIX + N, published on /tf_static in frame_id "
+                                      "(x along the boresight)", "rfid_antenna_")
     antenna_positions: list[float] = param(
         "x, y, z of each antenna in the reader frame [m], concatenated; antenna ports are 1, 2, ... in order",
         [0.0, 0.03, 0.30, 0.0, -0.03, 0.30, 0.0, 0.0, 0.05])
@@ -154,6 +167,13 @@ class ReaderParameters:
         return PolledReader(ReaderSimulator.for_world(self.reader_model(), world, rng_for(seed, "rfid_reader_sim")),
                             PollClock(self.polling(), rng_for(seed, "rfid_reader_sim.rounds")))
 
+    def antenna_frames(self) -> list[Frame]:
+        """Each antenna's frame in the reader's, its x axis along the boresight (REP 103 for a sensor)."""
+        positions = np.reshape(self.antenna_positions, (-1, 3))
+        return [Frame.mounted(self.frame_id, f"{self.antenna_frame_prefix}{index + 1}",
+                              (float(p[0]), float(p[1]), float(p[2])), **BORESIGHT_TURNS[facing])
+                for index, (p, facing) in enumerate(zip(positions, self.antenna_facing))]
+
     def reader_model(self) -> ReaderModel:
         positions = np.reshape(self.antenna_positions, (-1, 3))
         antennas = tuple(
@@ -176,7 +196,8 @@ class ReaderParameters:
 class CompassParameters:
     seed: int = param("run seed; the compass noise stream derives from it", 0)
     rate_hz: float = param("readings per second [Hz, sim time]", 10.0)
-    frame_id: str = param("frame of the compass", "base_link")
+    frame_id: str = param("frame of the compass: /compass readings are in it; other than base_link, it is "
+                          "published on /tf_static at the base's centre", "compass")
     noise_sd_deg: float = param("reading-to-reading noise, standard deviation [deg]", 2.0)
     bias_deg: float = param("constant heading offset for the whole run [deg]", 0.0)
 
@@ -184,6 +205,9 @@ class CompassParameters:
         if not (math.isfinite(self.rate_hz) and self.rate_hz > 0.0):
             raise ParameterError("rate_hz", f"must be positive, got {self.rate_hz}")
         self.model().validate()
+
+    def frames(self) -> list[Frame]:
+        return [] if self.frame_id == BASE_FRAME else [Frame(BASE_FRAME, self.frame_id, (0.0, 0.0, 0.0))]
 
     def model(self) -> CompassModel:
         return CompassModel(noise_sd_rad=math.radians(self.noise_sd_deg), bias_rad=math.radians(self.bias_deg))
@@ -223,6 +247,12 @@ class SonarParameters:
     rays_per_beam: int = param("rays spread over each 25-degree cone; the nearest echo is reported", 5)
     specular_angle_deg: float = param("specular loss: a ray meeting a wall further than this from the wall's "
                                       "normal reflects away and gives no echo; 90 = every wall echoes [deg]", 90.0)
+
+    def frames(self) -> list[Frame]:
+        """Each rangefinder's frame in base_link, x along its boresight (at the height of base_link: the paper
+        gives none, and the walls are vertical)."""
+        return [Frame.mounted(BASE_FRAME, self.frame_prefix + r.name, (r.position[0], r.position[1], 0.0),
+                              yaw=r.bearing_rad) for r in PAPER_LAYOUT]
 
     def model(self, walls: np.ndarray) -> SonarModel:
         """paper 004's seven rangefinders among ``walls`` with these settings: the model sonar_sim fires and the

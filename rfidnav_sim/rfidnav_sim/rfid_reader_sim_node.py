@@ -15,6 +15,7 @@ from nav_msgs.msg import Odometry
 
 from rfidnav_common.ros import SENSOR_QOS, declare_parameters, odometry_pose, run_node, seconds_of
 from rfidnav_common.stepped_node import SteppedNode
+from rfidnav_common.transforms import publish_static_frames
 from rfidnav_msgs.msg import TagReadArray
 from rfidnav_sim.conversions import reads_message
 from rfidnav_sim.parameters import ReaderParameters
@@ -29,6 +30,7 @@ class RfidReaderSimNode(SteppedNode):
         world = load_world(self.params.world_file)
         self.reader = self.params.simulated_reader(world, self.params.seed)
         self.reads_pub = self.create_publisher(TagReadArray, "/rfid/reads", SENSOR_QOS)
+        publish_static_frames(self, self.params.antenna_frames())
         self.create_subscription(Odometry, "/sim/ground_truth", self.on_ground_truth, SENSOR_QOS)
         lattice_tags = sum(deployment.tag_count() for deployment in world.deployments)
         self.get_logger().info(f"{len(world.tags)} listed tags, {lattice_tags} lattice floor tags, "

@@ -32,9 +32,11 @@ from visualization_msgs.msg import MarkerArray
 
 from rfidnav_common.base_safety import BaseEventRecord
 from rfidnav_common.errors import ConfigError
+from rfidnav_common.frames import BASE_FRAME, ODOM_FRAME, Frame
 from rfidnav_common.ros import COMMAND_QOS, LATCHED_QOS, SENSOR_QOS, declare_parameters, run_node, time_msg
 from rfidnav_common.step_ledger import StepLedger, StepReport
 from rfidnav_common.stepped_node import STEP_ACK_READER_QOS, STEP_ACK_TOPIC, SteppedNode, step_report_of
+from rfidnav_common.transforms import FrameBroadcaster, publish_static_frames
 from rfidnav_msgs.msg import BaseEvent, StepAck
 from rfidnav_sim.conversions import base_event_message, odometry_message, world_markers
 from rfidnav_sim.parameters import RobotSimParameters
@@ -73,6 +75,9 @@ class RobotSimNode(SteppedNode):
         self.truth_pub = self.create_publisher(Odometry, "/sim/ground_truth", SENSOR_QOS)
         self.markers_pub = self.create_publisher(MarkerArray, "/sim/markers", LATCHED_QOS)
         self.event_pub = self.create_publisher(BaseEvent, "/base/event", COMMAND_QOS)
+        self.frames = FrameBroadcaster(self)     # odom -> base_link, with each /odom
+        if p.map_to_odom_at_start:
+            publish_static_frames(self, [p.start_frame()])
         self.create_subscription(Twist, "/cmd_vel", self.on_cmd_vel, COMMAND_QOS)
         self.create_service(Trigger, "~/start", self.on_start)
         steady = Clock(clock_type=ClockType.STEADY_TIME)
@@ -190,7 +195,9 @@ class RobotSimNode(SteppedNode):
         stamp = self.sim_time_msg()
         velocity = self.base.velocity
         self.truth_pub.publish(odometry_message(self.base.truth, velocity, stamp, self.world.frame_id))
-        self.odom_pub.publish(odometry_message(self.base.odom, velocity, stamp, "odom"))
+        self.odom_pub.publish(odometry_message(self.base.odom, velocity, stamp, ODOM_FRAME))
+        odom = self.base.odom
+        self.frames.send([Frame.planar(ODOM_FRAME, BASE_FRAME, (odom.x, odom.y, odom.yaw))], stamp)
 
 
 def main(args: list[str] | None = None) -> int:

@@ -15,6 +15,7 @@ from sensor_msgs.msg import Range
 from rfidnav_common.ros import SENSOR_QOS, declare_parameters, odometry_pose, run_node, seconds_of
 from rfidnav_common.seeding import rng_for
 from rfidnav_common.stepped_node import SteppedNode
+from rfidnav_common.transforms import publish_static_frames
 from rfidnav_sim.parameters import SonarParameters
 from rfidnav_sim.schedule import GroundTruthSchedule
 from rfidnav_sim.sonar_model import PAPER_LAYOUT
@@ -27,6 +28,7 @@ class SonarSimNode(SteppedNode):
         self.params: SonarParameters = declare_parameters(self, SonarParameters)
         world = load_world(self.params.world_file)
         self.model = self.params.model(world.wall_segments())
+        publish_static_frames(self, self.params.frames())
         self.rng = rng_for(self.params.seed, "sonar_sim")
         self.schedule = GroundTruthSchedule(1.0 / self.params.rate_hz)
         self.publishers_by_name = {r.name: self.create_publisher(Range, f"/sonar/{r.name}", SENSOR_QOS)

@@ -1,0 +1,78 @@
+"""The robot's coordinate frames (REP 105: map -> odom -> base_link -> sensors), as plain data.
+
+Sensor nodes describe where they are mounted from their own parameters (:class:`Frame`), the base and the
+simulator where base_link is in odom, a localizer where odom is in the map (:func:`map_to_odom`); the adapter
+``rfidnav_common.transforms`` turns them into tf2_msgs/TFMessage on /tf and /tf_static.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from rfidnav_common.geometry import wrap_angle
+
+BASE_FRAME = "base_link"
+ODOM_FRAME = "odom"
+MAP_FRAME = "map"
+
+Quaternion = tuple[float, float, float, float]       # x, y, z, w
+
+
+def rpy_to_quaternion(roll: float, pitch: float, yaw: float) -> Quaternion:
+    """(x, y, z, w) of the fixed-axis rotation roll about x, then pitch about y, then yaw about z (REP 103)."""
+    cr, sr = math.cos(roll / 2.0), math.sin(roll / 2.0)
+    cp, sp = math.cos(pitch / 2.0), math.sin(pitch / 2.0)
+    cy, sy = math.cos(yaw / 2.0), math.sin(yaw / 2.0)
+    return (sr * cp * cy - cr * sp * sy, cr * sp * cy + sr * cp * sy, cr * cp * sy - sr * sp * cy,
+            cr * cp * cy + sr * sp * sy)
+
+
+@dataclass(frozen=True)
+class Frame:
+    """Where ``child`` is in ``parent``: a translation [m] and a rotation."""
+    parent: str
+    child: str
+    translation: tuple[float, float, float]
+    rotation: Quaternion = (0.0, 0.0, 0.0, 1.0)
+
+    def __post_init__(self) -> None:
+        if not self.parent or not self.child or self.parent == self.child:
+            raise ValueError(f"frame {self.parent!r} -> {self.child!r}: needs two different non-empty names")
+        values = (*self.translation, *self.rotation)
+        if len(self.translation) != 3 or not all(math.isfinite(v) for v in values):
+            raise ValueError(f"frame {self.parent} -> {self.child}: not finite: {values}")
+
+    @classmethod
+    def mounted(cls, parent: str, child: str, position: tuple[float, float, float], roll: float = 0.0,
+                pitch: float = 0.0, yaw: float = 0.0) -> Frame:
+        """A sensor mounted at ``position`` in ``parent``, turned by roll, pitch and yaw [rad]."""
+        return cls(parent, child, position, rpy_to_quaternion(roll, pitch, yaw))
+
+    @classmethod
+    def planar(cls, parent: str, child: str, pose: tuple[float, float, float]) -> Frame:
+        """A frame at (x, y, yaw) in the plane of ``parent``."""
+        x, y, yaw = pose
+        return cls.mounted(parent, child, (x, y, 0.0), yaw=yaw)
+
+
+def compose(a: tuple[float, float, float], b: tuple[float, float, float]) -> tuple[float, float, float]:
+    """Planar pose ``b`` (given in frame ``a``) in ``a``'s parent frame."""
+    ax, ay, ayaw = a
+    bx, by, byaw = b
+    c, s = math.cos(ayaw), math.sin(ayaw)
+    return ax + c * bx - s * by, ay + s * bx + c * by, wrap_angle(ayaw + byaw)
+
+
+def inverse(pose: tuple[float, float, float]) -> tuple[float, float, float]:
+    """The planar pose of a frame's parent in that frame."""
+    x, y, yaw = pose
+    c, s = math.cos(yaw), math.sin(yaw)
+    return -c * x - s * y, s * x - c * y, wrap_angle(-yaw)
+
+
+def map_to_odom(base_in_map: tuple[float, float, float],
+                base_in_odom: tuple[float, float, float]) -> tuple[float, float, float]:
+    """odom in the map, from where a localizer puts base_link in the map and where odometry puts it in odom at
+    the same time (REP 105: the localizer publishes map -> odom, so that odom -> base_link stays continuous)."""
+    return compose(base_in_map, inverse(base_in_odom))
