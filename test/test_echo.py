@@ -4,39 +4,64 @@ from __future__ import annotations
 
 import io
 import threading
+from collections.abc import Iterator
+from contextlib import contextmanager
 
 import pytest
 import yaml
 from geometry_msgs.msg import Twist
+from rclpy.qos import QoSProfile, ReliabilityPolicy
 
 from rfidnav_bringup.echo import EchoError, echo
-from rfidnav_common.ros import COMMAND_QOS, twist
+from rfidnav_common.ros import COMMAND_QOS, LATCHED_QOS, twist
 from support.graph import Graph
 
 pytestmark = pytest.mark.tier("node")
+
+
+@contextmanager
+def spinning(graph: Graph) -> Iterator[None]:
+    """The probe's executor spun from a thread while echo spins its own context."""
+    stop = threading.Event()
+
+    def spin() -> None:
+        while not stop.is_set():
+            graph.executor.spin_once(timeout_sec=0.05)
+
+    thread = threading.Thread(target=spin)
+    thread.start()
+    try:
+        yield
+    finally:
+        stop.set()
+        thread.join()
 
 
 def test_echo_prints_the_messages_a_publisher_sends(graph: Graph, domain: int) -> None:
     publisher = graph.probe.create_publisher(Twist, "/cmd_vel", COMMAND_QOS)
     graph.probe.create_timer(0.05, lambda: publisher.publish(twist(0.2, -0.5)))
     out = io.StringIO()
-    # echo spins its own context; the probe publishes from a thread meanwhile.
-    spinning = threading.Event()
-
-    def spin() -> None:
-        while not spinning.is_set():
-            graph.executor.spin_once(timeout_sec=0.05)
-
-    thread = threading.Thread(target=spin)
-    thread.start()
-    try:
+    with spinning(graph):
         assert echo("/cmd_vel", 2, wait_s=10.0, timeout_s=20.0, out=out, domain_id=domain) == 2
-    finally:
-        spinning.set()
-        thread.join()
     documents = [d for d in yaml.safe_load_all(out.getvalue()) if d]
     assert len(documents) == 2
     assert documents[0]["linear"]["x"] == 0.2 and documents[0]["angular"]["z"] == -0.5
+
+
+def test_echo_gets_the_one_message_a_latched_publisher_sent_before_it_started(graph: Graph, domain: int) -> None:
+    graph.probe.create_publisher(Twist, "/latched", LATCHED_QOS).publish(twist(0.1, 0.0))
+    out = io.StringIO()
+    with spinning(graph):
+        assert echo("/latched", 1, wait_s=10.0, timeout_s=20.0, out=out, domain_id=domain) == 1
+    assert yaml.safe_load(out.getvalue().split("---")[0])["linear"]["x"] == 0.1
+
+
+def test_echo_hears_a_best_effort_publisher_without_being_told(graph: Graph, domain: int) -> None:
+    best_effort = QoSProfile(depth=10, reliability=ReliabilityPolicy.BEST_EFFORT)
+    publisher = graph.probe.create_publisher(Twist, "/best_effort", best_effort)
+    graph.probe.create_timer(0.05, lambda: publisher.publish(twist(0.3, 0.0)))
+    with spinning(graph):
+        assert echo("/best_effort", 2, wait_s=10.0, timeout_s=20.0, out=io.StringIO(), domain_id=domain) == 2
 
 
 def test_echo_without_a_publisher_is_one_clear_error(domain: int) -> None:

@@ -13,7 +13,11 @@ from mcap.reader import make_reader
 from mcap_ros2.decoder import DecoderFactory
 
 from rfidnav_bag.bags import bag_info, read_messages
+from rfidnav_bringup.processes import DomainLease
 from rfidnav_bringup.report import run_metrics
+from rfidnav_common.frames import compose
+from rfidnav_common.ros import odometry_pose
+from support.frames import assert_same_pose, frame_tree
 from support.runs import WORKSPACE, run_cli, run_killing_the_controller, run_scenario
 
 pytestmark = pytest.mark.tier("graph")
@@ -118,9 +122,40 @@ def test_a_killed_controller_is_respawned_and_given_the_mission_again(tmp_path: 
     """heading_controller is `respawn: true`: killed mid-mission, it is restarted, the goal is sent again and
     the mission still succeeds, with the restart counted in summary.json."""
     out = tmp_path / "runs"
-    returncode, output = run_killing_the_controller(out, "line_follow_90", "--rtf", str(GRAPH_TEST_RTF))
+    with DomainLease(range(40, 51)) as free:     # a domain of the tests' own range, free now
+        domain = free.domain_id
+    returncode, output = run_killing_the_controller(out, "line_follow_90", "--rtf", str(GRAPH_TEST_RTF),
+                                                    "--domain", str(domain))
     assert returncode == 0, output
     assert "re-sending the goal to the restarted heading_controller" in output
+    # --quiet still says how to reach the graph
+    assert f"ROS_DOMAIN_ID={domain} ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST ./rfidnav echo" in output
     summary = json.loads(next(out.glob("*/summary.json")).read_text())
-    assert summary["success"] is True
+    assert summary["success"] is True and summary["ros_domain"]["id"] == domain
     assert summary["nodes"]["heading_controller"]["restarts"] == 1
+
+
+def test_the_antennas_hang_under_base_link_and_odom_sits_in_the_map_at_the_start(line_run: Path) -> None:
+    """The tf tree of a run without a localizer: the reader's antennas on /tf_static, odom -> base_link from the
+    simulator's odometry on /tf, map -> odom at the start pose. So the tree starts the base where ground truth is,
+    and then follows /odom (dead reckoning: this scenario's odometry drifts)."""
+    tree = frame_tree(line_run)
+    assert {tree.root_of(f"rfid_antenna_{port}") for port in (1, 2, 3)} == {"map"}
+    assert tree.parents["rfid_antenna_1"] == "base_link"
+    reads_frames = {m.header.frame_id for _, _, m in read_messages(line_run / "bag", ["/rfid/reads"])}
+    assert reads_frames == {"base_link"}
+    _, start_ns, start = next(read_messages(line_run / "bag", ["/sim/ground_truth"]))
+    assert_same_pose(tree.base_in_map(start_ns), odometry_pose(start), 1e-6, 1e-6)
+    odometry = [(t, m) for _, t, m in read_messages(line_run / "bag", ["/odom"])]
+    start_pose = tree.pose_at("odom", start_ns)
+    for stamp_ns, message in odometry[:: max(1, len(odometry) // 50)]:
+        assert_same_pose(tree.base_in_map(stamp_ns), compose(start_pose, odometry_pose(message)), 1e-6, 1e-6)
+
+
+def test_a_domain_given_with_domain_that_another_run_holds_is_refused_before_anything_starts(tmp_path: Path) -> None:
+    with DomainLease(range(40, 51)) as held:
+        result = run_cli("run", "line_follow_90", "--domain", str(held.domain_id), "--no-record", "--out",
+                         str(tmp_path))
+    assert result.returncode == 2, result.stdout + result.stderr
+    assert f"ROS domain {held.domain_id} is in use by another rfidnav run" in result.stderr
+    assert not list(tmp_path.glob("*/logs/*.log"))          # no node was started

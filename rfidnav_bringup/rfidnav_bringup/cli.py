@@ -46,6 +46,19 @@ def rtf_value(text: str) -> float:
         raise argparse.ArgumentTypeError(f"expected a number or 'max', got '{text}'") from None
 
 
+MAX_DOMAIN_ID = 101     # ROS 2 on Linux: higher ids run into the ephemeral port range
+
+
+def domain_id(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number, got '{text}'") from None
+    if not 0 <= value <= MAX_DOMAIN_ID:
+        raise argparse.ArgumentTypeError(f"must be 0-{MAX_DOMAIN_ID}, got {value}")
+    return value
+
+
 def add_run_options(parser: argparse.ArgumentParser, default_rtf: float) -> None:
     parser.add_argument("--rtf", type=rtf_value, default=default_rtf,
                         help="real-time factor (sim s per wall s): a ceiling with the stepped clock, which 'max' "
@@ -62,7 +75,13 @@ def add_run_options(parser: argparse.ArgumentParser, default_rtf: float) -> None
     parser.add_argument("--params", type=key_value, action="append", default=[], metavar="ROLE=FILE",
                         help="replace a role's parameter file")
     parser.add_argument("--no-record", action="store_true", help="do not record a bag")
-    parser.add_argument("--quiet", action="store_true", help="print only the summary")
+    parser.add_argument("--quiet", action="store_true",
+                        help="print only the summary (and the line that says how to reach the graph)")
+    parser.add_argument("--domain", type=domain_id, metavar="N",
+                        help=f"run in ROS domain N (0-{MAX_DOMAIN_ID}); default: the first free one of 51-101")
+    parser.add_argument("--discovery", choices=("localhost", "subnet"), default="localhost",
+                        help="ROS_AUTOMATIC_DISCOVERY_RANGE of the run: localhost (default; runs never mix) or "
+                             "subnet (drivers or a viewer on another machine)")
 
 
 def parser() -> tuple[argparse.ArgumentParser, dict[str, Handler]]:
@@ -103,7 +122,6 @@ def parser() -> tuple[argparse.ArgumentParser, dict[str, Handler]]:
     echo.add_argument("--count", type=int, default=5, help="messages to print, then exit 0")
     echo.add_argument("--wait", type=float, default=10.0, help="seconds to wait for a publisher")
     echo.add_argument("--timeout", type=float, default=30.0, help="seconds to wait for the messages (else exit 2)")
-    echo.add_argument("--best-effort", action="store_true", help="for best-effort publishers")
     report = verbs.add_parser("report", help="plots and recomputed metrics of a run")
     report.add_argument("run", type=Path)
     report.add_argument("--json", action="store_true")
@@ -154,7 +172,8 @@ def verb_run(args, scenario_name: str | None = None) -> int:
     if math.isnan(args.rtf) or args.rtf <= 0:
         raise ConfigError("--rtf", "", f"must be a positive number or max, got {args.rtf}")
     options = RunOptions(rtf=args.rtf, clock=args.clock, seed=args.seed, out_dir=args.out,
-                         record=not args.no_record, quiet=args.quiet)
+                         record=not args.no_record, quiet=args.quiet, domain=args.domain,
+                         discovery=args.discovery)
     summary = Orchestrator(scenario, options).run()
     print_summary(summary)
     return 0 if summary.success else 1
@@ -234,7 +253,7 @@ def verb_echo(args) -> int:
 
     if args.count < 1:
         raise ConfigError("--count", "", f"must be at least 1, got {args.count}")
-    echo(args.topic, args.count, args.wait, args.timeout, args.best_effort)
+    echo(args.topic, args.count, args.wait, args.timeout)
     return 0
 
 

@@ -1,9 +1,11 @@
 """``./rfidnav echo TOPIC``: print a topic's messages as YAML documents (ros2cli is not among the PyPI wheels), to
 check a driver alone, e.g. ``.venv/bin/llrp_reader --ros-args -p host:=10.0.0.5 & ./rfidnav echo /rfid/reads``.
 
-The message type is taken from the graph, so the publisher must be up within ``wait_s``; the subscription is
-reliable unless ``best_effort`` (a best-effort publisher is heard only by a best-effort subscriber). It ends after
-``count`` messages, or fails when they did not all come within ``timeout_s``.
+The message type is taken from the graph, so the publisher must be up within ``wait_s``; the subscription's QoS
+follows the publishers' as ros2cli's does: best effort if any publisher is (a best-effort publisher is heard only
+by a best-effort subscriber), transient local if all are (a latched publisher, e.g. /sim/markers or /tf_static,
+hands its last message only to a transient-local subscriber). It ends after ``count`` messages, or fails when they
+did not all come within ``timeout_s``.
 """
 
 from __future__ import annotations
@@ -17,7 +19,7 @@ import yaml
 from rclpy.context import Context
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
-from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
 from rfidnav_common.errors import RfidnavError
 from rfidnav_common.ros import message_class
@@ -36,8 +38,17 @@ def plain(message: Any) -> Any:
     return message
 
 
-def echo(topic: str, count: int, wait_s: float, timeout_s: float, best_effort: bool = False,
-         out: TextIO = sys.stdout, domain_id: int | None = None) -> int:
+def matching_qos(publishers: list[QoSProfile]) -> QoSProfile:
+    """A subscription that every one of ``publishers`` serves, getting what a latched one keeps."""
+    best_effort = any(p.reliability == ReliabilityPolicy.BEST_EFFORT for p in publishers)
+    latched = bool(publishers) and all(p.durability == DurabilityPolicy.TRANSIENT_LOCAL for p in publishers)
+    return QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=100,
+                      reliability=ReliabilityPolicy.BEST_EFFORT if best_effort else ReliabilityPolicy.RELIABLE,
+                      durability=DurabilityPolicy.TRANSIENT_LOCAL if latched else DurabilityPolicy.VOLATILE)
+
+
+def echo(topic: str, count: int, wait_s: float, timeout_s: float, out: TextIO = sys.stdout,
+         domain_id: int | None = None) -> int:
     """Print ``count`` messages of ``topic``; returns how many came (EchoError when fewer did in time). The
     domain is ROS_DOMAIN_ID's unless ``domain_id`` is given."""
     context = Context()
@@ -51,8 +62,7 @@ def echo(topic: str, count: int, wait_s: float, timeout_s: float, best_effort: b
         cls = message_class(type_name)
         if cls is None:
             raise EchoError(f"{topic}: type {type_name} is not installed here")
-        qos = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=100,
-                         reliability=ReliabilityPolicy.BEST_EFFORT if best_effort else ReliabilityPolicy.RELIABLE)
+        qos = matching_qos([info.qos_profile for info in node.get_publishers_info_by_topic(topic)])
 
         def on_message(message: Any) -> None:
             if len(received) < count:
@@ -65,8 +75,7 @@ def echo(topic: str, count: int, wait_s: float, timeout_s: float, best_effort: b
         while len(received) < count and time.monotonic() < deadline:
             executor.spin_once(timeout_sec=0.1)
         if len(received) < count:
-            raise EchoError(f"{topic}: {len(received)} of {count} messages within {timeout_s:g} s "
-                            f"(publisher's QoS best effort? try --best-effort)")
+            raise EchoError(f"{topic}: {len(received)} of {count} messages within {timeout_s:g} s")
         return len(received)
     finally:
         executor.shutdown()

@@ -64,6 +64,9 @@ RECORDER_ROLE = "recorder"
 RESEND_ATTEMPTS = 6
 RESEND_TIMEOUT_S = 5.0
 STEPPING_CLOCK_SOURCE = ("rfidnav_sim", "robot_sim")   # the clock source that can step
+# --discovery: a run's nodes find each other on this machine only (the default: two runs, or a run and a robot on
+# the network, never mix), or across the subnet (a robot's drivers on another machine, a viewer on a laptop).
+DISCOVERY_RANGES = {"localhost": "LOCALHOST", "subnet": "SUBNET"}
 
 
 @dataclass(frozen=True)
@@ -75,6 +78,8 @@ class RunOptions:
     record: bool = True
     record_exclude: tuple[str, ...] = ()     # topics the recorder leaves out (its exclude_topics)
     quiet: bool = False
+    domain: int | None = None                # the ROS domain to run in; None: the first free one of RUN_DOMAINS
+    discovery: str = "localhost"             # DISCOVERY_RANGES: ROS_AUTOMATIC_DISCOVERY_RANGE of the run
 
 
 @dataclass
@@ -216,9 +221,11 @@ class Orchestrator:
 
     # ----------------------------------------------------------------- run
     def run(self) -> RunSummary:
-        lease = DomainLease()
-        self.domain = {"id": lease.domain_id, "skipped": {str(d): nodes for d, nodes in lease.skipped.items()}}
-        env = child_environment(lease.domain_id)
+        lease = DomainLease() if self.options.domain is None else DomainLease(range(self.options.domain,
+                                                                                    self.options.domain + 1))
+        self.domain = {"id": lease.domain_id, "skipped": {str(d): nodes for d, nodes in lease.skipped.items()},
+                       "discovery": self.options.discovery}
+        env = child_environment(lease.domain_id, self.options.discovery)
         os.environ.update({k: env[k] for k in ("ROS_DOMAIN_ID", "ROS_AUTOMATIC_DISCOVERY_RANGE")})
         context = Context()
         rclpy.init(context=context, domain_id=lease.domain_id)
@@ -232,8 +239,9 @@ class Orchestrator:
             if lease.skipped:
                 self.say(f"skipped ROS domains in use by nodes not of this run: {lease.describe_skipped()}",
                          always=True)
-            self.say(f"run {self.run_dir.name}: domain {lease.domain_id}, seed {self.options.seed}, "
-                     f"RTF {rtf_text(self.options.rtf)}, {self.clock} clock{self.clock_note}")
+            self.say(f"run {self.run_dir.name}: seed {self.options.seed}, RTF {rtf_text(self.options.rtf)}, "
+                     f"{self.clock} clock{self.clock_note}")
+            self.say(f"graph on {reach_text(lease.domain_id, self.options.discovery)}", always=True)
             self.start_graph(node, executor)
             if not self.interrupted:
                 self.fly_mission(node, executor)
@@ -549,14 +557,21 @@ def choose_clock(scenario: Scenario, options: RunOptions) -> tuple[str, str]:
     return options.clock, ""
 
 
+def reach_text(domain_id: int, discovery: str) -> str:
+    """How another shell (or machine) joins the running graph."""
+    where = "this machine only" if discovery == "localhost" else "this subnet"
+    variables = f"ROS_DOMAIN_ID={domain_id} ROS_AUTOMATIC_DISCOVERY_RANGE={DISCOVERY_RANGES[discovery]}"
+    return f"{variables} ({where}); to join it: {variables} ./rfidnav echo /odom"
+
+
 def rtf_text(rtf: float) -> str | float:
     return rtf if math.isfinite(rtf) else "max"
 
 
-def child_environment(domain_id: int) -> dict[str, str]:
+def child_environment(domain_id: int, discovery: str = "localhost") -> dict[str, str]:
     env = dict(os.environ)
-    env.update(ROS_DOMAIN_ID=str(domain_id), ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST", PYTHONUNBUFFERED="1",
-               RCUTILS_COLORIZED_OUTPUT="0")
+    env.update(ROS_DOMAIN_ID=str(domain_id), ROS_AUTOMATIC_DISCOVERY_RANGE=DISCOVERY_RANGES[discovery],
+               PYTHONUNBUFFERED="1", RCUTILS_COLORIZED_OUTPUT="0")
     env.setdefault("AMENT_PREFIX_PATH", sys.prefix)
     return env
 

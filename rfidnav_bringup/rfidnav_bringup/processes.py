@@ -81,6 +81,10 @@ class DomainLease:
                 continue
             self.handle, self.domain_id = handle, domain
             return
+        if len(candidates) == 1:
+            raise LaunchError(f"ROS domain {candidates.start} is in use "
+                              + (f"by nodes not of this run ({self.describe_skipped()})" if self.skipped
+                                 else "by another rfidnav run") + "; choose another with --domain, or leave it out")
         raise LaunchError(f"all ROS domain ids {candidates.start}-{candidates.stop - 1} are in use by other runs"
                           + (f" or by nodes not ours ({self.describe_skipped()})" if self.skipped else ""))
 
@@ -92,6 +96,12 @@ class DomainLease:
         if self.handle is not None:
             self.handle.close()
             self.handle = None
+
+    def __enter__(self) -> DomainLease:
+        return self
+
+    def __exit__(self, *_exc: object) -> None:
+        self.close()
 
 
 class UnknownExecutableError(LaunchError):
