@@ -1,6 +1,7 @@
 """The swap end to end: `./rfidnav run ... --robot sim_base_llrp` puts the llrp_reader driver, reading from llrpkit's
-LLRP emulator on loopback, in the place of the reader simulator, and paper 001's heading_controller follows a
-route of the emulated tags with the simulated base (~30 s of wall time at RTF 1)."""
+LLRP emulator on loopback with the shipped parameters (but the address), in the place of the reader simulator, and
+paper 001's heading_controller follows a route of the emulated tags with the simulated base (~30 s of wall time at
+RTF 1)."""
 
 from __future__ import annotations
 
@@ -8,10 +9,13 @@ import json
 from pathlib import Path
 
 import pytest
+import yaml
 
 from rfidnav_bag.bags import read_messages
-from support.llrp import FLOOR, TARGET, EmulatorLoop, emulated_route
-from support.runs import run_scenario
+from rfidnav_common.config import node_parameter_values
+from rfidnav_drivers.parameters import LlrpReaderParameters
+from support.llrp import FLOOR, TARGET, EmulatorLoop, emulated_route, floor_tag_once_following
+from support.runs import WORKSPACE, run_scenario
 
 pytestmark = pytest.mark.tier("graph")
 
@@ -22,8 +26,9 @@ def swap_run(tmp_path_factory) -> Path:
     loop = EmulatorLoop()
     try:
         scenario, params = emulated_route(folder, loop, "[]")    # tracking needs the tags' true positions
-        return run_scenario(folder / "runs", str(scenario), "--robot", "sim_base_llrp", "--params",
-                            f"rfid_reader={params}", "--rtf", "1", "--seed", "1")
+        with floor_tag_once_following(folder / "runs", loop):
+            return run_scenario(folder / "runs", str(scenario), "--robot", "sim_base_llrp", "--params",
+                                f"rfid_reader={params}", "--rtf", "1", "--seed", "1")
     finally:
         loop.close()
 
@@ -35,6 +40,10 @@ def test_the_heading_controller_reaches_the_emulated_tag_through_the_llrp_driver
     graph = json.loads((swap_run / "graph.json").read_text())
     assert "llrp_reader" in graph["nodes"] and "rfid_reader_sim" not in graph["nodes"]
     assert "/rfid/reads" in graph["nodes"]["heading_controller"]["subscriptions"]
+    # The shipped reader parameters but the address: the ports the controller reads, 1, 2 and 3, untouched.
+    used = yaml.safe_load((swap_run / "params" / "rfid_reader.yaml").read_text())["llrp_reader"]["ros__parameters"]
+    shipped = node_parameter_values(LlrpReaderParameters, WORKSPACE / "config/params/llrp_reader.yaml", "llrp_reader")
+    assert used["antennas"] == shipped["antennas"] == [1, 2, 3]
 
 
 def test_the_bag_holds_the_drivers_reads_and_the_steering_they_caused(swap_run: Path) -> None:

@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 
 from support.fake_create import FakeCreate
-from support.llrp import EmulatorLoop, emulated_route
+from support.llrp import EmulatorLoop, emulated_route, floor_tag_once_following
 from support.runs import WORKSPACE, run_cli, run_scenario
 
 pytestmark = pytest.mark.tier("graph")
@@ -29,8 +29,9 @@ def robot_run(tmp_path_factory) -> Iterator[tuple[Path, FakeCreate]]:
         base.write_text((WORKSPACE / "config/params/create_base.yaml").read_text()
                         .replace("port: /dev/ttyUSB0", f"port: {create.slave_path}"))
         assert create.slave_path in base.read_text()
-        run = run_scenario(folder / "runs", str(scenario), "--robot", "create2_llrp",
-                           "--params", f"rfid_reader={reader}", "--params", f"robot_sim={base}")
+        with floor_tag_once_following(folder / "runs", loop):
+            run = run_scenario(folder / "runs", str(scenario), "--robot", "create2_llrp",
+                               "--params", f"rfid_reader={reader}", "--params", f"robot_sim={base}")
         yield run, create
     finally:
         create.close()

@@ -1,5 +1,6 @@
 """Tag-route follower (paper 001 sec. IV-C): arrival on the floor tag, finishing, steering sign, the unheard
-failure, validation of reads (NaN/Inf dropped, phase from I/Q), and the receding-target guard.
+failure, validation of reads (NaN/Inf dropped, phase from I/Q), phase pairs on one channel only, and the
+receding-target guard.
 
 Pure-module tests with a linear heading controller and with the real fuzzy controller of the paper."""
 
@@ -18,6 +19,7 @@ from rfidnav_control.tag_route import (
     TagObservation,
     TagRouteFollower,
     observe,
+    pair_phases,
 )
 
 pytestmark = pytest.mark.tier("unit")
@@ -178,6 +180,53 @@ def test_reads_of_other_tags_do_not_steer():
     command = route.step(0.04, ceiling_pair("C2", 0.0, 2.0))
     assert command.mode == "unheard"
     assert command.angular_radps == 0.0 and command.linear_mps == pytest.approx(0.2)
+
+
+# ------------------------------------------------------------------------------------- phase pairs, one channel
+
+OTHER_CHANNEL_HZ = 927.25e6
+
+
+def read(tag_id: str, antenna: int, phase: float, frequency_hz: float = FREQUENCY_HZ) -> TagObservation:
+    return TagObservation(tag_id, antenna, phase, -60.0, frequency_hz)
+
+
+def test_a_left_and_a_right_read_on_different_channels_make_no_pair_and_are_counted_as_such():
+    pairing = pair_phases([read("C1", 1, 2.0), read("C1", 2, 0.5, OTHER_CHANNEL_HZ)], "C1", 1, 2)
+    assert (pairing.left, pairing.right, pairing.cross_channel) == (None, None, True)
+    with pytest.raises(ValueError, match="no same-channel pair"):
+        _ = pairing.difference_rad
+    # One antenna only, or nothing at all: no pair, and no cross-channel round either.
+    assert not pair_phases([read("C1", 1, 2.0)], "C1", 1, 2).cross_channel
+    assert not pair_phases([read("C2", 1, 2.0), read("C2", 2, 0.5)], "C1", 1, 2).cross_channel
+
+
+def test_the_newest_same_channel_pair_of_a_batch_is_the_one_subtracted():
+    # A 20 ms LLRP batch across a hop: left and right on the old channel, then left on the new one, then right
+    # on the new one. The old channel's pair and the new one's are both same-channel; the new one is newer.
+    batch = [read("C1", 1, 1.0), read("C1", 2, 0.8), read("C1", 1, 3.0, OTHER_CHANNEL_HZ),
+             read("C2", 2, 6.0, OTHER_CHANNEL_HZ), read("C1", 2, 2.5, OTHER_CHANNEL_HZ)]
+    pairing = pair_phases(batch, "C1", 1, 2)
+    assert pairing.left is batch[2] and pairing.right is batch[4] and not pairing.cross_channel
+    assert pairing.difference_rad == pytest.approx(0.5)
+    # Without the new channel's right read, the old channel's pair is used, not left(new) - right(old).
+    assert pair_phases(batch[:4], "C1", 1, 2).difference_rad == pytest.approx(0.2)
+
+
+def test_a_cross_channel_round_does_not_steer_the_robot_and_is_counted():
+    route = follower(unheard_timeout_s=1.0)
+    route.start(["C1"], 0.0)
+    # Left minus right across the channels would be -2.5 rad: a hard left turn on a meaningless difference.
+    command = route.step(0.04, [read("C1", 1, 0.5), read("C1", 2, 3.0, OTHER_CHANNEL_HZ)])
+    assert command.mode == "unheard" and command.angular_radps == 0.0
+    assert route.cross_channel_rounds == 1
+    assert route.step(0.08, ceiling_pair("C1", 0.5, 3.0)).angular_radps > 0.0       # same channel: it steers
+    assert route.cross_channel_rounds == 1
+    for t in (0.5, 1.0):
+        route.step(t, [read("C1", 1, 0.5), read("C1", 2, 3.0, OTHER_CHANNEL_HZ)])
+    failed = route.step(1.2, [read("C1", 1, 0.5), read("C1", 2, 3.0, OTHER_CHANNEL_HZ)])
+    assert failed.mode == "failed" and route.cross_channel_rounds == 4
+    assert "in 3 rounds heard by both antennas, but never on one channel" in failed.failure
 
 
 # ------------------------------------------------------------------------------------------------ unheard target

@@ -256,8 +256,8 @@ def load_scenario(name_or_path: str, swaps: dict[str, str] | None = None,
     _check_route(scenario, mission)
     _check_goal_area(scenario, mission)
     _check_goal_node(scenario, mission)
-    for spec in scenario.nodes.values():
-        node_parameters(scenario, spec, seed=0, rtf=1.0)
+    parameters = {role: node_parameters(scenario, spec, seed=0, rtf=1.0) for role, spec in scenario.nodes.items()}
+    _check_antenna_ports(scenario, parameters)
     return scenario
 
 
@@ -373,6 +373,62 @@ def _check_goal_area(scenario: Scenario, mission: Section) -> None:
         raise mission.error("goal", "target: expected numbers x and y")
     if not (area[0] <= x <= area[2] and area[1] <= y <= area[3]):
         raise mission.error("goal", f"target ({x}, {y}) is outside the map's deployment_area {list(area)}")
+
+
+def _check_antenna_ports(scenario: Scenario, parameters: dict[str, Any]) -> None:
+    """Every antenna port a node takes reads of (``antenna_ports_read()`` of its parameters: heading_controller's
+    left, right and floor antennas, ...) is one a reader of the scenario publishes on /rfid/reads
+    (``published_antenna_ports()``: the LLRP driver's ``antennas``, the simulator's antennas). One error names the
+    reader's file and key, the ports it lacks and, for each, the node, parameter and file that asked for it.
+
+    Not checked: a reader told to inventory every port it has (``antennas: []``: known only once it runs), and a
+    scenario with a role we do not know (a command line: it may publish reads too)."""
+    if any(value is None for value in parameters.values()):
+        return
+    readers = {role: value.published_antenna_ports() for role, value in parameters.items()
+               if hasattr(value, "published_antenna_ports")}
+    if not readers or any(not ports for _, ports in readers.values()):
+        return
+    published = {port for _, ports in readers.values() for port in ports}
+    wanted = [(role, name, port) for role, value in parameters.items() if hasattr(value, "antenna_ports_read")
+              for name, port in value.antenna_ports_read().items() if port not in published]
+    if not wanted:
+        return
+    missing = sorted({port for _, _, port in wanted})
+    uses = "; ".join(f"{scenario.nodes[role].name or role}'s {name} = {port} ({_origin(scenario, role, name)})"
+                     for role, name, port in wanted)
+    if len(readers) == 1:
+        (role, (field_name, ports)), = readers.items()
+        source, key = _origin_key(scenario, role, field_name)
+        what = f"reads come from ports {', '.join(map(str, ports))} only"
+    else:
+        source, key = str(scenario.path), "nodes"
+        what = "the readers " + ", ".join(f"{role} ({', '.join(map(str, ports))})"
+                                          for role, (_, ports) in readers.items()) + " publish no other ports"
+    raise ConfigError(source, key, f"{what}, but {uses}: missing port{'s' if len(missing) > 1 else ''} "
+                                   f"{', '.join(map(str, missing))} (add {'them' if len(missing) > 1 else 'it'} to "
+                                   f"the reader's ports, or point the node at a port the reader has)")
+
+
+def _origin_key(scenario: Scenario, role: str, name: str) -> tuple[str, str]:
+    """Where parameter ``name`` of ``role`` is set: (file, key) of the last file or the scenario overrides that
+    set it; for a default, the role's last parameter file (where to set it), else the scenario's entry."""
+    spec = scenario.nodes[role]
+    if name in spec.overrides:
+        return str(scenario.path), f"nodes.{role}.overrides.{name}"
+    node_name, _ = KNOWN_NODES[(spec.package or "", spec.executable or "")]
+    for file in reversed(spec.param_files):
+        section = node_parameter_section(file, node_name)
+        if section.has(name):
+            return section.source, section.field(name)
+    if spec.param_files:
+        return str(spec.param_files[-1]), f"{node_name}.ros__parameters.{name} (not set: the default)"
+    return str(scenario.path), f"nodes.{role} (no parameter file: {name} is the default)"
+
+
+def _origin(scenario: Scenario, role: str, name: str) -> str:
+    source, key = _origin_key(scenario, role, name)
+    return f"{source}: {key}"
 
 
 def injected_parameters(scenario: Scenario, spec: NodeSpec, seed: int, rtf: float,

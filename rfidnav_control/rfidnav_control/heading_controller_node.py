@@ -2,8 +2,9 @@
 
 A thin adapter around TagRouteFollower: every TagReadArray (one inventory round) while a goal is
 active becomes one follower step and one /cmd_vel. Reads with a non-finite number are dropped and
-counted before they reach the controller. One route at a time, cancel and the watchdog on
-/rfid/reads: rfidnav_common.goal_server.
+counted before they reach the controller; rounds whose left and right reads of the target are on different
+channels are not steered on (tag_route.pair_phases) and counted too, each with a throttled warning. One route
+at a time, cancel and the watchdog on /rfid/reads: rfidnav_common.goal_server.
 """
 
 from __future__ import annotations
@@ -84,7 +85,12 @@ class HeadingControllerNode(SteppedNode):
         if goal is None:
             return
         # The round's own stamp, not arrival time: delivery jitter must not change the commanded yaw rate.
+        cross_channel_before = self.follower.cross_channel_rounds
         command = self.follower.step(seconds_of(msg.header.stamp), valid)
+        if self.follower.cross_channel_rounds > cross_channel_before:
+            self.get_logger().warning(
+                f"rounds with the target's left and right reads on different channels, not steered on "
+                f"({self.follower.cross_channel_rounds} so far)", throttle_duration_sec=5.0)
         self.goals.heard()
         if command.arrived_index is not None:
             goal.tags_reached = command.arrived_index + 1

@@ -71,6 +71,11 @@ class HeadingControllerParameters:
                 raise ParameterError(name, problem) from None
             raise ParameterError("", str(error)) from None
 
+    def antenna_ports_read(self) -> dict[str, int]:
+        """The reader ports this node takes reads of, by parameter: the reader must publish each of them."""
+        return {"left_antenna": self.left_antenna, "right_antenna": self.right_antenna,
+                "floor_antenna": self.floor_antenna}
+
     def follower_settings(self) -> FollowerSettings:
         # Every follower setting is a node parameter of the same name.
         return FollowerSettings(**{field.name: getattr(self, field.name)

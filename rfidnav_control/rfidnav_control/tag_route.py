@@ -2,9 +2,9 @@
 
 Once per inventory round: check arrival (the floor tag paired with the target is read, step 8), take
 the target's phases at the left and right antennas (steps 3-4), form the phase difference
-dphi = phi_left - phi_right (step 5, eq. 2), run the fuzzy controller for the heading change dtheta
-(steps 6-7) and command the yaw rate that turns the robot by dtheta over the round, at constant
-forward speed.
+dphi = phi_left - phi_right (step 5, eq. 2) from two reads on one channel (pair_phases), run the fuzzy
+controller for the heading change dtheta (steps 6-7) and command the yaw rate that turns the robot by dtheta
+over the round, at constant forward speed.
 
 Beyond the paper, and switchable so the faithful baseline stays available:
 
@@ -60,6 +60,48 @@ def observe(read) -> TagObservation | None:
         return None
     phase = math.atan2(read.q, read.i) % (2.0 * math.pi) if (read.i or read.q) else read.phase_rad
     return TagObservation(read.tag_id, int(read.antenna), phase, read.rssi_dbm, read.frequency_hz)
+
+
+@dataclass(frozen=True)
+class PhasePairing:
+    """What one inventory round gives for the phase difference of one tag (pair_phases)."""
+
+    left: TagObservation | None = None     # the left and right reads paired: same tag, same channel
+    right: TagObservation | None = None
+    cross_channel: bool = False            # both antennas read the tag, but never on one channel: no pair
+
+    @property
+    def difference_rad(self) -> float:
+        """phi_left - phi_right, wrapped to (-pi, pi] (no calibration offset taken off)."""
+        if self.left is None or self.right is None:
+            raise ValueError("no same-channel pair in this round")
+        return wrap_angle(self.left.phase_rad - self.right.phase_rad)
+
+
+def pair_phases(reads: list[TagObservation], tag_id: str, left_antenna: int, right_antenna: int) -> PhasePairing:
+    """The left and right reads of ``tag_id`` to subtract: both on one channel (carrier frequency), the newest such
+    pair of the round (reads are in the reader's order).
+
+    The round-trip phase is 4*pi*d*f/c plus what the reader's and the tag's circuits add, which also changes
+    with the channel. A left read on channel f1 minus a right read on f2 carries 4*pi*d*(f1 - f2)/c whatever the
+    tag's side (up to 3.3 rad at 3 m across the 902-928 MHz band) and the two channels' circuit phases. A reader
+    that hops between the left and the right antenna's turn in one batch gives such pairs; they say nothing about
+    the tag's side and are refused (``cross_channel``), not subtracted."""
+    left: dict[float, int] = {}
+    right: dict[float, int] = {}
+    for index, read in enumerate(reads):
+        if read.tag_id != tag_id:
+            continue
+        if read.antenna == left_antenna:
+            left[read.frequency_hz] = index
+        elif read.antenna == right_antenna:
+            right[read.frequency_hz] = index
+    channels = left.keys() & right.keys()
+    if not channels:
+        return PhasePairing(cross_channel=bool(left) and bool(right))
+    # The channel whose pair is the newest: its older read is the latest of all channels' older reads.
+    channel = max(channels, key=lambda f: min(left[f], right[f]))
+    return PhasePairing(reads[left[channel]], reads[right[channel]])
 
 
 @dataclass(frozen=True)
@@ -137,6 +179,9 @@ class TagRouteFollower:
         self.route: list[str] = []
         self.index = 0
         self.finished = False
+        # Rounds in which both antennas read the target only on different channels (pair_phases), over the
+        # follower's life: not steered on, counted for the node's warning.
+        self.cross_channel_rounds = 0
 
     def unknown_tags(self, route: list[str]) -> list[str]:
         return [tag for tag in route if tag not in self.arrival_tags]
@@ -153,6 +198,7 @@ class TagRouteFollower:
 
     def _reset_target(self, time_s: float) -> None:
         self.last_heard_s = time_s
+        self.target_cross_channel_rounds = 0       # since the target was last paired
         self.differences: list[float] = []
         self.tracks = {self.settings.left_antenna: PhaseTrack(), self.settings.right_antenna: PhaseTrack()}
         self.range_rate_mps: float | None = None
@@ -206,20 +252,22 @@ class TagRouteFollower:
     def _steer(self, time_s: float, round_s: float, reads: list[TagObservation]) -> Command:
         s = self.settings
         target = self.target
-        phases: dict[int, TagObservation] = {}
-        for read in reads:
-            if read.tag_id == target and read.antenna in (s.left_antenna, s.right_antenna):
-                phases[read.antenna] = read
-        if s.left_antenna not in phases or s.right_antenna not in phases:
+        pairing = pair_phases(reads, target, s.left_antenna, s.right_antenna)
+        left, right = pairing.left, pairing.right
+        if left is None or right is None:
+            self.cross_channel_rounds += pairing.cross_channel
+            self.target_cross_channel_rounds += pairing.cross_channel
             unheard_s = time_s - self.last_heard_s
             if unheard_s > s.unheard_timeout_s:
+                on_two = (f" (in {self.target_cross_channel_rounds} rounds heard by both antennas, but never on "
+                          f"one channel)" if self.target_cross_channel_rounds else "")
                 return Command(0.0, 0.0, "failed", self.index, target, self.last_difference, 0.0,
-                               failure=f"target tag '{target}' unheard for {unheard_s:.1f} s")
+                               failure=f"target tag '{target}' unheard for {unheard_s:.1f} s{on_two}")
             # Keep going straight: a missed round is common and the heading is still good.
             return Command(s.forward_speed_mps, 0.0, "unheard", self.index, target, self.last_difference, 0.0)
         self.last_heard_s = time_s
-        left, right = phases[s.left_antenna], phases[s.right_antenna]
-        difference = wrap_angle(left.phase_rad - right.phase_rad - s.phase_difference_offset_rad)
+        self.target_cross_channel_rounds = 0
+        difference = wrap_angle(pairing.difference_rad - s.phase_difference_offset_rad)
         # Over the floor tag the robot slows down, so the same lag in distance allows a longer average.
         window = s.filter_rounds if not self.floor_seen else round(s.filter_rounds / s.approach_speed_fraction)
         self.differences = (self.differences + [difference])[-window:]

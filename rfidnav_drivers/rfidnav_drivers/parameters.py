@@ -15,7 +15,9 @@ from rfidnav_common.errors import ParameterError
 class LlrpReaderParameters:
     host: str = param("the reader's address (an Impinj Speedway / R700 in LLRP mode)", "192.168.1.10")
     port: int = param("LLRP TCP port", 5084)
-    antennas: list[int] = param("antenna ports to inventory (empty: all the reader has)", [1, 2])
+    antennas: list[int] = param("antenna ports to inventory (empty: all the reader has); they must cover every "
+                                "port the nodes reading /rfid/reads use (heading_controller: 1, 2 and 3)",
+                                [1, 2, 3])
     session: int = param("Gen2 session 0-3 (0-1 for a moving robot: tags answer every round)", 0)
     search_mode: int = param("Impinj search mode (0: reader default, 1: single target, 2: dual target, "
                              "3: single target with suppression); -1: leave unset", 2)
@@ -43,6 +45,11 @@ class LlrpReaderParameters:
             raise ParameterError("", "reconnect_max_s must be at least reconnect_initial_s")
         if not (math.isfinite(self.batch_period_s) and self.batch_period_s >= 0.0):
             raise ParameterError("batch_period_s", f"must not be negative, got {self.batch_period_s}")
+
+    def published_antenna_ports(self) -> tuple[str, tuple[int, ...]]:
+        """The parameter naming the antenna ports whose reads reach /rfid/reads, and those ports (empty: every
+        port the reader has, known only once it is connected). The scenario checks its consumers against them."""
+        return "antennas", tuple(self.antennas)
 
 
 @dataclass(frozen=True)

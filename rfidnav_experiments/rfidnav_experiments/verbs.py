@@ -55,18 +55,54 @@ def add_reproduce(verbs: argparse._SubParsersAction) -> Handler:
     return run_reproduce
 
 
+def positive_seconds(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected seconds, got '{text}'") from None
+    if not (math.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(f"expected a positive number of seconds, got '{text}'")
+    return value
+
+
 def add_calibrate(verbs: argparse._SubParsersAction) -> Handler:
-    calibrate = verbs.add_parser("calibrate", help="fit a paper's unstated settings to its first experiment only")
+    calibrate = verbs.add_parser("calibrate", help="fit a paper's unstated settings to its first experiment only; "
+                                                   "measure the robot's antenna phase offset")
     names = calibrate.add_subparsers(dest="name", required=True, metavar="SETTING")
     flc = names.add_parser("flc", help="paper 001's phase noise and output range, fitted to Figs. 8/9 (the line "
                                        "experiments)")
     flc.add_argument("--out", type=Path, help="the parameter file to write (default: the shipped one, "
                                               "config/params/flc_paper_calibrated.yaml)")
     flc.add_argument("--json", action="store_true")
+    offset = names.add_parser("phase-offset", help="heading_controller's phase_difference_offset_rad from "
+                                                   "/rfid/reads, the robot standing still under (or squarely in "
+                                                   "front of) a tag")
+    offset.add_argument("--out", type=Path, help="the --params file with the offset set, may be the same file "
+                                                 "(default: print only)")
+    offset.add_argument("--json", action="store_true")
+    offset.add_argument("--params", type=Path, default=WORKSPACE / "config" / "params" / "flc_tuned.yaml",
+                        help="the heading_controller parameter file (its left and right antenna ports; the base of "
+                             "--out)")
+    offset.add_argument("--tag", help="the tag's id (EPC hex); default: the tag with the most same-channel pairs")
+    offset.add_argument("--duration", type=positive_seconds, default=20.0, help="seconds to listen once reads arrive")
+    offset.add_argument("--wait", type=positive_seconds, default=10.0,
+                        help="seconds to wait for the first /rfid/reads message")
+    offset.add_argument("--min-pairs", type=int, default=None,
+                        help="fewest same-channel pairs to give an offset (default 50)")
     return run_calibrate
 
 
 def run_calibrate(args: argparse.Namespace) -> int:
+    if args.name == "phase-offset":
+        from rfidnav_experiments.calibrate.phase_offset import MIN_PAIRS, calibrate_phase_offset
+
+        if not args.params.is_file():
+            raise ConfigError("--params", "", f"no such parameter file: {args.params}")
+        min_pairs = MIN_PAIRS if args.min_pairs is None else args.min_pairs
+        if min_pairs < 1:
+            raise ConfigError("--min-pairs", "", f"must be at least 1, got {min_pairs}")
+        return calibrate_phase_offset(args.params, args.out, args.tag, args.duration, args.wait, min_pairs,
+                                      args.json)
     from rfidnav_experiments.calibrate.flc import CALIBRATED_FILE, calibrate_flc
 
     return calibrate_flc(out=args.out or CALIBRATED_FILE, as_json=args.json)

@@ -56,6 +56,10 @@ class PartitionLocalizerParameters:
             raise ParameterError("seed", f"must not be negative, got {self.seed}")
         self.settings().validate()
 
+    def antenna_ports_read(self) -> dict[str, int]:
+        """The reader ports this node takes reads of, by parameter: the reader must publish each of them."""
+        return {"antenna": self.antenna}
+
     def settings(self) -> LocalizerSettings:
         # Every localizer setting is a node parameter of the same name, but the tagged area: the map's.
         values = {field.name: getattr(self, field.name) for field in dataclasses.fields(LocalizerSettings)

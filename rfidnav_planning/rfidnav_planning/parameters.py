@@ -93,6 +93,10 @@ class TwoTierNavigatorParameters:
         require_positive(self, "control_rate_hz", "service_timeout_s")
         self.settings().validate()
 
+    def antenna_ports_read(self) -> dict[str, int]:
+        """The reader ports this node takes reads of, by parameter: the reader must publish each of them."""
+        return {"floor_antenna": self.floor_antenna}
+
     def settings(self) -> TwoTierSettings:
         go_to = GoToSettings(speed_mps=self.speed_mps, turn_rate_radps=self.turn_rate_radps,
                              heading_gain_per_s=self.heading_gain_per_s, tolerance_m=self.goal_tolerance_m)

@@ -158,6 +158,11 @@ class ReaderParameters:
         if self.phase_noise_rad_per_m < 0.0:
             raise ParameterError("phase_noise_rad_per_m", "must not be negative")
 
+    def published_antenna_ports(self) -> tuple[str, tuple[int, ...]]:
+        """The parameter that gives the antennas (ports 1, 2, ... in order) and their ports, as the LLRP driver's
+        (the scenario checks the nodes reading /rfid/reads against them)."""
+        return "antenna_facing", tuple(range(1, len(self.antenna_facing) + 1))
+
     def polling(self) -> Polling:
         return Polling(1.0 / self.rate_hz, self.round_jitter_s, self.round_failure_probability)
 
