@@ -4,13 +4,17 @@ the mounting frames sensor nodes publish from their parameters."""
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
+from rfidnav_common.config import node_parameter_values, parameters_from_mapping
+from rfidnav_common.errors import ParameterError
 from rfidnav_common.frames import Frame, compose, inverse, map_to_odom, rpy_to_quaternion
+from rfidnav_drivers.parameters import LlrpReaderParameters
 from rfidnav_sim.parameters import CompassParameters, ReaderParameters, RobotSimParameters, SonarParameters
 
 pytestmark = pytest.mark.tier("unit")
@@ -76,3 +80,21 @@ def test_the_start_pose_places_odom_in_the_map() -> None:
 def test_a_frame_without_two_names_or_with_a_non_finite_value_is_refused(parent, child, translation) -> None:
     with pytest.raises(ValueError, match="frame"):
         Frame(parent, child, translation)
+
+
+def test_the_llrp_driver_and_the_simulated_reader_put_the_shipped_robots_antennas_in_the_same_frames() -> None:
+    """One robot, two readers: what a real run publishes on /tf_static is what the simulator publishes."""
+    config = Path(__file__).resolve().parents[1] / "config" / "params"
+    driver = parameters_from_mapping(LlrpReaderParameters, node_parameter_values(
+        LlrpReaderParameters, config / "llrp_reader.yaml", "llrp_reader"), "llrp_reader.yaml")
+    simulated = parameters_from_mapping(ReaderParameters, {**node_parameter_values(
+        ReaderParameters, config / "reader_uhf_2ant.yaml", "rfid_reader_sim"), "world_file": "w.yaml"},
+        "reader_uhf_2ant.yaml")
+    assert driver.antenna_frames() == simulated.antenna_frames()
+    assert [f.child for f in driver.antenna_frames()] == ["rfid_antenna_1", "rfid_antenna_2", "rfid_antenna_3"]
+
+
+def test_the_driver_publishes_the_frames_of_the_ports_it_inventories_and_refuses_an_undescribed_port() -> None:
+    assert [f.child for f in LlrpReaderParameters(antennas=[3]).antenna_frames()] == ["rfid_antenna_3"]
+    with pytest.raises(ParameterError, match=r"antennas.*\[4\]"):
+        LlrpReaderParameters(antennas=[1, 4]).validate()

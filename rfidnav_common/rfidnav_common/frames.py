@@ -8,6 +8,7 @@ simulator where base_link is in odom, a localizer where odom is in the map (:fun
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 from rfidnav_common.geometry import wrap_angle
@@ -54,6 +55,25 @@ class Frame:
         """A frame at (x, y, yaw) in the plane of ``parent``."""
         x, y, yaw = pose
         return cls.mounted(parent, child, (x, y, 0.0), yaw=yaw)
+
+
+# The turn from the reader frame's x axis to each antenna facing (a sensor frame's x is its boresight): a pitch of
+# -90 deg points x up, at the ceiling tags; left and right face the walls.
+FACINGS = ("up", "down", "left", "right")
+BORESIGHT_TURNS = {"up": {"pitch": -math.pi / 2.0}, "down": {"pitch": math.pi / 2.0},
+                   "left": {"yaw": math.pi / 2.0}, "right": {"yaw": -math.pi / 2.0}}
+
+
+def antenna_frames(reader_frame: str, prefix: str, ports: Sequence[int], positions: Sequence[float],
+                   facings: Sequence[str]) -> list[Frame]:
+    """Each antenna port's frame (``prefix`` + port) in the reader's, at its x, y, z (``positions`` concatenated),
+    its x axis along the boresight: what the simulated reader and the LLRP driver both publish."""
+    if len(positions) != 3 * len(ports) or len(facings) != len(ports):
+        raise ValueError(f"antennas {list(ports)}: need 3 position values and a facing per port, got "
+                         f"{len(positions)} and {len(facings)}")
+    return [Frame.mounted(reader_frame, f"{prefix}{port}", (float(positions[3 * i]), float(positions[3 * i + 1]),
+                                                             float(positions[3 * i + 2])), **BORESIGHT_TURNS[facing])
+            for i, (port, facing) in enumerate(zip(ports, facings))]
 
 
 def compose(a: tuple[float, float, float], b: tuple[float, float, float]) -> tuple[float, float, float]:

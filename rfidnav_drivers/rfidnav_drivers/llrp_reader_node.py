@@ -47,6 +47,7 @@ from rclpy.node import Node
 from rclpy.time import Time
 
 from rfidnav_common.ros import SENSOR_QOS, declare_parameters, run_node
+from rfidnav_common.transforms import publish_static_frames
 from rfidnav_drivers.llrp_reports import Backoff, Reading, reader_frequency_table_hz, reading_of
 from rfidnav_drivers.parameters import LlrpReaderParameters
 from rfidnav_msgs.msg import TagReadArray, TagReading
@@ -264,6 +265,7 @@ class LlrpReaderNode(Node):
         self.params: LlrpReaderParameters = declare_parameters(self, LlrpReaderParameters)
         self.endpoint = f"{self.params.host}:{self.params.port}"
         self.reads_pub = self.create_publisher(TagReadArray, "/rfid/reads", SENSOR_QOS)
+        publish_static_frames(self, self.params.antenna_frames())
         # Reliable like the other streams; diagnostic_aggregator's default subscription (reliable) matches it.
         self.diagnostics_pub = self.create_publisher(DiagnosticArray, "/diagnostics", SENSOR_QOS)
         self.link = ReaderLink(self.params)

@@ -9,6 +9,7 @@ from dataclasses import dataclass
 
 from rfidnav_common.config import param, require_positive
 from rfidnav_common.errors import ParameterError
+from rfidnav_common.frames import FACINGS, Frame, antenna_frames
 
 
 @dataclass(frozen=True)
@@ -24,6 +25,13 @@ class LlrpReaderParameters:
     mode_index: int = param("RF mode table index (-1: the reader's default)", -1)
     tx_power_dbm: float = param("transmit power [dBm] (0: the reader's maximum)", 0.0)
     frame_id: str = param("frame of /rfid/reads (antenna poses are relative to it)", "base_link")
+    antenna_positions: list[float] = param(
+        "x, y, z in frame_id of the antenna on port 1, 2, ... [m], concatenated: those inventoried are published on "
+        "/tf_static as frame antenna_frame_prefix + port (paper 001's robot: left and right 6 cm apart, the floor "
+        "antenna low)", [0.0, 0.03, 0.30, 0.0, -0.03, 0.30, 0.0, 0.0, 0.05])
+    antenna_facing: list[str] = param("boresight of the antenna on port 1, 2, ...: up, down, left or right",
+                                      ["up", "up", "down"])
+    antenna_frame_prefix: str = param("frame of antenna port N: PREFIX + N", "rfid_antenna_")
     batch_period_s: float = param("reads are published together every this long [s] (0: one message per report)",
                                   0.02)
     connect_timeout_s: float = param("give a connection attempt up after this long [s]", 5.0)
@@ -38,6 +46,16 @@ class LlrpReaderParameters:
             raise ParameterError("port", f"a TCP port is 1..65535, got {self.port}")
         if any(not 1 <= a <= 65535 for a in self.antennas):
             raise ParameterError("antennas", f"ports are 1..65535, got {self.antennas}")
+        if len(self.antenna_positions) != 3 * len(self.antenna_facing):
+            raise ParameterError("antenna_positions", f"expected 3 numbers per antenna_facing entry "
+                                 f"({3 * len(self.antenna_facing)}), got {len(self.antenna_positions)}")
+        undescribed = [a for a in self.antennas if a > len(self.antenna_facing)]
+        if undescribed:
+            raise ParameterError("antennas", f"ports {undescribed} have no antenna_positions / antenna_facing "
+                                 f"(they describe ports 1-{len(self.antenna_facing)})")
+        unknown = [facing for facing in self.antenna_facing if facing not in FACINGS]
+        if unknown:
+            raise ParameterError("antenna_facing", f"{unknown} not among {', '.join(FACINGS)}")
         if not 0 <= self.session <= 3:
             raise ParameterError("session", f"0..3, got {self.session}")
         require_positive(self, "connect_timeout_s", "reconnect_initial_s", "reconnect_max_s", "keepalive_s")
@@ -45,6 +63,12 @@ class LlrpReaderParameters:
             raise ParameterError("", "reconnect_max_s must be at least reconnect_initial_s")
         if not (math.isfinite(self.batch_period_s) and self.batch_period_s >= 0.0):
             raise ParameterError("batch_period_s", f"must not be negative, got {self.batch_period_s}")
+
+    def antenna_frames(self) -> list[Frame]:
+        """The frames of the antennas inventoried (``antennas``; empty: every one described)."""
+        described = antenna_frames(self.frame_id, self.antenna_frame_prefix, range(1, len(self.antenna_facing) + 1),
+                                   self.antenna_positions, self.antenna_facing)
+        return [frame for port, frame in enumerate(described, start=1) if not self.antennas or port in self.antennas]
 
     def published_antenna_ports(self) -> tuple[str, tuple[int, ...]]:
         """The parameter naming the antenna ports whose reads reach /rfid/reads, and those ports (empty: every

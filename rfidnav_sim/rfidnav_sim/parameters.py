@@ -13,7 +13,7 @@ import numpy as np
 
 from rfidnav_common.config import param, require_positive
 from rfidnav_common.errors import ParameterError
-from rfidnav_common.frames import BASE_FRAME, MAP_FRAME, ODOM_FRAME, Frame
+from rfidnav_common.frames import BASE_FRAME, FACINGS, MAP_FRAME, ODOM_FRAME, Frame, antenna_frames
 from rfidnav_common.polling import PollClock, Polling
 from rfidnav_common.seeding import rng_for
 from rfidnav_sim.compass_model import CompassModel
@@ -83,11 +83,7 @@ class RobotSimParameters:
 
 
 
-FACINGS = ("up", "down", "left", "right")
 SIDE_BEARINGS = {"left": math.pi / 2.0, "right": -math.pi / 2.0}
-# The turn from base_link's x axis to each facing (a sensor frame's x is its boresight): pitch -90 deg points x up.
-BORESIGHT_TURNS = {"up": {"pitch": -math.pi / 2.0}, "down": {"pitch": math.pi / 2.0},
-                   "left": {"yaw": SIDE_BEARINGS["left"]}, "right": {"yaw": SIDE_BEARINGS["right"]}}
 
 
 @dataclass(frozen=True)
@@ -174,10 +170,9 @@ class ReaderParameters:
 
     def antenna_frames(self) -> list[Frame]:
         """Each antenna's frame in the reader's, its x axis along the boresight (REP 103 for a sensor)."""
-        positions = np.reshape(self.antenna_positions, (-1, 3))
-        return [Frame.mounted(self.frame_id, f"{self.antenna_frame_prefix}{index + 1}",
-                              (float(p[0]), float(p[1]), float(p[2])), **BORESIGHT_TURNS[facing])
-                for index, (p, facing) in enumerate(zip(positions, self.antenna_facing))]
+        ports = range(1, len(self.antenna_facing) + 1)
+        return antenna_frames(self.frame_id, self.antenna_frame_prefix, ports, self.antenna_positions,
+                              self.antenna_facing)
 
     def reader_model(self) -> ReaderModel:
         positions = np.reshape(self.antenna_positions, (-1, 3))
