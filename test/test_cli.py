@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 
 from rfidnav_bringup import cli
-from rfidnav_common.progress import progress, stage
+from rfidnav_common.progress import StatusLine, progress, stage
 
 WORKSPACE = Path(__file__).resolve().parents[1]
 
@@ -102,3 +102,13 @@ def test_a_stage_says_when_it_starts_and_how_long_it_took(capsys: pytest.Capture
     assert captured.out == "figures\n"
     assert captured.err.splitlines()[0] == "one benchmark ..."
     assert captured.err.splitlines()[1].startswith("one benchmark: done in ")
+
+
+@pytest.mark.tier("unit")
+def test_a_status_line_in_a_log_prints_only_its_milestones(capsys: pytest.CaptureFixture[str]) -> None:
+    status = StatusLine()
+    for index in range(5):
+        status.show(f"target {index // 2}", milestone=index % 2 == 0)
+    status.done()
+    StatusLine(quiet=True).show("never", milestone=True)
+    assert capsys.readouterr().err.splitlines() == ["target 0", "target 1", "target 2"]

@@ -54,6 +54,7 @@ from rfidnav_bringup.scenario import (
     node_parameters,
 )
 from rfidnav_common.errors import ConfigError, RfidnavError
+from rfidnav_common.progress import StatusLine
 from rfidnav_common.ros import events_executor, fill_message, interface_class
 from rfidnav_common.step_ledger import CLOCKS
 from rfidnav_common.stepped_node import STEP_ACK_TOPIC
@@ -106,30 +107,6 @@ class RunSummary:
         return bool(self.document.get("success"))
 
 
-class Progress:
-    """One updating line on a terminal; occasional plain lines otherwise (CI logs)."""
-
-    def __init__(self, quiet: bool) -> None:
-        self.quiet = quiet
-        self.tty = sys.stdout.isatty()
-        self.last_text = ""
-        self.last_print = 0.0
-
-    def show(self, text: str, milestone: bool = False) -> None:
-        if self.quiet:
-            return
-        now = time.monotonic()
-        if self.tty and now - self.last_print > 0.2:
-            print("\r" + text.ljust(len(self.last_text)), end="", flush=True)
-            self.last_text, self.last_print = text, now
-        elif not self.tty and milestone:
-            print(text, flush=True)
-
-    def done(self) -> None:
-        if self.tty and self.last_text and not self.quiet:
-            print()
-
-
 def run_id(scenario: str) -> str:
     return f"{datetime.now(UTC).strftime('%Y%m%dT%H%M%SZ')}_{scenario}"
 
@@ -143,7 +120,7 @@ class Orchestrator:
         self.domain: dict[str, Any] | None = None    # the ROS domain it ran in, and the ones it skipped
         self.process_of = {role: spec.process or role for role, spec in scenario.nodes.items()}
         self.outcome = MissionOutcome()
-        self.progress = Progress(options.quiet)
+        self.progress = StatusLine(options.quiet)
         self.interrupted = False
         self.clock, self.clock_note = choose_clock(scenario, options)
         participants = [f"/{spec.name}" for spec in scenario.step_participants()]

@@ -12,6 +12,7 @@ from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 
 from rich.console import Console
+from rich.status import Status
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 
 LOG_STEPS = 10            # in a log: a line at every tenth of the way
@@ -64,3 +65,31 @@ def stage(label: str) -> Iterator[None]:
         console.print(f"{label} ...")
         yield
     console.print(f"{label}: done in {time.monotonic() - started:.0f} s")
+
+
+class StatusLine:
+    """A line that keeps changing while something runs (a mission's feedback): rich's status on a terminal,
+    redrawn at most ``refresh_per_second``; in a log only the milestones, one plain line each."""
+
+    def __init__(self, quiet: bool = False) -> None:
+        self.console = _console()
+        self.quiet = quiet
+        self.status: Status | None = None
+
+    def show(self, text: str, milestone: bool = False) -> None:
+        if self.quiet:
+            return
+        if not self.console.is_terminal:
+            if milestone:
+                self.console.print(text)
+            return
+        if self.status is None:
+            self.status = self.console.status(text)
+            self.status.start()
+        else:
+            self.status.update(text)
+
+    def done(self) -> None:
+        if self.status is not None:
+            self.status.stop()
+            self.status = None
