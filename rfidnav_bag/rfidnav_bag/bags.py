@@ -154,6 +154,11 @@ def _in_msg_namespace(name: str) -> str:
     return name if namespace == "msg" else f"{package}/msg/{leaf}"
 
 
+def _short_name(name: str) -> str:
+    package, _, leaf = name.split("/")
+    return f"{package}/{leaf}"
+
+
 def _rename_desc(desc: tuple) -> tuple:
     kind, arg = desc
     if kind == 2:
@@ -163,21 +168,55 @@ def _rename_desc(desc: tuple) -> tuple:
     return desc
 
 
+_FIELD = re.compile(r"^(?P<type>[A-Za-z][\w/]*)(?P<rest>(\[[^\]]*\])? .*)$")
+
+
+def _restore_namespaces(text: str, msgtype: str, moved: set[str]) -> str:
+    """Put the action (or service) types that were rendered as ``pkg/Leaf`` back where they live.
+
+    Each ``MSG:`` line gets the full name (``MSG: pkg/action/X_Feedback``, the form rosbag2 writes), and a field
+    of such a type is written relative (``X_Feedback feedback``) when its owner lives in the same package and
+    namespace -- always the case for rosidl's action-derived types. Both readers resolve a relative name in
+    the owner's namespace (rosbags: ``pkg/action/X_Feedback``, so the RIHS01 hash checks out; mcap_ros2: in the
+    owner's package). A full three-part name in a field would do for rosbags, but mcap_ros2 0.6 rejects it."""
+    by_short = {_short_name(name): name for name in moved}
+    blocks = text.split(f"{'=' * 80}\n")
+    restored = []
+    for index, block in enumerate(blocks):
+        lines = block.split("\n")
+        owner = msgtype
+        if index:  # "MSG: pkg/Leaf" opens every block after the first
+            owner = by_short.get(lines[0].removeprefix("MSG: "), lines[0].removeprefix("MSG: "))
+            lines[0] = f"MSG: {owner}"
+        owner_space = owner.rsplit("/", 1)[0]
+        for number, line in enumerate(lines[1:] if index else lines, start=1 if index else 0):
+            match = _FIELD.match(line)
+            if match is None or match["type"] not in by_short:
+                continue
+            full = by_short[match["type"]]
+            package_space, leaf = full.rsplit("/", 1)
+            lines[number] = f"{leaf if package_space == owner_space else full}{match['rest']}"
+        restored.append("\n".join(lines))
+    return f"{'=' * 80}\n".join(restored)
+
+
 @functools.cache
 def message_definition(msgtype: str) -> tuple[str, str]:
     """(ros2msg definition text with its dependencies, RIHS01 hash) of a type known to :func:`typestore`.
 
-    This is what MCAP schema records carry so Foxglove and ``mcap_ros2`` decode without rfidnav installed.
-    rosbags renders nested type names as ``pkg/Type``, which it can only do for ``pkg/msg/Type``; action types
-    (``pkg/action/X_Feedback``) are therefore rendered from a scratch store where they are filed under ``msg``
-    -- the text then names them ``pkg/X_Feedback``, as the ROS 2 definition format writes every nested type.
-    The hash is computed on the real names, so it matches rosidl's."""
+    This is what MCAP schema records carry so Foxglove, ``mcap_ros2`` and rosbags decode without rfidnav
+    installed. rosbags renders nested type names as ``pkg/Type``, which it can only do for ``pkg/msg/Type``;
+    action types (``pkg/action/X_Feedback``) are therefore rendered from a scratch store where they are filed
+    under ``msg`` and then put back in their namespace (:func:`_restore_namespaces`), so that a reader that
+    parses the text and hashes it (rosbags' AnyReader) gets the RIHS01 hash rosidl computed, which is the one
+    returned here (computed on the real names)."""
     store = typestore()
     if msgtype not in store.fielddefs:
         raise BagError(f"message type {msgtype} is unknown (not in ROS 2 Jazzy, not installed)")
     rihs01 = store.hash_rihs01(msgtype)
     closure = _type_closure(store, msgtype)
-    if all(name.split("/")[1] == "msg" for name in closure):
+    moved = {name for name in closure if name.split("/")[1] != "msg"}
+    if not moved:
         return store.generate_msgdef(msgtype, ros_version=2)[0], rihs01
     scratch = get_typestore(Stores.ROS2_JAZZY)
     renamed = {
@@ -186,7 +225,8 @@ def message_definition(msgtype: str) -> tuple[str, str]:
         for name in closure if name not in scratch.fielddefs
     }
     scratch.register(renamed)
-    return scratch.generate_msgdef(_in_msg_namespace(msgtype), ros_version=2)[0], rihs01
+    text = scratch.generate_msgdef(_in_msg_namespace(msgtype), ros_version=2)[0]
+    return _restore_namespaces(text, msgtype, moved), rihs01
 
 
 # ----------------------------------------------------------------------------------------------- info
