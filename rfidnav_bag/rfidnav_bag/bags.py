@@ -1,8 +1,10 @@
 """Reading rosbag2 (MCAP) directories written by the recorder, and the type knowledge both nodes share.
 
 No rclpy here: bags are read with ``rosbags`` so reports, metrics and ``./rfidnav bag info`` work without a
-running ROS graph. Every failure to read a bag becomes one :class:`BagError` that names the path (and the
-topic when one is at fault); the exceptions caught are the ones ``rosbags`` documents for bad input.
+running ROS graph. rosbags reads every file metadata.yaml lists (a split bag) in turn, and decompresses zstd or
+lz4 chunks, so all of this works on split and compressed bags alike. Every failure to read a bag becomes one
+:class:`BagError` that names the path (and the topic when one is at fault); the exceptions caught are the ones
+``rosbags`` documents for bad input.
 
 Types: :func:`typestore` is the ROS 2 Jazzy store of ``rosbags`` plus every rfidnav_msgs type, read from the
 installed interface definitions (``share/rfidnav_msgs/{msg,action}``). Action topics carry types that exist in
@@ -22,6 +24,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import NamedTuple
 
+from mcap.exceptions import McapError
+from mcap.reader import make_reader
 from rosbags.interfaces import Connection, MessageDefinitionFormat
 from rosbags.rosbag2 import Reader, ReaderError
 from rosbags.serde import SerdeError
@@ -32,8 +36,8 @@ from ruamel.yaml import YAML, YAMLError
 from rfidnav_bag.errors import BagError
 
 __all__ = [
-    "BagInfo", "OfferedQos", "RawMessage", "TopicInfo", "bag_info", "format_bag_info", "message_definition",
-    "read_messages", "read_raw", "register_installed_type", "typestore",
+    "BagFile", "BagInfo", "OfferedQos", "RawMessage", "TopicInfo", "bag_info", "format_bag_info",
+    "message_definition", "read_messages", "read_raw", "register_installed_type", "typestore",
 ]
 
 INTERFACE_PACKAGE = "rfidnav_msgs"
@@ -265,6 +269,18 @@ class TopicInfo:
 
 
 @dataclass(frozen=True)
+class BagFile:
+    """One storage file of a bag, as metadata.yaml lists it, with what its MCAP chunk records say."""
+
+    path: Path
+    message_count: int
+    start_ns: int
+    duration_s: float
+    size_bytes: int
+    compression: str  # of its chunks: none | zstd | lz4 (several: joined by ", "); "-" for non-MCAP storage
+
+
+@dataclass(frozen=True)
 class BagInfo:
     path: Path
     storage: str  # storage plugin of the files: mcap | sqlite3
@@ -273,6 +289,13 @@ class BagInfo:
     duration_s: float
     message_count: int
     topics: tuple[TopicInfo, ...]
+    files: tuple[BagFile, ...] = ()
+    ros_distro: str | None = None
+
+    @property
+    def compression(self) -> str:
+        """The chunk compression of the files ("none" when no file is compressed)."""
+        return ", ".join(dict.fromkeys(f.compression for f in self.files)) or "none"
 
     def topic(self, name: str) -> TopicInfo:
         for info in self.topics:
@@ -310,12 +333,40 @@ def _offered(connection: Connection) -> tuple[OfferedQos, ...]:
                  for q in profiles)
 
 
-def _storage_identifier(bag: Path) -> str:
+def _information(bag: Path) -> dict:
+    """metadata.yaml's rosbag2_bagfile_information (the Reader validated it already)."""
     try:
         metadata = YAML(typ="safe").load((bag / "metadata.yaml").read_text(encoding="utf-8"))
-        return str(metadata["rosbag2_bagfile_information"]["storage_identifier"])
-    except (OSError, YAMLError, KeyError, TypeError) as error:  # Reader already validated; be safe anyway
-        raise BagError(f"{bag / 'metadata.yaml'}: cannot read storage_identifier: {error}") from error
+        return dict(metadata["rosbag2_bagfile_information"])
+    except (OSError, YAMLError, KeyError, TypeError) as error:
+        raise BagError(f"{bag / 'metadata.yaml'}: cannot read rosbag2_bagfile_information: {error}") from error
+
+
+def _chunk_compression(path: Path) -> str:
+    """The compressions the MCAP summary's chunk indexes name ("none" for uncompressed chunks)."""
+    try:
+        with path.open("rb") as stream:
+            summary = make_reader(stream).get_summary()
+    except (McapError, OSError, struct.error, ValueError) as error:
+        raise BagError(f"{path}: unreadable MCAP summary: {error}") from error
+    if summary is None:  # a file without summary (rosbags reads it by scanning): say so rather than guess
+        return "unknown"
+    return ", ".join(sorted({index.compression or "none" for index in summary.chunk_indexes})) or "none"
+
+
+def _files(bag: Path, information: dict) -> tuple[BagFile, ...]:
+    storage = str(information["storage_identifier"])
+    entries = {Path(entry["path"]).name: entry for entry in information.get("files") or []}
+    files = []
+    for relative in information["relative_file_paths"]:
+        path = bag / Path(relative).name
+        entry = entries.get(path.name, {})
+        files.append(BagFile(
+            path=path, message_count=int(entry.get("message_count", 0)),
+            start_ns=int(entry.get("starting_time", {}).get("nanoseconds_since_epoch", 0)),
+            duration_s=int(entry.get("duration", {}).get("nanoseconds", 0)) / 1e9, size_bytes=path.stat().st_size,
+            compression=_chunk_compression(path) if storage == "mcap" else "-"))
+    return tuple(files)
 
 
 def bag_info(path: str | Path) -> BagInfo:
@@ -337,8 +388,10 @@ def bag_info(path: str | Path) -> BagInfo:
         end_ns = reader.end_time - 1 if count else 0
     finally:
         reader.close()
-    return BagInfo(path=bag, storage=_storage_identifier(bag), start_ns=start_ns, end_ns=end_ns,
-                   duration_s=(end_ns - start_ns) / 1e9, message_count=count, topics=tuple(topics))
+    information = _information(bag)
+    return BagInfo(path=bag, storage=str(information["storage_identifier"]), start_ns=start_ns, end_ns=end_ns,
+                   duration_s=(end_ns - start_ns) / 1e9, message_count=count, topics=tuple(topics),
+                   files=_files(bag, information), ros_distro=information.get("ros_distro"))
 
 
 def _seconds(nanoseconds: int) -> str:
@@ -349,14 +402,19 @@ def _seconds(nanoseconds: int) -> str:
 def format_bag_info(info: BagInfo) -> str:
     """A table for people, in the spirit of ``ros2 bag info``."""
     lines = [
-        f"Files:            {info.path}",
-        f"Storage:          {info.storage}",
+        f"Bag:              {info.path}",
+        f"Storage:          {info.storage} ({info.ros_distro or 'ROS distribution not recorded'})",
+        f"Compression:      {info.compression}",
         f"Duration:         {info.duration_s:.3f} s",
         f"Start:            {_seconds(info.start_ns)} s",
         f"End:              {_seconds(info.end_ns)} s",
         f"Messages:         {info.message_count}",
         f"Topics:           {len(info.topics)}",
+        f"Files:            {len(info.files)}",
     ]
+    for file in info.files:
+        lines.append(f"  {file.path.name}: {file.message_count} messages, {file.duration_s:.3f} s from "
+                     f"{_seconds(file.start_ns)} s, {file.size_bytes} bytes, {file.compression}")
     if info.topics:
         name_width = max(len("topic"), *(len(t.name) for t in info.topics))
         type_width = max(len("type"), *(len(t.msgtype) for t in info.topics))
