@@ -1,8 +1,8 @@
 """Recorder, player and bag access: real DDS between this process and the node processes.
 
-Recorded bags are checked with third-party readers only (``mcap`` + ``mcap_ros2``) so "self-describing"
-means what it says: no rfidnav type knowledge is involved in decoding. Readiness is always a signal
-(matched subscriptions, process exit), never a sleep; every wait has a deadline.
+Recorded bags are checked with third-party readers only (``mcap`` + ``mcap_ros2``, rosbags' AnyReader and
+``rosbags-convert``) so "self-describing" means what it says: no rfidnav type knowledge is involved in decoding.
+Readiness is always a signal (matched subscriptions, process exit), never a sleep; every wait has a deadline.
 """
 
 from __future__ import annotations
@@ -31,6 +31,7 @@ from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.serialization import serialize_message
+from rosbags.highlevel import AnyReader
 from rosbags.interfaces import (
     Qos,
     QosDurability,
@@ -54,6 +55,7 @@ from rfidnav_bag.bags import (
     typestore,
 )
 from rfidnav_bag.errors import BagError
+from rfidnav_bag.writer import BagWriter, StorageOptions
 from rfidnav_common.ros import LATCHED_QOS, message_class
 from rfidnav_msgs.action import FollowTagRoute
 from rfidnav_msgs.msg import TagReadArray, TagReading
@@ -213,22 +215,21 @@ def decoded_by_topic(mcap_file: Path, topics: list[str]) -> dict[str, list[Any]]
     return decoded
 
 
-def write_bag(path: Path, messages: list[tuple[str, str, int, bytes]], latched: Collection[str] = ()) -> None:
-    """A bag as the recorder writes it (rosbags Writer, MCAP, definitions embedded), for player tests."""
-    writer = Writer(path, version=9, storage_plugin=StoragePlugin.MCAP)
+def write_bag(path: Path, messages: list[tuple[str, str, int, bytes]], latched: Collection[str] = (),
+              options: StorageOptions = StorageOptions()) -> None:
+    """A bag as the recorder writes it (its writer, MCAP, definitions embedded), for player tests."""
+    writer = BagWriter(path, options)
     writer.open()
-    connections = {}
+    topics = {}
     never = QosTime(0, 0)
     for topic, msgtype, _, _ in messages:
-        if topic not in connections:
-            definition, rihs01 = message_definition(msgtype)
+        if topic not in topics:
             qos = Qos(QosHistory.UNKNOWN, 0, QosReliability.RELIABLE,
                       QosDurability.TRANSIENT_LOCAL if topic in latched else QosDurability.VOLATILE,
                       never, never, QosLiveliness.AUTOMATIC, never, False)
-            connections[topic] = writer.add_connection(topic, msgtype, msgdef=definition, rihs01=rihs01,
-                                                       offered_qos_profiles=[qos])
+            topics[topic] = writer.add_topic(topic, msgtype, *message_definition(msgtype), (qos,))
     for topic, _, timestamp, data in messages:
-        writer.write(connections[topic], timestamp, data)
+        writer.write(topics[topic], timestamp, data)
     writer.close()
 
 
@@ -347,7 +348,8 @@ def test_recording_decodes_with_third_party_readers(recording: Recording) -> Non
 
 def test_recording_embeds_definitions_of_action_types(recording: Recording) -> None:
     """mcap_ros2 rejects the underscore in rosidl's action-derived names, so decode the feedback topic with
-    a stock Jazzy rosbags store that learns the type from the bag's schema record alone."""
+    a stock Jazzy rosbags store that learns the type from the bag's schema record alone. The text names the
+    nested types where they live (``rfidnav_msgs/action/FollowTagRoute_Feedback``), so its hash is rosidl's."""
     with next(recording.bag.glob("*.mcap")).open("rb") as stream:
         reader = make_reader(stream)
         summary = reader.get_summary()
@@ -355,11 +357,42 @@ def test_recording_embeds_definitions_of_action_types(recording: Recording) -> N
         schema = summary.schemas[channel.schema_id]
         raw = [m.data for _, c, m in reader.iter_messages(topics=[FEEDBACK_TOPIC])]
     assert (schema.name, schema.encoding) == ("rfidnav_msgs/action/FollowTagRoute_FeedbackMessage", "ros2msg")
+    assert "MSG: rfidnav_msgs/action/FollowTagRoute_Feedback\n" in schema.data.decode()
     store = get_typestore(Stores.ROS2_JAZZY)
-    store.register(get_types_from_msg(schema.data.decode(), schema.name))
+    types = get_types_from_msg(schema.data.decode(), schema.name)
+    assert "rfidnav_msgs/action/FollowTagRoute_Feedback" in types
+    store.register(types)
+    assert store.hash_rihs01(schema.name) == channel.metadata["topic_type_hash"] == typestore().hash_rihs01(
+        schema.name)
     messages = [store.deserialize_cdr(data, schema.name) for data in raw]
     assert [(m.feedback.target_index, m.feedback.target_tag_id) for m in messages] == [
         (i, f"C{i}") for i in range(FEEDBACK_N)]
+
+
+def test_recording_opens_in_anyreader_and_converts_to_a_ros1_bag(recording: Recording, tmp_path: Path) -> None:
+    """rosbags' AnyReader checks every schema against the recorded hash before it reads anything."""
+    def decoded(bag: Path) -> dict[str, list[Any]]:
+        messages: dict[str, list[Any]] = {}
+        with AnyReader([bag]) as reader:
+            for connection, _, data in reader.messages():
+                messages.setdefault(connection.topic, []).append(reader.deserialize(data, connection.msgtype))
+        return messages
+
+    ros2 = decoded(recording.bag)
+    assert [m.feedback.target_tag_id for m in ros2[FEEDBACK_TOPIC]] == [f"C{i}" for i in range(FEEDBACK_N)]
+    assert [m.readings[0].tag_id for m in ros2["/rfid/reads"]] == [f"T{i:03d}" for i in range(N)]
+    # ROS 1 has no action namespace: rosbags' ROS 1 writer takes nested types from msg/ only (see README).
+    converted = subprocess.run([str(BIN / "rosbags-convert"), "--src", str(recording.bag),
+                                "--dst", str(tmp_path / "recording.bag"), "--exclude-topic", FEEDBACK_TOPIC],
+                               capture_output=True, text=True, timeout=120)
+    assert converted.returncode == 0, converted.stdout + converted.stderr
+    ros1 = decoded(tmp_path / "recording.bag")
+    ros2.pop(FEEDBACK_TOPIC)
+    assert {topic: len(messages) for topic, messages in ros1.items()} == {
+        topic: len(messages) for topic, messages in ros2.items()}
+    # ROS 1 classes differ (a Header with seq), the values do not
+    assert [(m.header.stamp.sec, [(r.tag_id, r.rssi_dbm) for r in m.readings]) for m in ros1["/rfid/reads"]] == [
+        (m.header.stamp.sec, [(r.tag_id, r.rssi_dbm) for r in m.readings]) for m in ros2["/rfid/reads"]]
 
 
 def test_recording_info_counts_and_exclusions(recording: Recording) -> None:
@@ -406,6 +439,38 @@ def test_recorder_refuses_an_existing_output_dir(processes: Processes, tmp_path:
     assert "exists already" in processes.log_of(recorder)
 
 
+@pytest.mark.parametrize("params, complaint", [
+    ({"compression": "gzip"}, "must be one of none, zstd"),
+    ({"max_bag_size": "100"}, "at least 1024 bytes"),
+    ({"max_bag_duration_s": "-1.0"}, "must be >= 0"),
+], ids=["compression", "max_bag_size", "max_bag_duration_s"])
+def test_recorder_rejects_bad_storage_parameters(processes: Processes, tmp_path: Path, params: dict[str, str],
+                                                 complaint: str) -> None:
+    recorder = processes.start("recorder", {"output_dir": str(tmp_path / "bag"), **params})
+    assert processes.wait(recorder, 20) == 2
+    log = processes.log_of(recorder)
+    assert complaint in log and next(iter(params)) in log and "Traceback" not in log
+    assert not (tmp_path / "bag").exists()
+
+
+def test_recorder_splits_and_compresses_as_its_parameters_say(ros: Ros, processes: Processes,
+                                                               tmp_path: Path) -> None:
+    reads = ros.node.create_publisher(TagReadArray, "/rfid/reads", KEEP)
+    recorder = processes.start("recorder", {"output_dir": str(tmp_path / "bag"), "compression": "zstd",
+                                            "max_bag_size": "1024", "exclude_topics": "[/parameter_events,/rosout]"})
+    wait_matched(ros, [reads])
+    for i in range(N):   # 40 messages of ~250 bytes in 256-byte chunks, 1 KiB files: several files
+        reads.publish(reads_message(i))
+    wait_acked([reads])
+    recorder.send_signal(signal.SIGINT)
+    assert processes.wait(recorder, 20) == 0, processes.log_of(recorder)
+    info = bag_info(tmp_path / "bag")
+    assert len(info.files) >= 2 and info.compression == "zstd", info.files
+    assert [m.readings[0].tag_id for _, _, m in read_messages(tmp_path / "bag", ["/rfid/reads"])] == [
+        f"T{i:03d}" for i in range(N)]
+    assert f"({len(info.files)} files)" in processes.log_of(recorder)
+
+
 # ------------------------------------------------------------------------------------------- bag errors
 
 def _missing(bag: Path) -> Path:
@@ -421,7 +486,7 @@ def _plain_file(bag: Path) -> Path:
 def _no_metadata(bag: Path) -> Path:
     path = bag.parent / "no_metadata"
     path.mkdir()
-    (path / "bag.mcap").write_bytes(next(bag.glob("*.mcap")).read_bytes())
+    (path / "bag_0.mcap").write_bytes(next(bag.glob("*.mcap")).read_bytes())
     return path
 
 
@@ -558,6 +623,18 @@ def test_player_start_offset_clock_and_pacing(ros: Ros, processes: Processes, sy
     assert clocks == sorted(clocks), "/clock went backwards"
     assert T0_NS + 1_000_000_000 <= clocks[0] < T0_NS + 1_300_000_000, "/clock does not start at the offset"
     assert clocks[-1] <= T0_NS + 3_100_000_000
+
+
+def test_player_plays_a_split_bag_in_order(ros: Ros, processes: Processes, tmp_path: Path) -> None:
+    messages = [("/odom", "nav_msgs/msg/Odometry", T0_NS + i * 10_000_000, serialize_message(odom_message(i)))
+                for i in range(60)]
+    write_bag(tmp_path / "bag", messages, options=StorageOptions(compression="zstd", max_bag_size=2048))
+    assert len(bag_info(tmp_path / "bag").files) >= 3
+    inbox = Inbox(ros, {"/odom": (Odometry, QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=100,
+                                                         reliability=ReliabilityPolicy.RELIABLE))})
+    play(ros, processes, {"bag": str(tmp_path / "bag"), "rate": "10.0", "wait_for_subscribers": "[/odom]"},
+         lambda: len(inbox.received["/odom"]) >= 60)
+    assert [m.pose.pose.position.x for m in inbox.received["/odom"]] == pytest.approx([0.1 * i for i in range(60)])
 
 
 def test_player_rejects_a_topic_the_bag_lacks(processes: Processes, synthetic_bag: Path) -> None:

@@ -66,3 +66,13 @@ def test_the_recorder_is_told_the_topics_the_wait_leaves_out(tmp_path: Path):
     # Node commands start with the executable load_scenario resolved.
     resolved = list(scenario.nodes["heading_controller"].command)
     assert orchestrator.processes["heading_controller"].command[:len(resolved)] == resolved
+
+
+@pytest.mark.tier("graph")
+def test_the_recorder_is_given_the_run_s_storage_options(tmp_path: Path):
+    options = RunOptions(out_dir=tmp_path, compress=True, max_bag_size=1_000_000, max_bag_duration_s=30.0)
+    orchestrator = Orchestrator(load_scenario("line_follow_90"), options)
+    orchestrator.prepare(env={})
+    recorder = orchestrator.processes["recorder"].command
+    assert "compression:=zstd" in recorder
+    assert "max_bag_size:=1000000" in recorder and "max_bag_duration_s:=30.0" in recorder

@@ -1,8 +1,10 @@
 """Reading rosbag2 (MCAP) directories written by the recorder, and the type knowledge both nodes share.
 
 No rclpy here: bags are read with ``rosbags`` so reports, metrics and ``./rfidnav bag info`` work without a
-running ROS graph. Every failure to read a bag becomes one :class:`BagError` that names the path (and the
-topic when one is at fault); the exceptions caught are the ones ``rosbags`` documents for bad input.
+running ROS graph. rosbags reads every file metadata.yaml lists (a split bag) in turn, and decompresses zstd or
+lz4 chunks, so all of this works on split and compressed bags alike. Every failure to read a bag becomes one
+:class:`BagError` that names the path (and the topic when one is at fault); the exceptions caught are the ones
+``rosbags`` documents for bad input.
 
 Types: :func:`typestore` is the ROS 2 Jazzy store of ``rosbags`` plus every rfidnav_msgs type, read from the
 installed interface definitions (``share/rfidnav_msgs/{msg,action}``). Action topics carry types that exist in
@@ -22,6 +24,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import NamedTuple
 
+from mcap.exceptions import McapError
+from mcap.reader import make_reader
 from rosbags.interfaces import Connection, MessageDefinitionFormat
 from rosbags.rosbag2 import Reader, ReaderError
 from rosbags.serde import SerdeError
@@ -32,8 +36,8 @@ from ruamel.yaml import YAML, YAMLError
 from rfidnav_bag.errors import BagError
 
 __all__ = [
-    "BagInfo", "OfferedQos", "RawMessage", "TopicInfo", "bag_info", "format_bag_info", "message_definition",
-    "read_messages", "read_raw", "register_installed_type", "typestore",
+    "BagFile", "BagInfo", "OfferedQos", "RawMessage", "TopicInfo", "bag_info", "format_bag_info",
+    "message_definition", "read_messages", "read_raw", "register_installed_type", "typestore",
 ]
 
 INTERFACE_PACKAGE = "rfidnav_msgs"
@@ -154,6 +158,11 @@ def _in_msg_namespace(name: str) -> str:
     return name if namespace == "msg" else f"{package}/msg/{leaf}"
 
 
+def _short_name(name: str) -> str:
+    package, _, leaf = name.split("/")
+    return f"{package}/{leaf}"
+
+
 def _rename_desc(desc: tuple) -> tuple:
     kind, arg = desc
     if kind == 2:
@@ -163,21 +172,55 @@ def _rename_desc(desc: tuple) -> tuple:
     return desc
 
 
+_FIELD = re.compile(r"^(?P<type>[A-Za-z][\w/]*)(?P<rest>(\[[^\]]*\])? .*)$")
+
+
+def _restore_namespaces(text: str, msgtype: str, moved: set[str]) -> str:
+    """Put the action (or service) types that were rendered as ``pkg/Leaf`` back where they live.
+
+    Each ``MSG:`` line gets the full name (``MSG: pkg/action/X_Feedback``, the form rosbag2 writes), and a field
+    of such a type is written relative (``X_Feedback feedback``) when its owner lives in the same package and
+    namespace -- always the case for rosidl's action-derived types. Both readers resolve a relative name in
+    the owner's namespace (rosbags: ``pkg/action/X_Feedback``, so the RIHS01 hash checks out; mcap_ros2: in the
+    owner's package). A full three-part name in a field would do for rosbags, but mcap_ros2 0.6 rejects it."""
+    by_short = {_short_name(name): name for name in moved}
+    blocks = text.split(f"{'=' * 80}\n")
+    restored = []
+    for index, block in enumerate(blocks):
+        lines = block.split("\n")
+        owner = msgtype
+        if index:  # "MSG: pkg/Leaf" opens every block after the first
+            owner = by_short.get(lines[0].removeprefix("MSG: "), lines[0].removeprefix("MSG: "))
+            lines[0] = f"MSG: {owner}"
+        owner_space = owner.rsplit("/", 1)[0]
+        for number, line in enumerate(lines[1:] if index else lines, start=1 if index else 0):
+            match = _FIELD.match(line)
+            if match is None or match["type"] not in by_short:
+                continue
+            full = by_short[match["type"]]
+            package_space, leaf = full.rsplit("/", 1)
+            lines[number] = f"{leaf if package_space == owner_space else full}{match['rest']}"
+        restored.append("\n".join(lines))
+    return f"{'=' * 80}\n".join(restored)
+
+
 @functools.cache
 def message_definition(msgtype: str) -> tuple[str, str]:
     """(ros2msg definition text with its dependencies, RIHS01 hash) of a type known to :func:`typestore`.
 
-    This is what MCAP schema records carry so Foxglove and ``mcap_ros2`` decode without rfidnav installed.
-    rosbags renders nested type names as ``pkg/Type``, which it can only do for ``pkg/msg/Type``; action types
-    (``pkg/action/X_Feedback``) are therefore rendered from a scratch store where they are filed under ``msg``
-    -- the text then names them ``pkg/X_Feedback``, as the ROS 2 definition format writes every nested type.
-    The hash is computed on the real names, so it matches rosidl's."""
+    This is what MCAP schema records carry so Foxglove, ``mcap_ros2`` and rosbags decode without rfidnav
+    installed. rosbags renders nested type names as ``pkg/Type``, which it can only do for ``pkg/msg/Type``;
+    action types (``pkg/action/X_Feedback``) are therefore rendered from a scratch store where they are filed
+    under ``msg`` and then put back in their namespace (:func:`_restore_namespaces`), so that a reader that
+    parses the text and hashes it (rosbags' AnyReader) gets the RIHS01 hash rosidl computed, which is the one
+    returned here (computed on the real names)."""
     store = typestore()
     if msgtype not in store.fielddefs:
         raise BagError(f"message type {msgtype} is unknown (not in ROS 2 Jazzy, not installed)")
     rihs01 = store.hash_rihs01(msgtype)
     closure = _type_closure(store, msgtype)
-    if all(name.split("/")[1] == "msg" for name in closure):
+    moved = {name for name in closure if name.split("/")[1] != "msg"}
+    if not moved:
         return store.generate_msgdef(msgtype, ros_version=2)[0], rihs01
     scratch = get_typestore(Stores.ROS2_JAZZY)
     renamed = {
@@ -186,7 +229,8 @@ def message_definition(msgtype: str) -> tuple[str, str]:
         for name in closure if name not in scratch.fielddefs
     }
     scratch.register(renamed)
-    return scratch.generate_msgdef(_in_msg_namespace(msgtype), ros_version=2)[0], rihs01
+    text = scratch.generate_msgdef(_in_msg_namespace(msgtype), ros_version=2)[0]
+    return _restore_namespaces(text, msgtype, moved), rihs01
 
 
 # ----------------------------------------------------------------------------------------------- info
@@ -225,6 +269,18 @@ class TopicInfo:
 
 
 @dataclass(frozen=True)
+class BagFile:
+    """One storage file of a bag, as metadata.yaml lists it, with what its MCAP chunk records say."""
+
+    path: Path
+    message_count: int
+    start_ns: int
+    duration_s: float
+    size_bytes: int
+    compression: str  # of its chunks: none | zstd | lz4 (several: joined by ", "); "-" for non-MCAP storage
+
+
+@dataclass(frozen=True)
 class BagInfo:
     path: Path
     storage: str  # storage plugin of the files: mcap | sqlite3
@@ -233,6 +289,13 @@ class BagInfo:
     duration_s: float
     message_count: int
     topics: tuple[TopicInfo, ...]
+    files: tuple[BagFile, ...] = ()
+    ros_distro: str | None = None
+
+    @property
+    def compression(self) -> str:
+        """The chunk compression of the files ("none" when no file is compressed)."""
+        return ", ".join(dict.fromkeys(f.compression for f in self.files)) or "none"
 
     def topic(self, name: str) -> TopicInfo:
         for info in self.topics:
@@ -270,12 +333,40 @@ def _offered(connection: Connection) -> tuple[OfferedQos, ...]:
                  for q in profiles)
 
 
-def _storage_identifier(bag: Path) -> str:
+def _information(bag: Path) -> dict:
+    """metadata.yaml's rosbag2_bagfile_information (the Reader validated it already)."""
     try:
         metadata = YAML(typ="safe").load((bag / "metadata.yaml").read_text(encoding="utf-8"))
-        return str(metadata["rosbag2_bagfile_information"]["storage_identifier"])
-    except (OSError, YAMLError, KeyError, TypeError) as error:  # Reader already validated; be safe anyway
-        raise BagError(f"{bag / 'metadata.yaml'}: cannot read storage_identifier: {error}") from error
+        return dict(metadata["rosbag2_bagfile_information"])
+    except (OSError, YAMLError, KeyError, TypeError) as error:
+        raise BagError(f"{bag / 'metadata.yaml'}: cannot read rosbag2_bagfile_information: {error}") from error
+
+
+def _chunk_compression(path: Path) -> str:
+    """The compressions the MCAP summary's chunk indexes name ("none" for uncompressed chunks)."""
+    try:
+        with path.open("rb") as stream:
+            summary = make_reader(stream).get_summary()
+    except (McapError, OSError, struct.error, ValueError) as error:
+        raise BagError(f"{path}: unreadable MCAP summary: {error}") from error
+    if summary is None:  # a file without summary (rosbags reads it by scanning): say so rather than guess
+        return "unknown"
+    return ", ".join(sorted({index.compression or "none" for index in summary.chunk_indexes})) or "none"
+
+
+def _files(bag: Path, information: dict) -> tuple[BagFile, ...]:
+    storage = str(information["storage_identifier"])
+    entries = {Path(entry["path"]).name: entry for entry in information.get("files") or []}
+    files = []
+    for relative in information["relative_file_paths"]:
+        path = bag / Path(relative).name
+        entry = entries.get(path.name, {})
+        files.append(BagFile(
+            path=path, message_count=int(entry.get("message_count", 0)),
+            start_ns=int(entry.get("starting_time", {}).get("nanoseconds_since_epoch", 0)),
+            duration_s=int(entry.get("duration", {}).get("nanoseconds", 0)) / 1e9, size_bytes=path.stat().st_size,
+            compression=_chunk_compression(path) if storage == "mcap" else "-"))
+    return tuple(files)
 
 
 def bag_info(path: str | Path) -> BagInfo:
@@ -297,8 +388,10 @@ def bag_info(path: str | Path) -> BagInfo:
         end_ns = reader.end_time - 1 if count else 0
     finally:
         reader.close()
-    return BagInfo(path=bag, storage=_storage_identifier(bag), start_ns=start_ns, end_ns=end_ns,
-                   duration_s=(end_ns - start_ns) / 1e9, message_count=count, topics=tuple(topics))
+    information = _information(bag)
+    return BagInfo(path=bag, storage=str(information["storage_identifier"]), start_ns=start_ns, end_ns=end_ns,
+                   duration_s=(end_ns - start_ns) / 1e9, message_count=count, topics=tuple(topics),
+                   files=_files(bag, information), ros_distro=information.get("ros_distro"))
 
 
 def _seconds(nanoseconds: int) -> str:
@@ -309,14 +402,19 @@ def _seconds(nanoseconds: int) -> str:
 def format_bag_info(info: BagInfo) -> str:
     """A table for people, in the spirit of ``ros2 bag info``."""
     lines = [
-        f"Files:            {info.path}",
-        f"Storage:          {info.storage}",
+        f"Bag:              {info.path}",
+        f"Storage:          {info.storage} ({info.ros_distro or 'ROS distribution not recorded'})",
+        f"Compression:      {info.compression}",
         f"Duration:         {info.duration_s:.3f} s",
         f"Start:            {_seconds(info.start_ns)} s",
         f"End:              {_seconds(info.end_ns)} s",
         f"Messages:         {info.message_count}",
         f"Topics:           {len(info.topics)}",
+        f"Files:            {len(info.files)}",
     ]
+    for file in info.files:
+        lines.append(f"  {file.path.name}: {file.message_count} messages, {file.duration_s:.3f} s from "
+                     f"{_seconds(file.start_ns)} s, {file.size_bytes} bytes, {file.compression}")
     if info.topics:
         name_width = max(len("topic"), *(len(t.name) for t in info.topics))
         type_width = max(len("type"), *(len(t.msgtype) for t in info.topics))

@@ -11,7 +11,10 @@ The wheels ship no rosbag2, so this node is the suite's ``ros2 bag record -a``:
   would lose the volatile ones), KEEP_LAST 1000 so a slow disk or a burst drops nothing. A publisher that
   appears later with weaker QoS makes the recorder re-subscribe with the weaker profile;
 - the MCAP schema records carry each type's full message definition (from ``bags.typestore()``), so the
-  bag decodes in Foxglove or with ``mcap_ros2`` without rfidnav installed.
+  bag decodes in Foxglove, with ``mcap_ros2`` or with rosbags without rfidnav installed;
+- the files are written by :mod:`rfidnav_bag.writer` in rosbag2's layout (``bag/bag_0.mcap``, ...), chunks
+  compressed with zstd if ``compression`` says so, split into several files by ``max_bag_size`` or
+  ``max_bag_duration_s`` (``ros2 bag record --max-bag-size`` / ``--max-bag-duration``).
 
 Timestamps are the node clock at reception. Runs use ``use_sim_time``, so bag time is sim time; a message
 that arrives before the first /clock is stamped 0 (the ROS time of a sim-time node with no clock yet).
@@ -37,18 +40,16 @@ from rclpy.executors import Executor
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.signals import SignalHandlerOptions
 from rclpy.subscription import Subscription
-from rosbags.interfaces import Connection, Qos, QosDurability, QosHistory, QosLiveliness, QosReliability, QosTime
-from rosbags.rosbag2 import StoragePlugin, Writer, WriterError
+from rosbags.interfaces import Qos, QosDurability, QosHistory, QosLiveliness, QosReliability, QosTime
 
 from rfidnav_bag.bags import message_definition, register_installed_type
 from rfidnav_bag.errors import BagError
+from rfidnav_bag.writer import COMPRESSIONS, MIN_SPLIT_SIZE, BagWriter, StorageOptions, Topic
 from rfidnav_common.config import param
 from rfidnav_common.errors import ConfigError, ParameterError
 from rfidnav_common.ros import declare_parameters, events_executor, message_class, run_node
 from rfidnav_common.stepped_node import SteppedNode
 
-# rosbag2 metadata version 9 is what Jazzy's rosbag2 writes (structured QoS in metadata.yaml).
-BAG_VERSION = 9
 RECORD_DEPTH = 1000
 DRAIN_IDLE_S = 0.05  # stop draining once a wait this long delivered nothing
 DRAIN_LIMIT_S = 2.0
@@ -62,6 +63,13 @@ class RecorderParameters:
     stamp_from_clock_topic: bool = param(
         "stamp messages with the latest recorded /clock (0 before the first) instead of the node clock: "
         "sim time without a second /clock subscription, which costs a callback per clock tick", False)
+    compression: str = param("chunk compression of the MCAP files: none or zstd (rosbag2's MCAP storage "
+                             "config 'compression: Zstd'); the files stay indexed and open in every reader", "none")
+    max_bag_size: int = param("start the next file (bag_1.mcap, ...) once the current one holds this many bytes; "
+                              f"0: one file, else at least {MIN_SPLIT_SIZE} (ros2 bag record --max-bag-size)", 0)
+    max_bag_duration_s: float = param(
+        "start the next file when a message is stamped more than this many seconds (bag time: sim time in a "
+        "simulated run) after the current file's first; 0: never (ros2 bag record --max-bag-duration)", 0.0)
 
     def validate(self) -> None:
         if not self.output_dir:
@@ -70,6 +78,17 @@ class RecorderParameters:
             raise ParameterError("output_dir", f"{self.output_dir} exists already; a bag is never overwritten")
         if not self.discovery_period_s > 0.0:
             raise ParameterError("discovery_period_s", f"must be > 0, got {self.discovery_period_s}")
+        if self.compression not in COMPRESSIONS:
+            raise ParameterError("compression", f"must be one of {', '.join(COMPRESSIONS)}, got '{self.compression}'")
+        if self.max_bag_size != 0 and self.max_bag_size < MIN_SPLIT_SIZE:
+            raise ParameterError("max_bag_size", f"must be 0 (one file) or at least {MIN_SPLIT_SIZE} bytes, "
+                                 f"got {self.max_bag_size}")
+        if not self.max_bag_duration_s >= 0.0:
+            raise ParameterError("max_bag_duration_s", f"must be >= 0 (0: no split), got {self.max_bag_duration_s}")
+
+    def storage_options(self) -> StorageOptions:
+        return StorageOptions(compression=self.compression, max_bag_size=self.max_bag_size,
+                              max_bag_duration_ns=round(self.max_bag_duration_s * 1e9))
 
 
 def recordable_definition(msgtype: str) -> tuple[str, str]:
@@ -136,17 +155,17 @@ class RecorderNode(SteppedNode):
         self.params: RecorderParameters = declare_parameters(self, RecorderParameters)
         self.excluded = set(self.params.exclude_topics)
         self.message_count = 0
-        self.connections: dict[str, Connection] = {}
+        self.connections: dict[str, Topic] = {}
         self.recorded_qos: dict[str, QoSProfile] = {}
         self.publisher_counts: dict[str, int] = {}
         self.topic_subscriptions: dict[str, Subscription] = {}
         self.unrecordable: set[str] = set()  # topics already reported as impossible to record
         self.write_failed = False
         self.clock_ns = 0  # latest /clock seen, when stamping from the clock topic
-        self.writer = Writer(self.params.output_dir, version=BAG_VERSION, storage_plugin=StoragePlugin.MCAP)
+        self.writer = BagWriter(self.params.output_dir, self.params.storage_options())
         try:
             self.writer.open()
-        except (WriterError, OSError) as error:
+        except (BagError, OSError) as error:
             raise ConfigError(f"parameters of node '{self.get_fully_qualified_name()}'", "output_dir",
                               f"cannot create the bag: {error}") from error
         # Wall (steady) time: with use_sim_time a ROS-time timer would not tick before the first /clock.
@@ -189,13 +208,12 @@ class RecorderNode(SteppedNode):
             return
         qos = subscription_qos(offered)
         try:
-            connection = self.writer.add_connection(
-                topic, msgtype, msgdef=definition, rihs01=rihs01, serialization_format="cdr",
-                offered_qos_profiles=[to_bag_qos(q) for q in offered])
-        except WriterError as error:
-            self.skip(topic, f"the bag refused the connection: {error}")
+            recorded = self.writer.add_topic(topic, msgtype, definition, rihs01,
+                                             tuple(to_bag_qos(q) for q in offered))
+        except (BagError, OSError) as error:
+            self.skip(topic, f"the bag refused the topic: {error}")
             return
-        self.connections[topic] = connection
+        self.connections[topic] = recorded
         self.subscribe(topic, message_class(msgtype), qos)
         self.get_logger().info(f"recording {topic} [{msgtype}] ({_describe(qos)})")
 
@@ -216,9 +234,9 @@ class RecorderNode(SteppedNode):
         self.subscribe(topic, cls, needed)
 
     def subscribe(self, topic: str, cls: type, qos: QoSProfile) -> None:
-        connection = self.connections[topic]
+        recorded = self.connections[topic]
         self.topic_subscriptions[topic] = self.create_subscription(
-            cls, topic, lambda data, c=connection: self.write(c, data), qos, raw=True)
+            cls, topic, lambda data, r=recorded: self.write(r, data), qos, raw=True)
         self.recorded_qos[topic] = qos
 
     def skip(self, topic: str, why: str) -> None:
@@ -227,9 +245,9 @@ class RecorderNode(SteppedNode):
 
     # -- writing --------------------------------------------------------------------------------------
 
-    def write(self, connection: Connection, data: bytes) -> None:
+    def write(self, recorded: Topic, data: bytes) -> None:
         if self.params.stamp_from_clock_topic:
-            if connection.topic == "/clock" and len(data) >= 12:
+            if recorded.name == "/clock" and len(data) >= 12:
                 # CDR: 4-byte encapsulation header, then builtin_interfaces/Time (int32 sec, uint32 nanosec).
                 sec, nanosec = struct.unpack_from("<iI" if data[1] == 1 else ">iI", data, 4)
                 self.clock_ns = sec * 1_000_000_000 + nanosec
@@ -237,8 +255,10 @@ class RecorderNode(SteppedNode):
         else:
             stamp_ns = self.get_clock().now().nanoseconds
         try:
-            self.writer.write(connection, stamp_ns, data)
-        except OSError as error:  # disk full or gone: say so once, keep the node (and the run) alive
+            self.writer.write(recorded, stamp_ns, data)
+        # Disk full or gone (BagError: the next file of a split could not be created): say so once, keep the
+        # node (and the run) alive.
+        except (OSError, BagError) as error:
             if not self.write_failed:
                 self.get_logger().error(f"cannot write to {self.params.output_dir}: {error}")
             self.write_failed = True
@@ -256,11 +276,12 @@ class RecorderNode(SteppedNode):
 
     def close(self) -> None:
         """Finalise the bag: MCAP summary, then metadata.yaml. Safe to call twice."""
-        if self.writer.storage is None:
+        if self.writer.finished:
             return
         self.writer.close()
+        files = len(self.writer.files)
         self.get_logger().info(f"bag closed: {self.message_count} messages on {len(self.connections)} topics "
-                               f"in {self.params.output_dir}")
+                               f"in {self.params.output_dir} ({files} file{'s' if files > 1 else ''})")
 
 
 class _StopRequest:

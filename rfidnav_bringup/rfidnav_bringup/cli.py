@@ -59,6 +59,30 @@ def domain_id(text: str) -> int:
     return value
 
 
+def bag_size_value(text: str) -> int:
+    """``--max-bag-size``: 0 (one file) or at least the smallest split size rosbag2's MCAP plugin takes."""
+    from rfidnav_bag.writer import MIN_SPLIT_SIZE
+
+    try:
+        size = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number of bytes, got '{text}'") from None
+    if size != 0 and size < MIN_SPLIT_SIZE:
+        raise argparse.ArgumentTypeError(f"expected 0 (one file) or at least {MIN_SPLIT_SIZE} bytes, got {size}")
+    return size
+
+
+def seconds_value(text: str) -> float:
+    """``--max-bag-duration``: seconds >= 0."""
+    try:
+        seconds = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number of seconds, got '{text}'") from None
+    if not seconds >= 0.0:
+        raise argparse.ArgumentTypeError(f"expected seconds >= 0 (0: no split), got {text}")
+    return seconds
+
+
 def add_run_options(parser: argparse.ArgumentParser, default_rtf: float) -> None:
     parser.add_argument("--rtf", type=rtf_value, default=default_rtf,
                         help="real-time factor (sim s per wall s): a ceiling with the stepped clock, which 'max' "
@@ -82,6 +106,12 @@ def add_run_options(parser: argparse.ArgumentParser, default_rtf: float) -> None
     parser.add_argument("--discovery", choices=("localhost", "subnet"), default="localhost",
                         help="ROS_AUTOMATIC_DISCOVERY_RANGE of the run: localhost (default; runs never mix) or "
                              "subnet (drivers or a viewer on another machine)")
+    parser.add_argument("--compress", action="store_true",
+                        help="compress the bag's MCAP chunks with zstd (rosbag2's MCAP 'compression: Zstd')")
+    parser.add_argument("--max-bag-size", type=bag_size_value, default=0, metavar="BYTES",
+                        help="split the bag into files bag_0.mcap, bag_1.mcap, ... of about BYTES (0: one file)")
+    parser.add_argument("--max-bag-duration", type=seconds_value, default=0.0, metavar="SECONDS",
+                        help="split the bag into files of SECONDS of bag time (sim time when simulated; 0: no)")
 
 
 def parser() -> tuple[argparse.ArgumentParser, dict[str, Handler]]:
@@ -173,7 +203,8 @@ def verb_run(args, scenario_name: str | None = None) -> int:
         raise ConfigError("--rtf", "", f"must be a positive number or max, got {args.rtf}")
     options = RunOptions(rtf=args.rtf, clock=args.clock, seed=args.seed, out_dir=args.out,
                          record=not args.no_record, quiet=args.quiet, domain=args.domain,
-                         discovery=args.discovery)
+                         discovery=args.discovery, compress=args.compress, max_bag_size=args.max_bag_size,
+                         max_bag_duration_s=args.max_bag_duration)
     summary = Orchestrator(scenario, options).run()
     print_summary(summary)
     return 0 if summary.success else 1
@@ -241,7 +272,10 @@ def verb_bag(args) -> int:
     info = bag_info(bag)
     if args.json:
         print(json.dumps({"path": str(info.path), "storage": info.storage, "duration_s": info.duration_s,
-                          "message_count": info.message_count,
+                          "message_count": info.message_count, "compression": info.compression,
+                          "files": [{"path": str(f.path), "message_count": f.message_count,
+                                     "duration_s": f.duration_s, "size_bytes": f.size_bytes,
+                                     "compression": f.compression} for f in info.files],
                           "topics": [{"name": t.name, "type": t.msgtype, "count": t.count} for t in info.topics]}))
     else:
         print(format_bag_info(info))

@@ -81,6 +81,9 @@ class RunOptions:
     quiet: bool = False
     domain: int | None = None                # the ROS domain to run in; None: the first free one of RUN_DOMAINS
     discovery: str = "localhost"             # DISCOVERY_RANGES: ROS_AUTOMATIC_DISCOVERY_RANGE of the run
+    compress: bool = False                   # zstd chunk compression of the bag's MCAP files
+    max_bag_size: int = 0                    # split the bag into files of this many bytes (0: one file)
+    max_bag_duration_s: float = 0.0          # split the bag into files of this many seconds of bag time (0: no)
 
 
 @dataclass
@@ -148,6 +151,10 @@ class Orchestrator:
                 command += ["-p", "stepped_clock:=true"]
             if self.record_exclude:
                 command += ["-p", f"exclude_topics:={json.dumps(list(self.record_exclude))}"]
+            if self.options.compress:
+                command += ["-p", "compression:=zstd"]
+            command += ["-p", f"max_bag_size:={self.options.max_bag_size}",
+                        "-p", f"max_bag_duration_s:={float(self.options.max_bag_duration_s)}"]
             self.processes[RECORDER_ROLE] = NodeProcess(RECORDER_ROLE, command, self.log_path(RECORDER_ROLE), env)
         groups: dict[str, list[NodeSpec]] = {}
         for role, spec in self.scenario.nodes.items():
