@@ -20,11 +20,12 @@ import struct
 import subprocess
 import sys
 import threading
+import time
 from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pytest
@@ -37,6 +38,9 @@ from rfidnav_bag.bag_view import PlaybackClock
 from rfidnav_bag.bags import message_definition, typestore
 from rfidnav_bag.live_view import Demand, Offer, cdr_channel, clock_stamp_ns, live_qos, ws_url
 from support.runs import WORKSPACE
+
+if TYPE_CHECKING:
+    from support.graph import Graph
 
 SUBPROTOCOL = "foxglove.sdk.v1"
 WAIT_S = 60.0   # a run's start on a loaded two-core machine; each wait normally takes well under a second
@@ -140,8 +144,6 @@ def playback_state(frame: Frame) -> PlaybackStateFrame:
 
 
 def _now() -> float:
-    import time
-
     return time.monotonic()
 
 
@@ -224,8 +226,8 @@ def free_port() -> int:
 def test_the_time_of_a_clock_message_is_read_from_its_cdr_in_either_byte_order() -> None:
     store = typestore()
     clock = store.types["rosgraph_msgs/msg/Clock"]
-    time = store.types["builtin_interfaces/msg/Time"]
-    message = clock(clock=time(sec=12, nanosec=345_000_000))
+    stamp = store.types["builtin_interfaces/msg/Time"]
+    message = clock(clock=stamp(sec=12, nanosec=345_000_000))
     little = bytes(store.serialize_cdr(message, "rosgraph_msgs/msg/Clock"))
     big = bytes(store.serialize_cdr(message, "rosgraph_msgs/msg/Clock", little_endian=False))
     assert clock_stamp_ns(little) == clock_stamp_ns(big) == 12_345_000_000
@@ -285,6 +287,62 @@ def test_the_playback_clock_follows_play_pause_seek_and_speed() -> None:
     assert clock.now_ns(200.0) == 1_000_000_000             # nor before the start
     clock.set_speed(float("nan"), 200.0)
     assert clock.speed > 0.0
+
+
+# ------------------------------------------------------------------------------------------- node: the bridge
+
+@pytest.mark.tier("node")
+def test_the_bridge_subscribes_while_watched_and_gives_a_late_client_the_latched_message(graph: Graph) -> None:
+    from rclpy.parameter import Parameter
+    from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+    from visualization_msgs.msg import Marker, MarkerArray
+
+    from rfidnav_bag.foxglove_bridge_node import FoxgloveBridgeNode
+    from rfidnav_common.ros import LATCHED_QOS
+
+    latched = graph.probe.create_publisher(MarkerArray, "/markers", LATCHED_QOS)
+    latched.publish(MarkerArray(markers=[Marker(ns="walls", id=7)]))
+    port = free_port()
+    graph.add(FoxgloveBridgeNode(context=graph.context, parameter_overrides=[
+        Parameter("port", value=port), Parameter("discovery_period_s", value=0.05)]))
+
+    def bridge_subscription() -> Any:
+        found = [info for info in graph.probe.get_subscriptions_info_by_topic("/markers")
+                 if info.node_name == "foxglove_bridge"]
+        return found[0] if found else None
+
+    with foxglove_client(f"ws://localhost:{port}") as client:
+        assert "time" not in client.server_info["capabilities"]   # no /clock to follow: the node's own clock
+        frames: list[Frame] = []
+
+        def read() -> bool:
+            """Take the frames that arrived (a moment's wait at most) between two turns of the executor."""
+            frame = client.next_frame(_now() + 0.01)
+            if frame is not None and frame.opcode == MESSAGE_DATA:
+                frames.append(frame)
+            return True
+
+        graph.spin_until(lambda: read() and "/markers" in client.channels, "the bridge to advertise /markers")
+        assert bridge_subscription() is None                        # nobody watches yet: no subscription
+        client.subscribe("/markers")
+        graph.spin_until(lambda: read() and bool(frames), "the latched marker array, published before anyone watched")
+        message = client.decode("/markers", frames[0].payload)
+        assert [(m.ns, m.id) for m in message.markers] == [("walls", 7)]
+        assert abs(frames[0].log_time - time.time_ns()) < 60_000_000_000   # stamped with the node's (wall) clock
+        subscription = bridge_subscription()
+        assert subscription.qos_profile.durability == DurabilityPolicy.TRANSIENT_LOCAL
+
+        # A volatile publisher joins: a durable subscription would not match it, so the bridge re-subscribes.
+        graph.probe.create_publisher(MarkerArray, "/markers", QoSProfile(
+            depth=10, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.VOLATILE))
+        graph.spin_until(lambda: bridge_subscription() is not None
+                         and bridge_subscription().qos_profile.durability == DurabilityPolicy.VOLATILE,
+                         "the bridge to re-subscribe volatile")
+        assert bridge_subscription().qos_profile.reliability == ReliabilityPolicy.BEST_EFFORT
+
+        client.ws.send(json.dumps({"op": "unsubscribe", "subscriptionIds": [
+            sid for sid, topic in client.subscriptions.items() if topic == "/markers"]}))
+        graph.spin_until(lambda: bridge_subscription() is None, "the bridge to drop the unwatched subscription")
 
 
 # ------------------------------------------------------------------------------------------- graph: live

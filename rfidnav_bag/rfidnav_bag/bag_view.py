@@ -18,11 +18,12 @@ No rclpy: the bag is read with ``bags.read_raw``, so this runs without a ROS gra
 from __future__ import annotations
 
 import math
+import queue
 import sys
 import threading
 import time
 from collections.abc import Callable, Iterator
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import foxglove
@@ -47,6 +48,7 @@ __all__ = ["BagPlayer", "PlaybackClock", "serve_bag"]
 TIME_BROADCAST_S = 1.0 / 30.0   # how often the server's time goes out while playing (wall seconds)
 IDLE_WAIT_S = 0.1               # longest wait between looks at the playback state
 MIN_SPEED = 0.01                # Foxglove's slowest is 0.01x; a speed <= 0 or NaN would stall the clock
+REQUEST_TIMEOUT_S = 5.0         # a playback request the loop has not answered by then gets no answer
 
 
 @dataclass
@@ -103,9 +105,19 @@ def clamped_speed(speed: float) -> float:
     return speed if math.isfinite(speed) and speed >= MIN_SPEED else MIN_SPEED
 
 
+@dataclass
+class _Request:
+    """What a server callback asks of the loop: a playback request (answered through ``answer``), or None for
+    a client's subscription."""
+
+    control: PlaybackControlRequest | None
+    answer: queue.Queue[PlaybackState] = field(default_factory=lambda: queue.Queue(maxsize=1))
+
+
 class BagPlayer:
-    """Plays a bag's messages on their channels as the clock passes their log times; answers the clients'
-    playback requests. The loop (:meth:`run`) and the server's callbacks share one lock and condition."""
+    """Plays a bag's messages on their channels as the clock passes their log times, on the caller's thread
+    (:meth:`run`). The server's callbacks only queue requests and wait for the answer: the loop takes them
+    between two messages, so a fast playback never keeps a request waiting and no state is shared."""
 
     def __init__(self, bag: Path, info: BagInfo, channels: dict[str, foxglove.Channel], speed: float) -> None:
         self.bag = bag
@@ -113,10 +125,8 @@ class BagPlayer:
         self.latched = tuple(t.name for t in info.topics if t.latched and t.name in channels)
         self.clock = PlaybackClock(info.start_ns, info.end_ns, speed, info.start_ns)
         self.status = PlaybackStatus.Paused
-        self.server: WebSocketServer | None = None
-        self.condition = threading.Condition()
-        self.watched = False          # a client subscribed to a channel: start playing, once
-        self.started = False
+        self.requests: queue.Queue[_Request] = queue.Queue()
+        self.started = False          # playback starts once, when a client first subscribes
         self.time_due = True          # the server's time changed without being broadcast (seek, pause)
         self.last_time_broadcast = -math.inf
         self.messages: Iterator[RawMessage] = iter(())
@@ -140,31 +150,77 @@ class BagPlayer:
         for message in sorted(last.values(), key=lambda m: m.timestamp_ns):
             self.channels[message.topic].log(message.data, log_time=message.timestamp_ns)
 
-    # -- the clients' requests (the server's threads) ------------------------------------------------
+    # -- the server's callbacks (its threads) ---------------------------------------------------------
 
     def on_subscribe(self) -> None:
-        with self.condition:
-            self.watched = True
-            self.condition.notify_all()
+        self.requests.put(_Request(None))
 
-    def control(self, request: PlaybackControlRequest) -> PlaybackState:
-        with self.condition:
+    def on_control(self, control: PlaybackControlRequest) -> PlaybackState | None:
+        request = _Request(control)
+        self.requests.put(request)
+        try:
+            return request.answer.get(timeout=REQUEST_TIMEOUT_S)
+        except queue.Empty:   # the loop has stopped: the client gets no answer, as from a server gone
+            return None
+
+    # -- the loop (the caller's thread) ---------------------------------------------------------------
+
+    def run(self, server: WebSocketServer, stop: threading.Event) -> None:
+        while not stop.is_set():
             now = time.monotonic()
-            did_seek = request.seek_time is not None
-            if did_seek:
-                self.seek(int(request.seek_time or 0), now)
-            self.clock.set_speed(request.playback_speed, now)
-            if request.playback_command == PlaybackCommand.Play:
-                if self.status == PlaybackStatus.Ended and not did_seek:
-                    self.seek(self.clock.start_ns, now)   # play at the end: from the beginning again
-                    did_seek = True
-                self.play(now)
-            elif request.playback_command == PlaybackCommand.Pause:
-                self.pause(now)
-            self.condition.notify_all()
-            return self.state(now, did_seek, request.request_id)
+            if self.status != PlaybackStatus.Playing:
+                self.broadcast_time(server, now)
+                self.take_requests(server, IDLE_WAIT_S)
+                continue
+            message = self.pending if self.pending is not None else next(self.messages, None)
+            if message is None:
+                self.end(server, now)
+                continue
+            wait_s = self.clock.wall_until(message.timestamp_ns, now)
+            if wait_s > 0.0:
+                self.pending = message
+                self.broadcast_time(server, now)
+                self.take_requests(server, min(wait_s, TIME_BROADCAST_S))
+                continue
+            self.pending = None
+            self.channels[message.topic].log(message.data, log_time=message.timestamp_ns)
+            self.played += 1
+            self.broadcast_time(server, now)
+            self.take_requests(server, 0.0)
 
-    # -- state changes (callers hold the lock) --------------------------------------------------------
+    def take_requests(self, server: WebSocketServer, wait_s: float) -> None:
+        """Handle the queued requests, waiting up to ``wait_s`` for the first."""
+        try:
+            request = self.requests.get(timeout=wait_s) if wait_s > 0.0 else self.requests.get_nowait()
+        except queue.Empty:
+            return
+        while True:
+            now = time.monotonic()
+            if request.control is not None:
+                request.answer.put(self.control(request.control, now))
+            elif not self.started:
+                self.play(now)
+                server.broadcast_playback_state(self.state(now))
+            try:
+                request = self.requests.get_nowait()
+            except queue.Empty:
+                return
+
+    def control(self, request: PlaybackControlRequest, now: float) -> PlaybackState:
+        did_seek = request.seek_time is not None
+        if request.seek_time is not None:
+            self.seek(request.seek_time, now)
+        self.clock.set_speed(request.playback_speed, now)
+        if request.playback_command == PlaybackCommand.Play:
+            if self.status == PlaybackStatus.Ended and not did_seek:
+                self.seek(self.clock.start_ns, now)   # play at the end: from the beginning again
+                did_seek = True
+            self.play(now)
+        elif request.playback_command == PlaybackCommand.Pause:
+            self.pause(now)
+        return self.state(now, did_seek, request.request_id)
+
+    # -- state changes --------------------------------------------------------------------------------
 
     def play(self, now: float) -> None:
         self.started = True
@@ -184,53 +240,21 @@ class BagPlayer:
         self.rewind(self.clock.position_ns)
         self.time_due = True
 
+    def end(self, server: WebSocketServer, now: float) -> None:
+        self.clock.seek(self.clock.end_ns, now)
+        self.pause(now)
+        self.status = PlaybackStatus.Ended
+        self.broadcast_time(server, now)
+        server.broadcast_playback_state(self.state(now))
+
     def state(self, now: float, did_seek: bool = False, request_id: str | None = None) -> PlaybackState:
         return PlaybackState(status=self.status, current_time=self.clock.now_ns(now),
                              playback_speed=self.clock.speed, did_seek=did_seek, request_id=request_id)
 
-    # -- the loop (the caller's thread) ---------------------------------------------------------------
-
-    def run(self, server: WebSocketServer, stop: threading.Event) -> None:
-        self.server = server
-        with self.condition:
-            while not stop.is_set():
-                now = time.monotonic()
-                if self.watched and not self.started:
-                    self.play(now)
-                    server.broadcast_playback_state(self.state(now))
-                if self.status != PlaybackStatus.Playing:
-                    self.broadcast_time(now)
-                    self.condition.wait(IDLE_WAIT_S)
-                    continue
-                self.step(server, now)
-
-    def step(self, server: WebSocketServer, now: float) -> None:
-        """Send the next message if its time has come, else wait for it (or for a request)."""
-        message = self.pending if self.pending is not None else next(self.messages, None)
-        if message is None:
-            self.clock.seek(self.clock.end_ns, now)
-            self.pause(now)
-            self.status = PlaybackStatus.Ended
-            self.broadcast_time(now)
-            server.broadcast_playback_state(self.state(now))
-            return
-        wait_s = self.clock.wall_until(message.timestamp_ns, now)
-        if wait_s > 0.0:
-            self.pending = message
-            self.broadcast_time(now)
-            self.condition.wait(min(wait_s, TIME_BROADCAST_S))
-            return
-        self.pending = None
-        self.channels[message.topic].log(message.data, log_time=message.timestamp_ns)
-        self.played += 1
-        self.broadcast_time(now)
-
-    def broadcast_time(self, now: float) -> None:
-        if self.server is None:
-            return
+    def broadcast_time(self, server: WebSocketServer, now: float) -> None:
         if self.time_due or (self.status == PlaybackStatus.Playing
                              and now - self.last_time_broadcast >= TIME_BROADCAST_S):
-            self.server.broadcast_time(self.clock.now_ns(now))
+            server.broadcast_time(self.clock.now_ns(now))
             self.last_time_broadcast, self.time_due = now, False
 
 
@@ -241,8 +265,8 @@ class _Listener(ServerListener):
     def on_subscribe(self, client: Client, channel: ChannelView) -> None:
         self.player.on_subscribe()
 
-    def on_playback_control_request(self, playback_control_request: PlaybackControlRequest) -> PlaybackState:
-        return self.player.control(playback_control_request)
+    def on_playback_control_request(self, playback_control_request: PlaybackControlRequest) -> PlaybackState | None:
+        return self.player.on_control(playback_control_request)
 
 
 def serve_bag(bag: Path, port: int, host: str = DEFAULT_HOST, speed: float = 1.0,

@@ -21,6 +21,7 @@ waits for it, and what it misses is lost for the viewer only.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any, NamedTuple
 
 import foxglove
 from foxglove.websocket import Capability, ChannelView, Client, ServerListener
@@ -70,6 +71,14 @@ class FoxgloveBridgeParameters:
             raise ParameterError("discovery_period_s", f"must be > 0, got {self.discovery_period_s}")
 
 
+class _Forwarding(NamedTuple):
+    """A topic the bridge subscribes to: with which QoS, chosen for how many publishers."""
+
+    subscription: Subscription
+    qos: LiveQos
+    publishers: int
+
+
 class _Subscriptions(ServerListener):
     """The server's callbacks (its own threads) put the clients' subscriptions into a Demand."""
 
@@ -91,8 +100,8 @@ def _qos_profile(qos: LiveQos) -> QoSProfile:
 
 
 class FoxgloveBridgeNode(Node):
-    def __init__(self) -> None:
-        super().__init__("foxglove_bridge")
+    def __init__(self, **node_options: Any) -> None:
+        super().__init__("foxglove_bridge", **node_options)
         self.params: FoxgloveBridgeParameters = declare_parameters(self, FoxgloveBridgeParameters)
         self.excluded = set(self.params.exclude_topics)
         self.demand = Demand()
@@ -100,7 +109,7 @@ class FoxgloveBridgeNode(Node):
         self.channels: dict[str, foxglove.Channel] = {}
         self.msgtypes: dict[str, str] = {}
         self.unservable: set[str] = set()   # topics already reported as impossible to serve
-        self.forwarding: dict[str, tuple[Subscription, LiveQos, int]] = {}   # topic: subscription, QoS, publishers
+        self.forwarding: dict[str, _Forwarding] = {}
         self.clock_ns = 0        # latest /clock seen, when stamping from the clock topic
         self.forwarded = 0
         try:
@@ -148,20 +157,21 @@ class FoxgloveBridgeNode(Node):
         if wanted and self.params.stamp_from_clock_topic and CLOCK_TOPIC in self.channels:
             wanted |= {CLOCK_TOPIC}
         for topic in self.forwarding.keys() - wanted:
-            self.destroy_subscription(self.forwarding.pop(topic)[0])
+            self.destroy_subscription(self.forwarding.pop(topic).subscription)
         for topic in wanted:
-            publishers = self.get_publishers_info_by_topic(topic)
             current = self.forwarding.get(topic)
-            if current is not None and current[2] == len(publishers):
-                continue
+            publishers = self.count_publishers(topic)
+            if current is not None and current.publishers == publishers:
+                continue   # the same publishers as when it subscribed: the same QoS
             qos = live_qos(Offer(p.qos_profile.reliability == ReliabilityPolicy.RELIABLE,
-                                 p.qos_profile.durability == DurabilityPolicy.TRANSIENT_LOCAL) for p in publishers)
-            if current is not None and current[1] == qos:
-                self.forwarding[topic] = (current[0], qos, len(publishers))
+                                 p.qos_profile.durability == DurabilityPolicy.TRANSIENT_LOCAL)
+                           for p in self.get_publishers_info_by_topic(topic))
+            if current is not None and current.qos == qos:
+                self.forwarding[topic] = current._replace(publishers=publishers)
                 continue
             if current is not None:
-                self.destroy_subscription(current[0])
-            self.forwarding[topic] = (self.subscribe(topic, qos), qos, len(publishers))
+                self.destroy_subscription(current.subscription)
+            self.forwarding[topic] = _Forwarding(self.subscribe(topic, qos), qos, publishers)
 
     def subscribe(self, topic: str, qos: LiveQos) -> Subscription:
         channel = self.channels[topic]
@@ -188,7 +198,8 @@ class FoxgloveBridgeNode(Node):
     def destroy_node(self) -> None:
         try:
             self.server.stop()
-            self.get_logger().info(f"stopped serving {self.url}: {self.forwarded} messages forwarded")
+            # Printed, not logged: on Ctrl-C the context is shut down by now and /rosout is gone with it.
+            print(f"stopped serving {self.url}: {self.forwarded} messages forwarded", flush=True)
         finally:
             super().destroy_node()
 
