@@ -35,8 +35,8 @@ from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 from websockets.sync.client import ClientConnection, connect
 
 from rfidnav_bag.bag_view import PlaybackClock
-from rfidnav_bag.bags import message_definition, typestore
-from rfidnav_bag.live_view import Demand, Offer, cdr_channel, clock_stamp_ns, live_qos, ws_url
+from rfidnav_bag.bags import clock_stamp_ns, message_definition, typestore
+from rfidnav_bag.live_view import Demand, Offer, cdr_channel, live_qos, ws_url
 from support.runs import WORKSPACE
 
 if TYPE_CHECKING:

@@ -30,6 +30,7 @@ from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.subscription import Subscription
 
+from rfidnav_bag.bags import clock_stamp_ns
 from rfidnav_bag.errors import BagError
 from rfidnav_bag.live_view import (
     DEFAULT_HOST,
@@ -38,7 +39,6 @@ from rfidnav_bag.live_view import (
     LiveQos,
     Offer,
     cdr_channel,
-    clock_stamp_ns,
     live_qos,
     ws_url,
 )

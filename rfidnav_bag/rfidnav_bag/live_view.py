@@ -8,7 +8,6 @@ with ``schemaEncoding`` ``ros2msg`` from the schema text alone, so nothing is de
 
 from __future__ import annotations
 
-import struct
 import threading
 from collections import Counter
 from collections.abc import Iterable
@@ -21,7 +20,7 @@ from rfidnav_bag.bags import message_definition
 
 __all__ = [
     "DEFAULT_HOST", "DEFAULT_PORT", "MESSAGE_ENCODING", "SCHEMA_ENCODING", "Demand", "LiveQos", "Offer",
-    "clock_stamp_ns", "cdr_channel", "live_qos", "ws_url",
+    "cdr_channel", "live_qos", "ws_url",
 ]
 
 DEFAULT_PORT = 8765          # Foxglove's default for "Open connection -> Foxglove WebSocket"
@@ -46,17 +45,6 @@ def cdr_channel(topic: str, msgtype: str, context: foxglove.Context | None = Non
     definition, _ = message_definition(msgtype)
     schema = Schema(name=msgtype, encoding=SCHEMA_ENCODING, data=definition.encode("utf-8"))
     return foxglove.Channel(topic, schema=schema, message_encoding=MESSAGE_ENCODING, context=context)
-
-
-def clock_stamp_ns(data: bytes) -> int | None:
-    """The time a rosgraph_msgs/Clock message carries, from its CDR bytes (None if too short to hold one).
-
-    CDR: a 4-byte encapsulation header (its second byte 1 for little endian), then builtin_interfaces/Time
-    (int32 sec, uint32 nanosec)."""
-    if len(data) < 12:
-        return None
-    sec, nanosec = struct.unpack_from("<iI" if data[1] == 1 else ">iI", data, 4)
-    return sec * 1_000_000_000 + nanosec
 
 
 @dataclass(frozen=True)

@@ -24,7 +24,6 @@ shut the context down at once, which would drop the messages still queued in the
 from __future__ import annotations
 
 import signal
-import struct
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -40,7 +39,7 @@ from rclpy.subscription import Subscription
 from rosbags.interfaces import Connection, Qos, QosDurability, QosHistory, QosLiveliness, QosReliability, QosTime
 from rosbags.rosbag2 import StoragePlugin, Writer, WriterError
 
-from rfidnav_bag.bags import message_definition, register_installed_type
+from rfidnav_bag.bags import clock_stamp_ns, message_definition, register_installed_type
 from rfidnav_bag.errors import BagError
 from rfidnav_common.config import param
 from rfidnav_common.errors import ConfigError, ParameterError
@@ -229,10 +228,9 @@ class RecorderNode(SteppedNode):
 
     def write(self, connection: Connection, data: bytes) -> None:
         if self.params.stamp_from_clock_topic:
-            if connection.topic == "/clock" and len(data) >= 12:
-                # CDR: 4-byte encapsulation header, then builtin_interfaces/Time (int32 sec, uint32 nanosec).
-                sec, nanosec = struct.unpack_from("<iI" if data[1] == 1 else ">iI", data, 4)
-                self.clock_ns = sec * 1_000_000_000 + nanosec
+            clock_ns = clock_stamp_ns(data) if connection.topic == "/clock" else None
+            if clock_ns is not None:
+                self.clock_ns = clock_ns
             stamp_ns = self.clock_ns
         else:
             stamp_ns = self.get_clock().now().nanoseconds
