@@ -358,15 +358,15 @@ def test_a_live_run_serves_its_topics_as_cdr_with_their_definitions_and_the_sim_
         with foxglove_client(url_in(line)) as client:
             assert "time" in client.server_info["capabilities"]      # a simulated run: the server's time is sim time
             deadline = _now() + WAIT_S
-            client.wait_for_channels({"/odom", "/rfid/reads", "/clock", "/follow_tag_route/_action/status"},
-                                     deadline)
+            client.wait_for_channels({"/odom", "/rfid/reads", "/clock", "/tf", "/tf_static",
+                                      "/follow_tag_route/_action/status"}, deadline)
             assert "/sim/step_ack" not in client.channels              # bookkeeping, left out as from the bag
             for channel in client.channels.values():
                 assert channel["encoding"] == "cdr" and channel["schemaEncoding"] == "ros2msg", channel
                 assert channel["schema"].strip(), channel["topic"]
-            client.subscribe("/odom", "/rfid/reads")
-            odometry, reads, server_times = [], [], []
-            while len(odometry) < 20 or not any(message.readings for _, message in reads):
+            client.subscribe("/odom", "/rfid/reads", "/tf")
+            odometry, reads, transforms, server_times = [], [], [], []
+            while len(odometry) < 20 or not transforms or not any(message.readings for _, message in reads):
                 frame = client.next_frame(deadline)
                 assert frame is not None, f"{len(odometry)} /odom, {len(reads)} /rfid/reads by the deadline"
                 # (a round with no tag in range reads nothing: wait for one that reads a tag)
@@ -375,7 +375,8 @@ def test_a_live_run_serves_its_topics_as_cdr_with_their_definitions_and_the_sim_
                 elif frame.opcode == MESSAGE_DATA:
                     topic = client.subscriptions[frame.subscription]
                     message = client.decode(topic, frame.payload)
-                    (odometry if topic == "/odom" else reads).append((frame.log_time, message))
+                    received = {"/odom": odometry, "/rfid/reads": reads, "/tf": transforms}[topic]
+                    received.append((frame.log_time, message))
         assert server_times and server_times[-1] > 0
         for log_time, message in odometry:
             assert message.header.frame_id == "odom" and message.child_frame_id == "base_link"
@@ -390,6 +391,8 @@ def test_a_live_run_serves_its_topics_as_cdr_with_their_definitions_and_the_sim_
         reading = next(message for _, message in reads if message.readings).readings[0]
         assert reading.tag_id and reading.antenna in (1, 2) and 0.0 <= reading.phase_rad < 2 * math.pi
         assert -100.0 < reading.rssi_dbm < 0.0
+        pairs = {(t.header.frame_id, t.child_frame_id) for _, message in transforms for t in message.transforms}
+        assert ("odom", "base_link") in pairs
         code, output = cli.finish()
     finally:
         cli.stop()
