@@ -13,10 +13,12 @@ setup(
     install_requires=["setuptools"],
     zip_safe=True,
     maintainer="rfidnav developers",
-    description="rosbag2 MCAP bags of rfidnav: the recorder and player nodes, reading and writing bags.",
+    description="rosbag2 MCAP bags of rfidnav: the recorder and player nodes, reading and writing bags, "
+                "and serving the graph or a bag to Foxglove.",
     license="Apache-2.0",
     entry_points={"console_scripts": [
         "recorder = rfidnav_bag.recorder_node:main",
         "player = rfidnav_bag.player_node:main",
+        "foxglove_bridge = rfidnav_bag.foxglove_bridge_node:main",
     ]},
 )

@@ -36,7 +36,7 @@ from ruamel.yaml import YAML, YAMLError
 from rfidnav_bag.errors import BagError
 
 __all__ = [
-    "BagFile", "BagInfo", "OfferedQos", "RawMessage", "TopicInfo", "bag_info", "format_bag_info",
+    "BagFile", "BagInfo", "OfferedQos", "RawMessage", "TopicInfo", "bag_info", "clock_stamp_ns", "format_bag_info",
     "message_definition", "read_messages", "read_raw", "register_installed_type", "typestore",
 ]
 
@@ -429,6 +429,17 @@ def format_bag_info(info: BagInfo) -> str:
 
 
 # ----------------------------------------------------------------------------------------------- messages
+
+def clock_stamp_ns(data: bytes) -> int | None:
+    """The time a rosgraph_msgs/Clock message carries, from its CDR bytes (None if too short to hold one).
+
+    CDR: a 4-byte encapsulation header (its second byte 1 for little endian), then builtin_interfaces/Time
+    (int32 sec, uint32 nanosec)."""
+    if len(data) < 12:
+        return None
+    sec, nanosec = struct.unpack_from("<iI" if data[1] == 1 else ">iI", data, 4)
+    return sec * 1_000_000_000 + nanosec
+
 
 class RawMessage(NamedTuple):
     """One recorded message as stored: CDR bytes, ready to republish."""

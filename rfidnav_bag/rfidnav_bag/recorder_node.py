@@ -27,7 +27,6 @@ shut the context down at once, which would drop the messages still queued in the
 from __future__ import annotations
 
 import signal
-import struct
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -42,7 +41,7 @@ from rclpy.signals import SignalHandlerOptions
 from rclpy.subscription import Subscription
 from rosbags.interfaces import Qos, QosDurability, QosHistory, QosLiveliness, QosReliability, QosTime
 
-from rfidnav_bag.bags import message_definition, register_installed_type
+from rfidnav_bag.bags import clock_stamp_ns, message_definition, register_installed_type
 from rfidnav_bag.errors import BagError
 from rfidnav_bag.writer import COMPRESSIONS, MIN_SPLIT_SIZE, BagWriter, StorageOptions, Topic
 from rfidnav_common.config import param
@@ -247,10 +246,9 @@ class RecorderNode(SteppedNode):
 
     def write(self, recorded: Topic, data: bytes) -> None:
         if self.params.stamp_from_clock_topic:
-            if recorded.name == "/clock" and len(data) >= 12:
-                # CDR: 4-byte encapsulation header, then builtin_interfaces/Time (int32 sec, uint32 nanosec).
-                sec, nanosec = struct.unpack_from("<iI" if data[1] == 1 else ">iI", data, 4)
-                self.clock_ns = sec * 1_000_000_000 + nanosec
+            clock_ns = clock_stamp_ns(data) if recorded.name == "/clock" else None
+            if clock_ns is not None:
+                self.clock_ns = clock_ns
             stamp_ns = self.clock_ns
         else:
             stamp_ns = self.get_clock().now().nanoseconds

@@ -25,6 +25,7 @@ WORKSPACE = Path(__file__).resolve().parents[2]
 DEMO_SCENARIO = "hallway"
 DEMO_RTF = 3.0
 VERB_ENTRY_POINTS = "rfidnav.verbs"
+LIVE_PORT = 8765   # Foxglove's default WebSocket port
 
 Handler = Callable[[argparse.Namespace], int]
 
@@ -83,6 +84,17 @@ def seconds_value(text: str) -> float:
     return seconds
 
 
+def port_number(text: str, lowest: int = 1) -> int:
+    """A TCP port (``lowest`` 0: any free port, which the server then names)."""
+    try:
+        port = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a TCP port number, got '{text}'") from None
+    if not lowest <= port <= 65535:
+        raise argparse.ArgumentTypeError(f"expected a TCP port {lowest}-65535, got {port}")
+    return port
+
+
 def add_run_options(parser: argparse.ArgumentParser, default_rtf: float) -> None:
     parser.add_argument("--rtf", type=rtf_value, default=default_rtf,
                         help="real-time factor (sim s per wall s): a ceiling with the stepped clock, which 'max' "
@@ -112,6 +124,8 @@ def add_run_options(parser: argparse.ArgumentParser, default_rtf: float) -> None
                         help="split the bag into files bag_0.mcap, bag_1.mcap, ... of about BYTES (0: one file)")
     parser.add_argument("--max-bag-duration", type=seconds_value, default=0.0, metavar="SECONDS",
                         help="split the bag into files of SECONDS of bag time (sim time when simulated; 0: no)")
+    parser.add_argument("--live", nargs="?", type=port_number, const=LIVE_PORT, metavar="PORT",
+                        help=f"serve the running graph to Foxglove over its WebSocket protocol (port {LIVE_PORT})")
 
 
 def parser() -> tuple[argparse.ArgumentParser, dict[str, Handler]]:
@@ -152,6 +166,11 @@ def parser() -> tuple[argparse.ArgumentParser, dict[str, Handler]]:
     echo.add_argument("--count", type=int, default=5, help="messages to print, then exit 0")
     echo.add_argument("--wait", type=float, default=10.0, help="seconds to wait for a publisher")
     echo.add_argument("--timeout", type=float, default=30.0, help="seconds to wait for the messages (else exit 2)")
+    view = verbs.add_parser("view", help="serve a recorded run to Foxglove with its timeline (WebSocket)")
+    view.add_argument("bag", type=Path, metavar="RUN_OR_BAG")
+    view.add_argument("--port", type=lambda text: port_number(text, lowest=0), default=LIVE_PORT,
+                      help=f"TCP port (default {LIVE_PORT}; 0: any free port)")
+    view.add_argument("--rate", type=float, default=1.0, help="playback speed until Foxglove sets its own")
     report = verbs.add_parser("report", help="plots and recomputed metrics of a run")
     report.add_argument("run", type=Path)
     report.add_argument("--json", action="store_true")
@@ -202,7 +221,7 @@ def verb_run(args, scenario_name: str | None = None) -> int:
     if math.isnan(args.rtf) or args.rtf <= 0:
         raise ConfigError("--rtf", "", f"must be a positive number or max, got {args.rtf}")
     options = RunOptions(rtf=args.rtf, clock=args.clock, seed=args.seed, out_dir=args.out,
-                         record=not args.no_record, quiet=args.quiet, domain=args.domain,
+                         record=not args.no_record, live_port=args.live, quiet=args.quiet, domain=args.domain,
                          discovery=args.discovery, compress=args.compress, max_bag_size=args.max_bag_size,
                          max_bag_duration_s=args.max_bag_duration)
     summary = Orchestrator(scenario, options).run()
@@ -218,7 +237,7 @@ def verb_demo(args) -> int:
 
         _, plots = write_report(runs[-1])
         print("plots:", *plots, sep="\n  ")
-        print(f"open {runs[-1] / 'bag'} (the .mcap file) in Foxglove to replay the run")
+        print(f"open the .mcap files of {runs[-1] / 'bag'} in Foxglove, or serve it: ./rfidnav view {runs[-1]}")
     return code
 
 
@@ -282,6 +301,16 @@ def verb_bag(args) -> int:
     return 0
 
 
+def verb_view(args) -> int:
+    from rfidnav_bag.bag_view import serve_bag
+    from rfidnav_bringup.report import locate_run
+
+    if not (math.isfinite(args.rate) and args.rate > 0):
+        raise ConfigError("--rate", "", f"must be a positive number, got {args.rate}")
+    _, bag = locate_run(args.bag)
+    return serve_bag(bag, args.port, speed=args.rate, announce=lambda line: print(line, flush=True))
+
+
 def verb_echo(args) -> int:
     from rfidnav_bringup.echo import echo
 
@@ -325,7 +354,7 @@ def verb_map(args) -> int:
 
 VERBS: dict[str, Handler] = {"setup": verb_setup, "demo": verb_demo, "test": verb_test, "run": verb_run,
                              "replay": verb_replay, "bag": verb_bag, "report": verb_report, "map": verb_map,
-                             "echo": verb_echo}
+                             "echo": verb_echo, "view": verb_view}
 
 
 if __name__ == "__main__":

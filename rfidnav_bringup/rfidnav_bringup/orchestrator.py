@@ -42,6 +42,7 @@ from rclpy.node import Node
 from std_srvs.srv import Trigger
 
 from rfidnav_bag.errors import BagError
+from rfidnav_bag.live_view import DEFAULT_HOST, ws_url
 from rfidnav_bag.recorder_node import recordable_definition
 from rfidnav_bringup.errors import ReadinessError
 from rfidnav_bringup.processes import DomainLease, NodeProcess, resolve_executable
@@ -62,6 +63,7 @@ from rfidnav_common.stepped_node import STEP_ACK_TOPIC
 READY_TIMEOUT_S = 90.0
 STOP_GRACE_S = 5.0
 RECORDER_ROLE = "recorder"
+LIVE_ROLE = "live_view"                  # foxglove_bridge with --live: no participant of the stepped clock
 RESEND_ATTEMPTS = 6
 RESEND_TIMEOUT_S = 5.0
 STEPPING_CLOCK_SOURCE = ("rfidnav_sim", "robot_sim")   # the clock source that can step
@@ -78,6 +80,7 @@ class RunOptions:
     out_dir: Path = Path("bags")
     record: bool = True
     record_exclude: tuple[str, ...] = ()     # topics the recorder leaves out (its exclude_topics)
+    live_port: int | None = None             # serve the graph to Foxglove on this port (--live)
     quiet: bool = False
     domain: int | None = None                # the ROS domain to run in; None: the first free one of RUN_DOMAINS
     discovery: str = "localhost"             # DISCOVERY_RANGES: ROS_AUTOMATIC_DISCOVERY_RANGE of the run
@@ -156,6 +159,13 @@ class Orchestrator:
             command += ["-p", f"max_bag_size:={self.options.max_bag_size}",
                         "-p", f"max_bag_duration_s:={float(self.options.max_bag_duration_s)}"]
             self.processes[RECORDER_ROLE] = NodeProcess(RECORDER_ROLE, command, self.log_path(RECORDER_ROLE), env)
+        if self.options.live_port is not None:
+            command = resolve_executable("rfidnav_bag", "foxglove_bridge") + [
+                "--ros-args", "-p", f"port:={self.options.live_port}",
+                "-p", f"stamp_from_clock_topic:={str(self.scenario.simulated).lower()}"]
+            if self.record_exclude:   # what the recorder leaves out, the viewer does not see either
+                command += ["-p", f"exclude_topics:={json.dumps(list(self.record_exclude))}"]
+            self.processes[LIVE_ROLE] = NodeProcess(LIVE_ROLE, command, self.log_path(LIVE_ROLE), env)
         groups: dict[str, list[NodeSpec]] = {}
         for role, spec in self.scenario.nodes.items():
             groups.setdefault(self.process_of[role], []).append(spec)
@@ -279,6 +289,12 @@ class Orchestrator:
         expected = {spec.name for spec in self.scenario.nodes.values() if spec.name}
         self.spin_until(executor, lambda: expected <= set(node.get_node_names()), READY_TIMEOUT_S,
                         f"nodes {', '.join(sorted(expected))} to join the graph")
+        port = self.options.live_port
+        if LIVE_ROLE in self.processes and port is not None:
+            self.spin_until(executor, lambda: listens(self.processes[LIVE_ROLE], port), READY_TIMEOUT_S,
+                            f"the live view to listen on port {port}")
+            self.say(f"live view: {ws_url(DEFAULT_HOST, port)} "
+                     "(Foxglove: Open connection -> Foxglove WebSocket)", always=True)
         self.action_type = interface_class(self.scenario.mission.action_type)
         self.client = ActionClient(node, self.action_type, self.scenario.mission.action)
         self.spin_until(executor, self.client.server_is_ready, READY_TIMEOUT_S,
@@ -525,6 +541,17 @@ def recordable_type(msgtype: str) -> bool:
     except BagError:
         return False
     return True
+
+
+def listens(process: NodeProcess, port: int) -> bool:
+    """Whether ``process`` has a TCP socket listening on ``port`` (asked of the OS: no connection is made)."""
+    if not process.running or process.popen is None:
+        return False
+    try:
+        sockets = psutil.Process(process.popen.pid).net_connections(kind="tcp")
+    except psutil.Error:
+        return False
+    return any(s.status == psutil.CONN_LISTEN and s.laddr and s.laddr.port == port for s in sockets)
 
 
 def choose_clock(scenario: Scenario, options: RunOptions) -> tuple[str, str]:
