@@ -322,8 +322,10 @@ def verb_echo(args) -> int:
 
 def verb_report(args) -> int:
     from rfidnav_bringup.report import write_report
+    from rfidnav_common.progress import stage
 
-    metrics, plots = write_report(args.run)
+    with stage(f"report {args.run}"):
+        metrics, plots = write_report(args.run)
     if args.json:
         print(json.dumps({"metrics": metrics, "plots": [str(p) for p in plots]}))
     else:

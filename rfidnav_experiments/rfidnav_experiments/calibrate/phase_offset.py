@@ -28,6 +28,7 @@ from typing import Any
 from rfidnav_common.config import node_parameter_values
 from rfidnav_common.errors import RfidnavError
 from rfidnav_common.geometry import wrap_angle
+from rfidnav_common.progress import stage
 from rfidnav_control.parameters import HeadingControllerParameters
 from rfidnav_control.tag_route import TagObservation, pair_phases
 
@@ -241,7 +242,8 @@ def calibrate_phase_offset(controller_file: Path, out: Path | None, tag_id: str 
     import json
 
     left, right = antenna_ports(controller_file)
-    rounds = listen(duration_s, wait_s, domain_id)
+    with stage(f"calibrate phase-offset: listening to /rfid/reads for {duration_s:g} s"):
+        rounds = listen(duration_s, wait_s, domain_id)
     estimate = estimate_offset(rounds, left, right, tag_id, min_pairs=min_pairs)
     before = write_offset(controller_file, out, estimate.offset_rad) if out is not None else None
     if as_json:
