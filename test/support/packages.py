@@ -17,11 +17,13 @@ import re
 import xml.etree.ElementTree as ElementTree
 from pathlib import Path
 
+import yaml
+
 WORKSPACE = Path(__file__).resolve().parents[2]
 TESTS = WORKSPACE / "test"
 SUPPORT = "support"
 RUNTIME_TAGS = ("depend", "exec_depend")
-TEST_TAGS = ("depend", "test_depend")
+ROSDEP_FRAGMENT = WORKSPACE / "rosdep" / "rfidnav.yaml"
 
 
 class OwnershipError(Exception):
@@ -174,3 +176,13 @@ def owner(path: Path) -> str:
 def suite_modules() -> list[Path]:
     """The workspace's test modules (test/test_*.py)."""
     return sorted(TESTS.glob("test_*.py"))
+
+
+def rosdep_fragment() -> dict[str, list[str]]:
+    """rosdep/rfidnav.yaml: each key's pip packages, which must be the same on every OS it lists."""
+    result = {}
+    for key, platforms in yaml.safe_load(ROSDEP_FRAGMENT.read_text()).items():
+        installs = {tuple(rule["pip"]["packages"]) for rule in platforms.values()}
+        assert len(installs) == 1, (key, installs)
+        result[key] = list(installs.pop())
+    return result
