@@ -23,4 +23,6 @@ setup(
     maintainer="rfidnav developers",
     description="Orchestration of rfidnav: the CLI, scenarios, node processes, the orchestrator, metrics, reports.",
     license="Apache-2.0",
+    # The command line as an executable of the package: <install>/lib/rfidnav_bringup/rfidnav VERB in a colcon install.
+    entry_points={"console_scripts": ["rfidnav = rfidnav_bringup.cli:main"]},
 )

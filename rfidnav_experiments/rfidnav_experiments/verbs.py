@@ -9,7 +9,7 @@ import json
 import math
 from pathlib import Path
 
-from rfidnav_bringup.cli import WORKSPACE, Handler
+from rfidnav_bringup.cli import RUNS_DIR, Handler
 from rfidnav_common.errors import ConfigError
 
 
@@ -42,7 +42,7 @@ def add_reproduce(verbs: argparse._SubParsersAction) -> Handler:
     reproduce.add_argument("--runs", type=int, help="partitions: runs per (read range, level, method), default 250; "
                                                     "two_tier: runs per route, default 20; topological: missions "
                                                     "per miss rate, default 100")
-    reproduce.add_argument("--out", type=Path, default=WORKSPACE / "bags" / "reproduce")
+    reproduce.add_argument("--out", type=Path, default=RUNS_DIR / "reproduce")
     reproduce.add_argument("--json", action="store_true")
     return run_reproduce
 
@@ -100,7 +100,7 @@ def add_bench(verbs: argparse._SubParsersAction) -> Handler:
                        help="rtf: busy-loop processes kept running through the sweep (a loaded machine)")
     bench.add_argument("--tolerance", type=float, default=0.10, help="rtf: allowed RMSE growth over RTF 1")
     bench.add_argument("--seeds", type=int, default=3, help="rtf: runs per RTF (seeds 1..N)")
-    bench.add_argument("--out", type=Path, default=WORKSPACE / "bags" / "bench_rtf")
+    bench.add_argument("--out", type=Path, default=RUNS_DIR / "bench_rtf")
     return run_bench
 
 
