@@ -135,6 +135,13 @@ def test_a_scenario_run_with_the_installed_rfidnav_executable_succeeds_on_the_in
     assert (run / "bag" / "metadata.yaml").is_file()   # the installed recorder wrote the bag
 
 
+def test_the_installed_rfidnav_test_says_in_one_line_that_the_suite_runs_from_a_source_tree(
+        workspace: Workspace) -> None:
+    result = workspace.sourced(f"{workspace.install / 'rfidnav_bringup' / 'lib' / 'rfidnav_bringup' / 'rfidnav'} test")
+    assert result.returncode == 2, output(result)
+    assert result.stderr.count("\n") == 1 and "colcon test" in result.stderr, result.stderr
+
+
 def test_colcon_test_runs_a_packages_share_of_the_suite_from_the_install(workspace: Workspace) -> None:
     result = workspace.colcon("test", "--packages-ignore", "rfidnav_msgs", "--packages-select", TESTED_PACKAGE)
     assert result.returncode == 0, output(result)

@@ -181,6 +181,10 @@ LINTERS = (("ruff", ["-m", "ruff", "check", "--quiet", "."]), ("mypy", ["-m", "m
 def verb_test(args) -> int:
     """ruff and mypy on the workspace (unless --no-lint), then pytest: on the test files or ids given, else on
     the whole of test/ (the tiers: ``-m unit`` and the like, see test/conftest.py)."""
+    if not (WORKSPACE / "test").is_dir():
+        print(f"rfidnav test: no test/ beside {WORKSPACE}: the suite runs from the source tree (./rfidnav test), "
+              "or from a colcon workspace with colcon test", file=sys.stderr)
+        return 2
     if not args.no_lint:
         for name, command in LINTERS:
             code = subprocess.call([sys.executable, *command], cwd=WORKSPACE)
