@@ -18,8 +18,11 @@ setup(
         *((f"share/{package_name}/{path.parent}", [f"../{path}"]) for path in config_files),
     ],
     install_requires=["setuptools"],
+    extras_require={"test": ["pytest"]},   # colcon test runs pytest here: this package's share of test/ (conftest.py)
     zip_safe=True,
     maintainer="rfidnav developers",
     description="Orchestration of rfidnav: the CLI, scenarios, node processes, the orchestrator, metrics, reports.",
     license="Apache-2.0",
+    # The command line as an executable of the package: <install>/lib/rfidnav_bringup/rfidnav VERB in a colcon install.
+    entry_points={"console_scripts": ["rfidnav = rfidnav_bringup.cli:main"]},
 )

@@ -11,6 +11,7 @@ setup(
         ("share/" + package_name, ["package.xml"]),
     ],
     install_requires=["setuptools"],
+    extras_require={"test": ["pytest"]},   # colcon test runs pytest here: this package's share of test/ (conftest.py)
     zip_safe=True,
     maintainer="rfidnav developers",
     description="Hardware drivers of rfidnav: an LLRP RFID reader with phase, the iRobot Create base, a WiFi scanner.",

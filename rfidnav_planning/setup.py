@@ -11,6 +11,7 @@ setup(
         ("share/" + package_name, ["package.xml"]),
     ],
     install_requires=["setuptools"],
+    extras_require={"test": ["pytest"]},   # colcon test runs pytest here: this package's share of test/ (conftest.py)
     zip_safe=True,
     maintainer="rfidnav developers",
     description=("Planners and navigators of rfidnav: the partition path planner and navigator (paper 000), the "

@@ -9,6 +9,9 @@ NAME, so ``./rfidnav test -m unit`` selects a tier:
 * ``slow``: pure code too, but whole in-process missions, reproductions or comparisons against scikit-fuzzy;
 * ``node``: real nodes in this process on a private context and executor (``support.graph.Graph``);
 * ``graph``: node processes over DDS, the CLI, the recorder and player, LLRP and serial peers.
+
+Under ``colcon test`` pytest runs in a package's folder, whose ``test`` links here: this file is then loaded as
+``<package>/test/conftest.py`` and collects only the modules that belong to that package (support/packages.py).
 """
 
 from __future__ import annotations
@@ -21,16 +24,27 @@ os.environ["ROS_PYTHON_CHECK_FIELDS"] = "1"
 
 
 from collections.abc import Iterator  # noqa: E402
+from pathlib import Path  # noqa: E402
 from typing import TYPE_CHECKING  # noqa: E402
 
 import pytest  # noqa: E402
 
-from rfidnav_bringup.processes import DomainLease  # noqa: E402
+from support.packages import owner  # noqa: E402
 
 if TYPE_CHECKING:
     from support.graph import Graph
 
 TIERS = ("unit", "slow", "node", "graph")
+# The package colcon tests, when this file is loaded through its link (the path is not resolved); None from test/.
+HERE = Path(__file__).parent
+COLCON_PACKAGE = HERE.parent.name if (HERE.parent / "package.xml").is_file() else None
+
+
+def pytest_ignore_collect(collection_path: Path, config: pytest.Config) -> bool | None:
+    """Under colcon test, skip (without importing them) the test modules of the other packages."""
+    if COLCON_PACKAGE and collection_path.suffix == ".py" and collection_path.name.startswith("test_"):
+        return owner(collection_path.resolve()) != COLCON_PACKAGE or None
+    return None
 
 
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
@@ -49,6 +63,9 @@ def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item
 @pytest.fixture
 def domain():
     """A DDS domain leased for one test (as ./rfidnav run leases one), so concurrent sessions never cross-talk."""
+    # Imported here, not at the top: only the tests taking this fixture need rfidnav_bringup (support/packages.py).
+    from rfidnav_bringup.processes import DomainLease
+
     lease = DomainLease()
     try:
         yield lease.domain_id

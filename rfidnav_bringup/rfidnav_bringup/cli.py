@@ -22,6 +22,9 @@ from rfidnav_common.errors import ConfigError, RfidnavError
 from rfidnav_common.step_ledger import CLOCKS
 
 WORKSPACE = Path(__file__).resolve().parents[2]
+# Runs go to the source tree's bags/ (./rfidnav, a colcon --symlink-install), and from a colcon install, where
+# WORKSPACE is the install's lib/pythonX.Y, to bags/ in the current folder.
+RUNS_DIR = WORKSPACE / "bags" if (WORKSPACE / "rfidnav").is_file() else Path.cwd() / "bags"
 DEMO_SCENARIO = "hallway"
 DEMO_RTF = 3.0
 VERB_ENTRY_POINTS = "rfidnav.verbs"
@@ -103,7 +106,7 @@ def add_run_options(parser: argparse.ArgumentParser, default_rtf: float) -> None
                         help="stepped (default): the simulator waits for our nodes to answer each step, so a run "
                              "follows its seed, not the machine's load; free: free-running at the RTF")
     parser.add_argument("--seed", type=int, default=1, help="run seed (every node derives its own)")
-    parser.add_argument("--out", type=Path, default=WORKSPACE / "bags", help="folder for the run folder")
+    parser.add_argument("--out", type=Path, default=RUNS_DIR, help="folder for the run folder")
     parser.add_argument("--robot", metavar="PROFILE",
                         help="run the roles a robot profile (config/robots/PROFILE.yaml) names with its drivers")
     parser.add_argument("--swap", type=key_value, action="append", default=[], metavar="ROLE=CMD",
@@ -257,6 +260,10 @@ def pytest_command(pytest_args: list[str], cwd: Path) -> list[str]:
 def verb_test(args) -> int:
     """ruff and mypy on the workspace (unless --no-lint), then pytest (the tiers: ``-m unit`` and the like, see
     test/conftest.py)."""
+    if not (WORKSPACE / "test").is_dir():
+        print(f"rfidnav test: no test/ beside {WORKSPACE}: the suite runs from the source tree (./rfidnav test), "
+              "or from a colcon workspace with colcon test", file=sys.stderr)
+        return 2
     if not args.no_lint:
         for name, command in LINTERS:
             code = subprocess.call([sys.executable, *command], cwd=WORKSPACE)

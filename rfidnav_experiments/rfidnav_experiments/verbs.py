@@ -9,7 +9,7 @@ import json
 import math
 from pathlib import Path
 
-from rfidnav_bringup.cli import WORKSPACE, Handler
+from rfidnav_bringup.cli import RUNS_DIR, Handler
 from rfidnav_common.errors import ConfigError
 
 
@@ -37,7 +37,7 @@ def add_reproduce(verbs: argparse._SubParsersAction) -> Handler:
     reproduce = verbs.add_parser("reproduce", help="the papers' experiments in-process, beside the papers' figures")
     names = reproduce.add_subparsers(dest="name", required=True, metavar="EXPERIMENT")
     common = argparse.ArgumentParser(add_help=False)
-    common.add_argument("--out", type=Path, default=WORKSPACE / "bags" / "reproduce",
+    common.add_argument("--out", type=Path, default=RUNS_DIR / "reproduce",
                         help="folder for the rows, tables and plots")
     common.add_argument("--json", action="store_true", help="print the rows as JSON on stdout")
     flc = names.add_parser("flc", parents=[common], help="paper 001 sec. V: the fuzzy heading controller's "
@@ -80,9 +80,9 @@ def add_calibrate(verbs: argparse._SubParsersAction) -> Handler:
     offset.add_argument("--out", type=Path, help="the --params file with the offset set, may be the same file "
                                                  "(default: print only)")
     offset.add_argument("--json", action="store_true")
-    offset.add_argument("--params", type=Path, default=WORKSPACE / "config" / "params" / "flc_tuned.yaml",
+    offset.add_argument("--params", type=Path,
                         help="the heading_controller parameter file (its left and right antenna ports; the base of "
-                             "--out)")
+                             "--out); default: the shipped config/params/flc_tuned.yaml")
     offset.add_argument("--tag", help="the tag's id (EPC hex); default: the tag with the most same-channel pairs")
     offset.add_argument("--duration", type=positive_seconds, default=20.0, help="seconds to listen once reads arrive")
     offset.add_argument("--wait", type=positive_seconds, default=10.0,
@@ -94,8 +94,10 @@ def add_calibrate(verbs: argparse._SubParsersAction) -> Handler:
 
 def run_calibrate(args: argparse.Namespace) -> int:
     if args.name == "phase-offset":
+        from rfidnav_bringup.scenario import CONFIG_DIR
         from rfidnav_experiments.calibrate.phase_offset import MIN_PAIRS, calibrate_phase_offset
 
+        args.params = args.params or CONFIG_DIR / "params" / "flc_tuned.yaml"
         if not args.params.is_file():
             raise ConfigError("--params", "", f"no such parameter file: {args.params}")
         min_pairs = MIN_PAIRS if args.min_pairs is None else args.min_pairs
@@ -139,7 +141,7 @@ def add_bench(verbs: argparse._SubParsersAction) -> Handler:
                      help="busy-loop processes kept running through the sweep (a loaded machine)")
     rtf.add_argument("--tolerance", type=float, default=0.10, help="allowed RMSE growth over the lowest RTF")
     rtf.add_argument("--seeds", type=int, default=3, help="runs per RTF (seeds 1..N)")
-    rtf.add_argument("--out", type=Path, default=WORKSPACE / "bags" / "bench_rtf", help="folder for the runs")
+    rtf.add_argument("--out", type=Path, default=RUNS_DIR / "bench_rtf", help="folder for the runs")
     planner = names.add_parser("planner", parents=[common], help="Algorithm 1 and a reader round in a 30 x 30 m "
                                                                  "field at r = 2 cm")
     planner.add_argument("--plans", type=int, default=200, help="random segments planned")
