@@ -56,6 +56,8 @@ PYTHON_KEYS = {
     "ruamel.yaml": "python3-ruamel.yaml", "pytest": "python3-pytest", "hypothesis": "python3-hypothesis",
     "scikit-fuzzy": "python3-scikit-fuzzy-pip", "rosbags": "python3-rosbags-pip", "mcap": "python3-mcap-pip",
     "mcap-ros2-support": "python3-mcap-ros2-support-pip", "llrpkit": "python3-llrpkit-pip",
+    # not confirmed in rosdistro here (no network to check): pip keys of our own, so they resolve anyway
+    "foxglove-sdk": "python3-foxglove-sdk-pip", "rich": "python3-rich-pip", "websockets": "python3-websockets-pip",
 }
 TEST_TAGS_ALL = ("depend", "exec_depend", "test_depend")
 
