@@ -49,10 +49,6 @@ class LlrpReaderParameters:
         if len(self.antenna_positions) != 3 * len(self.antenna_facing):
             raise ParameterError("antenna_positions", f"expected 3 numbers per antenna_facing entry "
                                  f"({3 * len(self.antenna_facing)}), got {len(self.antenna_positions)}")
-        undescribed = [a for a in self.antennas if a > len(self.antenna_facing)]
-        if undescribed:
-            raise ParameterError("antennas", f"ports {undescribed} have no antenna_positions / antenna_facing "
-                                 f"(they describe ports 1-{len(self.antenna_facing)})")
         unknown = [facing for facing in self.antenna_facing if facing not in FACINGS]
         if unknown:
             raise ParameterError("antenna_facing", f"{unknown} not among {', '.join(FACINGS)}")
@@ -65,10 +61,14 @@ class LlrpReaderParameters:
             raise ParameterError("batch_period_s", f"must not be negative, got {self.batch_period_s}")
 
     def antenna_frames(self) -> list[Frame]:
-        """The frames of the antennas inventoried (``antennas``; empty: every one described)."""
+        """The frames of the antennas inventoried (``antennas``; empty: every one described); a port without
+        antenna_positions / antenna_facing has none (``undescribed_ports``)."""
         described = antenna_frames(self.frame_id, self.antenna_frame_prefix, range(1, len(self.antenna_facing) + 1),
                                    self.antenna_positions, self.antenna_facing)
         return [frame for port, frame in enumerate(described, start=1) if not self.antennas or port in self.antennas]
+
+    def undescribed_ports(self) -> list[int]:
+        return [port for port in self.antennas if port > len(self.antenna_facing)]
 
     def published_antenna_ports(self) -> tuple[str, tuple[int, ...]]:
         """The parameter naming the antenna ports whose reads reach /rfid/reads, and those ports (empty: every

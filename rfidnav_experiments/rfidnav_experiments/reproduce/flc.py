@@ -141,6 +141,7 @@ class Summary:
 SOURCES: dict[str, tuple[str, str]] = {
     "rfid_reader_sim.rate_hz": ("ours", "25 inventory rounds per second: the paper gives no reader rate"),
     "rfid_reader_sim.frame_id": ("ours", "the robot's frame; no effect on the figures"),
+    "rfid_reader_sim.antenna_frame_prefix": ("ours", "the antennas' frames on /tf_static; no effect on the figures"),
     "rfid_reader_sim.antenna_positions": ("ours", "receiving antennas 6 cm apart (below lambda/4: the tag's side "
                                                   "is unambiguous) 30 cm up, the floor antenna 5 cm up; the paper "
                                                   "gives no geometry"),

@@ -209,6 +209,7 @@ SOURCES: dict[str, tuple[str, str]] = {
     "partition_localizer.rogue_distance_factor": ("ours", "rogue-tag rejection; no rogue tags here"),
     "partition_localizer.map_file": ("ours", "unused in-process: the tagged area is world.field_m"),
     "partition_localizer.map_frame": ("ours", "no effect on the figures"),
+    "partition_localizer.publish_tf": ("ours", "map -> odom on /tf over DDS; no effect on the figures"),
     "partition_localizer.seed": ("ours", "the node's; in-process each run draws from runs.seed, method, r, level "
                                          "and run"),
     "partition_navigator.approximation_level": ("paper", "sec. 6.3.2: N = 1-8 (Figs. 12-14); the headline at 4, the "

@@ -152,6 +152,7 @@ READER_SOURCES: dict[str, tuple[str, str]] = {
     "rfid_reader_sim.round_failure_probability": ("ours", "sec. 4.1 item 3: negotiations with a tag fail, no rate "
                                                           "given; one poll in ten reads nothing"),
     "rfid_reader_sim.frame_id": ("ours", "the robot's frame; no effect on the figures"),
+    "rfid_reader_sim.antenna_frame_prefix": ("ours", "the antennas' frames on /tf_static; no effect on the figures"),
     "rfid_reader_sim.antenna_positions": ("ours", "at the robot's centre, 5 mm above the floor: the paper gives "
                                                   "no geometry"),
     "rfid_reader_sim.antenna_facing": ("paper", "sec. 3.3, 4.1: a reader scanning the tags on the ground"),
@@ -171,6 +172,7 @@ NAVIGATOR_SOURCES: dict[str, tuple[str, str]] = {
     "two_tier_navigator.control_rate_hz": ("ours", "20 control steps/s: the in-process step"),
     "two_tier_navigator.service_timeout_s": ("ours", "unused in-process: the server answers at once"),
     "two_tier_navigator.map_frame": ("ours", "no effect on the figures"),
+    "two_tier_navigator.publish_tf": ("ours", "map -> odom on /tf over DDS; no effect on the figures"),
     "two_tier_navigator.landmark_spacing_m": ("ours", "Fig. 4's tolerable distance to the next landmark: none given"),
     "two_tier_navigator.calibration_distance_m": ("ours", "A5's 'after moving a certain distance': none given"),
     "two_tier_navigator.deviation_threshold_m": ("ours", "A5's 'a certain threshold': none given"),
