@@ -14,15 +14,13 @@ import sys
 import time
 from typing import Any, TextIO
 
-import rclpy
 import yaml
-from rclpy.context import Context
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
 from rfidnav_common.errors import RfidnavError
-from rfidnav_common.ros import message_class
+from rfidnav_common.ros import message_class, standalone_node
 
 
 class EchoError(RfidnavError):
@@ -51,13 +49,8 @@ def echo(topic: str, count: int, wait_s: float, timeout_s: float, out: TextIO = 
          domain_id: int | None = None) -> int:
     """Print ``count`` messages of ``topic``; returns how many came (EchoError when fewer did in time). The
     domain is ROS_DOMAIN_ID's unless ``domain_id`` is given."""
-    context = Context()
-    rclpy.init(context=context, domain_id=domain_id)
-    node = Node("rfidnav_echo", context=context)
-    executor = SingleThreadedExecutor(context=context)
-    executor.add_node(node)
     received: list[Any] = []
-    try:
+    with standalone_node("rfidnav_echo", domain_id) as (node, executor):
         type_name = wait_for_type(node, executor, topic, wait_s)
         cls = message_class(type_name)
         if cls is None:
@@ -77,10 +70,6 @@ def echo(topic: str, count: int, wait_s: float, timeout_s: float, out: TextIO = 
         if len(received) < count:
             raise EchoError(f"{topic}: {len(received)} of {count} messages within {timeout_s:g} s")
         return len(received)
-    finally:
-        executor.shutdown()
-        node.destroy_node()
-        context.try_shutdown()
 
 
 def wait_for_type(node: Node, executor: SingleThreadedExecutor, topic: str, wait_s: float) -> str:

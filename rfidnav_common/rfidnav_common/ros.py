@@ -6,7 +6,8 @@ import dataclasses
 import importlib
 import sys
 import typing
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
 from typing import Any
 
 import rclpy
@@ -16,7 +17,7 @@ from nav_msgs.msg import Odometry
 from rcl_interfaces.msg import ParameterDescriptor
 from rclpy.context import Context
 from rclpy.exceptions import InvalidParameterTypeException
-from rclpy.executors import Executor, ExternalShutdownException
+from rclpy.executors import Executor, ExternalShutdownException, SingleThreadedExecutor
 from rclpy.experimental import EventsExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
@@ -131,6 +132,23 @@ def run_nodes(make_nodes: Sequence[Callable[[], Node]], args: list[str] | None =
         executor.shutdown()
         rclpy.try_shutdown()
     return code
+
+
+@contextmanager
+def standalone_node(name: str, domain_id: int | None = None) -> Iterator[tuple[Node, SingleThreadedExecutor]]:
+    """A node on its own context and executor, for a command that listens to a graph it is not part of (echo,
+    a calibration); the domain is ROS_DOMAIN_ID's unless ``domain_id`` is given. All three end with the block."""
+    context = Context()
+    rclpy.init(context=context, domain_id=domain_id)
+    node = Node(name, context=context)
+    executor = SingleThreadedExecutor(context=context)
+    executor.add_node(node)
+    try:
+        yield node, executor
+    finally:
+        executor.shutdown()
+        node.destroy_node()
+        context.try_shutdown()
 
 
 def odometry_pose(msg: Odometry) -> tuple[float, float, float]:

@@ -179,26 +179,16 @@ def listen(duration_s: float, wait_s: float, domain_id: int | None = None) -> li
     """The valid reads (tag_route.observe, as the controller validates them) of every /rfid/reads message in
     ``duration_s`` of wall time, once a publisher is there (CalibrationError if none within ``wait_s``). The
     domain is ROS_DOMAIN_ID's unless ``domain_id`` is given."""
-    import rclpy
-    from rclpy.context import Context
-    from rclpy.executors import SingleThreadedExecutor
-    from rclpy.node import Node
-
-    from rfidnav_common.ros import SENSOR_QOS
+    from rfidnav_common.ros import SENSOR_QOS, standalone_node
     from rfidnav_control.tag_route import observe
     from rfidnav_msgs.msg import TagReadArray  # type: ignore[attr-defined]  # generated
 
-    context = Context()
-    rclpy.init(context=context, domain_id=domain_id)
-    node = Node("rfidnav_calibrate", context=context)
-    executor = SingleThreadedExecutor(context=context)
-    executor.add_node(node)
     rounds: list[list[TagObservation]] = []
 
     def on_reads(msg: Any) -> None:
         rounds.append([o for o in map(observe, msg.readings) if o is not None])
 
-    try:
+    with standalone_node("rfidnav_calibrate", domain_id) as (node, executor):
         node.create_subscription(TagReadArray, "/rfid/reads", on_reads, SENSOR_QOS)
         deadline = time.monotonic() + wait_s
         while not rounds:
@@ -213,10 +203,6 @@ def listen(duration_s: float, wait_s: float, domain_id: int | None = None) -> li
         while time.monotonic() < end:
             executor.spin_once(timeout_sec=min(0.05, max(0.0, end - time.monotonic())))
         return rounds
-    finally:
-        executor.shutdown()
-        node.destroy_node()
-        context.try_shutdown()
 
 
 def report(estimate: PhaseOffsetEstimate) -> str:
