@@ -17,6 +17,7 @@ import sys
 from collections.abc import Callable
 from importlib.metadata import entry_points
 from pathlib import Path
+from typing import Any
 
 from rfidnav_common.errors import ConfigError, RfidnavError
 from rfidnav_common.step_ledger import CLOCKS
@@ -50,52 +51,44 @@ def rtf_value(text: str) -> float:
         raise argparse.ArgumentTypeError(f"expected a number or 'max', got '{text}'") from None
 
 
+def checked_number(convert: Callable[[str], Any], unreadable: str, accepted: Callable[[Any], bool],
+                   rejected: Callable[[str], str]) -> Callable[[str], Any]:
+    """An argparse ``type``: ``convert`` the text ("expected UNREADABLE" if it cannot be), then keep the value if
+    ``accepted``, else fail with ``rejected(text)``."""
+    def parse(text: str) -> Any:
+        try:
+            value = convert(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected {unreadable}, got '{text}'") from None
+        if not accepted(value):
+            raise argparse.ArgumentTypeError(rejected(text))
+        return value
+
+    return parse
+
+
 MAX_DOMAIN_ID = 101     # ROS 2 on Linux: higher ids run into the ephemeral port range
 
-
-def domain_id(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a whole number, got '{text}'") from None
-    if not 0 <= value <= MAX_DOMAIN_ID:
-        raise argparse.ArgumentTypeError(f"must be 0-{MAX_DOMAIN_ID}, got {value}")
-    return value
+domain_id = checked_number(int, "a whole number", lambda value: 0 <= value <= MAX_DOMAIN_ID,
+                           lambda text: f"must be 0-{MAX_DOMAIN_ID}, got {int(text)}")
+# --max-bag-duration: seconds >= 0 (0: no split).
+seconds_value = checked_number(float, "a number of seconds", lambda seconds: seconds >= 0.0,
+                               lambda text: f"expected seconds >= 0 (0: no split), got {text}")
 
 
 def bag_size_value(text: str) -> int:
     """``--max-bag-size``: 0 (one file) or at least the smallest split size rosbag2's MCAP plugin takes."""
-    from rfidnav_bag.writer import MIN_SPLIT_SIZE
+    from rfidnav_bag.writer import MIN_SPLIT_SIZE  # here, not at the top: it loads mcap (~0.2 s) for every verb
 
-    try:
-        size = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number of bytes, got '{text}'") from None
-    if size != 0 and size < MIN_SPLIT_SIZE:
-        raise argparse.ArgumentTypeError(f"expected 0 (one file) or at least {MIN_SPLIT_SIZE} bytes, got {size}")
-    return size
-
-
-def seconds_value(text: str) -> float:
-    """``--max-bag-duration``: seconds >= 0."""
-    try:
-        seconds = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number of seconds, got '{text}'") from None
-    if not seconds >= 0.0:
-        raise argparse.ArgumentTypeError(f"expected seconds >= 0 (0: no split), got {text}")
-    return seconds
+    parse = checked_number(int, "a number of bytes", lambda size: size == 0 or size >= MIN_SPLIT_SIZE,
+                           lambda text: f"expected 0 (one file) or at least {MIN_SPLIT_SIZE} bytes, got {int(text)}")
+    return parse(text)
 
 
 def port_number(text: str, lowest: int = 1) -> int:
     """A TCP port (``lowest`` 0: any free port, which the server then names)."""
-    try:
-        port = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a TCP port number, got '{text}'") from None
-    if not lowest <= port <= 65535:
-        raise argparse.ArgumentTypeError(f"expected a TCP port {lowest}-65535, got {port}")
-    return port
+    return checked_number(int, "a TCP port number", lambda port: lowest <= port <= 65535,
+                          lambda text: f"expected a TCP port {lowest}-65535, got {int(text)}")(text)
 
 
 def add_run_options(parser: argparse.ArgumentParser, default_rtf: float) -> None:

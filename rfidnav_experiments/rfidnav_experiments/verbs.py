@@ -9,7 +9,7 @@ import json
 import math
 from pathlib import Path
 
-from rfidnav_bringup.cli import RUNS_DIR, Handler
+from rfidnav_bringup.cli import RUNS_DIR, Handler, checked_number
 from rfidnav_common.errors import ConfigError
 
 
@@ -55,14 +55,8 @@ def add_reproduce(verbs: argparse._SubParsersAction) -> Handler:
     return run_reproduce
 
 
-def positive_seconds(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected seconds, got '{text}'") from None
-    if not (math.isfinite(value) and value > 0):
-        raise argparse.ArgumentTypeError(f"expected a positive number of seconds, got '{text}'")
-    return value
+positive_seconds = checked_number(float, "seconds", lambda value: math.isfinite(value) and value > 0,
+                                  lambda text: f"expected a positive number of seconds, got '{text}'")
 
 
 def add_calibrate(verbs: argparse._SubParsersAction) -> Handler:
