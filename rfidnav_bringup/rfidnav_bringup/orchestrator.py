@@ -42,7 +42,6 @@ from rclpy.node import Node
 from std_srvs.srv import Trigger
 
 from rfidnav_bag.errors import BagError
-from rfidnav_bag.live_view import DEFAULT_HOST, ws_url
 from rfidnav_bag.recorder_node import recordable_definition
 from rfidnav_bringup.errors import ReadinessError
 from rfidnav_bringup.processes import DomainLease, NodeProcess, resolve_executable
@@ -291,6 +290,8 @@ class Orchestrator:
                         f"nodes {', '.join(sorted(expected))} to join the graph")
         port = self.options.live_port
         if LIVE_ROLE in self.processes and port is not None:
+            from rfidnav_bag.live_view import DEFAULT_HOST, ws_url  # only with --live: it loads foxglove (~0.25 s)
+
             self.spin_until(executor, lambda: listens(self.processes[LIVE_ROLE], port), READY_TIMEOUT_S,
                             f"the live view to listen on port {port}")
             self.say(f"live view: {ws_url(DEFAULT_HOST, port)} "

@@ -266,9 +266,10 @@ class LlrpReaderNode(Node):
         self.endpoint = f"{self.params.host}:{self.params.port}"
         self.reads_pub = self.create_publisher(TagReadArray, "/rfid/reads", SENSOR_QOS)
         publish_static_frames(self, self.params.antenna_frames())
-        if self.params.undescribed_ports():
-            self.get_logger().warning(f"antenna ports {self.params.undescribed_ports()} have no antenna_positions / "
-                                      f"antenna_facing: no frame for them on /tf_static")
+        undescribed = self.params.undescribed_ports()
+        if undescribed:
+            self.get_logger().warning(f"antenna ports {undescribed} have no antenna_positions / antenna_facing: no "
+                                      f"frame for them on /tf_static")
         # Reliable like the other streams; diagnostic_aggregator's default subscription (reliable) matches it.
         self.diagnostics_pub = self.create_publisher(DiagnosticArray, "/diagnostics", SENSOR_QOS)
         self.link = ReaderLink(self.params)
