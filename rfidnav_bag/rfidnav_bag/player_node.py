@@ -42,7 +42,7 @@ from rfidnav_bag.bags import BagInfo, RawMessage, TopicInfo, bag_info, read_raw
 from rfidnav_bag.errors import BagError
 from rfidnav_common.config import param
 from rfidnav_common.errors import ConfigError, ParameterError
-from rfidnav_common.ros import declare_parameters, message_class, run_node
+from rfidnav_common.ros import declare_parameters, message_class, run_node, stop_requested
 
 TICK_S = 0.005  # the pacing timer's period: the worst lateness of a message [s, wall]
 VOLATILE_DEPTH = 100  # room for a burst of due messages at a high rate before a reliable reader acks
@@ -224,8 +224,9 @@ class PlayerNode(Node):
 
 
 def spin_until_played(executor: Executor, node: PlayerNode) -> int:
-    """Spin until playback is done; its exit code."""
-    executor.spin_until_future_complete(node.done)
+    """Spin until playback is done (or the process is stopped); its exit code."""
+    while not node.done.done() and not stop_requested() and node.context.ok():
+        executor.spin_once(timeout_sec=0.1)
     code = node.done.result() if node.done.done() else 0
     node.wait_for_acknowledgements()
     return code

@@ -26,18 +26,15 @@ shut the context down at once, which would drop the messages still queued in the
 
 from __future__ import annotations
 
-import signal
 import time
 from dataclasses import dataclass
 from pathlib import Path
-from types import FrameType
 from typing import Any
 
 import rclpy
 from rclpy.clock import Clock, ClockType
 from rclpy.executors import Executor
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
-from rclpy.signals import SignalHandlerOptions
 from rclpy.subscription import Subscription
 from rosbags.interfaces import Qos, QosDurability, QosHistory, QosLiveliness, QosReliability, QosTime
 
@@ -46,7 +43,7 @@ from rfidnav_bag.errors import BagError
 from rfidnav_bag.writer import COMPRESSIONS, MIN_SPLIT_SIZE, BagWriter, StorageOptions, Topic
 from rfidnav_common.config import param
 from rfidnav_common.errors import ConfigError, ParameterError
-from rfidnav_common.ros import declare_parameters, events_executor, message_class, run_node
+from rfidnav_common.ros import declare_parameters, events_executor, message_class, run_node, stop_requested
 from rfidnav_common.stepped_node import SteppedNode
 
 RECORD_DEPTH = 1000
@@ -282,18 +279,6 @@ class RecorderNode(SteppedNode):
                                f"in {self.params.output_dir} ({files} file{'s' if files > 1 else ''})")
 
 
-class _StopRequest:
-    """SIGINT/SIGTERM set a flag the spin loop checks; a second signal interrupts at once."""
-
-    def __init__(self) -> None:
-        self.requested = False
-
-    def __call__(self, signum: int, frame: FrameType | None) -> None:
-        if self.requested:
-            raise KeyboardInterrupt
-        self.requested = True
-
-
 def _drain(executor: Executor, node: RecorderNode) -> None:
     """Record what already reached this process: spin until a short wait delivers nothing."""
     deadline = time.monotonic() + DRAIN_LIMIT_S
@@ -305,11 +290,8 @@ def _drain(executor: Executor, node: RecorderNode) -> None:
 
 
 def spin_until_stopped(executor: Executor, node: RecorderNode) -> int:
-    """Record until SIGINT/SIGTERM (or shutdown), then what already reached this process."""
-    stop = _StopRequest()
-    signal.signal(signal.SIGINT, stop)
-    signal.signal(signal.SIGTERM, stop)
-    while not stop.requested and rclpy.ok():
+    """Record until SIGINT, SIGTERM or SIGHUP (or shutdown), then what already reached this process."""
+    while not stop_requested() and rclpy.ok(context=node.context):
         # Bounded waits: a Python signal handler runs only when control returns from the executor.
         executor.spin_once(timeout_sec=0.1)
     node.stop_discovery()
@@ -318,8 +300,8 @@ def spin_until_stopped(executor: Executor, node: RecorderNode) -> int:
 
 
 def main(args: list[str] | None = None) -> int:
-    """rfidnav_common.ros.run_node with rclpy's signal handlers off: a stop drains before the bag closes."""
-    return run_node(RecorderNode, args, events_executor, spin_until_stopped, SignalHandlerOptions.NO)
+    """rfidnav_common.ros.run_node with its own spin: a stop drains before the bag closes."""
+    return run_node(RecorderNode, args, events_executor, spin_until_stopped)
 
 
 if __name__ == "__main__":

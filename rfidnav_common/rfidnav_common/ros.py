@@ -4,10 +4,13 @@ from __future__ import annotations
 
 import dataclasses
 import importlib
+import signal
 import sys
+import threading
 import typing
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
+from types import FrameType
 from typing import Any
 
 import rclpy
@@ -82,37 +85,61 @@ def events_executor(context: Context | None = None) -> Executor:
     return EventsExecutor(context=context)
 
 
-def spin_until_shutdown(executor: Executor, _node: Node) -> int:
-    while rclpy.ok():
+STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
+
+
+class _StopRequest:
+    """The node process's stop: any of STOP_SIGNALS sets a flag that the spin loops check between bounded spins,
+    so that the main thread itself ends the spin, destroys the nodes and shuts rclpy down, in that order. (rclpy's
+    own handlers shut the context down from another thread, under a callback or the teardown: a publication or
+    a destroy then fails at random and the process exits 1.) Later signals change nothing: the parent-death
+    signal comes once per thread of a dying parent, and a node that will not stop is SIGKILLed by its parent."""
+
+    def __init__(self) -> None:
+        self.requested = False
+
+    def __call__(self, _signum: int, _frame: FrameType | None) -> None:
+        self.requested = True
+
+    def install(self) -> None:
+        self.requested = False
+        if threading.current_thread() is threading.main_thread():   # a node run by a test's thread has none
+            for signum in STOP_SIGNALS:
+                signal.signal(signum, self)
+
+
+_STOP = _StopRequest()
+
+
+def stop_requested() -> bool:
+    """Whether the node process was asked to stop (SIGINT, SIGTERM or SIGHUP): the condition of every spin loop."""
+    return _STOP.requested
+
+
+def spin_until_shutdown(executor: Executor, node: Node) -> int:
+    while rclpy.ok(context=node.context) and not stop_requested():
         # Bounded waits: Python signal handlers run only when control returns from the executor.
-        try:
-            executor.spin_once(timeout_sec=0.1)
-        except RuntimeError:
-            # Ctrl-C shuts the context down while the EventsExecutor may still be handing over an event (seen in a
-            # container of four nodes): once the context is down that is the end of the run, not an error.
-            if rclpy.ok():
-                raise
+        executor.spin_once(timeout_sec=0.1)
     return 0
 
 
 def run_node(make_node: Callable[[], Node], args: list[str] | None = None,
              make_executor: Callable[[], Executor] = events_executor,
-             spin: Callable[[Executor, Node], int] = spin_until_shutdown,
-             signal_handler_options: SignalHandlerOptions = SignalHandlerOptions.ALL) -> int:
-    """Jazzy main() of every rfidnav node: init, ``spin`` (until Ctrl-C or shutdown by default; its value is
-    the exit code), always destroy the node and shut down.
+             spin: Callable[[Executor, Node], int] = spin_until_shutdown) -> int:
+    """Jazzy main() of every rfidnav node: init, ``spin`` (until SIGINT, SIGTERM, SIGHUP or shutdown by default;
+    its value is the exit code), always destroy the node and shut down.
 
     A configuration problem found while constructing the node is printed as one line and exits 2."""
-    return run_nodes([make_node], args, make_executor, spin, signal_handler_options)
+    return run_nodes([make_node], args, make_executor, spin)
 
 
 def run_nodes(make_nodes: Sequence[Callable[[], Node]], args: list[str] | None = None,
               make_executor: Callable[[], Executor] = events_executor,
-              spin: Callable[[Executor, Node], int] = spin_until_shutdown,
-              signal_handler_options: SignalHandlerOptions = SignalHandlerOptions.ALL) -> int:
+              spin: Callable[[Executor, Node], int] = spin_until_shutdown) -> int:
     """run_node for several nodes in one process and on one executor (rfidnav_bringup.container); ``spin`` is
     given the first."""
-    rclpy.init(args=args, signal_handler_options=signal_handler_options)
+    rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
+    _STOP.install()
     nodes: list[Node] = []
     executor = make_executor()
     code = 0
@@ -137,9 +164,12 @@ def run_nodes(make_nodes: Sequence[Callable[[], Node]], args: list[str] | None =
 @contextmanager
 def standalone_node(name: str, domain_id: int | None = None) -> Iterator[tuple[Node, SingleThreadedExecutor]]:
     """A node on its own context and executor, for a command that listens to a graph it is not part of (echo,
-    a calibration); the domain is ROS_DOMAIN_ID's unless ``domain_id`` is given. All three end with the block."""
+    a calibration); the domain is ROS_DOMAIN_ID's unless ``domain_id`` is given. All three end with the block.
+
+    rclpy's signal handlers are left out: Ctrl-C (and the command line's SIGTERM and SIGHUP) end the command as
+    Python exceptions, between two bounded spins, instead of shutting the context down under the executor."""
     context = Context()
-    rclpy.init(context=context, domain_id=domain_id)
+    rclpy.init(context=context, domain_id=domain_id, signal_handler_options=SignalHandlerOptions.NO)
     node = Node(name, context=context)
     executor = SingleThreadedExecutor(context=context)
     executor.add_node(node)

@@ -22,7 +22,7 @@ from builtin_interfaces.msg import Time
 from rclpy.executors import Executor, SingleThreadedExecutor
 from rclpy.node import Node
 
-from rfidnav_common.ros import SENSOR_QOS, declare_parameters, run_node
+from rfidnav_common.ros import SENSOR_QOS, declare_parameters, run_node, stop_requested
 from rfidnav_drivers.errors import DriverError
 from rfidnav_drivers.parameters import WifiScannerParameters
 from rfidnav_drivers.wifi_scan import AccessPoint, IwError, IwNotFound, check_interface, run_scan, scan_command
@@ -120,7 +120,7 @@ class WifiScannerNode(Node):
 
 def spin_until_failed(executor: Executor, node: Node) -> int:
     """run_node's spin: until shutdown (0) or until the scanner has failed (FAILED_EXIT_CODE)."""
-    while rclpy.ok(context=node.context) and getattr(node, "failed", None) is None:
+    while rclpy.ok(context=node.context) and not stop_requested() and getattr(node, "failed", None) is None:
         # Bounded waits: Python signal handlers run only when control returns from the executor.
         executor.spin_once(timeout_sec=0.1)
     return FAILED_EXIT_CODE if getattr(node, "failed", None) is not None else 0
