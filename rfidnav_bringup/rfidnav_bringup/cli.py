@@ -12,6 +12,7 @@ import argparse
 import json
 import math
 import os
+import signal
 import subprocess
 import sys
 from collections.abc import Callable
@@ -91,6 +92,19 @@ def port_number(text: str, lowest: int = 1) -> int:
                           lambda text: f"expected a TCP port {lowest}-65535, got {int(text)}")(text)
 
 
+def add_graph_options(parser: argparse.ArgumentParser, what: str, default_domain: str,
+                      default_discovery: str | None = "localhost") -> None:
+    """--domain and --discovery: which DDS graph ``what`` joins."""
+    parser.add_argument("--domain", type=domain_id, metavar="N",
+                        help=f"the ROS domain of the {what} (0-{MAX_DOMAIN_ID}); default: {default_domain}")
+    parser.add_argument("--discovery", choices=("localhost", "subnet"), default=default_discovery,
+                        help=f"ROS_AUTOMATIC_DISCOVERY_RANGE of the {what}: localhost "
+                             f"({'default; ' if default_discovery == 'localhost' else ''}graphs never mix across "
+                             "machines) or subnet (drivers or a viewer on another machine)"
+                             + ("" if default_discovery else "; default: $ROS_AUTOMATIC_DISCOVERY_RANGE, else "
+                                "localhost"))
+
+
 def add_run_options(parser: argparse.ArgumentParser, default_rtf: float) -> None:
     parser.add_argument("--rtf", type=rtf_value, default=default_rtf,
                         help="real-time factor (sim s per wall s): a ceiling with the stepped clock, which 'max' "
@@ -109,11 +123,7 @@ def add_run_options(parser: argparse.ArgumentParser, default_rtf: float) -> None
     parser.add_argument("--no-record", action="store_true", help="do not record a bag")
     parser.add_argument("--quiet", action="store_true",
                         help="print only the summary (and the line that says how to reach the graph)")
-    parser.add_argument("--domain", type=domain_id, metavar="N",
-                        help=f"run in ROS domain N (0-{MAX_DOMAIN_ID}); default: the first free one of 51-101")
-    parser.add_argument("--discovery", choices=("localhost", "subnet"), default="localhost",
-                        help="ROS_AUTOMATIC_DISCOVERY_RANGE of the run: localhost (default; runs never mix) or "
-                             "subnet (drivers or a viewer on another machine)")
+    add_graph_options(parser, "run", "the first free one of 51-101")
     parser.add_argument("--compress", action="store_true",
                         help="compress the bag's MCAP chunks with zstd (rosbag2's MCAP 'compression: Zstd')")
     parser.add_argument("--max-bag-size", type=bag_size_value, default=0, metavar="BYTES",
@@ -145,6 +155,7 @@ def parser() -> tuple[argparse.ArgumentParser, dict[str, Handler]]:
     replay.add_argument("--loop", action="store_true")
     replay.add_argument("--clock", action="store_true", help="publish /clock from the bag's time")
     replay.add_argument("--start", type=float, default=0.0, help="skip the first S seconds")
+    add_graph_options(replay, "replay", "a free one of 51-101, leased as a run leases one")
     bag = verbs.add_parser("bag", help="bag tools")
     bag_verbs = bag.add_subparsers(dest="bag_verb", required=True)
     info = bag_verbs.add_parser("info", help="topics, types, counts, duration")
@@ -162,6 +173,7 @@ def parser() -> tuple[argparse.ArgumentParser, dict[str, Handler]]:
     echo.add_argument("--count", type=int, default=5, help="messages to print, then exit 0")
     echo.add_argument("--wait", type=float, default=10.0, help="seconds to wait for a publisher")
     echo.add_argument("--timeout", type=float, default=30.0, help="seconds to wait for the messages (else exit 2)")
+    add_graph_options(echo, "graph to listen to", "$ROS_DOMAIN_ID, else 0", default_discovery=None)
     view = verbs.add_parser("view", help="serve a recorded run to Foxglove with its timeline (WebSocket)")
     view.add_argument("bag", type=Path, metavar="RUN_OR_BAG")
     view.add_argument("--port", type=lambda text: port_number(text, lowest=0), default=LIVE_PORT,
@@ -176,7 +188,22 @@ def parser() -> tuple[argparse.ArgumentParser, dict[str, Handler]]:
     return top, handlers
 
 
+class Stopped(KeyboardInterrupt):
+    """SIGTERM or SIGHUP, ending a verb as Ctrl-C (KeyboardInterrupt) does."""
+
+    def __init__(self, signum: int) -> None:
+        super().__init__(signal.Signals(signum).name)
+        self.signum = signum
+
+
+def stop_verb(signum: int, _frame: object) -> None:
+    raise Stopped(signum)
+
+
 def main(argv: list[str] | None = None) -> int:
+    # SIGTERM and SIGHUP end every verb as Ctrl-C does (run and replay handle all three themselves while they run).
+    for signum in (signal.SIGTERM, signal.SIGHUP):
+        signal.signal(signum, stop_verb)
     command_line, handlers = parser()
     args, extra = command_line.parse_known_args(argv)
     if extra and args.verb != "test":
@@ -188,8 +215,8 @@ def main(argv: list[str] | None = None) -> int:
     except (RfidnavError, ConfigError) as error:
         print(f"rfidnav {args.verb}: {error}", file=sys.stderr)
         return 2
-    except KeyboardInterrupt:
-        return 130
+    except KeyboardInterrupt as interrupt:
+        return 128 + getattr(interrupt, "signum", signal.SIGINT)
 
 
 def verb_setup(_args) -> int:
@@ -220,9 +247,11 @@ def verb_run(args, scenario_name: str | None = None) -> int:
                          record=not args.no_record, live_port=args.live, quiet=args.quiet, domain=args.domain,
                          discovery=args.discovery, compress=args.compress, max_bag_size=args.max_bag_size,
                          max_bag_duration_s=args.max_bag_duration)
-    summary = Orchestrator(scenario, options).run()
-    print_summary(summary)
-    return 0 if summary.success else 1
+    orchestrator = Orchestrator(scenario, options)
+    summary = orchestrator.run()
+    if not orchestrator.terminal_lost:
+        print_summary(summary)
+    return orchestrator.exit_code
 
 
 def verb_demo(args) -> int:
@@ -269,18 +298,28 @@ def verb_test(args) -> int:
 
 def verb_replay(args) -> int:
     from rfidnav_bag.bags import bag_info
-    from rfidnav_bringup.processes import resolve_executable
+    from rfidnav_bringup.processes import RUN_DOMAINS, DomainLease, child_environment, reach_text, run_supervised
     from rfidnav_bringup.report import locate_run
 
     _, bag = locate_run(args.bag)
     bag_info(bag)  # fails early, with one clear message, on a missing or truncated bag
+    # A leased domain on this machine by default: a replay republishes the recorded /cmd_vel, which must reach no
+    # robot and no other run.
+    with DomainLease(RUN_DOMAINS if args.domain is None else range(args.domain, args.domain + 1)) as lease:
+        print(f"replaying {bag} on {reach_text(lease.domain_id, args.discovery)}", file=sys.stderr, flush=True)
+        return run_supervised(player_command(bag, args), child_environment(lease.domain_id, args.discovery))
+
+
+def player_command(bag: Path, args: argparse.Namespace) -> list[str]:
+    from rfidnav_bringup.processes import resolve_executable
+
     command = resolve_executable("rfidnav_bag", "player") + [
         "--ros-args", "-p", f"bag:={bag.resolve()}", "-p", f"rate:={float(args.rate)}",
         "-p", f"loop:={str(args.loop).lower()}", "-p", f"clock:={str(args.clock).lower()}",
         "-p", f"start_s:={float(args.start)}"]
     if args.topics:
         command += ["-p", f"topics:={json.dumps(args.topics)}"]
-    return subprocess.call(command)
+    return command
 
 
 def verb_bag(args) -> int:
@@ -316,7 +355,17 @@ def verb_echo(args) -> int:
 
     if args.count < 1:
         raise ConfigError("--count", "", f"must be at least 1, got {args.count}")
-    echo(args.topic, args.count, args.wait, args.timeout)
+    domain = args.domain if args.domain is not None else int(os.environ.get("ROS_DOMAIN_ID") or 0)
+    discovery = args.discovery or os.environ.get("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST").lower()
+    if discovery not in ("localhost", "subnet"):
+        raise ConfigError("ROS_AUTOMATIC_DISCOVERY_RANGE", "", f"echo listens on LOCALHOST or SUBNET, not {discovery}")
+    os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = discovery.upper()
+    print(f"listening to {args.topic} on ROS domain {domain} ({discovery})", file=sys.stderr, flush=True)
+    try:
+        echo(args.topic, args.count, args.wait, args.timeout, domain_id=domain)
+    except BrokenPipeError:
+        # The reader went away (``echo /odom | head``): that is the end of the output, not an error.
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
     return 0
 
 

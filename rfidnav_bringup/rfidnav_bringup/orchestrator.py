@@ -6,9 +6,15 @@ and wait until it is in the graph; start the nodes; wait until every node is in 
 mission's action server answers and the recorder subscribes to every topic it will record (not the
 excluded ones, nor those of a type it cannot store); start the simulation clock and send the goal
 (with the stepped clock the goal first, so that it starts at sim time 0 whatever the load), and show
-its feedback on one progress line; on result, timeout or Ctrl-C cancel the goal, stop the nodes
+its feedback on one progress line; on result, timeout, a stall or a signal cancel the goal, stop the nodes
 (SIGINT, then SIGKILL), stop the recorder last so it finalizes the bag; compute the metrics from the
 bag and write summary.json.
+
+Signals: SIGINT (Ctrl-C), SIGTERM and SIGHUP all end a run that way, a second one too (it only says that the run
+is already stopping); the exit code is then 128 + the first signal's number. Every node dies with the
+orchestrator, even a SIGKILLed one (processes.die_with_parent). While the mission runs, a clock that stops
+advancing is reported within seconds, naming the processes that are stopped and what the clock source says it
+waits for; a second graph whose nodes take our nodes' names (two runs on one domain) ends the run before they mix.
 
 Clocks (``RunOptions.clock``): ``stepped`` (the default for simulated runs) makes robot_sim wait, at every
 publication, for the answers of our nodes of the simulated loop and the recorder (rfidnav_common.stepped_node);
@@ -35,16 +41,18 @@ from typing import Any
 import psutil
 import rclpy
 import yaml
+from rcl_interfaces.msg import Log
 from rclpy.action import ActionClient
 from rclpy.context import Context
 from rclpy.executors import Executor
 from rclpy.node import Node
+from rclpy.signals import SignalHandlerOptions
 from std_srvs.srv import Trigger
 
 from rfidnav_bag.errors import BagError
 from rfidnav_bag.recorder_node import recordable_definition
 from rfidnav_bringup.errors import ReadinessError
-from rfidnav_bringup.processes import DomainLease, NodeProcess, resolve_executable
+from rfidnav_bringup.processes import DomainLease, NodeProcess, child_environment, reach_text, resolve_executable
 from rfidnav_bringup.scenario import (
     KNOWN_NODES,
     NodeSpec,
@@ -54,6 +62,7 @@ from rfidnav_bringup.scenario import (
     node_parameters,
 )
 from rfidnav_common.errors import ConfigError, RfidnavError
+from rfidnav_common.files import write_atomically
 from rfidnav_common.progress import StatusLine
 from rfidnav_common.ros import events_executor, fill_message, interface_class
 from rfidnav_common.step_ledger import CLOCKS
@@ -66,9 +75,10 @@ LIVE_ROLE = "live_view"                  # foxglove_bridge with --live: no parti
 RESEND_ATTEMPTS = 6
 RESEND_TIMEOUT_S = 5.0
 STEPPING_CLOCK_SOURCE = ("rfidnav_sim", "robot_sim")   # the clock source that can step
-# --discovery: a run's nodes find each other on this machine only (the default: two runs, or a run and a robot on
-# the network, never mix), or across the subnet (a robot's drivers on another machine, a viewer on a laptop).
-DISCOVERY_RANGES = {"localhost": "LOCALHOST", "subnet": "SUBNET"}
+STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)   # each ends a run as Ctrl-C does
+STALL_REPORT_S = 5.0      # wall time without sim-time progress after which the run says who holds it up
+STALL_ABORT_S = 60.0      # ... and after which it ends the mission as stalled
+GRAPH_CHECK_PERIOD_S = 1.0   # how often the mission loop looks for a second graph in the domain
 
 
 @dataclass(frozen=True)
@@ -82,7 +92,7 @@ class RunOptions:
     live_port: int | None = None             # serve the graph to Foxglove on this port (--live)
     quiet: bool = False
     domain: int | None = None                # the ROS domain to run in; None: the first free one of RUN_DOMAINS
-    discovery: str = "localhost"             # DISCOVERY_RANGES: ROS_AUTOMATIC_DISCOVERY_RANGE of the run
+    discovery: str = "localhost"             # processes.DISCOVERY_RANGES: ROS_AUTOMATIC_DISCOVERY_RANGE of the run
     compress: bool = False                   # zstd chunk compression of the bag's MCAP files
     max_bag_size: int = 0                    # split the bag into files of this many bytes (0: one file)
     max_bag_duration_s: float = 0.0          # split the bag into files of this many seconds of bag time (0: no)
@@ -126,7 +136,12 @@ class Orchestrator:
         self.process_of = {role: spec.process or role for role, spec in scenario.nodes.items()}
         self.outcome = MissionOutcome()
         self.progress = StatusLine(options.quiet)
-        self.interrupted = False
+        self.stop_signal: int | None = None       # the first of STOP_SIGNALS that came
+        self.terminal_lost = False                 # SIGHUP on a terminal: nothing more is printed
+        self.clock_source_says = ""                # the clock source's last warning on /rosout
+        # Nodes of a respawned process: the dead one stays in the graph until its DDS lease ends, so two of the name
+        # are expected until one has gone.
+        self.respawned_names: set[str] = set()
         self.clock, self.clock_note = choose_clock(scenario, options)
         participants = [f"/{spec.name}" for spec in scenario.step_participants()]
         if options.record:
@@ -221,12 +236,14 @@ class Orchestrator:
         env = child_environment(lease.domain_id, self.options.discovery)
         os.environ.update({k: env[k] for k in ("ROS_DOMAIN_ID", "ROS_AUTOMATIC_DISCOVERY_RANGE")})
         context = Context()
-        rclpy.init(context=context, domain_id=lease.domain_id)
+        # rclpy's own handlers would shut the context down under the executor (SIGTERM): ours only set a flag.
+        rclpy.init(context=context, domain_id=lease.domain_id, signal_handler_options=SignalHandlerOptions.NO)
         node = Node("rfidnav_orchestrator", context=context,
                     parameter_overrides=[rclpy.parameter.Parameter("use_sim_time", value=self.scenario.simulated)])
+        node.create_subscription(Log, "/rosout", self.on_log, 100)
         executor = events_executor(context)
         executor.add_node(node)
-        previous_handler = signal.signal(signal.SIGINT, self.on_interrupt)
+        previous_handlers = {signum: signal.signal(signum, self.on_stop_signal) for signum in STOP_SIGNALS}
         try:
             self.prepare(env)
             if lease.skipped:
@@ -242,8 +259,8 @@ class Orchestrator:
             self.outcome.message = str(error)
             self.say(f"error: {error}", always=True)
         finally:
-            signal.signal(signal.SIGINT, previous_handler)
             self.progress.done()
+            # Our handlers stay until the bag is closed and the summary written: a second signal must not cut that.
             self.shut_down()
             executor.shutdown()
             node.destroy_node()
@@ -252,15 +269,45 @@ class Orchestrator:
             # run after another in this process would find its own last run there).
             context.destroy()
             lease.close()
-        return self.write_summary()
+            summary = self.write_summary()
+            for signum, handler in previous_handlers.items():
+                signal.signal(signum, handler)
+        return summary
 
-    def on_interrupt(self, _signum, _frame) -> None:
-        self.interrupted = True
-        self.outcome.message = "interrupted (Ctrl-C)"
+    @property
+    def interrupted(self) -> bool:
+        return self.stop_signal is not None
+
+    @property
+    def exit_code(self) -> int:
+        """The shell's convention: 128 + the signal that stopped the run, else 0 on success and 1 otherwise."""
+        if self.stop_signal is not None:
+            return 128 + self.stop_signal
+        return 0 if self.outcome.success else 1
+
+    def on_stop_signal(self, signum: int, _frame) -> None:
+        if signum == signal.SIGHUP and os.isatty(sys.stdout.fileno()):
+            self.terminal_lost = True   # the terminal hung up: printing to it would fail
+        if self.stop_signal is not None:
+            self.say(f"\n{signal.Signals(signum).name}: already stopping (the nodes stop in order and the bag is "
+                     "closed); please wait", always=True)
+            return
+        self.stop_signal = signum
+        name = "Ctrl-C" if signum == signal.SIGINT else signal.Signals(signum).name
+        self.outcome.message = f"interrupted ({name})"
+
+    def on_log(self, message: Log) -> None:
+        clock_source = next((spec.name for spec in self.scenario.nodes.values() if spec.clock_source), None)
+        if message.name == clock_source and message.level >= Log.WARN:
+            self.clock_source_says = message.msg
 
     def say(self, text: str, always: bool = False) -> None:
-        if always or not self.options.quiet:
+        if self.terminal_lost or not (always or not self.options.quiet):
+            return
+        try:
             print(text, flush=True)
+        except OSError:   # the output went away (a closed pipe, a terminal gone): the run goes on
+            self.terminal_lost = True
 
     def spin_until(self, executor: Executor, condition, timeout_s: float,
                    what: str | Callable[[], str]) -> None:
@@ -362,10 +409,17 @@ class Orchestrator:
         role = self.process_of[role] if role else None
         restarts = self.processes[role].restarts if role else 0
         wall_limit = mission.timeout_s / (self.options.rtf if math.isfinite(self.options.rtf) else 1.0) * 3.0 + 60.0
+        watch = StallWatch(sim_seconds(node), time.monotonic())
+        graph_checked = time.monotonic()
         while not result_future.done():
             executor.spin_once(timeout_sec=0.05)
-            elapsed_sim = sim_seconds(node) - self.outcome.started_sim_s
+            now_sim, now = sim_seconds(node), time.monotonic()
+            elapsed_sim = now_sim - self.outcome.started_sim_s
             self.check_processes(starting=False)
+            if now - graph_checked > GRAPH_CHECK_PERIOD_S:
+                graph_checked = now
+                self.check_single_graph(node)
+            stalled = self.check_stall(watch, now_sim, now)
             if role and self.processes[role].restarts > restarts and not self.interrupted:
                 # The goal died with the server: give the respawned one the mission again.
                 restarts = self.processes[role].restarts
@@ -374,9 +428,11 @@ class Orchestrator:
                 if handle is None:
                     return
                 result_future = handle.get_result_async()
-            if self.interrupted or elapsed_sim > mission.timeout_s or \
+            if self.interrupted or stalled or elapsed_sim > mission.timeout_s or \
                     time.monotonic() - self.outcome.started_wall > wall_limit:
-                if not self.interrupted:
+                if stalled:
+                    self.outcome.message = f"stalled: {stalled}"
+                elif not self.interrupted:
                     self.outcome.message = f"timeout after {elapsed_sim:.1f} s of sim time"
                 cancel = handle.cancel_goal_async()
                 deadline = time.monotonic() + 5.0
@@ -393,6 +449,39 @@ class Orchestrator:
                 and self.outcome.message == "not started"
             if self.outcome.message == "not started":
                 self.outcome.message = getattr(result, "message", "")
+
+    def check_stall(self, watch: StallWatch, sim_s: float, wall_s: float) -> str:
+        """Say once per stall, after STALL_REPORT_S, who holds the clock up; the reason once the stall has lasted
+        STALL_ABORT_S (the mission then ends), else "". A run in real time (hardware) has no clock to watch: only
+        stopped processes are looked for."""
+        if self.scenario.simulated and watch.advanced(sim_s, wall_s):
+            return ""
+        stuck_s = wall_s - watch.since_wall_s
+        if stuck_s < STALL_REPORT_S:
+            return ""
+        stopped = stopped_processes(self.processes)
+        if not self.scenario.simulated and not stopped:
+            watch.since_wall_s = wall_s
+            return ""
+        held = f" ({'; '.join(stopped)})" if stopped else ""
+        says = f"; {self.clock_source_says}" if self.clock_source_says else ""
+        reason = f"sim time has not advanced for {stuck_s:.0f} s (wall) at {sim_s:.2f} s{held}{says}"
+        if not watch.reported:
+            watch.reported = True
+            self.say(f"\n{reason}", always=True)
+        return reason if stuck_s >= STALL_ABORT_S else ""
+
+    def check_single_graph(self, node: Node) -> None:
+        """A second graph in our domain (another run forced onto it, an orphan of an older one) shows as a second
+        node of one of our names: end the run before the two mix (a ReadinessError)."""
+        ours = {f"/{spec.name}" for spec in self.scenario.nodes.values() if spec.name}
+        ours |= {f"/{role}" for role in (RECORDER_ROLE, node.get_name())}
+        names = [f"{namespace.rstrip('/')}/{name}" for name, namespace in node.get_node_names_and_namespaces()]
+        self.respawned_names -= {name for name in self.respawned_names if names.count(name) <= 1}
+        twice = sorted(name for name in ours - self.respawned_names if names.count(name) > 1)
+        if twice:
+            raise ReadinessError(f"another graph joined ROS domain {self.domain['id'] if self.domain else '?'}: "
+                                 f"two nodes named {', '.join(twice)}; the run stops before the two mix")
 
     def send_goal(self, executor: Executor, goal: Any, timeout_s: float = READY_TIMEOUT_S):
         """The accepted goal's handle; None when interrupted; a ReadinessError when it is rejected or unanswered."""
@@ -475,6 +564,8 @@ class Orchestrator:
                 self.say(f"\n{role} exited with code {code}; restarting ({process.restarts + 1}/"
                          f"{process.max_respawns})\n{process.last_lines(5)}", always=True)
                 process.restarts += 1
+                self.respawned_names |= {f"/{self.scenario.nodes[r].name}" for r, key in self.process_of.items()
+                                         if key == role and self.scenario.nodes[r].name}
                 process.start()
                 continue
             if starting or not process.respawn:
@@ -523,8 +614,39 @@ class Orchestrator:
             "bag": str(bag if bag.exists() else self.run_dir),
             "run_dir": str(self.run_dir),
         }
-        (self.run_dir / "summary.json").write_text(json.dumps(document, indent=2) + "\n")
+        try:
+            write_atomically(self.run_dir / "summary.json", json.dumps(document, indent=2) + "\n")
+        except OSError as error:   # a full disk, the folder gone: the run's outcome is still printed
+            self.say(f"summary.json not written in {self.run_dir}: {error.strerror}", always=True)
         return RunSummary(self.run_dir, document)
+
+
+@dataclass
+class StallWatch:
+    """When sim time last advanced (wall clock), and whether the present stall has been reported."""
+    sim_s: float
+    since_wall_s: float
+    reported: bool = False
+
+    def advanced(self, sim_s: float, wall_s: float) -> bool:
+        if sim_s > self.sim_s:
+            self.sim_s, self.since_wall_s, self.reported = sim_s, wall_s, False
+            return True
+        return False
+
+
+def stopped_processes(processes: dict[str, NodeProcess]) -> list[str]:
+    """'ROLE is stopped (pid N)' for every running process the OS has stopped (SIGSTOP, a debugger)."""
+    found = []
+    for role, process in processes.items():
+        if process.running and process.popen is not None:
+            try:
+                status = psutil.Process(process.popen.pid).status()
+            except psutil.Error:
+                continue
+            if status in (psutil.STATUS_STOPPED, psutil.STATUS_TRACING_STOP):
+                found.append(f"{role} is stopped (pid {process.popen.pid})")
+    return found
 
 
 def topics_to_record(published: Iterable[tuple[str, list[str]]], exclude: Collection[str],
@@ -569,23 +691,8 @@ def choose_clock(scenario: Scenario, options: RunOptions) -> tuple[str, str]:
     return options.clock, ""
 
 
-def reach_text(domain_id: int, discovery: str) -> str:
-    """How another shell (or machine) joins the running graph."""
-    where = "this machine only" if discovery == "localhost" else "this subnet"
-    variables = f"ROS_DOMAIN_ID={domain_id} ROS_AUTOMATIC_DISCOVERY_RANGE={DISCOVERY_RANGES[discovery]}"
-    return f"{variables} ({where}); to join it: {variables} ./rfidnav echo /odom"
-
-
 def rtf_text(rtf: float) -> str | float:
     return rtf if math.isfinite(rtf) else "max"
-
-
-def child_environment(domain_id: int, discovery: str = "localhost") -> dict[str, str]:
-    env = dict(os.environ)
-    env.update(ROS_DOMAIN_ID=str(domain_id), ROS_AUTOMATIC_DISCOVERY_RANGE=DISCOVERY_RANGES[discovery],
-               PYTHONUNBUFFERED="1", RCUTILS_COLORIZED_OUTPUT="0")
-    env.setdefault("AMENT_PREFIX_PATH", sys.prefix)
-    return env
 
 
 def sim_seconds(node: Node) -> float:

@@ -1,4 +1,5 @@
-"""Node processes: resolving ``package executable`` like ``ros2 run``, starting with logs, stopping politely.
+"""Node processes: resolving ``package executable`` like ``ros2 run``, starting with logs, stopping politely, and
+never outliving the process that started them (Linux's parent-death signal).
 
 Also hands out DDS domain ids: each run holds an exclusive lock on one id for its lifetime, so
 concurrent runs (and test sessions) on one machine never hear each other, and passes over an id in which
@@ -7,24 +8,40 @@ nodes are already heard (a graph that does not know our locks), so that no forei
 
 from __future__ import annotations
 
+import ctypes
+import errno
 import fcntl
 import os
 import signal
+import stat
 import subprocess
 import sys
-import tempfile
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from importlib import metadata
 from pathlib import Path
-from typing import IO
+from typing import Any
 
 import psutil
 
 from rfidnav_bringup.errors import LaunchError
 
 RUN_DOMAINS = range(51, 102)   # 1-50 are left to test sessions; 0-101 avoid the ephemeral port range
+# The domain locks live in one folder per user under /tmp, not $TMPDIR: two runs with different TMPDIRs must still
+# see each other's locks.
+LOCK_ROOT = Path("/tmp")
+# What a child receives when the process that started it dies, however it dies (SIGKILL included): the signal a
+# node treats as Ctrl-C, so that it stops the base, closes its bag or ends as on a normal stop. It comes once per thread
+# of the dying parent (Linux reparents a child from thread to thread): nodes take repeats calmly (ros.stop_requested).
+PARENT_DEATH_SIGNAL = signal.SIGINT
+_PR_SET_PDEATHSIG = 1   # linux/prctl.h
+_LIBC = ctypes.CDLL(None, use_errno=True)
+
+
+# --discovery: a run's nodes find each other on this machine only (the default: two runs, or a run and a robot on
+# the network, never mix), or across the subnet (a robot's drivers on another machine, a viewer on a laptop).
+DISCOVERY_RANGES = {"localhost": "LOCALHOST", "subnet": "SUBNET"}
 
 
 DISCOVERY_WINDOW_S = 1.0   # how long a probe listens for nodes already in a domain (localhost discovery: ~0.1 s)
@@ -65,19 +82,20 @@ class DomainLease:
 
     def __init__(self, candidates: range = RUN_DOMAINS,
                  occupants: Callable[[int], list[str]] = nodes_in_domain) -> None:
-        self.handle: IO[str] | None = None
+        self.handle: int | None = None
         self.skipped: dict[int, list[str]] = {}
+        folder = lock_folder()
         for domain in candidates:
-            handle = open(Path(tempfile.gettempdir()) / f"rfidnav-domain-{domain}.lock", "w")
+            handle = open_lock_file(folder / f"domain-{domain}.lock")
             try:
                 fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
             except BlockingIOError:
-                handle.close()
+                os.close(handle)
                 continue
             found = occupants(domain)
             if found:
                 self.skipped[domain] = found
-                handle.close()
+                os.close(handle)
                 continue
             self.handle, self.domain_id = handle, domain
             return
@@ -94,7 +112,7 @@ class DomainLease:
 
     def close(self) -> None:
         if self.handle is not None:
-            self.handle.close()
+            os.close(self.handle)
             self.handle = None
 
     def __enter__(self) -> DomainLease:
@@ -102,6 +120,87 @@ class DomainLease:
 
     def __exit__(self, *_exc: object) -> None:
         self.close()
+
+
+def lock_folder(root: Path = LOCK_ROOT) -> Path:
+    """``/tmp/rfidnav-<uid>``, this user's folder of domain locks: created private (0700); refused when it is a
+    symbolic link or another user's (someone could otherwise point our lock files at a file of ours)."""
+    folder = root / f"rfidnav-{os.getuid()}"
+    try:
+        folder.mkdir(mode=0o700)
+    except FileExistsError:
+        pass
+    except OSError as error:
+        raise LaunchError(f"cannot create the domain lock folder {folder}: {error.strerror}") from None
+    info = os.lstat(folder)
+    if not stat.S_ISDIR(info.st_mode) or info.st_uid != os.getuid() or info.st_mode & 0o022:
+        raise LaunchError(f"the domain lock folder {folder} is not a private folder of this user (a symbolic link, "
+                          "another user's, or writable by others); remove it")
+    return folder
+
+
+def open_lock_file(path: Path) -> int:
+    """A descriptor of the lock file ``path``, created owner-only if missing; never through a symbolic link and
+    never truncating (a lock file holds nothing: only its lock counts)."""
+    try:
+        return os.open(path, os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW | os.O_CLOEXEC, 0o600)
+    except OSError as error:
+        reason = "it is a symbolic link" if error.errno == errno.ELOOP else error.strerror
+        raise LaunchError(f"cannot open the domain lock {path}: {reason}") from None
+
+
+def die_with_parent(parent_pid: int) -> Callable[[], None]:
+    """A ``preexec_fn`` that makes the child receive PARENT_DEATH_SIGNAL when ``parent_pid`` dies (or has died
+    already, between the fork and this call). It only makes system calls: a preexec_fn must not take locks that
+    another thread of the parent may have held at the fork."""
+    def set_parent_death_signal() -> None:
+        _LIBC.prctl(_PR_SET_PDEATHSIG, int(PARENT_DEATH_SIGNAL), 0, 0, 0)
+        if os.getppid() != parent_pid:
+            os.kill(os.getpid(), PARENT_DEATH_SIGNAL)
+    return set_parent_death_signal
+
+
+def start_child(command: list[str], **popen_options: Any) -> subprocess.Popen:
+    """``subprocess.Popen(command)`` in a session of its own (Ctrl-C in the terminal reaches only its parent, which
+    stops it in order) that dies with its parent (die_with_parent)."""
+    return subprocess.Popen(command, start_new_session=True, preexec_fn=die_with_parent(os.getpid()),
+                            **popen_options)
+
+
+def reach_text(domain_id: int, discovery: str) -> str:
+    """How another shell (or machine) joins the running graph."""
+    where = "this machine only" if discovery == "localhost" else "this subnet"
+    variables = f"ROS_DOMAIN_ID={domain_id} ROS_AUTOMATIC_DISCOVERY_RANGE={DISCOVERY_RANGES[discovery]}"
+    return f"{variables} ({where}); to join it: {variables} ./rfidnav echo /odom"
+
+
+def child_environment(domain_id: int, discovery: str = "localhost") -> dict[str, str]:
+    env = dict(os.environ)
+    env.update(ROS_DOMAIN_ID=str(domain_id), ROS_AUTOMATIC_DISCOVERY_RANGE=DISCOVERY_RANGES[discovery],
+               PYTHONUNBUFFERED="1", RCUTILS_COLORIZED_OUTPUT="0")
+    env.setdefault("AMENT_PREFIX_PATH", sys.prefix)
+    return env
+
+
+def run_supervised(command: list[str], env: dict[str, str]) -> int:
+    """Run one child to its end (start_child), passing any of SIGINT, SIGTERM and SIGHUP on to it as SIGINT (its
+    Ctrl-C), and return its exit code, or 128 + the first signal that came (the shell's convention)."""
+    first: list[int] = []
+    child = start_child(command, env=env)
+
+    def pass_on(signum: int, _frame: object) -> None:
+        first.append(signum)
+        if child.poll() is None:
+            os.killpg(child.pid, signal.SIGINT)
+
+    stop_signals = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
+    previous = {signum: signal.signal(signum, pass_on) for signum in stop_signals}
+    try:
+        code = child.wait()
+    finally:
+        for signum, handler in previous.items():
+            signal.signal(signum, handler)
+    return 128 + first[0] if first else code
 
 
 class UnknownExecutableError(LaunchError):
@@ -179,9 +278,7 @@ class NodeProcess:
         log.write(f"$ {' '.join(self.command)}\n")
         log.flush()
         try:
-            # A session of its own: Ctrl-C in the terminal reaches the orchestrator, which stops nodes in order.
-            self.popen = subprocess.Popen(self.command, stdout=log, stderr=subprocess.STDOUT, env=self.env,
-                                          start_new_session=True)
+            self.popen = start_child(self.command, stdout=log, stderr=subprocess.STDOUT, env=self.env)
         except OSError as error:
             raise LaunchError(f"{self.role}: cannot start '{self.command[0]}': {error.strerror}") from None
         finally:
@@ -211,10 +308,11 @@ class NodeProcess:
             return False
 
     def stop(self, grace_s: float) -> None:
-        """SIGINT, then SIGKILL after the grace period."""
+        """SIGINT (and SIGCONT, so that a stopped process can act on it), then SIGKILL after the grace period."""
         if not self.running:
             return
         self.signal(signal.SIGINT)
+        self.signal(signal.SIGCONT)
         if not self.wait(grace_s):
             self.signal(signal.SIGKILL)
             self.wait(5.0)

@@ -16,6 +16,7 @@ import yaml
 
 from rfidnav_common.config import Section, check_number
 from rfidnav_common.errors import ConfigError
+from rfidnav_common.files import write_atomically
 from rfidnav_localization.fingerprint import Fingerprint
 
 
@@ -42,4 +43,4 @@ def write_radio_map(path: Path, fingerprints: list[Fingerprint], description: st
                 "fingerprints": [{"position": [round(f.position[0], 4), round(f.position[1], 4)],
                                   "rss": {bssid: round(value, 2) for bssid, value in f.rss}, "source": f.source}
                                  for f in fingerprints]}
-    Path(path).write_text(yaml.safe_dump(document, sort_keys=False, default_flow_style=None, width=120))
+    write_atomically(Path(path), yaml.safe_dump(document, sort_keys=False, default_flow_style=None, width=120))

@@ -46,25 +46,36 @@ def navigation_subscriptions(run: Path, navigation_nodes: tuple[str, ...]) -> di
     return subscriptions
 
 
+def start_cli(*args: str) -> subprocess.Popen:
+    """``./rfidnav ARGS`` started in the background (its own domain lease), output merged into one text pipe."""
+    env = dict(os.environ)
+    env.pop("ROS_DOMAIN_ID", None)   # the orchestrator leases its own domain
+    return subprocess.Popen([sys.executable, "-m", "rfidnav_bringup.cli", *args], cwd=WORKSPACE, env=env,
+                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+
+
+def wait_for_log(out: Path, role: str, text: str, cli: subprocess.Popen, timeout: float = 180) -> None:
+    """Wait until the log of ``role`` in the one run folder under ``out`` says ``text`` (the CLI still running)."""
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline and cli.poll() is None:
+        logs = list(out.glob(f"*/logs/{role}.log"))
+        if logs and text in logs[0].read_text():
+            return
+        time.sleep(0.2)   # polling a file another process writes; no ROS readiness signal reaches here
+    raise AssertionError(f"{role}'s log never said {text!r} (CLI exit {cli.poll()})")
+
+
+def mission_started(out: Path, cli: subprocess.Popen) -> list[psutil.Process]:
+    """Wait until heading_controller follows its route; the CLI's node processes then."""
+    wait_for_log(out, "heading_controller", "following", cli)
+    return psutil.Process(cli.pid).children(recursive=True)
+
+
 def run_killing_the_controller(out: Path, scenario: str, *options: str, timeout: float = 300) -> tuple[int, str]:
     """``./rfidnav run SCENARIO OPTIONS --out OUT --no-record --quiet`` in which heading_controller is killed
     hard once its log says it follows the route: the CLI's exit code and output."""
-    env = dict(os.environ)
-    env.pop("ROS_DOMAIN_ID", None)   # the orchestrator leases its own domain
-    command = [sys.executable, "-m", "rfidnav_bringup.cli", "run", scenario, *options, "--out", str(out),
-               "--no-record", "--quiet"]
-    with subprocess.Popen(command, cwd=WORKSPACE, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
-                          text=True) as cli:
-        started = False
-        deadline = time.monotonic() + 180
-        while time.monotonic() < deadline and cli.poll() is None and not started:
-            logs = list(out.glob("*/logs/heading_controller.log"))
-            started = bool(logs) and "following 2 tags" in logs[0].read_text()
-            if not started:
-                time.sleep(0.2)   # polling a file another process writes; no ROS readiness signal reaches here
-        assert started, "the mission never started"
-        victims = [p for p in psutil.Process(cli.pid).children(recursive=True)
-                   if any("heading_controller" in part for part in p.cmdline())]
+    with start_cli("run", scenario, *options, "--out", str(out), "--no-record", "--quiet") as cli:
+        victims = [p for p in mission_started(out, cli) if any("heading_controller" in part for part in p.cmdline())]
         assert len(victims) == 1, victims
         victims[0].kill()
         output, _ = cli.communicate(timeout=timeout)

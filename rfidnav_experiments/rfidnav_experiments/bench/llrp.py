@@ -35,8 +35,7 @@ from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
 from rfidnav_bringup.errors import ReadinessError
-from rfidnav_bringup.orchestrator import child_environment
-from rfidnav_bringup.processes import DomainLease, NodeProcess, resolve_executable
+from rfidnav_bringup.processes import DomainLease, NodeProcess, child_environment, resolve_executable
 from rfidnav_drivers.parameters import LlrpReaderParameters
 from rfidnav_msgs.msg import TagReadArray
 

@@ -21,8 +21,7 @@ from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 
 from rfidnav_bringup.errors import ReadinessError
-from rfidnav_bringup.orchestrator import child_environment
-from rfidnav_bringup.processes import DomainLease
+from rfidnav_bringup.processes import DomainLease, child_environment
 from rfidnav_bringup.scenario import CONFIG_DIR
 from rfidnav_common.robot_map import load_route_map
 from rfidnav_experiments.runners.two_tier import floor_extent, wifi_model

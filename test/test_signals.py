@@ -1,0 +1,192 @@
+"""Process lifetime under signals: every way a run, a replay or a node process is told to stop ends the same way,
+the goal cancelled, the nodes stopped in order, the bag finalised and the summary written, and leaves no process
+behind; a SIGKILLed orchestrator's nodes die with it; a stalled node is named; two graphs on one domain never mix;
+the domain locks cannot be turned against a user's files."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import psutil
+import pytest
+
+from rfidnav_bag.bags import bag_info
+from rfidnav_bringup.errors import LaunchError
+from rfidnav_bringup.processes import DomainLease, lock_folder, open_lock_file
+from support.runs import WORKSPACE, mission_started, start_cli
+
+pytestmark = pytest.mark.tier("graph")
+
+RTF = "5"
+LEFTOVER_WAIT_S = 30.0   # a node's own stop (its bag, its base) takes a few seconds on a loaded machine
+
+
+def assert_all_gone(processes: list[psutil.Process]) -> None:
+    _, alive = psutil.wait_procs(processes, timeout=LEFTOVER_WAIT_S)
+    leftovers = [f"{p.pid} {' '.join(p.cmdline()[-6:])}" for p in alive]
+    for process in alive:   # ours: end them, so that no orphan spoils the next test's domain
+        process.kill()
+    assert not leftovers, f"left running: {leftovers}"
+
+
+def one_run(out: Path) -> Path:
+    runs = list(out.iterdir())
+    assert len(runs) == 1, runs
+    return runs[0]
+
+
+def assert_finalised(run: Path, message: str) -> dict:
+    summary = json.loads((run / "summary.json").read_text())
+    assert summary["message"] == message, summary["message"]
+    assert summary["success"] is False
+    assert (run / "bag" / "metadata.yaml").is_file()
+    assert bag_info(run / "bag").message_count > 0
+    return summary
+
+
+@pytest.mark.parametrize("signum, name", [(signal.SIGTERM, "SIGTERM"), (signal.SIGHUP, "SIGHUP")])
+def test_sigterm_and_sighup_end_a_run_as_ctrl_c_does_and_leave_no_process(tmp_path: Path, signum: int,
+                                                                           name: str) -> None:
+    out = tmp_path / "runs"
+    with start_cli("run", "line_follow_90", "--rtf", RTF, "--out", str(out), "--quiet") as cli:
+        nodes = mission_started(out, cli)
+        cli.send_signal(signum)
+        output, _ = cli.communicate(timeout=120)
+    assert cli.returncode == 128 + signum, output
+    assert "Traceback" not in output
+    assert_all_gone(nodes)
+    assert_finalised(one_run(out), f"interrupted ({name})")
+
+
+def test_a_second_ctrl_c_while_stopping_still_closes_the_bag_and_writes_the_summary(tmp_path: Path) -> None:
+    out = tmp_path / "runs"
+    with start_cli("run", "line_follow_90", "--rtf", RTF, "--out", str(out)) as cli:
+        nodes = mission_started(out, cli)
+        cli.send_signal(signal.SIGINT)
+        time.sleep(0.5)   # the second Ctrl-C half a second later, as the issue's tester pressed it
+        cli.send_signal(signal.SIGINT)
+        output, _ = cli.communicate(timeout=120)
+    assert cli.returncode == 130, output
+    assert "already stopping" in output and "Traceback" not in output
+    assert_all_gone(nodes)
+    assert_finalised(one_run(out), "interrupted (Ctrl-C)")
+
+
+def test_the_nodes_of_a_sigkilled_orchestrator_stop_and_its_recorder_closes_the_bag(tmp_path: Path) -> None:
+    out = tmp_path / "runs"
+    with start_cli("run", "line_follow_90", "--rtf", RTF, "--out", str(out), "--quiet") as cli:
+        nodes = mission_started(out, cli)
+        cli.kill()
+        cli.communicate(timeout=60)
+    assert_all_gone(nodes)
+    bag = one_run(out) / "bag"
+    assert (bag / "metadata.yaml").is_file()          # written by the recorder itself, on its parent's death
+    info = bag_info(bag)
+    assert info.message_count > 0 and "/odom" in {topic.name for topic in info.topics}
+
+
+def test_a_stopped_simulator_is_named_within_seconds_and_the_run_goes_on_when_it_resumes(tmp_path: Path) -> None:
+    out = tmp_path / "runs"
+    with start_cli("run", "line_follow_90", "--rtf", RTF, "--out", str(out), "--no-record", "--quiet") as cli:
+        nodes = mission_started(out, cli)
+        simulator = next(p for p in nodes if "rfidnav_bringup.container" in " ".join(p.cmdline()))
+        simulator.suspend()
+        try:
+            seen = []
+            for line in cli.stdout:   # the report comes on the CLI's output, in seconds
+                seen.append(line)
+                if "has not advanced" in line:
+                    break
+        finally:
+            simulator.resume()
+        output, _ = cli.communicate(timeout=300)
+    report = seen[-1]
+    assert f"simulator is stopped (pid {simulator.pid})" in report, "".join(seen)
+    assert cli.returncode == 0, "".join(seen) + output
+
+
+def test_a_node_of_a_second_graph_taking_one_of_our_names_ends_the_run_before_the_two_mix(tmp_path: Path) -> None:
+    out = tmp_path / "runs"
+    with DomainLease(range(40, 51)) as free:     # a domain of the tests' own range, free now
+        domain = free.domain_id
+    impostor_code = ("import rclpy, sys; from rclpy.node import Node; rclpy.init(domain_id=int(sys.argv[1])); "
+                     "node = Node('heading_controller'); print('up', flush=True); rclpy.spin(node)")
+    with start_cli("run", "line_follow_90", "--rtf", RTF, "--out", str(out), "--no-record", "--quiet",
+                   "--domain", str(domain)) as cli:
+        nodes = mission_started(out, cli)
+        with subprocess.Popen([sys.executable, "-c", impostor_code, str(domain)], stdout=subprocess.PIPE,
+                              text=True) as impostor:
+            try:
+                assert impostor.stdout.readline() == "up\n"
+                output, _ = cli.communicate(timeout=120)
+            finally:
+                impostor.kill()
+    assert cli.returncode == 1, output
+    assert (f"another graph joined ROS domain {domain}: two nodes named /heading_controller; the run stops "
+            "before the two mix") in output
+    assert_all_gone(nodes)
+
+
+def test_sigterm_on_replay_stops_its_player_on_the_domain_it_leased(tmp_path: Path) -> None:
+    out = tmp_path / "runs"
+    with start_cli("run", "line_follow_90", "--rtf", RTF, "--out", str(out), "--quiet") as cli:
+        cli.communicate(timeout=300)
+    with start_cli("replay", str(one_run(out)), "--loop") as replay:
+        announced = replay.stdout.readline()
+        assert "ROS_DOMAIN_ID=" in announced and "ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST" in announced, announced
+        deadline = time.monotonic() + 60
+        players: list[psutil.Process] = []
+        while not players and time.monotonic() < deadline:
+            players = psutil.Process(replay.pid).children()
+            time.sleep(0.1)   # the player is a process replay starts: polled, no ROS signal reaches here
+        assert players, "the player never started"
+        replay.send_signal(signal.SIGTERM)
+        output, _ = replay.communicate(timeout=60)
+    assert replay.returncode == 128 + signal.SIGTERM, output
+    assert_all_gone(players)
+
+
+def test_a_child_gets_sigint_when_the_process_that_started_it_is_sigkilled() -> None:
+    parent_code = ("import sys, time; from rfidnav_bringup.processes import start_child; "
+                   "child = start_child([sys.executable, '-c', 'import time; time.sleep(600)']); "
+                   "print(child.pid, flush=True); time.sleep(600)")
+    with subprocess.Popen([sys.executable, "-c", parent_code], stdout=subprocess.PIPE, text=True,
+                          cwd=WORKSPACE) as parent:
+        child = psutil.Process(int(parent.stdout.readline()))
+        parent.kill()
+    assert_all_gone([child])
+
+
+def test_a_domain_lock_that_is_a_symbolic_link_is_refused_and_its_target_left_whole(tmp_path: Path) -> None:
+    victim = tmp_path / "precious.txt"
+    victim.write_text("keep me")
+    link = lock_folder() / f"test-symlink-{os.getpid()}.lock"
+    link.symlink_to(victim)
+    try:
+        with pytest.raises(LaunchError, match="is a symbolic link"):
+            open_lock_file(link)
+    finally:
+        link.unlink()
+    assert victim.read_text() == "keep me"
+
+
+def test_the_domain_lock_folder_must_be_this_users_own_private_folder(tmp_path: Path) -> None:
+    (tmp_path / f"rfidnav-{os.getuid()}").symlink_to(tmp_path)
+    with pytest.raises(LaunchError, match="not a private folder of this user"):
+        lock_folder(tmp_path)
+
+
+def test_two_runs_with_different_tmpdirs_still_share_one_set_of_domain_locks(tmp_path: Path) -> None:
+    with DomainLease(range(40, 51)) as held:
+        result = subprocess.run(
+            [sys.executable, "-c", "from rfidnav_bringup.processes import DomainLease; import sys; "
+             f"DomainLease(range({held.domain_id}, {held.domain_id + 1}))"],
+            capture_output=True, text=True, cwd=WORKSPACE, env=dict(os.environ, TMPDIR=str(tmp_path)))
+    assert result.returncode != 0
+    assert f"ROS domain {held.domain_id} is in use by another rfidnav run" in result.stderr
