@@ -594,6 +594,14 @@ class Orchestrator:
                 metrics = run_metrics(self.run_dir)
             except RfidnavError as error:
                 self.say(f"metrics not computed: {error}", always=True)
+        if self.outcome.success and metrics.get("success") is False:
+            # The mission's node can be fooled (a spoofed tag, a wrong map); ground truth, which it never sees, has
+            # the last word on whether the run succeeded.
+            self.outcome.success = False
+            self.outcome.message = (f"{self.outcome.message or 'succeeded'}, says the mission's node; but ground "
+                                    "truth did not reach the goal (metrics.success false"
+                                    + (f", {metrics['final_distance_m']:.2f} m from it)"
+                                       if isinstance(metrics.get("final_distance_m"), float) else ")"))
         sim_duration = None
         if self.outcome.started_sim_s is not None and self.outcome.ended_sim_s is not None:
             sim_duration = round(self.outcome.ended_sim_s - self.outcome.started_sim_s, 3)
