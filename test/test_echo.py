@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import io
+import subprocess
+import sys
 import threading
 from collections.abc import Iterator
 from contextlib import contextmanager
@@ -15,6 +17,7 @@ from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rfidnav_bringup.echo import EchoError, echo
 from rfidnav_common.ros import COMMAND_QOS, LATCHED_QOS, twist
 from support.graph import Graph
+from support.runs import WORKSPACE
 
 pytestmark = pytest.mark.tier("node")
 
@@ -67,3 +70,19 @@ def test_echo_hears_a_best_effort_publisher_without_being_told(graph: Graph, dom
 def test_echo_without_a_publisher_is_one_clear_error(domain: int) -> None:
     with pytest.raises(EchoError, match="/nothing: no publisher within 0.5 s"):
         echo("/nothing", 1, wait_s=0.5, timeout_s=1.0, domain_id=domain)
+
+
+def test_echo_into_a_reader_that_goes_away_ends_quietly_and_says_where_it_listened(graph: Graph, domain: int) -> None:
+    """``./rfidnav echo /cmd_vel | head -1``: the closed pipe is the end of the output, not a traceback."""
+    publisher = graph.probe.create_publisher(Twist, "/cmd_vel", COMMAND_QOS)
+    graph.probe.create_timer(0.05, lambda: publisher.publish(twist(0.2, -0.5)))
+    with spinning(graph), subprocess.Popen(
+            [sys.executable, "-m", "rfidnav_bringup.cli", "echo", "/cmd_vel", "--count", "1000", "--domain",
+             str(domain)], cwd=WORKSPACE, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True) as cli:
+        assert cli.stdout.readline() == "linear:\n"
+        cli.stdout.close()              # as head does after its first line
+        errors = cli.stderr.read()
+        cli.wait(timeout=60)
+    assert cli.returncode == 0, errors
+    assert "Traceback" not in errors
+    assert f"listening to /cmd_vel on ROS domain {domain} (localhost)" in errors
