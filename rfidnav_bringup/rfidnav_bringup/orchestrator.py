@@ -79,6 +79,7 @@ STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)   # each ends a ru
 STALL_REPORT_S = 5.0      # wall time without sim-time progress after which the run says who holds it up
 STALL_ABORT_S = 60.0      # ... and after which it ends the mission as stalled
 GRAPH_CHECK_PERIOD_S = 1.0   # how often the mission loop looks for a second graph in the domain
+RESPAWN_GRACE_S = 30.0       # a killed node stays in the graph until its DDS lease ends (Fast DDS: 20 s)
 
 
 @dataclass(frozen=True)
@@ -139,9 +140,9 @@ class Orchestrator:
         self.stop_signal: int | None = None       # the first of STOP_SIGNALS that came
         self.terminal_lost = False                 # SIGHUP on a terminal: nothing more is printed
         self.clock_source_says = ""                # the clock source's last warning on /rosout
-        # Nodes of a respawned process: the dead one stays in the graph until its DDS lease ends, so two of the name
-        # are expected until one has gone.
-        self.respawned_names: set[str] = set()
+        # Nodes of a respawned process, and until when (wall): the dead one stays in the graph until its DDS lease
+        # ends, so two of the name are expected for that long.
+        self.respawned_until: dict[str, float] = {}
         self.clock, self.clock_note = choose_clock(scenario, options)
         participants = [f"/{spec.name}" for spec in scenario.step_participants()]
         if options.record:
@@ -398,6 +399,10 @@ class Orchestrator:
         fill_message(goal, mission.goal, f"{self.scenario.path}: mission.goal")
         self.outcome.started_sim_s = sim_seconds(node)
         self.outcome.started_wall = time.monotonic()
+        role = self.mission_role()
+        role = self.process_of[role] if role else None
+        # Counted before the goal goes out: a server that dies while the clock starts gets the goal again too.
+        restarts = self.processes[role].restarts if role else 0
         handle = self.send_goal(executor, goal)
         if handle is None:
             return
@@ -405,9 +410,6 @@ class Orchestrator:
             self.start_clock(node, executor)
         result_future = handle.get_result_async()
         self.outcome.cpu_at_start = self.cpu_seconds()
-        role = self.mission_role()
-        role = self.process_of[role] if role else None
-        restarts = self.processes[role].restarts if role else 0
         wall_limit = mission.timeout_s / (self.options.rtf if math.isfinite(self.options.rtf) else 1.0) * 3.0 + 60.0
         watch = StallWatch(sim_seconds(node), time.monotonic())
         graph_checked = time.monotonic()
@@ -477,8 +479,8 @@ class Orchestrator:
         ours = {f"/{spec.name}" for spec in self.scenario.nodes.values() if spec.name}
         ours |= {f"/{role}" for role in (RECORDER_ROLE, node.get_name())}
         names = [f"{namespace.rstrip('/')}/{name}" for name, namespace in node.get_node_names_and_namespaces()]
-        self.respawned_names -= {name for name in self.respawned_names if names.count(name) <= 1}
-        twice = sorted(name for name in ours - self.respawned_names if names.count(name) > 1)
+        now = time.monotonic()
+        twice = sorted(name for name in ours if names.count(name) > 1 and self.respawned_until.get(name, 0.0) < now)
         if twice:
             raise ReadinessError(f"another graph joined ROS domain {self.domain['id'] if self.domain else '?'}: "
                                  f"two nodes named {', '.join(twice)}; the run stops before the two mix")
@@ -564,8 +566,9 @@ class Orchestrator:
                 self.say(f"\n{role} exited with code {code}; restarting ({process.restarts + 1}/"
                          f"{process.max_respawns})\n{process.last_lines(5)}", always=True)
                 process.restarts += 1
-                self.respawned_names |= {f"/{self.scenario.nodes[r].name}" for r, key in self.process_of.items()
-                                         if key == role and self.scenario.nodes[r].name}
+                self.respawned_until.update({f"/{self.scenario.nodes[r].name}": time.monotonic() + RESPAWN_GRACE_S
+                                             for r, key in self.process_of.items()
+                                             if key == role and self.scenario.nodes[r].name})
                 process.start()
                 continue
             if starting or not process.respawn:
