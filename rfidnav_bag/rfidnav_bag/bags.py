@@ -516,7 +516,7 @@ def _file_note(scan: FileScan) -> str | None:
     elif scan.lost_bytes:
         tail = f"the last, incomplete chunk ({scan.lost_bytes:,} bytes) is lost"
     else:
-        tail = "the file ends after a whole chunk"
+        tail = "the file ends after a whole chunk: later messages were never written to it"
     return (f"{name} has no summary (the recorder stopped without closing it, or the file was cut): read "
             f"{scan.message_count:,} messages up to {scan.end_ns / 1e9:.1f} s; {tail}{skipped}")
 
@@ -597,12 +597,13 @@ class _SalvagedBag(Bag):
                 yield connection, timestamp, data
 
 
-def open_bag(path: str | Path) -> Bag:
+def open_bag(path: str | Path, salvage: bool = False) -> Bag:
     """Open a rosbag2 directory, finished or not (a BagError naming the path if nothing in it can be read).
-    Use as a context manager."""
+    ``salvage``: read every file from its start even if the bag looks finished, so that a damaged chunk is
+    skipped (and counted in the notes) instead of ending the read with a BagError. Use as a context manager."""
     bag = _checked_bag_path(path)
     information, metadata_problem = _load_information(bag)
-    if information is not None:
+    if information is not None and not (salvage and information.get("storage_identifier") == "mcap"):
         complete, metadata_problem = _complete_bag(bag, information)
         if complete is not None:
             return complete

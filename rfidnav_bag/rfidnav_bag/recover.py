@@ -1,12 +1,12 @@
 """``./rfidnav bag recover RUN_OR_BAG [--out DIR]``: a complete copy of a bag that was not finalised or is
 damaged, as ``mcap recover`` makes of one MCAP file.
 
-The source is read as every reader here reads it (:func:`rfidnav_bag.bags.open_bag`: a finished bag with rosbags,
-any other from its intact chunks, with what was lost in ``info.notes``); its topics -- name, type, message
-definition, RIHS01 hash, offered QoS -- and messages, in time order, go through the recorder's writer into a new
-rosbag2 directory: one MCAP file with chunks, message indexes and summary, and metadata.yaml. rosbags' AnyReader,
-mcap's seeking reader and mcap_ros2 open it like any finished bag. Chunks are zstd-compressed if the source's
-were. The source is left as it is.
+The source is read from the start of each file, chunk by chunk (:func:`rfidnav_bag.bags.open_bag` with
+``salvage``: a damaged chunk is skipped rather than ending the read; what was lost is in ``info.notes``). Its
+topics -- name, type, message definition, RIHS01 hash, offered QoS -- and its messages, in time order, go through
+the recorder's writer into a new rosbag2 directory: one MCAP file with chunks, message indexes and summary, and
+metadata.yaml, which rosbags' AnyReader, mcap's seeking reader and mcap_ros2 open like any finished bag. Chunks
+are zstd-compressed if the source's were. The source is left as it is.
 """
 
 from __future__ import annotations
@@ -45,7 +45,7 @@ def default_output(bag: Path) -> Path:
 def recover_bag(source: str | Path, output: str | Path | None = None) -> Recovery:
     """Copy whatever of ``source`` is readable into a new, finalised bag at ``output`` (default: beside it,
     ``<bag>_recovered``; it must not exist). BagError if nothing is readable or the copy cannot be written."""
-    with open_bag(source) as bag:
+    with open_bag(source, salvage=True) as bag:
         target = Path(output) if output is not None else default_output(bag.path)
         compression = "zstd" if "zstd" in bag.info.compression else "none"
         writer = BagWriter(target, StorageOptions(compression=compression))

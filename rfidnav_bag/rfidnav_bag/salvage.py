@@ -16,7 +16,7 @@ from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 
-import zstandard
+from mcap import stream_reader
 from mcap.exceptions import EndOfFile, InvalidMagic, McapError, RecordLengthLimitExceeded
 from mcap.records import Channel, Chunk, DataEnd, Footer, Message, Metadata, Schema
 from mcap.stream_reader import MAGIC_SIZE, StreamReader, breakup_chunk
@@ -24,9 +24,13 @@ from mcap.stream_reader import MAGIC_SIZE, StreamReader, breakup_chunk
 __all__ = ["FileScan", "SalvagedChannel", "salvaged_messages", "scan_file"]
 
 # What a damaged record raises when mcap parses it: McapError (EndOfFile, a bad magic, an unsupported
-# compression), struct.error (a field cut short), ValueError (a CRC mismatch, text that is not UTF-8),
-# zstandard.ZstdError (a compressed chunk that does not decompress).
-_DAMAGE = (McapError, struct.error, ValueError, zstandard.ZstdError)
+# compression), struct.error (a field cut short), ValueError (a CRC mismatch, text that is not UTF-8), and the
+# errors of the decompressors mcap uses when they are installed (taken from mcap, whose dependencies they are):
+# zstandard's ZstdError, lz4.frame's RuntimeError, for a compressed chunk that does not decompress.
+_CODEC_ERRORS: tuple[type[Exception], ...] = (
+    ((stream_reader.zstandard.ZstdError,) if stream_reader.zstandard is not None else ())
+    + ((RuntimeError,) if stream_reader.lz4 is not None else ()))
+_DAMAGE: tuple[type[Exception], ...] = (McapError, struct.error, ValueError, *_CODEC_ERRORS)
 
 
 @dataclass(frozen=True)

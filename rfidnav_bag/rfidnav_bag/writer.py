@@ -109,8 +109,10 @@ class _Tally:
     def add(self, topic_id: int, timestamp_ns: int) -> None:
         if not self.counts:
             self.start_ns = self.end_ns = timestamp_ns
-        self.start_ns = min(self.start_ns, timestamp_ns)
-        self.end_ns = max(self.end_ns, timestamp_ns)
+        elif timestamp_ns > self.end_ns:
+            self.end_ns = timestamp_ns
+        elif timestamp_ns < self.start_ns:
+            self.start_ns = timestamp_ns
         self.counts[topic_id] += 1
 
     def merge(self, other: _Tally) -> None:
@@ -234,7 +236,7 @@ class BagWriter:
         self.current = None
 
     def _should_split(self, file: _File, timestamp_ns: int) -> bool:
-        if not file.message_count:
+        if not (file.written.counts or file.pending.counts):
             return False
         by_size = self.options.max_bag_size and file.stream.tell() >= self.options.max_bag_size
         by_duration = (self.options.max_bag_duration_ns
