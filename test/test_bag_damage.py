@@ -19,10 +19,12 @@ import random
 import shutil
 import subprocess
 import sys
+import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
+import psutil
 import pytest
 import yaml
 from mcap.exceptions import EndOfFile
@@ -36,8 +38,11 @@ from rosgraph_msgs.msg import Clock
 
 from rfidnav_bag.bags import bag_info, message_definition, read_messages
 from rfidnav_bag.errors import BagError
+from rfidnav_bag.recorder_node import RecorderNode
 from rfidnav_bag.writer import CHUNK_DURATION_NS, BagWriter, StorageOptions
 from rfidnav_bringup import cli
+from rfidnav_bringup.processes import DomainLease
+from rfidnav_common.ros import standalone_node
 
 pytestmark = pytest.mark.tier("unit")
 
@@ -273,6 +278,9 @@ DAMAGES = [
            "the last, incomplete chunk", in_chunks(1)),
     Damage("corrupt_chunk_of_a_cut_file", corrupt_chunk(1), True, "1 damaged chunk(s) skipped",
            lambda stamps: [s for s in stamps if not T0_NS + CHUNK_DURATION_NS <= s < T0_NS + 2 * CHUNK_DURATION_NS]),
+    Damage("compressed_corrupt_chunk_of_a_cut_file", corrupt_chunk(2), True, "1 damaged chunk(s) skipped",
+           lambda stamps: [s for s in stamps if not T0_NS + 2 * CHUNK_DURATION_NS <= s < T0_NS + 3 * CHUNK_DURATION_NS],
+           StorageOptions(compression="zstd")),
     Damage("split_last_file_cut", cut_last_file, True, "bag_2.mcap is unreadable", in_files(0, 1), SPLIT),
     Damage("split_listed_file_missing", drop_file(1), True, "bag_1.mcap (listed in metadata.yaml) is missing",
            in_files(0, 2), SPLIT),
@@ -325,6 +333,26 @@ def test_every_reader_reads_a_damaged_bag_stating_the_loss_or_refuses_it_in_one_
     assert bag_info(tmp_path / "bag_recovered").notes == ()
 
 
+def test_a_damaged_chunk_in_a_finished_bag_ends_a_read_in_one_line_and_recover_skips_it(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """Its summary is intact, so it reads as finished (rosbags): the chunk's CRC fails only when it is read."""
+    bag = tmp_path / "bag"
+    written = write_bag(bag, StorageOptions(compression="zstd"))
+    path = first_file(bag)
+    start, length = chunk_offsets(path)[1]
+    data = bytearray(path.read_bytes())
+    data[start + length // 2] ^= 0xFF
+    path.write_bytes(bytes(data))
+    assert bag_info(bag).message_count == len(written) and bag_info(bag).notes == ()
+    with pytest.raises(BagError, match="corrupt message data"):
+        list(read_messages(bag))
+    code, out, err = run_cli(capsys, "bag", "recover", str(bag))
+    assert code == 0 and err.splitlines() == [f"rfidnav bag recover: {bag}: bag_0.mcap: read 800 messages; "
+                                              "1 damaged chunk(s) skipped"], err
+    second = range(T0_NS + CHUNK_DURATION_NS, T0_NS + 2 * CHUNK_DURATION_NS)
+    assert [t for _, t, _ in read_messages(tmp_path / "bag_recovered")] == [s for s in written if s not in second]
+
+
 def test_a_plain_file_and_a_missing_path_are_refused_in_one_line(tmp_path: Path,
                                                                  capsys: pytest.CaptureFixture[str]) -> None:
     plain = tmp_path / "bag_0.mcap"
@@ -333,3 +361,65 @@ def test_a_plain_file_and_a_missing_path_are_refused_in_one_line(tmp_path: Path,
                        (tmp_path / "nothing", "the path does not exist")):
         code, out, err = run_cli(capsys, "bag", "info", str(path))
         assert code == 2 and out == "" and err.count("\n") == 1 and says in err and str(path) in err, err
+
+
+# ------------------------------------------------------------------------------------------- a real run
+
+KILL_AT_NS = 60_000_000_000   # sim time at which the recorder of the run is killed
+CLOCK_RATE_HZ = 50.0   # robot_sim's /clock (odom_rate_hz)
+WORKSPACE = Path(__file__).resolve().parents[1]
+
+
+def run_killing_the_recorder(out: Path, scenario: str) -> tuple[int, int, str]:
+    """``./rfidnav run SCENARIO --rtf max`` whose recorder is SIGKILLed once /clock passes KILL_AT_NS: the latest
+    /clock this process had seen at the kill, the CLI's exit code and its output."""
+    with DomainLease(range(40, 51)) as free:     # a domain of the tests' own range, free now
+        domain = free.domain_id
+    env = dict(os.environ)
+    env.pop("ROS_DOMAIN_ID", None)
+    command = [sys.executable, "-m", "rfidnav_bringup.cli", "run", scenario, "--rtf", "max", "--domain",
+               str(domain), "--out", str(out), "--quiet"]
+    latest = [0]
+    with subprocess.Popen(command, cwd=WORKSPACE, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                          text=True) as run:
+        assert run.stdout is not None
+        # Join only once the run leased its domain (it refuses a domain that has nodes in it already).
+        head = []
+        for line in iter(run.stdout.readline, ""):
+            head.append(line)
+            if line.startswith("graph on "):
+                break
+        with standalone_node("test_bag_damage_clock", domain) as (node, executor):
+            node.create_subscription(Clock, "/clock", lambda m: latest.__setitem__(
+                0, m.clock.sec * 1_000_000_000 + m.clock.nanosec), 100)
+            deadline = time.monotonic() + 240
+            while latest[0] < KILL_AT_NS and run.poll() is None:
+                assert time.monotonic() < deadline, "the run's clock never reached the kill"
+                executor.spin_once(timeout_sec=0.01)
+            recorders = [p for p in psutil.Process(run.pid).children(recursive=True)
+                         if any(part.endswith("/recorder") for part in p.cmdline())]
+            assert len(recorders) == 1, recorders
+            executor.spin_once(timeout_sec=0)   # the latest /clock already delivered
+            killed_at = latest[0]
+            recorders[0].kill()
+        output, _ = run.communicate(timeout=180)
+        output = "".join(head) + output
+    return killed_at, run.returncode, output
+
+
+@pytest.mark.tier("graph")
+def test_a_run_whose_recorder_is_sigkilled_keeps_its_bag_to_within_a_second_of_the_kill(tmp_path: Path) -> None:
+    """The figure of the README: how much bag (sim) time a SIGKILL of a real run's recorder loses, between the
+    last message that can be read and the latest /clock an outside node had seen at the kill."""
+    killed_at, code, output = run_killing_the_recorder(tmp_path, "hallway")
+    assert code != 0 and "recorder exited with code -9" in output, output
+    [bag] = tmp_path.glob("*/bag")
+    info = bag_info(bag)
+    assert any("has no summary" in note for note in info.notes), info.notes
+    lost_s = (killed_at - info.end_ns) / 1e9
+    print(f"recorder SIGKILLed at {killed_at / 1e9:.3f} s of sim time; last readable message at "
+          f"{info.end_ns / 1e9:.3f} s: {lost_s:.3f} s lost; {info.notes}")
+    # The chunk in progress spans under a second of bag time; the stepped clock lets the recorder fall at most
+    # step_slack messages behind on /clock (50 Hz): at most a second more that it had not handled yet.
+    assert lost_s < CHUNK_DURATION_NS / 1e9 + RecorderNode.step_slack / CLOCK_RATE_HZ, f"{lost_s:.3f} s lost"
+    assert info.topic("/odom").count > 0 and info.topic("/rfid/reads").count > 0
