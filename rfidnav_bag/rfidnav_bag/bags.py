@@ -543,23 +543,23 @@ class _SalvagedBag(Bag):
         notes += [note for note in map(_file_note, scans) if note]
         if not any(scan.message_count or scan.complete for scan in scans):
             raise BagError(f"{bag}: no message readable: {'; '.join(notes) or 'no .mcap file'}")
-        self.by_key: dict[tuple[str, str], Connection] = {}
+        first: dict[tuple[str, str], SalvagedChannel] = {}  # (topic, type) -> its channel in the first file
         counts: Counter[tuple[str, str]] = Counter()
         for scan in scans:
             for channel_id, channel in scan.channels.items():
                 key = (channel.topic, channel.schema_name)
+                first.setdefault(key, channel)
                 counts[key] += scan.counts[channel_id]
-                if key not in self.by_key:
-                    self.by_key[key] = Connection(
-                        id=len(self.by_key) + 1, topic=channel.topic, msgtype=channel.schema_name,
-                        msgdef=MessageDefinition(
-                            _DEFINITION_FORMATS.get(channel.schema_encoding, MessageDefinitionFormat.NONE),
-                            channel.schema_data.decode("utf-8", errors="replace")),
-                        digest=channel.metadata.get("topic_type_hash", ""), msgcount=0,
-                        ext=ConnectionExtRosbag2(serialization_format=channel.message_encoding,
-                                                 offered_qos_profiles=_channel_qos(channel)),
-                        owner=None)
-        self.connections = [c._replace(msgcount=counts[key]) for key, c in self.by_key.items()]
+        self.connections = [
+            Connection(id=index, topic=channel.topic, msgtype=channel.schema_name,
+                       msgdef=MessageDefinition(
+                           _DEFINITION_FORMATS.get(channel.schema_encoding, MessageDefinitionFormat.NONE),
+                           channel.schema_data.decode("utf-8", errors="replace")),
+                       digest=channel.metadata.get("topic_type_hash", ""), msgcount=counts[key],
+                       ext=ConnectionExtRosbag2(serialization_format=channel.message_encoding,
+                                                offered_qos_profiles=_channel_qos(channel)),
+                       owner=None)
+            for index, (key, channel) in enumerate(first.items(), start=1)]
         self.by_key = {(c.topic, c.msgtype): c for c in self.connections}
         read = [scan for scan in scans if scan.message_count]
         start_ns = min((scan.start_ns for scan in read), default=0)
