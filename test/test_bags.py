@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import json
 import os
+import resource
 import shutil
 import signal
 import subprocess
@@ -21,7 +22,9 @@ from typing import Any
 
 import pytest
 import rclpy
+import yaml
 from builtin_interfaces.msg import Time
+from mcap.exceptions import McapError
 from mcap.reader import make_reader
 from mcap_ros2.decoder import DecoderFactory
 from nav_msgs.msg import Odometry
@@ -55,7 +58,9 @@ from rfidnav_bag.bags import (
     typestore,
 )
 from rfidnav_bag.errors import BagError
-from rfidnav_bag.writer import BagWriter, StorageOptions
+from rfidnav_bag.recover import recover_bag
+from rfidnav_bag.salvage import scan_file
+from rfidnav_bag.writer import CHUNK_DURATION_NS, BagWriter, StorageOptions
 from rfidnav_common.ros import LATCHED_QOS, message_class
 from rfidnav_msgs.action import FollowTagRoute
 from rfidnav_msgs.msg import TagReadArray, TagReading
@@ -118,13 +123,24 @@ class Processes:
         self.log_dir = log_dir
         self.started: list[tuple[subprocess.Popen, Path]] = []
 
-    def start(self, executable: str, params: dict[str, str]) -> subprocess.Popen:
+    def start(self, executable: str, params: dict[str, str], file_size_limit: int | None = None) -> subprocess.Popen:
+        """``file_size_limit``: RLIMIT_FSIZE of the process, SIGXFSZ ignored, so that a write past it fails with
+        EFBIG as one to a full disk fails with ENOSPC (its DDS then talks UDP only: the limit would refuse the
+        shared-memory segments)."""
         log = self.log_dir / f"{executable}-{len(self.started)}.log"
         command = [str(BIN / executable), "--ros-args"]
         for name, value in params.items():
             command += ["-p", f"{name}:={value}"]
+        env = dict(os.environ)
+        limit = None
+        if file_size_limit is not None:
+            env["FASTDDS_BUILTIN_TRANSPORTS"] = "UDPv4"
+
+            def limit() -> None:
+                signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+                resource.setrlimit(resource.RLIMIT_FSIZE, (file_size_limit, file_size_limit))
         with log.open("wb") as handle:  # the child keeps its own descriptor
-            process = subprocess.Popen(command, stdout=handle, stderr=subprocess.STDOUT, env=dict(os.environ))
+            process = subprocess.Popen(command, stdout=handle, stderr=subprocess.STDOUT, env=env, preexec_fn=limit)
         self.started.append((process, log))
         return process
 
@@ -418,19 +434,132 @@ def test_recording_info_counts_and_exclusions(recording: Recording) -> None:
     assert stamps == sorted(stamps)
 
 
-def test_sigterm_finalizes_a_readable_bag(ros: Ros, processes: Processes, tmp_path: Path) -> None:
+@pytest.mark.parametrize("signals", [[signal.SIGTERM], [signal.SIGHUP], [signal.SIGINT, signal.SIGINT]],
+                         ids=["sigterm", "sighup", "two_sigints"])
+def test_a_stop_signal_finalizes_a_readable_bag(ros: Ros, processes: Processes, tmp_path: Path,
+                                               signals: list[signal.Signals]) -> None:
+    """SIGTERM and SIGHUP stop the recorder as Ctrl-C does, and a second signal only cuts the drain short."""
     odom = ros.node.create_publisher(Odometry, "/odom", KEEP)
     recorder = processes.start("recorder", {"output_dir": str(tmp_path / "bag"), "discovery_period_s": "0.1"})
     wait_matched(ros, [odom])
     for i in range(5):
         odom.publish(odom_message(i))
     wait_acked([odom])
-    recorder.send_signal(signal.SIGTERM)
+    for signum in signals:
+        recorder.send_signal(signum)
     assert processes.wait(recorder, 20) == 0, processes.log_of(recorder)
-    assert (tmp_path / "bag" / "metadata.yaml").is_file()
-    assert bag_info(tmp_path / "bag").topic("/odom").count == 5
+    assert "bag closed" in processes.log_of(recorder)
+    info = bag_info(tmp_path / "bag")
+    assert info.notes == () and info.topic("/odom").count == 5
     assert [m.pose.pose.position.x for _, _, m in read_messages(tmp_path / "bag", ["/odom"])] == pytest.approx(
         [0.0, 0.1, 0.2, 0.3, 0.4])
+
+
+# ------------------------------------------------------------------------------------------- crashes
+
+CLOCK_STEP_NS = 10_000_000
+ROUNDS = 500   # /clock from 0 to 4.99 s
+LATEST_NS = (ROUNDS - 1) * CLOCK_STEP_NS
+CLOCK_KEEP = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=ROUNDS, reliability=ReliabilityPolicy.RELIABLE)
+
+
+def clock_at(stamp_ns: int) -> Clock:
+    return Clock(clock=Time(sec=stamp_ns // 1_000_000_000, nanosec=stamp_ns % 1_000_000_000))
+
+
+def record_clock_then_kill(ros: Ros, processes: Processes, bag: Path, checkpoint_period_s: float,
+                           until: Callable[[], bool] = lambda: True) -> None:
+    """A recorder stamping from /clock, as in a simulated run, records 5 s of /clock published at once; once it
+    has handled every message and ``until`` holds, it is SIGKILLed."""
+    clock = ros.node.create_publisher(Clock, "/clock", CLOCK_KEEP)
+    recorder = processes.start("recorder", {"output_dir": str(bag), "stamp_from_clock_topic": "true",
+                                            "discovery_period_s": "0.1",
+                                            "checkpoint_period_s": str(checkpoint_period_s),
+                                            "exclude_topics": "[/parameter_events,/rosout]"})
+    wait_matched(ros, [clock])
+    for i in range(ROUNDS):
+        clock.publish(clock_at(i * CLOCK_STEP_NS))
+    wait_acked([clock])
+    # The recorder handles its events in order: once its next graph poll has found a topic that appeared after
+    # every /clock reached it, it has written them all (to the chunk in progress, or further).
+    probe = ros.node.create_publisher(Odometry, "/probe", KEEP)
+    wait_matched(ros, [probe])
+    ros.spin_until(until, 20, "the condition before the kill")
+    recorder.kill()
+    assert processes.wait(recorder, 20) == -signal.SIGKILL
+
+
+def test_a_sigkilled_recorder_leaves_a_bag_readable_up_to_the_chunk_in_progress(
+        ros: Ros, processes: Processes, tmp_path: Path) -> None:
+    """No checkpoint in the run (a period of an hour): what is lost is exactly the chunk in progress, the last
+    second of bag time; bag info, read_messages and bag recover read the rest, and the recovered bag opens in
+    rosbags, mcap's seeking reader and mcap_ros2."""
+    bag = tmp_path / "bag"
+    record_clock_then_kill(ros, processes, bag, checkpoint_period_s=3600.0)
+    # Unfinished: no summary, so the third-party readers refuse it as it is.
+    with pytest.raises(McapError), (bag / "bag_0.mcap").open("rb") as stream:
+        make_reader(stream).get_summary()
+    info = bag_info(bag)
+    stamps = [t for _, t, _ in read_messages(bag, ["/clock"])]
+    assert stamps == [i * CLOCK_STEP_NS for i in range(ROUNDS) if i * CLOCK_STEP_NS < 4_000_000_000]
+    lost_s = (LATEST_NS - stamps[-1]) / 1e9
+    assert 0 < lost_s <= CHUNK_DURATION_NS / 1e9, f"{lost_s} s of bag time lost"  # the chunk spans < 1 s
+    assert info.message_count == len(stamps) and len(info.notes) == 1
+    assert "bag_0.mcap has no summary" in info.notes[0] and "read 400 messages up to 4.0 s" in info.notes[0]
+
+    recovery = recover_bag(bag)
+    assert recovery.message_count == len(stamps) and recovery.source.notes == info.notes
+    with AnyReader([recovery.output]) as reader:
+        assert [t for _, t, _ in reader.messages()] == stamps
+    [mcap_file] = recovery.output.glob("*.mcap")
+    with mcap_file.open("rb") as stream:
+        decoded = [(channel.topic, message.clock.sec * 1_000_000_000 + message.clock.nanosec) for _, channel, _, message
+                   in make_reader(stream, decoder_factories=[DecoderFactory()]).iter_decoded_messages()]
+    assert decoded == [("/clock", t) for t in stamps]
+    assert bag_info(recovery.output).notes == ()
+
+
+def test_a_stalled_clock_keeps_nothing_in_memory_past_a_checkpoint(ros: Ros, processes: Processes,
+                                                                   tmp_path: Path) -> None:
+    """/clock stops (a paused or stalled simulation): within a checkpoint period (wall time) the chunk in
+    progress is on disk, so a SIGKILL then loses nothing."""
+    bag = tmp_path / "bag"
+
+    def on_disk() -> int:
+        return scan_file(bag / "bag_0.mcap").message_count
+
+    record_clock_then_kill(ros, processes, bag, checkpoint_period_s=0.5, until=lambda: on_disk() == ROUNDS)
+    assert [t for _, t, _ in read_messages(bag)] == [i * CLOCK_STEP_NS for i in range(ROUNDS)]
+    metadata = yaml.safe_load((bag / "metadata.yaml").read_text())["rosbag2_bagfile_information"]
+    assert metadata["message_count"] == ROUNDS, "metadata.yaml not kept current"
+
+
+def test_a_recorder_whose_disk_is_full_stops_with_one_error_and_exit_3(ros: Ros, processes: Processes,
+                                                                       tmp_path: Path) -> None:
+    """The recorder under RLIMIT_FSIZE (its writes past 1 MB fail with EFBIG, as a full disk fails them with
+    ENOSPC): one ERROR line, exit 3, and the chunks written before stay readable."""
+    reads = ros.node.create_publisher(TagReadArray, "/rfid/reads", CLOCK_KEEP)
+    recorder = processes.start("recorder", {"output_dir": str(tmp_path / "bag"),
+                                            "exclude_topics": "[/parameter_events,/rosout]"},
+                               file_size_limit=1_000_000)
+    wait_matched(ros, [reads])
+    big = reads_message(0)
+    big.readings = big.readings * 200   # ~25 kB a message: the 1 MB is reached in a few chunks
+    deadline = time.monotonic() + 60
+    while recorder.poll() is None:
+        assert time.monotonic() < deadline, f"the recorder did not stop:\n{processes.log_of(recorder)}"
+        reads.publish(big)
+        ros.executor.spin_once(timeout_sec=0.01)
+    assert processes.wait(recorder, 20) == 3
+    log = processes.log_of(recorder)
+    errors = [line for line in log.splitlines() if "[ERROR]" in line]
+    assert len(errors) == 1 and "File too large; recording stopped with" in errors[0], log
+    assert "Traceback" not in log
+    info = bag_info(tmp_path / "bag")
+    metadata = yaml.safe_load((tmp_path / "bag" / "metadata.yaml").read_text())["rosbag2_bagfile_information"]
+    assert info.message_count == metadata["message_count"] > 0, "metadata.yaml does not say what is on disk"
+    assert f"with {info.message_count:,} messages on disk" in errors[0]
+    assert all(len(m.readings) == 400 for _, _, m in read_messages(tmp_path / "bag", ["/rfid/reads"]))
 
 
 def test_recorder_refuses_an_existing_output_dir(processes: Processes, tmp_path: Path) -> None:
@@ -483,27 +612,20 @@ def _plain_file(bag: Path) -> Path:
     return path
 
 
-def _no_metadata(bag: Path) -> Path:
-    path = bag.parent / "no_metadata"
-    path.mkdir()
-    (path / "bag_0.mcap").write_bytes(next(bag.glob("*.mcap")).read_bytes())
-    return path
-
-
-def _truncated(bag: Path) -> Path:
-    path = bag.parent / "truncated"
+def _cut_to_the_magic(bag: Path) -> Path:
+    path = bag.parent / "cut"
     shutil.copytree(bag, path)
     mcap_file = next(path.glob("*.mcap"))
-    data = mcap_file.read_bytes()
-    mcap_file.write_bytes(data[: len(data) // 2])
+    mcap_file.write_bytes(mcap_file.read_bytes()[:8])
     return path
 
 
 @pytest.mark.tier("unit")
-@pytest.mark.parametrize("damage", [_missing, _plain_file, _no_metadata, _truncated],
-                         ids=["missing", "plain_file", "no_metadata", "truncated"])
+@pytest.mark.parametrize("damage", [_missing, _plain_file, _cut_to_the_magic],
+                         ids=["missing", "plain_file", "cut_to_the_magic"])
 def test_unreadable_bags_raise_bag_error_naming_the_path(damage: Callable[[Path], Path], tmp_path: Path,
                                                          synthetic_bag: Path) -> None:
+    """(Bags that are damaged but partly readable: test_bag_damage.py.)"""
     bag = tmp_path / "bag"
     shutil.copytree(synthetic_bag, bag)
     broken = damage(bag)

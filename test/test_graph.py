@@ -112,8 +112,8 @@ def test_missing_and_truncated_bags_are_clear_errors(line_run: Path, tmp_path: P
     broken.mkdir()
     (broken / "metadata.yaml").write_bytes((line_run / "bag" / "metadata.yaml").read_bytes())
     mcap_file = next((line_run / "bag").glob("*.mcap"))
-    data = mcap_file.read_bytes()
-    (broken / mcap_file.name).write_bytes(data[: len(data) // 2])
+    # Cut to its magic: nothing is readable (a bag cut further on is read up to the cut: test_bag_damage.py)
+    (broken / mcap_file.name).write_bytes(mcap_file.read_bytes()[:8])
     for verb in (["report", str(broken)], ["bag", "info", str(broken)], ["replay", str(broken)]):
         result = run_cli(*verb)
         assert result.returncode != 0, verb

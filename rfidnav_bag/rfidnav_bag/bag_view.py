@@ -274,6 +274,8 @@ def serve_bag(bag: Path, port: int, host: str = DEFAULT_HOST, speed: float = 1.0
     """Serve ``bag`` (a rosbag2 directory) until ``stop`` is set or Ctrl-C; 0 then. A missing, unreadable or
     empty bag is a BagError; a port it cannot bind a BagError naming it."""
     info = bag_info(bag)
+    for note in info.notes:   # a bag that was not finalised: what was lost
+        print(f"rfidnav view: {bag}: {note}", file=sys.stderr)
     if info.message_count == 0:
         raise BagError(f"{bag}: the bag holds no messages: nothing to play")
     context = foxglove.Context()

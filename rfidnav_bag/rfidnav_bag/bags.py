@@ -1,10 +1,13 @@
 """Reading rosbag2 (MCAP) directories written by the recorder, and the type knowledge both nodes share.
 
-No rclpy here: bags are read with ``rosbags`` so reports, metrics and ``./rfidnav bag info`` work without a
-running ROS graph. rosbags reads every file metadata.yaml lists (a split bag) in turn, and decompresses zstd or
-lz4 chunks, so all of this works on split and compressed bags alike. Every failure to read a bag becomes one
-:class:`BagError` that names the path (and the topic when one is at fault); the exceptions caught are the ones
-``rosbags`` documents for bad input.
+No rclpy here: bags are read without a running ROS graph (reports, metrics, ``./rfidnav bag info``). A finished
+bag -- metadata.yaml, and an intact summary in every file that agrees with it -- is read with ``rosbags``, which
+reads every file metadata.yaml lists (a split bag) in turn and decompresses zstd or lz4 chunks. Any other bag
+(the recorder killed or out of disk before it could close it, a file cut short, metadata.yaml missing, stale or
+malformed) is salvaged: each file is read from its start (:mod:`rfidnav_bag.salvage`), topics, counts and times
+are rebuilt from its intact chunks, and ``BagInfo.notes`` says in one line per file what was lost. Every failure
+to read a bag becomes one :class:`BagError` that names the path (and the topic when one is at fault); the
+exceptions caught are the ones ``rosbags`` and ``mcap`` raise for bad input.
 
 Types: :func:`typestore` is the ROS 2 Jazzy store of ``rosbags`` plus every rfidnav_msgs type, read from the
 installed interface definitions (``share/rfidnav_msgs/{msg,action}``). Action topics carry types that exist in
@@ -19,6 +22,7 @@ import os
 import re
 import struct
 import sys
+from collections import Counter
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
@@ -26,18 +30,22 @@ from typing import NamedTuple
 
 from mcap.exceptions import McapError
 from mcap.reader import make_reader
-from rosbags.interfaces import Connection, MessageDefinitionFormat
+from mcap.summary import Summary
+from rosbags.interfaces import Connection, ConnectionExtRosbag2, MessageDefinition, MessageDefinitionFormat
 from rosbags.rosbag2 import Reader, ReaderError
+from rosbags.rosbag2.metadata import parse_qos
 from rosbags.serde import SerdeError
 from rosbags.typesys import Stores, TypesysError, get_types_from_idl, get_types_from_msg, get_typestore
 from rosbags.typesys.store import Typestore
 from ruamel.yaml import YAML, YAMLError
 
 from rfidnav_bag.errors import BagError
+from rfidnav_bag.salvage import FileScan, SalvagedChannel, salvaged_messages, scan_file
 
 __all__ = [
-    "BagFile", "BagInfo", "OfferedQos", "RawMessage", "TopicInfo", "bag_info", "clock_stamp_ns", "format_bag_info",
-    "message_definition", "read_messages", "read_raw", "register_installed_type", "typestore",
+    "Bag", "BagFile", "BagInfo", "OfferedQos", "RawMessage", "TopicInfo", "bag_info", "clock_stamp_ns",
+    "format_bag_info", "is_bag_directory", "message_definition", "open_bag", "read_messages", "read_raw",
+    "register_installed_type", "typestore",
 ]
 
 INTERFACE_PACKAGE = "rfidnav_msgs"
@@ -270,14 +278,16 @@ class TopicInfo:
 
 @dataclass(frozen=True)
 class BagFile:
-    """One storage file of a bag, as metadata.yaml lists it, with what its MCAP chunk records say."""
+    """One storage file of a bag, as metadata.yaml lists it (or as read, for a bag that was not finalised), with
+    what its MCAP chunk records say."""
 
     path: Path
     message_count: int
     start_ns: int
     duration_s: float
     size_bytes: int
-    compression: str  # of its chunks: none | zstd | lz4 (several: joined by ", "); "-" for non-MCAP storage
+    compression: str  # of its chunks: none | zstd | lz4 (several: joined by ", "); "-" for non-MCAP storage,
+    # "unknown" for a file of which no chunk could be read
 
 
 @dataclass(frozen=True)
@@ -291,6 +301,7 @@ class BagInfo:
     topics: tuple[TopicInfo, ...]
     files: tuple[BagFile, ...] = ()
     ros_distro: str | None = None
+    notes: tuple[str, ...] = ()  # what was lost or rebuilt, one line each: empty for a finalised, intact bag
 
     @property
     def compression(self) -> str:
@@ -304,27 +315,20 @@ class BagInfo:
         raise KeyError(name)
 
 
+def is_bag_directory(path: Path) -> bool:
+    """A folder that holds a rosbag2 bag, finished or not: metadata.yaml, or MCAP files without it."""
+    return path.is_dir() and ((path / "metadata.yaml").is_file() or any(path.glob("*.mcap")))
+
+
 def _checked_bag_path(path: str | Path) -> Path:
     bag = Path(path)
     if not bag.exists():
         raise BagError(f"{bag}: no such bag (path does not exist)")
     if not bag.is_dir():
         raise BagError(f"{bag}: not a rosbag2 directory (expected a directory with metadata.yaml and .mcap files)")
-    if not (bag / "metadata.yaml").is_file():
-        raise BagError(f"{bag}: no metadata.yaml -- not a rosbag2 directory, or a recording that was never "
-                       "finalised (recorder killed before it could close the bag)")
+    if not is_bag_directory(bag):
+        raise BagError(f"{bag}: not a rosbag2 directory (no metadata.yaml, no .mcap file)")
     return bag
-
-
-def _open_reader(bag: Path) -> Reader:
-    try:
-        reader = Reader(bag)
-        reader.open()
-    except (ReaderError, OSError, struct.error, UnicodeDecodeError) as error:
-        # ReaderError: rosbags' own checks (magic, footer, record sizes, metadata keys); struct.error and
-        # UnicodeDecodeError: a corrupt record that passed those checks but cannot be unpacked.
-        raise BagError(f"{bag}: unreadable bag (truncated or corrupt?): {error}") from error
-    return reader
 
 
 def _offered(connection: Connection) -> tuple[OfferedQos, ...]:
@@ -333,65 +337,284 @@ def _offered(connection: Connection) -> tuple[OfferedQos, ...]:
                  for q in profiles)
 
 
-def _information(bag: Path) -> dict:
-    """metadata.yaml's rosbag2_bagfile_information (the Reader validated it already)."""
+def _topics(connections: Iterable[Connection]) -> tuple[TopicInfo, ...]:
+    """One TopicInfo per topic name (a topic recorded with two types counts both)."""
+    by_name: dict[str, list[Connection]] = {}
+    for connection in connections:
+        by_name.setdefault(connection.topic, []).append(connection)
+    topics = []
+    for name, group in sorted(by_name.items()):
+        offered: tuple[OfferedQos, ...] = ()
+        for connection in group:
+            offered += _offered(connection)
+        distinct = list(dict.fromkeys(str(q) for q in offered))
+        msgtypes = {c.msgtype for c in group}
+        topics.append(TopicInfo(name=name, msgtype=msgtypes.pop() if len(msgtypes) == 1 else "(several types)",
+                                count=sum(c.msgcount for c in group),
+                                qos="; ".join(distinct) if distinct else None, offered_qos=offered))
+    return tuple(topics)
+
+
+def _yaml_problem(error: YAMLError) -> str:
+    problem, mark = getattr(error, "problem", None), getattr(error, "problem_mark", None)
+    if problem and mark is not None:
+        return f"{problem} at line {mark.line + 1}"
+    return str(error).splitlines()[0] if str(error) else type(error).__name__
+
+
+def _load_information(bag: Path) -> tuple[dict | None, str | None]:
+    """metadata.yaml's rosbag2_bagfile_information, or None and why it cannot be used."""
+    path = bag / "metadata.yaml"
+    if not path.is_file():
+        return None, "no metadata.yaml"
     try:
-        metadata = YAML(typ="safe").load((bag / "metadata.yaml").read_text(encoding="utf-8"))
-        return dict(metadata["rosbag2_bagfile_information"])
-    except (OSError, YAMLError, KeyError, TypeError) as error:
-        raise BagError(f"{bag / 'metadata.yaml'}: cannot read rosbag2_bagfile_information: {error}") from error
+        document = YAML(typ="safe").load(path.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError) as error:
+        return None, f"metadata.yaml cannot be read ({error})"
+    except YAMLError as error:
+        return None, f"metadata.yaml is not valid YAML ({_yaml_problem(error)})"
+    information = document.get("rosbag2_bagfile_information") if isinstance(document, dict) else None
+    if not isinstance(information, dict) or not isinstance(information.get("relative_file_paths"), list):
+        return None, "metadata.yaml holds no rosbag2_bagfile_information with relative_file_paths"
+    return information, None
 
 
-def _chunk_compression(path: Path) -> str:
-    """The compressions the MCAP summary's chunk indexes name ("none" for uncompressed chunks)."""
+def _file_order(path: Path) -> tuple[str, int]:
+    """bag_2.mcap before bag_10.mcap, as rosbag2 numbers them."""
+    stem, _, number = path.stem.rpartition("_")
+    return (stem, int(number)) if number.isdigit() else (path.stem, -1)
+
+
+def _listed_files(bag: Path, information: dict) -> list[Path]:
+    return [bag / Path(str(relative)).name for relative in information["relative_file_paths"]]
+
+
+def _summary(path: Path) -> Summary | None:
+    """The MCAP summary of ``path`` if its footer and summary are intact, else None."""
     try:
         with path.open("rb") as stream:
-            summary = make_reader(stream).get_summary()
-    except (McapError, OSError, struct.error, ValueError) as error:
-        raise BagError(f"{path}: unreadable MCAP summary: {error}") from error
-    if summary is None:  # a file without summary (rosbags reads it by scanning): say so rather than guess
-        return "unknown"
-    return ", ".join(sorted({index.compression or "none" for index in summary.chunk_indexes})) or "none"
+            return make_reader(stream).get_summary()
+    except (McapError, OSError, struct.error, ValueError):
+        return None
 
 
-def _files(bag: Path, information: dict) -> tuple[BagFile, ...]:
-    storage = str(information["storage_identifier"])
-    entries = {Path(entry["path"]).name: entry for entry in information.get("files") or []}
-    files = []
-    for relative in information["relative_file_paths"]:
-        path = bag / Path(relative).name
-        entry = entries.get(path.name, {})
-        files.append(BagFile(
-            path=path, message_count=int(entry.get("message_count", 0)),
-            start_ns=int(entry.get("starting_time", {}).get("nanoseconds_since_epoch", 0)),
-            duration_s=int(entry.get("duration", {}).get("nanoseconds", 0)) / 1e9, size_bytes=path.stat().st_size,
-            compression=_chunk_compression(path) if storage == "mcap" else "-"))
-    return tuple(files)
+def _compression(names: Iterable[str]) -> str:
+    return ", ".join(sorted({name or "none" for name in names})) or "none"
+
+
+class Bag:
+    """An open bag (:func:`open_bag`): what it holds (``info``, ``connections``) and its messages.
+
+    Complete bags -- metadata.yaml and every file's MCAP summary agree -- are read with rosbags; any other is
+    salvaged (:class:`_SalvagedBag`) and ``info.notes`` says what was lost or rebuilt."""
+
+    path: Path
+    info: BagInfo
+    connections: list[Connection]
+
+    def messages(self, connections: list[Connection], start_ns: int | None = None) -> Iterator[
+            tuple[Connection, int, bytes]]:
+        """(connection, timestamp, CDR) of ``connections`` (not empty) in time order, from ``start_ns`` on."""
+        raise NotImplementedError
+
+    def close(self) -> None:
+        """Let go of the files."""
+
+    def __enter__(self) -> Bag:
+        return self
+
+    def __exit__(self, *_exc: object) -> None:
+        self.close()
+
+
+class _CompleteBag(Bag):
+    """A finished bag, read with rosbags' Reader."""
+
+    def __init__(self, bag: Path, information: dict, summaries: list[Summary | None]) -> None:
+        self.path = bag
+        try:
+            self.reader = Reader(bag)
+            self.reader.open()
+        except (ReaderError, OSError, struct.error, UnicodeDecodeError) as error:
+            # ReaderError: rosbags' own checks (magic, footer, record sizes, metadata keys); struct.error and
+            # UnicodeDecodeError: a corrupt record that passed those checks but cannot be unpacked.
+            raise BagError(f"{bag}: unreadable bag (truncated or corrupt?): {error}") from error
+        self.connections = list(self.reader.connections)
+        count = self.reader.message_count
+        # rosbags reports end_time one past the last message (a half-open range); we report the message itself.
+        start_ns = self.reader.start_time if count else 0
+        end_ns = self.reader.end_time - 1 if count else 0
+        storage = str(information["storage_identifier"])
+        entries = {Path(str(entry["path"])).name: entry for entry in information.get("files") or []}
+        files = []
+        for path, summary in zip(_listed_files(bag, information), summaries, strict=True):
+            entry = entries.get(path.name, {})
+            files.append(BagFile(
+                path=path, message_count=int(entry.get("message_count", 0)),
+                start_ns=int(entry.get("starting_time", {}).get("nanoseconds_since_epoch", 0)),
+                duration_s=int(entry.get("duration", {}).get("nanoseconds", 0)) / 1e9,
+                size_bytes=path.stat().st_size,
+                compression=_compression(i.compression for i in summary.chunk_indexes) if summary else "-"))
+        self.info = BagInfo(path=bag, storage=storage, start_ns=start_ns, end_ns=end_ns,
+                            duration_s=(end_ns - start_ns) / 1e9, message_count=count,
+                            topics=_topics(self.connections), files=tuple(files),
+                            ros_distro=information.get("ros_distro"))
+
+    def messages(self, connections: list[Connection], start_ns: int | None = None) -> Iterator[
+            tuple[Connection, int, bytes]]:
+        try:
+            yield from self.reader.messages(connections, start=start_ns)
+        except (ReaderError, struct.error, UnicodeDecodeError) as error:
+            raise BagError(f"{self.path}: corrupt message data (truncated or damaged chunk?): {error}") from error
+
+    def close(self) -> None:
+        self.reader.close()
+
+
+def _complete_bag(bag: Path, information: dict) -> tuple[_CompleteBag | None, str | None]:
+    """The bag read with rosbags if metadata.yaml and the files' summaries agree, else (None, what is wrong with
+    metadata.yaml, if it is metadata.yaml that is unusable)."""
+    if information.get("storage_identifier") != "mcap":  # sqlite3: rosbags' to read, nothing to salvage
+        return _CompleteBag(bag, information, [None] * len(information["relative_file_paths"])), None
+    listed = _listed_files(bag, information)
+    if not listed or set(listed) != set(bag.glob("*.mcap")):
+        return None, None
+    summaries = [_summary(path) for path in listed]
+    counted = [s.statistics.message_count for s in summaries if s is not None and s.statistics is not None]
+    if len(counted) != len(listed) or sum(counted) != information.get("message_count"):
+        return None, None   # a file without summary, or metadata.yaml of a checkpoint: salvage
+    try:
+        return _CompleteBag(bag, information, list(summaries)), None
+    except BagError as error:  # intact files, but metadata.yaml that rosbags refuses (keys missing, ...)
+        return None, f"metadata.yaml is not usable ({error.__cause__ or error})"
+
+
+_DEFINITION_FORMATS = {"ros2msg": MessageDefinitionFormat.MSG, "ros2idl": MessageDefinitionFormat.IDL,
+                       "omgidl": MessageDefinitionFormat.IDL}
+
+
+def _channel_qos(channel: SalvagedChannel) -> list:
+    try:
+        return parse_qos(channel.metadata.get("offered_qos_profiles", ""))
+    except (ReaderError, KeyError, TypeError, AttributeError):
+        return []
+
+
+def _file_note(scan: FileScan) -> str | None:
+    """One line on what reading ``scan``'s file lost, or None for a complete file."""
+    name = scan.path.name
+    skipped = f"; {scan.damaged_chunks} damaged chunk(s) skipped" if scan.damaged_chunks else ""
+    if scan.complete:
+        return f"{name}: read {scan.message_count:,} messages{skipped}" if skipped else None
+    if not scan.message_count and not scan.channels:
+        return f"{name} is unreadable: {scan.problem}"
+    if scan.data_complete:
+        return (f"{name} has no intact summary ({scan.problem}): all its {scan.message_count:,} messages were read, "
+                f"the summary rebuilt{skipped}")
+    if not scan.cut:
+        tail = f"{scan.problem}: the {scan.lost_bytes:,} bytes from there on are lost"
+    elif scan.lost_bytes:
+        tail = f"the last, incomplete chunk ({scan.lost_bytes:,} bytes) is lost"
+    else:
+        tail = "the file ends after a whole chunk: later messages were never written to it"
+    return (f"{name} has no summary (the recorder stopped without closing it, or the file was cut): read "
+            f"{scan.message_count:,} messages up to {scan.end_ns / 1e9:.1f} s; {tail}{skipped}")
+
+
+class _SalvagedBag(Bag):
+    """A bag that was not finalised or is damaged: its files read from their start (:mod:`rfidnav_bag.salvage`),
+    topics, counts and times rebuilt from the records read. The messages of each file are sorted by time in
+    memory (the files follow each other in time), one file at a time."""
+
+    def __init__(self, bag: Path, information: dict | None, metadata_problem: str | None) -> None:
+        self.path = bag
+        notes = [f"{metadata_problem}: topics and counts rebuilt from the MCAP files"] if metadata_problem else []
+        listed = _listed_files(bag, information) if information is not None else []
+        notes += [f"{path.name} (listed in metadata.yaml) is missing: its messages are lost"
+                  for path in listed if not path.is_file()]
+        self.files = [p for p in listed if p.is_file()]
+        self.files += sorted(set(bag.glob("*.mcap")) - set(self.files), key=_file_order)
+        scans = []
+        for path in self.files:
+            try:
+                scans.append(scan_file(path))
+            except OSError as error:
+                raise BagError(f"{path}: cannot read: {error}") from error
+        notes += [note for note in map(_file_note, scans) if note]
+        if not any(scan.message_count or scan.complete for scan in scans):
+            raise BagError(f"{bag}: no message readable: {'; '.join(notes) or 'no .mcap file'}")
+        first: dict[tuple[str, str], SalvagedChannel] = {}  # (topic, type) -> its channel in the first file
+        counts: Counter[tuple[str, str]] = Counter()
+        for scan in scans:
+            for channel_id, channel in scan.channels.items():
+                key = (channel.topic, channel.schema_name)
+                first.setdefault(key, channel)
+                counts[key] += scan.counts[channel_id]
+        self.connections = [
+            Connection(id=index, topic=channel.topic, msgtype=channel.schema_name,
+                       msgdef=MessageDefinition(
+                           _DEFINITION_FORMATS.get(channel.schema_encoding, MessageDefinitionFormat.NONE),
+                           channel.schema_data.decode("utf-8", errors="replace")),
+                       digest=channel.metadata.get("topic_type_hash", ""), msgcount=counts[key],
+                       ext=ConnectionExtRosbag2(serialization_format=channel.message_encoding,
+                                                offered_qos_profiles=_channel_qos(channel)),
+                       owner=None)
+            for index, (key, channel) in enumerate(first.items(), start=1)]
+        self.by_key = {(c.topic, c.msgtype): c for c in self.connections}
+        read = [scan for scan in scans if scan.message_count]
+        start_ns = min((scan.start_ns for scan in read), default=0)
+        end_ns = max((scan.end_ns for scan in read), default=0)
+        distro = information.get("ros_distro") if information is not None else None
+        recorded = next((scan.rosbag2_metadata for scan in scans if scan.rosbag2_metadata), None)
+        if distro is None and recorded is not None:
+            try:
+                distro = (YAML(typ="safe").load(recorded) or {}).get("ros_distro")
+            except (YAMLError, AttributeError):
+                distro = None
+        self.info = BagInfo(
+            path=bag, storage="mcap", start_ns=start_ns, end_ns=end_ns, duration_s=(end_ns - start_ns) / 1e9,
+            message_count=sum(scan.message_count for scan in scans), topics=_topics(self.connections),
+            files=tuple(BagFile(path=scan.path, message_count=scan.message_count, start_ns=scan.start_ns,
+                                duration_s=(scan.end_ns - scan.start_ns) / 1e9, size_bytes=scan.size_bytes,
+                                compression=_compression(scan.compressions) if scan.compressions else "unknown")
+                        for scan in scans),
+            ros_distro=distro, notes=tuple(notes))
+
+    def messages(self, connections: list[Connection], start_ns: int | None = None) -> Iterator[
+            tuple[Connection, int, bytes]]:
+        wanted = {(c.topic, c.msgtype) for c in connections}
+        for path in self.files:
+            found = []
+            try:
+                for channel, message in salvaged_messages(path):
+                    key = (channel.topic, channel.schema_name)
+                    if key in wanted and (start_ns is None or message.log_time >= start_ns):
+                        found.append((message.log_time, self.by_key[key], message.data))
+            except OSError as error:
+                raise BagError(f"{path}: cannot read: {error}") from error
+            found.sort(key=lambda item: item[0])  # stable: messages of one time keep their order in the file
+            for timestamp, connection, data in found:
+                yield connection, timestamp, data
+
+
+def open_bag(path: str | Path, salvage: bool = False) -> Bag:
+    """Open a rosbag2 directory, finished or not (a BagError naming the path if nothing in it can be read).
+    ``salvage``: read every file from its start even if the bag looks finished, so that a damaged chunk is
+    skipped (and counted in the notes) instead of ending the read with a BagError. Use as a context manager."""
+    bag = _checked_bag_path(path)
+    information, metadata_problem = _load_information(bag)
+    if information is not None and not (salvage and information.get("storage_identifier") == "mcap"):
+        complete, metadata_problem = _complete_bag(bag, information)
+        if complete is not None:
+            return complete
+    return _SalvagedBag(bag, information, metadata_problem)
 
 
 def bag_info(path: str | Path) -> BagInfo:
-    """Topics, types, counts, QoS and time span of a rosbag2 directory (raises BagError if unreadable)."""
-    bag = _checked_bag_path(path)
-    reader = _open_reader(bag)
-    try:
-        topics: list[TopicInfo] = []
-        for name, info in sorted(reader.topics.items()):
-            offered: tuple[OfferedQos, ...] = ()
-            for connection in info.connections:
-                offered += _offered(connection)
-            distinct = list(dict.fromkeys(str(q) for q in offered))
-            topics.append(TopicInfo(name=name, msgtype=info.msgtype or "(several types)", count=info.msgcount,
-                                    qos="; ".join(distinct) if distinct else None, offered_qos=offered))
-        count = reader.message_count
-        # rosbags reports end_time one past the last message (a half-open range); we report the message itself.
-        start_ns = reader.start_time if count else 0
-        end_ns = reader.end_time - 1 if count else 0
-    finally:
-        reader.close()
-    information = _information(bag)
-    return BagInfo(path=bag, storage=str(information["storage_identifier"]), start_ns=start_ns, end_ns=end_ns,
-                   duration_s=(end_ns - start_ns) / 1e9, message_count=count, topics=tuple(topics),
-                   files=_files(bag, information), ros_distro=information.get("ros_distro"))
+    """Topics, types, counts, QoS and time span of a rosbag2 directory, and for a bag that was not finalised or
+    is damaged what was lost (``notes``); BagError if nothing in it can be read."""
+    with open_bag(path) as bag:
+        return bag.info
 
 
 def _seconds(nanoseconds: int) -> str:
@@ -450,10 +673,9 @@ class RawMessage(NamedTuple):
     data: bytes
 
 
-def _selected(reader: Reader, topics: Iterable[str] | None) -> list[Connection]:
+def _selected(connections: list[Connection], topics: Iterable[str] | None) -> list[Connection]:
     """The connections of ``topics``; a topic the bag lacks simply has no messages (a run where nothing was
     ever published on it records no connection). Callers that need a topic check ``bag_info`` first."""
-    connections = list(reader.connections)
     if topics is None:
         return connections
     wanted = set(topics)
@@ -463,23 +685,16 @@ def _selected(reader: Reader, topics: Iterable[str] | None) -> list[Connection]:
 def read_raw(path: str | Path, topics: Iterable[str] | None = None, *,
              start_ns: int | None = None) -> Iterator[RawMessage]:
     """Yield the recorded messages (all, or those of ``topics``; absent topics yield nothing) as raw CDR in
-    time order.
+    time order; of a bag that was not finalised, those of its intact chunks (see ``bag_info``'s notes).
 
     ``start_ns`` skips messages stamped before it (absolute bag time). Lazy: errors, including a missing bag,
     surface as BagError on the first ``next()``."""
-    bag = _checked_bag_path(path)
-    reader = _open_reader(bag)
-    try:
-        connections = _selected(reader, topics)
+    with open_bag(path) as bag:
+        connections = _selected(bag.connections, topics)
         if not connections:  # rosbags reads every connection when given none
             return
-        try:
-            for connection, timestamp, data in reader.messages(connections, start=start_ns):
-                yield RawMessage(connection.topic, connection.msgtype, timestamp, bytes(data))
-        except (ReaderError, struct.error, UnicodeDecodeError) as error:
-            raise BagError(f"{bag}: corrupt message data (truncated or damaged chunk?): {error}") from error
-    finally:
-        reader.close()
+        for connection, timestamp, data in bag.messages(connections, start_ns):
+            yield RawMessage(connection.topic, connection.msgtype, timestamp, bytes(data))
 
 
 def _store_for(bag: Path, connections: list[Connection]) -> Typestore:
@@ -511,22 +726,15 @@ def read_messages(path: str | Path, topics: Iterable[str] | None = None) -> Iter
     """Yield (topic, timestamp_ns, message) in time order, messages deserialised as rosbags dataclasses.
 
     Lazy like :func:`read_raw`. A message that does not deserialise raises BagError naming the topic."""
-    bag = _checked_bag_path(path)
-    reader = _open_reader(bag)
-    try:
-        connections = _selected(reader, topics)
+    with open_bag(path) as bag:
+        connections = _selected(bag.connections, topics)
         if not connections:
             return
-        store = _store_for(bag, connections)
-        try:
-            for connection, timestamp, data in reader.messages(connections):
-                try:
-                    message = store.deserialize_cdr(data, connection.msgtype)
-                except SerdeError as error:
-                    raise BagError(f"{bag}: topic {connection.topic}: message at {timestamp} ns does not "
-                                   f"deserialise as {connection.msgtype}: {error}") from error
-                yield connection.topic, timestamp, message
-        except (ReaderError, struct.error, UnicodeDecodeError) as error:
-            raise BagError(f"{bag}: corrupt message data (truncated or damaged chunk?): {error}") from error
-    finally:
-        reader.close()
+        store = _store_for(bag.path, connections)
+        for connection, timestamp, data in bag.messages(connections):
+            try:
+                message = store.deserialize_cdr(data, connection.msgtype)
+            except SerdeError as error:
+                raise BagError(f"{bag.path}: topic {connection.topic}: message at {timestamp} ns does not "
+                               f"deserialise as {connection.msgtype}: {error}") from error
+            yield connection.topic, timestamp, message

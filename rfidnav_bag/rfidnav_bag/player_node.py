@@ -90,6 +90,8 @@ class PlayerNode(Node):
         super().__init__("player", **node_options)
         self.params: PlayerParameters = declare_parameters(self, PlayerParameters)
         self.info: BagInfo = bag_info(self.params.bag)
+        for note in self.info.notes:   # a bag that was not finalised: what was lost
+            self.get_logger().warning(f"{self.params.bag}: {note}")
         self.done: Future = Future()
         recorded = {t.name: t for t in self.info.topics}
         missing = [t for t in self.params.topics if t not in recorded]

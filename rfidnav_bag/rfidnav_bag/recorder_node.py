@@ -14,14 +14,23 @@ The wheels ship no rosbag2, so this node is the suite's ``ros2 bag record -a``:
   bag decodes in Foxglove, with ``mcap_ros2`` or with rosbags without rfidnav installed;
 - the files are written by :mod:`rfidnav_bag.writer` in rosbag2's layout (``bag/bag_0.mcap``, ...), chunks
   compressed with zstd if ``compression`` says so, split into several files by ``max_bag_size`` or
-  ``max_bag_duration_s`` (``ros2 bag record --max-bag-size`` / ``--max-bag-duration``).
+  ``max_bag_duration_s`` (``ros2 bag record --max-bag-size`` / ``--max-bag-duration``);
+- every ``checkpoint_period_s`` (wall time) the chunk in progress is written and metadata.yaml brought up to
+  date, so a recorder that is killed loses at most that, or a second of bag time (the writer's chunk bound).
 
 Timestamps are the node clock at reception. Runs use ``use_sim_time``, so bag time is sim time; a message
 that arrives before the first /clock is stamped 0 (the ROS time of a sim-time node with no clock yet).
 
-Stopping: SIGINT or SIGTERM stops recording, drains what DDS already delivered to this process, then
-finalises the bag (MCAP summary and metadata.yaml). rclpy's own handlers are not installed because they
-shut the context down at once, which would drop the messages still queued in the subscriptions.
+Stopping: SIGINT, SIGTERM or SIGHUP stops recording, drains what DDS already delivered to this process (for
+at most DRAIN_LIMIT_S; a second signal ends the drain at once), then finalises the bag (MCAP summary and
+metadata.yaml); exit 0. rclpy's own handlers are not installed because they shut the context down at once,
+which would drop the messages still queued in the subscriptions. A recorder whose orchestrator died gets SIGINT
+from the kernel (the orchestrator sets the parent-death signal) and finalises the same way.
+
+Disk full (or over quota, an I/O error, a file over the size limit): the first write the disk refuses ends the
+recording. The recorder logs one ERROR line saying so and what the bag still holds, closes what it can (the
+chunks already written stay readable, metadata.yaml lists them if the disk still takes it) and exits with
+WRITE_FAILED_EXIT (3), which the orchestrator reports as the recorder's exit.
 """
 
 from __future__ import annotations
@@ -39,7 +48,7 @@ from rclpy.subscription import Subscription
 from rosbags.interfaces import Qos, QosDurability, QosHistory, QosLiveliness, QosReliability, QosTime
 
 from rfidnav_bag.bags import clock_stamp_ns, message_definition, register_installed_type
-from rfidnav_bag.errors import BagError
+from rfidnav_bag.errors import BagError, BagWriteError
 from rfidnav_bag.writer import COMPRESSIONS, MIN_SPLIT_SIZE, BagWriter, StorageOptions, Topic
 from rfidnav_common.config import param
 from rfidnav_common.errors import ConfigError, ParameterError
@@ -47,6 +56,7 @@ from rfidnav_common.ros import declare_parameters, events_executor, message_clas
 from rfidnav_common.stepped_node import SteppedNode
 
 RECORD_DEPTH = 1000
+WRITE_FAILED_EXIT = 3  # the exit code of a recorder stopped by a write the disk refused
 DRAIN_IDLE_S = 0.05  # stop draining once a wait this long delivered nothing
 DRAIN_LIMIT_S = 2.0
 
@@ -66,6 +76,9 @@ class RecorderParameters:
     max_bag_duration_s: float = param(
         "start the next file when a message is stamped more than this many seconds (bag time: sim time in a "
         "simulated run) after the current file's first; 0: never (ros2 bag record --max-bag-duration)", 0.0)
+    checkpoint_period_s: float = param(
+        "wall-time period of writing the chunk in progress and rewriting metadata.yaml [s]: what a killed "
+        "recorder can lose beyond the writer's bound of a second of bag time", 1.0)
 
     def validate(self) -> None:
         if not self.output_dir:
@@ -81,6 +94,8 @@ class RecorderParameters:
                                  f"got {self.max_bag_size}")
         if not self.max_bag_duration_s >= 0.0:
             raise ParameterError("max_bag_duration_s", f"must be >= 0 (0: no split), got {self.max_bag_duration_s}")
+        if not self.checkpoint_period_s > 0.0:
+            raise ParameterError("checkpoint_period_s", f"must be > 0, got {self.checkpoint_period_s}")
 
     def storage_options(self) -> StorageOptions:
         return StorageOptions(compression=self.compression, max_bag_size=self.max_bag_size,
@@ -156,7 +171,7 @@ class RecorderNode(SteppedNode):
         self.publisher_counts: dict[str, int] = {}
         self.topic_subscriptions: dict[str, Subscription] = {}
         self.unrecordable: set[str] = set()  # topics already reported as impossible to record
-        self.write_failed = False
+        self.exit_code = 0  # WRITE_FAILED_EXIT once the disk refused a write: recording is over
         self.clock_ns = 0  # latest /clock seen, when stamping from the clock topic
         self.writer = BagWriter(self.params.output_dir, self.params.storage_options())
         try:
@@ -165,8 +180,9 @@ class RecorderNode(SteppedNode):
             raise ConfigError(f"parameters of node '{self.get_fully_qualified_name()}'", "output_dir",
                               f"cannot create the bag: {error}") from error
         # Wall (steady) time: with use_sim_time a ROS-time timer would not tick before the first /clock.
-        self.discovery_timer = self.create_timer(self.params.discovery_period_s, self.discover,
-                                                 clock=Clock(clock_type=ClockType.STEADY_TIME))
+        wall = Clock(clock_type=ClockType.STEADY_TIME)
+        self.discovery_timer = self.create_timer(self.params.discovery_period_s, self.discover, clock=wall)
+        self.checkpoint_timer = self.create_timer(self.params.checkpoint_period_s, self.checkpoint, clock=wall)
         self.get_logger().info(f"recording into {self.params.output_dir}")
 
     # -- discovery ------------------------------------------------------------------------------------
@@ -249,19 +265,32 @@ class RecorderNode(SteppedNode):
             stamp_ns = self.clock_ns
         else:
             stamp_ns = self.get_clock().now().nanoseconds
+        if self.exit_code:
+            return  # recording stopped: what still arrives until the process ends is not recorded
         try:
             self.writer.write(recorded, stamp_ns, data)
-        # Disk full or gone (BagError: the next file of a split could not be created): say so once, keep the
-        # node (and the run) alive.
-        except (OSError, BagError) as error:
-            if not self.write_failed:
-                self.get_logger().error(f"cannot write to {self.params.output_dir}: {error}")
-            self.write_failed = True
+        except BagWriteError as error:
+            self.stop_recording(error)
             return
         self.message_count += 1
 
-    def stop_discovery(self) -> None:
+    def checkpoint(self) -> None:
+        if self.exit_code:
+            return
+        try:
+            self.writer.checkpoint()
+        except BagWriteError as error:
+            self.stop_recording(error)
+
+    def stop_recording(self, error: BagWriteError) -> None:
+        """The disk refused a write: the writer has closed what it could; say so once, and end the process."""
+        self.exit_code = WRITE_FAILED_EXIT
+        self.stop_timers()
+        self.get_logger().error(str(error))
+
+    def stop_timers(self) -> None:
         self.discovery_timer.cancel()
+        self.checkpoint_timer.cancel()
 
     def destroy_node(self) -> None:
         try:
@@ -269,20 +298,26 @@ class RecorderNode(SteppedNode):
         finally:
             super().destroy_node()
 
-    def close(self) -> None:
-        """Finalise the bag: MCAP summary, then metadata.yaml. Safe to call twice."""
+    def close(self) -> int:
+        """Finalise the bag (MCAP summary, then metadata.yaml); the exit code. Safe to call twice."""
         if self.writer.finished:
-            return
-        self.writer.close()
+            return self.exit_code
+        try:
+            self.writer.close()
+        except BagWriteError as error:
+            self.stop_recording(error)
+            return self.exit_code
         files = len(self.writer.files)
         self.get_logger().info(f"bag closed: {self.message_count} messages on {len(self.connections)} topics "
                                f"in {self.params.output_dir} ({files} file{'s' if files > 1 else ''})")
+        return self.exit_code
 
 
 def _drain(executor: Executor, node: RecorderNode) -> None:
-    """Record what already reached this process: spin until a short wait delivers nothing."""
+    """Record what already reached this process: spin until a short wait delivers nothing (bounded by
+    DRAIN_LIMIT_S: repeated signals do not cut it short, since a dying parent sends one per thread)."""
     deadline = time.monotonic() + DRAIN_LIMIT_S
-    while time.monotonic() < deadline:
+    while time.monotonic() < deadline and not node.exit_code:
         before = node.message_count
         executor.spin_once(timeout_sec=DRAIN_IDLE_S)
         if node.message_count == before:
@@ -290,13 +325,14 @@ def _drain(executor: Executor, node: RecorderNode) -> None:
 
 
 def spin_until_stopped(executor: Executor, node: RecorderNode) -> int:
-    """Record until SIGINT, SIGTERM or SIGHUP (or shutdown), then what already reached this process."""
-    while not stop_requested() and rclpy.ok(context=node.context):
+    """Record until SIGINT, SIGTERM or SIGHUP (rfidnav_common.ros.stop_requested), shutdown or a write the disk
+    refused, then what already reached this process; finalise the bag. The exit code: 0, or WRITE_FAILED_EXIT."""
+    while not stop_requested() and not node.exit_code and rclpy.ok(context=node.context):
         # Bounded waits: a Python signal handler runs only when control returns from the executor.
         executor.spin_once(timeout_sec=0.1)
-    node.stop_discovery()
+    node.stop_timers()
     _drain(executor, node)
-    return 0
+    return node.close()
 
 
 def main(args: list[str] | None = None) -> int:

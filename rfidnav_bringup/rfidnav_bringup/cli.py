@@ -158,9 +158,12 @@ def parser() -> tuple[argparse.ArgumentParser, dict[str, Handler]]:
     add_graph_options(replay, "replay", "a free one of 51-101, leased as a run leases one")
     bag = verbs.add_parser("bag", help="bag tools")
     bag_verbs = bag.add_subparsers(dest="bag_verb", required=True)
-    info = bag_verbs.add_parser("info", help="topics, types, counts, duration")
-    info.add_argument("bag", type=Path)
+    info = bag_verbs.add_parser("info", help="topics, types, counts, duration (of an unfinished bag: what was lost)")
+    info.add_argument("bag", type=Path, metavar="RUN_OR_BAG")
     info.add_argument("--json", action="store_true")
+    recover = bag_verbs.add_parser("recover", help="a finalised copy of a bag that was not closed or is damaged")
+    recover.add_argument("bag", type=Path, metavar="RUN_OR_BAG")
+    recover.add_argument("--out", type=Path, help="the bag folder to write (default: beside it, BAG_recovered)")
     map_parser = verbs.add_parser("map", help="paper 004: topological map tools")
     map_verbs = map_parser.add_subparsers(dest="map_verb", required=True)
     check = map_verbs.add_parser("check", help="every problem of a topological map, one line each")
@@ -327,16 +330,32 @@ def verb_bag(args) -> int:
     from rfidnav_bringup.report import locate_run
 
     _, bag = locate_run(args.bag)
+    if args.bag_verb == "recover":
+        return bag_recover(bag, args.out)
     info = bag_info(bag)
+    for note in info.notes:   # a bag that was not finalised or is damaged: what was lost, one line each
+        print(f"rfidnav bag info: {bag}: {note}", file=sys.stderr)
     if args.json:
         print(json.dumps({"path": str(info.path), "storage": info.storage, "duration_s": info.duration_s,
                           "message_count": info.message_count, "compression": info.compression,
                           "files": [{"path": str(f.path), "message_count": f.message_count,
                                      "duration_s": f.duration_s, "size_bytes": f.size_bytes,
                                      "compression": f.compression} for f in info.files],
-                          "topics": [{"name": t.name, "type": t.msgtype, "count": t.count} for t in info.topics]}))
+                          "topics": [{"name": t.name, "type": t.msgtype, "count": t.count} for t in info.topics],
+                          "notes": list(info.notes)}))
     else:
         print(format_bag_info(info))
+    return 0
+
+
+def bag_recover(bag: Path, out: Path | None) -> int:
+    from rfidnav_bag.recover import recover_bag
+
+    recovery = recover_bag(bag, out)
+    for note in recovery.source.notes:
+        print(f"rfidnav bag recover: {bag}: {note}", file=sys.stderr)
+    print(f"{bag} -> {recovery.output}: {recovery.message_count:,} messages on {recovery.topic_count} topics, "
+          f"{recovery.source.duration_s:.1f} s of bag time")
     return 0
 
 

@@ -12,6 +12,7 @@ which compare against the truth, are not computed.
 from __future__ import annotations
 
 import math
+import sys
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -24,7 +25,7 @@ import numpy as np  # noqa: E402
 import yaml  # noqa: E402
 from matplotlib.figure import Figure  # noqa: E402
 
-from rfidnav_bag.bags import bag_info, read_messages  # noqa: E402
+from rfidnav_bag.bags import bag_info, is_bag_directory, read_messages  # noqa: E402
 from rfidnav_bag.errors import BagError  # noqa: E402
 from rfidnav_bringup.metrics import (  # noqa: E402
     Fix,
@@ -61,18 +62,23 @@ class RunRecord:
 
 
 def locate_run(path: Path) -> tuple[Path, Path]:
-    """(run folder, bag folder) for a run folder or its bag folder."""
+    """(run folder, bag folder) for a run folder or its bag folder, the bag finalised or not."""
     path = Path(path)
-    if (path / "bag" / "metadata.yaml").exists():
+    if not path.exists():
+        raise BagError(f"{path}: not a run folder nor a rosbag2 folder (the path does not exist)")
+    if is_bag_directory(path / "bag"):
         return path, path / "bag"
-    if (path / "metadata.yaml").exists():
+    if is_bag_directory(path):
         return path.parent, path
-    raise BagError(f"{path}: not a run folder nor a rosbag2 folder (no metadata.yaml)")
+    raise BagError(f"{path}: not a run folder nor a rosbag2 folder (no metadata.yaml, no .mcap file)")
 
 
 def load_run(path: Path) -> RunRecord:
     run_dir, bag = locate_run(path)
-    bag_info(bag)  # a missing or truncated bag is named first, before anything that depends on it
+    # An unreadable bag is named first, before anything that depends on it; one that was not finalised is read
+    # as far as it goes, and what was lost said once.
+    for note in bag_info(bag).notes:
+        print(f"{bag}: {note}", file=sys.stderr)
     scenario_file = run_dir / "scenario.yaml"
     if not scenario_file.exists():
         raise BagError(f"{run_dir}: no scenario.yaml beside the bag; report needs the run folder ./rfidnav run wrote")
