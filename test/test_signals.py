@@ -104,8 +104,10 @@ def test_a_stopped_simulator_is_named_within_seconds_and_the_run_goes_on_when_it
                 if "has not advanced" in line:
                     break
         finally:
-            simulator.resume()
+            if simulator.is_running():
+                simulator.resume()
         output, _ = cli.communicate(timeout=300)
+    assert seen, output
     report = seen[-1]
     assert f"simulator is stopped (pid {simulator.pid})" in report, "".join(seen)
     assert cli.returncode == 0, "".join(seen) + output
