@@ -82,8 +82,9 @@ def events_executor(context: Context | None = None) -> Executor:
     return EventsExecutor(context=context)
 
 
-def spin_until_shutdown(executor: Executor, _node: Node) -> int:
-    while rclpy.ok():
+def spin_until_shutdown(executor: Executor, _node: Node, until: Callable[[], bool] = lambda: False) -> int:
+    """Spin until Ctrl-C or shutdown (or ``until()`` holds); 0."""
+    while rclpy.ok() and not until():
         # Bounded waits: Python signal handlers run only when control returns from the executor.
         try:
             executor.spin_once(timeout_sec=0.1)

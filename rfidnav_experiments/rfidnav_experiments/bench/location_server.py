@@ -19,11 +19,13 @@ import rclpy
 from rclpy.context import Context
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
+from std_msgs.msg import Header
 
 from rfidnav_bringup.errors import ReadinessError
 from rfidnav_bringup.orchestrator import child_environment
 from rfidnav_bringup.processes import DomainLease
 from rfidnav_bringup.scenario import CONFIG_DIR
+from rfidnav_common.frames import WIFI_FRAME
 from rfidnav_common.robot_map import load_route_map
 from rfidnav_experiments.runners.two_tier import floor_extent, wifi_model
 from rfidnav_localization.fingerprint import RadioMap
@@ -93,7 +95,8 @@ def _round_trips(node: Node, executor: SingleThreadedExecutor, server: subproces
         executor.spin_once(timeout_sec=0.1)
     round_trips = []
     for scan in samples:
-        request = Locate.Request(scan=WifiScan(access_points=[AccessPointRss(bssid=b, rssi_dbm=v)
+        request = Locate.Request(scan=WifiScan(header=Header(frame_id=WIFI_FRAME),
+                                               access_points=[AccessPointRss(bssid=b, rssi_dbm=v)
                                                               for b, v in scan.items()]))
         started = time.perf_counter()
         future = client.call_async(request)
