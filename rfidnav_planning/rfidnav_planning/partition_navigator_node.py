@@ -135,14 +135,16 @@ class PartitionNavigatorNode(SteppedNode):
 
     def on_status(self, msg: LocalizationStatus) -> None:
         active = self.goals.running
-        if active is None:
-            return
-        self.goals.heard()
+        if active is not None:
+            self.goals.heard()
         try:
             inputs.frame(msg.header.frame_id, MAP_FRAME)
-            estimate = estimate_from_status(msg, seconds_of(msg.header.stamp), active.previous_partition)
+            estimate = estimate_from_status(msg, seconds_of(msg.header.stamp),
+                                            active.previous_partition if active is not None else None)
         except inputs.BadInput as error:
             self.drops.drop("/localization/status", error)
+            return
+        if active is None:
             return
         if estimate.partition:
             active.previous_partition = estimate.partition

@@ -41,11 +41,11 @@ class CompassSimNode(SteppedNode):
         self.create_subscription(Odometry, "/sim/ground_truth", self.on_ground_truth, SENSOR_QOS)
 
     def on_ground_truth(self, msg: Odometry) -> None:
-        now_s = seconds_of(msg.header.stamp)
-        if not self.schedule.due(now_s):
-            return
         pose = ground_truth_pose(msg, MAP_FRAME, self.drops)   # the compass needs no world: the map's frame
         if pose is None:
+            return
+        now_s = seconds_of(msg.header.stamp)
+        if not self.schedule.due(now_s):
             return
         heading = self.model.measure(pose[2], self.rng)
         reading = Imu()

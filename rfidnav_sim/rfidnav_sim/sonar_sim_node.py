@@ -42,11 +42,11 @@ class SonarSimNode(SteppedNode):
                                f"{self.params.rate_hz:g} sweeps/s")
 
     def on_ground_truth(self, msg: Odometry) -> None:
-        now_s = seconds_of(msg.header.stamp)
-        if not self.schedule.due(now_s):
-            return
         pose = ground_truth_pose(msg, self.world_frame, self.drops)
         if pose is None:
+            return
+        now_s = seconds_of(msg.header.stamp)
+        if not self.schedule.due(now_s):
             return
         readings = self.model.ranges(*pose, self.rng)
         for rangefinder in PAPER_LAYOUT:

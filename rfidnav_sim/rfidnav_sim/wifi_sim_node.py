@@ -43,11 +43,11 @@ class WifiSimNode(SteppedNode):
                                f"a scan every {self.params.scan_period_s:g} s")
 
     def on_ground_truth(self, msg: Odometry) -> None:
-        now_s = seconds_of(msg.header.stamp)
-        if not self.schedule.due(now_s):
-            return
         pose = ground_truth_pose(msg, self.world_frame, self.drops)
         if pose is None:
+            return
+        now_s = seconds_of(msg.header.stamp)
+        if not self.schedule.due(now_s):
             return
         x, y, _ = pose
         readings = self.model.scan(x, y, self.rng)
