@@ -138,7 +138,8 @@ def test_adding_fingerprints_rebuilds_the_matrix():
      "no fingerprint shares 2 access points with the scan (the best shares 1 of its 2 known ones)"),
     (three_point_map(), {"a": -50.0, "b:ad": math.nan}, LocateSettings(), "access point b:ad: RSS: nan is not finite"),
     (three_point_map(), {"a": -50.0, "b:ad": math.inf}, LocateSettings(), "access point b:ad: RSS: inf is not finite"),
-    (three_point_map(), {"b:ad": "strong"}, LocateSettings(), "access point b:ad: RSS: expected a number, got 'strong'"),
+    (three_point_map(), {"b:ad": "strong"}, LocateSettings(),
+     "access point b:ad: RSS: expected a number, got 'strong'"),
     (three_point_map(), {"a": -50.0, "b:ad": 1e308}, LocateSettings(), "access point b:ad: RSS: 1e+308 dBm is outside"),
 ])
 def test_unlocatable_scans_raise_locate_error_with_the_reason(radio_map, scan, settings, reason):

@@ -189,7 +189,8 @@ def read_cases(tag: str = "readings[0]", unknown_tag: str = "ZZ-UNKNOWN", one_po
             + numbers(f"{tag}.i", huge=ACCEPT) + numbers(f"{tag}.q", huge=ACCEPT)
             + numbers(f"{tag}.rssi_dbm") + cases(f"{tag}.rssi_dbm", (("+200", 200.0),), DROP)
             + cases(f"{tag}.frequency_hz", EXTREMES + (("0", 0.0), ("-915e6", -915e6)), DROP)
-            + cases(f"{tag}.antenna", (("0", 0),), ACCEPT if one_port else DROP) + cases(f"{tag}.antenna", (("65535", UINT16_MAX),), ACCEPT)
+            + cases(f"{tag}.antenna", (("0", 0),), ACCEPT if one_port else DROP)
+            + cases(f"{tag}.antenna", (("65535", UINT16_MAX),), ACCEPT)
             + cases(f"{tag}.tag_id", (("''", ""),), DROP) + cases(f"{tag}.tag_id", (("unknown", unknown_tag),), ACCEPT)
             + [Case("readings=[]", lambda m: setattr(m, "readings", []), ACCEPT)] + frames() + [GOOD])
 
@@ -367,11 +368,13 @@ SPECS = [
                     + [Case(f"stop_within_m={label}", lambda m, value=value: (
                         setattr(m, "action", "stop"), setattr(m, "stop_within_m", value)), DROP)
                        for label, value in EXTREMES + (("-1", -1.0),)], COMMAND_QOS)],
-        [("/cmd_vel", Twist), ("/wall_follower/event", WallFollowerEvent), ("/wall_follower/state", WallFollowerEvent)]),
+        [("/cmd_vel", Twist), ("/wall_follower/event", WallFollowerEvent),
+         ("/wall_follower/state", WallFollowerEvent)]),
     NodeSpec("location_server", lambda graph, tmp: LocationServerNode(
         context=graph.context, parameter_overrides=stepped(database_file=str(location_database(tmp)),
                                                            map_file=str(home_map(tmp)), k=1)),
-        [ServiceInput("/location_server/locate", Locate, lambda: Locate.Request(scan=scan()), in_scan(scan_cases(ANSWER)) + [
+        [ServiceInput("/location_server/locate", Locate, lambda: Locate.Request(scan=scan()),
+                      in_scan(scan_cases(ANSWER)) + [
             Case("access_points=[]", lambda m: setattr(m.scan, "access_points", []), REFUSE),
             Case("every bssid unknown", lambda m: [setattr(ap, "bssid", "aa:aa:aa:aa:aa:aa")
                                                    for ap in m.scan.access_points], REFUSE)]),

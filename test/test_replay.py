@@ -63,8 +63,7 @@ from rfidnav_common.config import parameters_from_mapping
 from rfidnav_common.robot_map import load_route_map
 from rfidnav_control.fuzzy import FuzzyHeadingController
 from rfidnav_control.parameters import HeadingControllerParameters
-from rfidnav_common.inputs import BadInput, tag_read
-from rfidnav_control.tag_route import TagObservation, TagRouteFollower
+from rfidnav_control.tag_route import TagObservation, TagRouteFollower, observe
 from rfidnav_msgs.action import FollowTagRoute
 from support.runs import WORKSPACE
 
@@ -307,17 +306,9 @@ def run_parameters(run_dir: Path, **changes: Any) -> HeadingControllerParameters
 
 def recorded_rounds(run_dir: Path) -> list[tuple[float, list[TagObservation]]]:
     """(stamp, valid reads) of every recorded inventory round."""
-    return [(msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9, [read for read in map(checked, msg.readings)
-                                                                     if read is not None])
+    return [(msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9,
+             [o for o in (observe(r) for r in msg.readings) if o is not None])
             for _, _, msg in read_messages(run_dir / "bag", ["/rfid/reads"])]
-
-
-def checked(reading: Any) -> TagObservation | None:
-    """A read as heading_controller takes it; None for one it drops."""
-    try:
-        return tag_read(reading)
-    except BadInput:
-        return None
 
 
 def core_commands(rounds: list[tuple[float, list[TagObservation]]], route: list[str],

@@ -7,6 +7,7 @@ Pure-module tests with a linear heading controller and with the real fuzzy contr
 from __future__ import annotations
 
 import math
+from types import SimpleNamespace
 
 import pytest
 
@@ -17,6 +18,7 @@ from rfidnav_control.tag_route import (
     PhaseTrack,
     TagObservation,
     TagRouteFollower,
+    observe,
     pair_phases,
 )
 
@@ -250,6 +252,16 @@ def test_unheard_clock_restarts_at_each_new_target():
     assert route.step(3.8, []).mode == "unheard"       # 1.9 s since C2 became the target
     command = route.step(4.0, [])
     assert command.mode == "failed" and "C2" in command.failure
+
+
+# -------------------------------------------------------------------------------------------- read validation
+
+def test_observe_takes_a_read_as_the_controller_does_and_none_for_one_it_drops():
+    """The checks themselves: test_inputs.py."""
+    good = SimpleNamespace(tag_id="C1", antenna=1, i=0.0, q=0.0, phase_rad=7.0, rssi_dbm=-60.0,
+                           frequency_hz=FREQUENCY_HZ)
+    assert observe(good) == TagObservation("C1", 1, pytest.approx(7.0 - 2 * math.pi), -60.0, FREQUENCY_HZ)
+    assert observe(SimpleNamespace(**{**vars(good), "rssi_dbm": math.nan})) is None
 
 
 # --------------------------------------------------------------------------------------------- receding target

@@ -113,7 +113,8 @@ def test_silent_or_nan_sonar_holds_the_robot_still_and_the_node_stays_up(graph: 
     graph.spin_until(lambda: probe.twists[-1].linear.x == 0.0, "a stop")
     probe.ranges["left"] = math.nan
     probe.silent = False
-    graph.spin_until(lambda: graph.logged("wall_follower", "/sonar/left: dropped", "nan is not finite"), "the NaN warning")
+    graph.spin_until(lambda: graph.logged("wall_follower", "/sonar/left: dropped", "nan is not finite"),
+                     "the NaN warning")
     probe.command("sideways")
     graph.spin_until(lambda: graph.logged("wall_follower", "unknown action 'sideways'"), "the unknown-action error")
     probe.ranges["left"] = 0.8

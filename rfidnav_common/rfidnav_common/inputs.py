@@ -151,7 +151,8 @@ def tag_read(read: Any, field: str = "reading") -> TagRead:
     i, q = number(read.i, f"{field}.i"), number(read.q, f"{field}.q")
     reported = phase(read.phase_rad, f"{field}.phase_rad")
     return TagRead(read.tag_id, int(read.antenna), phase(math.atan2(q, i), f"{field}.i/q") if (i or q) else reported,
-                   rss_dbm(read.rssi_dbm, f"{field}.rssi_dbm"), frequency_hz(read.frequency_hz, f"{field}.frequency_hz"))
+                   rss_dbm(read.rssi_dbm, f"{field}.rssi_dbm"),
+                   frequency_hz(read.frequency_hz, f"{field}.frequency_hz"))
 
 
 def round_reads(msg: Any, drops: Drops, ports: Collection[int] | None = None,

@@ -3,9 +3,10 @@
 A thin adapter around TagRouteFollower: every TagReadArray (one inventory round) while a goal is
 active becomes one follower step and one /cmd_vel. A round in another frame than base_link, and reads with a
 number no reader reports (rfidnav_common.inputs.tag_read: non-finite, an RSS or a frequency beyond physics, port
-0), are dropped and counted before they reach the controller (phases of any size are wrapped); rounds whose left and right reads of the target are on different
-channels are not steered on (tag_route.pair_phases) and counted too, each with a throttled warning. One route
-at a time, cancel and the watchdog on /rfid/reads: rfidnav_common.goal_server.
+0), are dropped and counted before they reach the controller (phases of any size are wrapped); rounds whose left
+and right reads of the target are on different channels are not steered on (tag_route.pair_phases) and counted
+too, each with a throttled warning. One route at a time, cancel and the watchdog on /rfid/reads:
+rfidnav_common.goal_server.
 """
 
 from __future__ import annotations

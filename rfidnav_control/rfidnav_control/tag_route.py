@@ -34,7 +34,7 @@ import numpy as np
 
 from rfidnav_common.errors import ParameterError
 from rfidnav_common.geometry import wrap_angle
-from rfidnav_common.inputs import TagRead
+from rfidnav_common.inputs import BadInput, TagRead, tag_read
 from rfidnav_common.rf import range_change_m
 
 ARRIVAL_MODES = ("first_read", "closest_approach")
@@ -43,6 +43,15 @@ ARRIVAL_MODES = ("first_read", "closest_approach")
 # One checked tag read (rfidnav_common.inputs.tag_read: finite numbers in their physical ranges, the phase from I/Q
 # as in paper 001 eq. (1), phi = atan2(Q, I), or the reported phase angle when I = Q = 0); the node drops the rest.
 TagObservation = TagRead
+
+
+def observe(read) -> TagObservation | None:
+    """A TagObservation from a TagReading message (or anything with its fields), as heading_controller takes it
+    (rfidnav_common.inputs.tag_read); None for a read it drops."""
+    try:
+        return tag_read(read)
+    except BadInput:
+        return None
 
 
 @dataclass(frozen=True)

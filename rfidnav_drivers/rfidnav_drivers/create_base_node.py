@@ -26,8 +26,8 @@ import threading
 import time
 from typing import Any
 
-import serial
 import rclpy
+import serial
 from geometry_msgs.msg import Twist
 from nav_msgs.msg import Odometry
 from rclpy.executors import Executor, SingleThreadedExecutor
@@ -305,9 +305,11 @@ class CreateBaseNode(Node):
                 raise
 
 
-def spin(executor: Executor, node: CreateBaseNode) -> int:
+def spin(executor: Executor, node: Node) -> int:
     """Until Ctrl-C or SIGTERM (0), or until the serial thread ends (SERIAL_THREAD_ENDED): a node whose thread is
     gone drives nothing and watches nothing, so it exits to be respawned rather than stay up."""
+    if not isinstance(node, CreateBaseNode):
+        raise TypeError(f"spin: expected create_base's node, got {type(node).__name__}")
     spin_until_shutdown(executor, node, until=lambda: not node.thread.is_alive())
     return SERIAL_THREAD_ENDED if rclpy.ok(context=node.context) and not node.thread.is_alive() else 0
 

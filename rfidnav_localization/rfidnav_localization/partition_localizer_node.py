@@ -4,8 +4,8 @@ A thin adapter around PartitionLocalizer: every TagReadArray (one inventory roun
 the ids its floor antenna read and the latest /odom pose, and one pose and status stamped with the round's
 own stamp. Positions and the read range come from the tag ids themselves, so the node needs no map. Rounds not
 in base_link, floor reads no reader reports and /odom messages that are not a pose in odom are dropped and counted
-(rfidnav_common.inputs); junk ids are counted by the localizer (LocalizationStatus.undecodable_count). The pose is published once a tag has been read; the
-status from the first round on.
+(rfidnav_common.inputs); junk ids are counted by the localizer (LocalizationStatus.undecodable_count). The pose
+is published once a tag has been read; the status from the first round on.
 """
 
 from __future__ import annotations

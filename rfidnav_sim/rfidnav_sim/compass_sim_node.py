@@ -14,9 +14,9 @@ from typing import Any
 from nav_msgs.msg import Odometry
 from sensor_msgs.msg import Imu
 
-from rfidnav_common.geometry import yaw_to_quaternion
 from rfidnav_common import inputs
 from rfidnav_common.frames import MAP_FRAME
+from rfidnav_common.geometry import yaw_to_quaternion
 from rfidnav_common.ros import SENSOR_QOS, declare_parameters, run_node, seconds_of
 from rfidnav_common.seeding import rng_for
 from rfidnav_common.stepped_node import SteppedNode
