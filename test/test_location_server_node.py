@@ -6,7 +6,6 @@ from pathlib import Path
 
 import pytest
 from rclpy.parameter import Parameter
-from std_msgs.msg import Header
 
 from rfidnav_localization.errors import StoreError
 from rfidnav_localization.fingerprint import Fingerprint
@@ -29,8 +28,9 @@ def rss_at(x: float, y: float) -> dict[str, float]:
 
 
 def scan_message(rss: dict[str, float]) -> WifiScan:
-    return WifiScan(header=Header(frame_id="base_link"), interface="test",
-                    access_points=[AccessPointRss(bssid=b, rssi_dbm=v) for b, v in rss.items()])
+    scan = WifiScan(interface="test", access_points=[AccessPointRss(bssid=b, rssi_dbm=v) for b, v in rss.items()])
+    scan.header.frame_id = "base_link"
+    return scan
 
 
 @pytest.fixture

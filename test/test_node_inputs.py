@@ -25,7 +25,6 @@ from rclpy.action import ActionClient
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from sensor_msgs.msg import Imu, Range
-from std_msgs.msg import Header
 
 from rfidnav_common.geometry import yaw_to_quaternion
 from rfidnav_common.ros import COMMAND_QOS, SENSOR_QOS, time_msg
@@ -151,12 +150,14 @@ class NodeSpec:
 
 # ------------------------------------------------------------------------------------------------ messages
 
-def header(frame_id: str) -> Header:
-    return Header(frame_id=frame_id)
+def framed(message: Any, frame_id: str) -> Any:
+    """``message`` with its header in ``frame_id``."""
+    message.header.frame_id = frame_id
+    return message
 
 
 def odometry(frame_id: str = "odom", x: float = 0.5, y: float = 0.6, yaw: float = 0.3) -> Odometry:
-    msg = Odometry(header=header(frame_id), child_frame_id="base_link")
+    msg = framed(Odometry(child_frame_id="base_link"), frame_id)
     msg.pose.pose.position.x, msg.pose.pose.position.y = x, y
     q = msg.pose.pose.orientation
     q.x, q.y, q.z, q.w = yaw_to_quaternion(yaw)
@@ -176,7 +177,7 @@ def read(tag_id: str, antenna: int, phase: float = 1.0) -> TagReading:
 
 
 def reads(*readings: TagReading) -> TagReadArray:
-    return TagReadArray(header=header("base_link"), readings=list(readings))
+    return framed(TagReadArray(readings=list(readings)), "base_link")
 
 
 def read_cases(tag: str = "readings[0]", unknown_tag: str = "ZZ-UNKNOWN", one_port: bool = False) -> list[Case]:
@@ -196,9 +197,9 @@ def read_cases(tag: str = "readings[0]", unknown_tag: str = "ZZ-UNKNOWN", one_po
 
 
 def scan(frame_id: str = "base_link", rss: tuple[float, ...] = (-40.0, -60.0)) -> WifiScan:
-    return WifiScan(header=header(frame_id), interface="fuzz", access_points=[
+    return framed(WifiScan(interface="fuzz", access_points=[
         AccessPointRss(bssid=f"02:00:00:00:00:0{i + 1}", channel=6, frequency_hz=2.437e9, rssi_dbm=value)
-        for i, value in enumerate(rss)])
+        for i, value in enumerate(rss)]), frame_id)
 
 
 def scan_cases(taken: str) -> list[Case]:
@@ -217,7 +218,7 @@ def in_scan(scan_cases: list[Case]) -> list[Case]:
 
 
 def compass(frame_id: str = "compass") -> Imu:
-    msg = Imu(header=header(frame_id))
+    msg = framed(Imu(), frame_id)
     q = msg.orientation
     q.x, q.y, q.z, q.w = yaw_to_quaternion(0.2)
     msg.orientation_covariance[8] = 0.01
@@ -225,13 +226,12 @@ def compass(frame_id: str = "compass") -> Imu:
 
 
 def status(frame_id: str = "map") -> LocalizationStatus:
-    return LocalizationStatus(header=header(frame_id), method="paper", position_valid=True, x=0.5, y=0.6,
-                              orientation_valid=True, yaw_rad=0.0, yaw_lower_rad=-0.1, yaw_upper_rad=0.1,
-                              read_range_m=0.1)
+    return framed(LocalizationStatus(method="paper", position_valid=True, x=0.5, y=0.6, orientation_valid=True,
+                                     yaw_rad=0.0, yaw_lower_rad=-0.1, yaw_upper_rad=0.1, read_range_m=0.1), frame_id)
 
 
 def follower_report(state: str = "following", event: str = "") -> WallFollowerEvent:
-    msg = WallFollowerEvent(header=header("odom"), event=event, state=state)
+    msg = framed(WallFollowerEvent(event=event, state=state), "odom")
     msg.odom_pose.x, msg.odom_pose.y = 0.5, 0.5
     return msg
 
@@ -249,8 +249,7 @@ def target(x: float, y: float, tolerance_m: float = 0.0) -> NavigateToPoint.Goal
 
 
 def range_reading(name: str) -> Range:
-    return Range(header=header(f"sonar_{name}"), radiation_type=Range.ULTRASOUND, min_range=0.02, max_range=5.0,
-                 range=1.0)
+    return framed(Range(radiation_type=Range.ULTRASOUND, min_range=0.02, max_range=5.0, range=1.0), f"sonar_{name}")
 
 
 # ------------------------------------------------------------------------------------------------ the nodes

@@ -19,7 +19,6 @@ import rclpy
 from rclpy.context import Context
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
-from std_msgs.msg import Header
 
 from rfidnav_bringup.errors import ReadinessError
 from rfidnav_bringup.orchestrator import child_environment
@@ -95,9 +94,9 @@ def _round_trips(node: Node, executor: SingleThreadedExecutor, server: subproces
         executor.spin_once(timeout_sec=0.1)
     round_trips = []
     for scan in samples:
-        request = Locate.Request(scan=WifiScan(header=Header(frame_id=WIFI_FRAME),
-                                               access_points=[AccessPointRss(bssid=b, rssi_dbm=v)
+        request = Locate.Request(scan=WifiScan(access_points=[AccessPointRss(bssid=b, rssi_dbm=v)
                                                               for b, v in scan.items()]))
+        request.scan.header.frame_id = WIFI_FRAME
         started = time.perf_counter()
         future = client.call_async(request)
         while not future.done():
