@@ -12,6 +12,7 @@ as clamped), ACCEPT (used, nothing counted), REFUSE (a service answers success f
 from __future__ import annotations
 
 import math
+import os
 import re
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -26,6 +27,7 @@ from rclpy.node import Node
 from rclpy.parameter import Parameter
 from sensor_msgs.msg import Imu, Range
 
+from rfidnav_bringup.processes import NodeProcess, resolve_executable
 from rfidnav_common.geometry import yaw_to_quaternion
 from rfidnav_common.ros import COMMAND_QOS, SENSOR_QOS, time_msg
 from rfidnav_common.stepped_node import STEPPED_CLOCK_PARAMETER
@@ -550,3 +552,65 @@ def test_the_fuzz_set_covers_every_node_of_the_simulated_graphs() -> None:
         "heading_controller", "partition_localizer", "partition_navigator", "two_tier_navigator", "mission_executor",
         "wall_follower", "location_server", "robot_sim", "rfid_reader_sim", "compass_sim", "sonar_sim", "wifi_sim"}
     assert case_count() >= 400, case_count()
+
+
+# ------------------------------------------------------------------------------------------------ across processes
+
+@pytest.mark.tier("graph")
+def test_the_inputs_that_crashed_nodes_leave_their_processes_up_over_dds(graph: Graph, domain: int,
+                                                                         tmp_path: Path) -> None:
+    """Issue 17's crashes, each node in a process of its own: phases of +-1e308 to heading_controller, a /cmd_vel of
+    1.7e308 to robot_sim (its pose turned NaN for good), an /odom of 1e308 to two_tier_navigator."""
+    env = dict(os.environ, ROS_DOMAIN_ID=str(domain), ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST", PYTHONUNBUFFERED="1",
+               RCUTILS_COLORIZED_OUTPUT="0")
+    processes = [
+        NodeProcess("heading_controller", resolve_executable("rfidnav_control", "heading_controller") + [
+            "--ros-args", "-p", f"map_file:={CONFIG / 'maps/line_follow.yaml'}"], tmp_path / "controller.log", env),
+        NodeProcess("robot_sim", resolve_executable("rfidnav_sim", "robot_sim") + [
+            "--ros-args", "-p", f"world_file:={CONFIG / 'worlds/line_follow.yaml'}", "-p", "rtf:=5.0"],
+            tmp_path / "robot_sim.log", env),
+        NodeProcess("two_tier_navigator", resolve_executable("rfidnav_planning", "two_tier_navigator"),
+                    tmp_path / "navigator.log", env)]
+    probe = graph.probe
+    reads_pub = probe.create_publisher(TagReadArray, "/rfid/reads", SENSOR_QOS)
+    cmd_pub = probe.create_publisher(Twist, "/cmd_vel", COMMAND_QOS)
+    odom_pub = probe.create_publisher(Odometry, "/odom", SENSOR_QOS)
+    commands: list[Twist] = []
+    truth: list[Odometry] = []
+    probe.create_subscription(Twist, "/cmd_vel", commands.append, COMMAND_QOS)
+    probe.create_subscription(Odometry, "/sim/ground_truth", truth.append, SENSOR_QOS)
+    route = ActionClient(probe, FollowTagRoute, "/follow_tag_route")
+    navigation = ActionClient(probe, NavigateToPoint, "/navigate_to_point")
+    graph.clients += [route, navigation]
+    try:
+        for process in processes:
+            process.start()
+        graph.spin_until(lambda: route.server_is_ready() and navigation.server_is_ready() and bool(truth)
+                         and reads_pub.get_subscription_count() >= 2 and cmd_pub.get_subscription_count() >= 1
+                         and odom_pub.get_subscription_count() >= 1, "the three nodes' topics and actions", 60.0)
+        sent = route.send_goal_async(FollowTagRoute.Goal(tag_ids=["C1"]))
+        graph.spin_until(sent.done, "the route goal's answer", 30.0)
+        assert sent.result().accepted
+        for huge in (1e308, -1e308, 1.7e308):
+            message = reads(read("C1", 1), read("C1", 2))
+            for reading in message.readings:
+                reading.i = reading.q = 0.0
+                reading.phase_rad = huge
+            before = len(commands)
+            reads_pub.publish(message)
+            graph.spin_until(lambda before=before: len(commands) > before, f"the controller's answer to {huge}", 30.0)
+        cmd_pub.publish(twist(1.7e308, 1.7e308))
+        odom_pub.publish(odometry(x=1e308, y=1e308))
+        count = len(truth)
+        graph.spin_until(lambda: len(truth) > count + 25, "half a second more of ground truth", 30.0)
+        assert all(process.running for process in processes), [
+            (process.role, process.poll(), process.log_path.read_text()[-2000:]) for process in processes]
+        assert all(math.isfinite(v) for c in commands for v in (c.linear.x, c.angular.z))
+        pose = truth[-1].pose.pose.position
+        assert math.isfinite(pose.x) and math.isfinite(pose.y) and math.hypot(pose.x, pose.y) < 5.0
+        for process, words in ((processes[1], "/cmd_vel: clamped"), (processes[2], "/odom: dropped")):
+            graph.spin_until(lambda process=process, words=words: words in process.log_path.read_text(),
+                             f"{process.role}'s warning", 30.0)
+    finally:
+        for process in processes:
+            process.stop(5.0)
