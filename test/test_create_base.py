@@ -26,7 +26,7 @@ from rclpy.parameter import Parameter
 from rfidnav_common import base_safety as safety
 from rfidnav_common.ros import COMMAND_QOS, SENSOR_QOS, odometry_pose, twist
 from rfidnav_drivers import create_oi as oi
-from rfidnav_drivers.create_base_node import CreateBaseNode, port_error
+from rfidnav_drivers.create_base_node import SERIAL_THREAD_ENDED, CreateBaseNode, port_error, spin
 from rfidnav_drivers.errors import DriverError
 from rfidnav_drivers.parameters import CreateBaseParameters
 from rfidnav_msgs.msg import BaseEvent
@@ -369,9 +369,53 @@ def test_short_and_missing_replies_are_counted_and_warned_about(graph: Graph, fa
 def test_a_nan_command_is_dropped_with_a_warning(graph: Graph, fake: FakeCreate, base: Base):
     since = len(fake.received())
     base.cmd_pub.publish(twist(math.nan, 0.0))
-    graph.spin_until(lambda: graph.logged("create_base", "NaN"), "a warning about the NaN command")
+    graph.spin_until(lambda: graph.logged("create_base", "/cmd_vel: dropped", "nan is not finite"),
+                     "a warning about the NaN command")
     assert base.drive(0.1, 0.0) == (100, 100)
     assert fake.drives(since) == [(100, 100)]                  # nothing was sent for the NaN one
+
+
+# /cmd_vel at its extremes: (linear, angular) -> the Drive Direct sent (right, left mm/s), None when dropped.
+COMMAND_CASES = [     # (1e308, 1e308): both scaled to 0.5 m/s and 0.5 rad/s, then the arc within the wheel limit
+    ((1.7e308, 0.0), (500, 500)), ((-1e308, 0.0), (-500, -500)), ((1e308, 1e308), (500, 395)),
+    ((0.0, 1.7e308), (500, -500)), ((0.0, -1e308), (-500, 500)), ((0.6, 0.0), (500, 500)),
+    ((-0.0, -0.0), (0, 0)), ((math.nan, 0.0), None), ((0.0, math.inf), None), ((-math.inf, 0.0), None),
+]
+
+
+@pytest.mark.tier("node")
+def test_commands_beyond_the_limits_are_clamped_non_finite_ones_dropped_and_the_serial_thread_lives_on(
+        graph: Graph, fake: FakeCreate, base: Base):
+    for (linear, angular), expected in COMMAND_CASES:
+        clamped, dropped = base.node.drops.clamped("/cmd_vel"), base.node.drops.dropped("/cmd_vel")
+        if expected is None:
+            base.cmd_pub.publish(twist(linear, angular))
+            graph.spin_until(lambda dropped=dropped: base.node.drops.dropped("/cmd_vel") > dropped,
+                             f"/cmd_vel ({linear}, {angular}) dropped")
+            continue
+        right, left = base.drive(linear, angular)
+        assert (right, left) == pytest.approx(expected, abs=1), (linear, angular)
+        beyond = max(abs(linear) / 0.5, abs(angular) / (2 * 0.5 / 0.235)) > 1.0
+        assert base.node.drops.clamped("/cmd_vel") == clamped + beyond, (linear, angular)
+    assert base.node.thread.is_alive()
+    assert base.drive(0.1, 0.0) == (100, 100)            # still driving on commands
+    graph.spin_until(lambda: graph.logged("create_base", "/cmd_vel: clamped"), "the warning about clamping")
+    assert all(math.isfinite(v) for o in base.odoms for v in (*odometry_pose(o), o.twist.twist.linear.x))
+
+
+@pytest.mark.tier("node")
+def test_a_serial_thread_that_dies_stops_the_base_and_ends_the_node_with_exit_1(graph: Graph, fake: FakeCreate,
+                                                                                base: Base):
+    assert base.drive(0.2, 0.0) == (200, 200)
+    since = len(fake.received())
+
+    def broken() -> None:
+        raise RuntimeError("a bug in the serial thread")
+    base.node.sensor_cycle = broken           # type: ignore[method-assign]  # the next cycle raises
+    graph.spin_until(lambda: not base.node.thread.is_alive(), "the serial thread to die")
+    assert (0, 0) in fake.drives(since) and fake.speeds() == (0, 0)
+    assert spin(graph.executor, base.node) == SERIAL_THREAD_ENDED
+    graph.spin_until(lambda: graph.logged("create_base", "serial thread ended"), "the fatal line")
 
 
 @pytest.mark.tier("node")
@@ -402,14 +446,16 @@ def test_main_prints_one_line_and_exits_2_for_a_missing_port():
 
 
 @pytest.mark.tier("graph")
-def test_ctrl_c_stops_the_base_then_the_open_interface_without_a_traceback(graph: Graph, fake: FakeCreate):
+@pytest.mark.parametrize("signal_number", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
+def test_ctrl_c_or_sigterm_stops_the_base_then_the_open_interface_without_a_traceback(
+        graph: Graph, fake: FakeCreate, signal_number: int):
     process = subprocess.Popen([sys.executable, "-m", "rfidnav_drivers.create_base_node", "--ros-args",
                                 "-p", f"port:={fake.slave_path}"], stderr=subprocess.PIPE, text=True)
     try:
         graph.spin_until(lambda: fake.queries >= 10 or process.poll() is not None, "the node's sensor queries",
                          timeout_s=60.0)
         assert process.poll() is None, process.communicate()[1]
-        process.send_signal(signal.SIGINT)
+        process.send_signal(signal_number)
         stderr = process.communicate(timeout=60)[1]
     finally:
         if process.poll() is None:
@@ -418,3 +464,22 @@ def test_ctrl_c_stops_the_base_then_the_open_interface_without_a_traceback(graph
     assert process.returncode == 0 and "Traceback" not in stderr, stderr
     graph.spin_until(lambda: fake.opcodes()[-1:] == [oi.STOP], "Stop from the interrupted node")
     assert fake.received()[-2] == Command(oi.DRIVE_DIRECT, (0, 0, 0, 0)) and fake.mode == "off"
+
+
+@pytest.mark.tier("graph")
+def test_a_lost_port_ends_the_process_with_exit_1_so_that_it_is_respawned(graph: Graph):
+    fake = FakeCreate()
+    process = subprocess.Popen([sys.executable, "-m", "rfidnav_drivers.create_base_node", "--ros-args",
+                                "-p", f"port:={fake.slave_path}"], stderr=subprocess.PIPE, text=True)
+    try:
+        graph.spin_until(lambda: fake.queries >= 10 or process.poll() is not None, "the node's sensor queries",
+                         timeout_s=60.0)
+        assert process.poll() is None, process.communicate()[1]
+        fake.close()                           # the cable pulled: every read and write fails from now on
+        stderr = process.communicate(timeout=60)[1]
+    finally:
+        if process.poll() is None:
+            process.kill()
+            process.wait()
+    assert process.returncode == SERIAL_THREAD_ENDED, stderr
+    assert "the port is lost" in stderr and "Traceback" not in stderr, stderr

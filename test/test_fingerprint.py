@@ -136,9 +136,11 @@ def test_adding_fingerprints_rebuilds_the_matrix():
     (RadioMap([Fingerprint((0.0, 0.0), {"a": -50.0}), Fingerprint((1.0, 0.0), {"b": -50.0})]),
      {"a": -50.0, "b": -50.0}, LocateSettings(min_common_aps=2),
      "no fingerprint shares 2 access points with the scan (the best shares 1 of its 2 known ones)"),
-    (three_point_map(), {"a": -50.0, "b:ad": math.nan}, LocateSettings(), "access point b:ad: RSS nan"),
-    (three_point_map(), {"a": -50.0, "b:ad": math.inf}, LocateSettings(), "access point b:ad: RSS inf"),
-    (three_point_map(), {"b:ad": "strong"}, LocateSettings(), "access point b:ad: RSS 'strong'"),
+    (three_point_map(), {"a": -50.0, "b:ad": math.nan}, LocateSettings(), "access point b:ad: RSS: nan is not finite"),
+    (three_point_map(), {"a": -50.0, "b:ad": math.inf}, LocateSettings(), "access point b:ad: RSS: inf is not finite"),
+    (three_point_map(), {"b:ad": "strong"}, LocateSettings(),
+     "access point b:ad: RSS: expected a number, got 'strong'"),
+    (three_point_map(), {"a": -50.0, "b:ad": 1e308}, LocateSettings(), "access point b:ad: RSS: 1e+308 dBm is outside"),
 ])
 def test_unlocatable_scans_raise_locate_error_with_the_reason(radio_map, scan, settings, reason):
     with pytest.raises(LocateError) as raised:
@@ -169,7 +171,8 @@ def test_fingerprint_rss_is_normalised_and_hashable():
 
 
 @pytest.mark.parametrize("position, rss, source, field", [
-    ((0.0, math.nan), {"a": -50.0}, "grid", "position"), ((0.0, 0.0), {}, "grid", "rss"),
+    ((0.0, math.nan), {"a": -50.0}, "grid", r"position\.y"), ((1e308, 0.0), {"a": -50.0}, "grid", r"position\.x"),
+    ((0.0, 0.0), {"a": -1e308}, "grid", r"rss\[a\]"), ((0.0, 0.0), {}, "grid", "rss"),
     ((0.0, 0.0), {"a": math.inf}, "grid", r"rss\[a\]"), ((0.0, 0.0), (("a", -1.0), ("a", -2.0)), "grid", r"rss\[a\]"),
     ((0.0, 0.0), {"": -50.0}, "grid", "rss"), ((0.0, 0.0), {"a": -50.0}, "guess", "source"),
 ])

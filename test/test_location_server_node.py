@@ -28,7 +28,9 @@ def rss_at(x: float, y: float) -> dict[str, float]:
 
 
 def scan_message(rss: dict[str, float]) -> WifiScan:
-    return WifiScan(interface="test", access_points=[AccessPointRss(bssid=b, rssi_dbm=v) for b, v in rss.items()])
+    scan = WifiScan(interface="test", access_points=[AccessPointRss(bssid=b, rssi_dbm=v) for b, v in rss.items()])
+    scan.header.frame_id = "base_link"
+    return scan
 
 
 @pytest.fixture
@@ -132,3 +134,31 @@ def test_the_latency_bench_runs_the_server_in_its_own_process_and_reports_percen
     assert figures["requests"] == 20 and figures["fingerprints"] == 96
     assert 0.0 < figures["p50_ms"] <= figures["p99_ms"] <= figures["max_ms"]
     assert figures["matcher_ms"] > 0.0
+
+
+def test_extreme_scans_and_fingerprints_off_the_map_are_refused_and_later_scans_still_locate(
+        graph: Graph, database: Path, map_file: Path) -> None:
+    server = start_server(graph, database, map_file)
+    for rss in (1e308, -1e308, 200.0):
+        answer = call(graph, Locate, "/location_server/locate",
+                      Locate.Request(scan=scan_message({**rss_at(4.0, 1.0), BSSIDS[0]: rss})))
+        assert not answer.success and BSSIDS[0] in answer.message and "dBm" in answer.message, answer.message
+    for x, y in ((1e308, 1e308), (40.0, 1.0), (-20.0, -20.0)):     # the map covers [0, 5] x [0, 5] (+ 10 m)
+        added = call(graph, AddFingerprint, "/location_server/add_fingerprint",
+                     AddFingerprint.Request(x=x, y=y, source="survey", scan=scan_message(rss_at(1.0, 1.0))))
+        assert not added.success and added.fingerprint_count == 36, added.message
+    assert "outside the map" in added.message and "[0, 5] x [0, 5] m" in added.message, added.message
+    wrong_frame = scan_message(rss_at(4.0, 1.0))
+    wrong_frame.header.frame_id = "map"
+    answer = call(graph, Locate, "/location_server/locate", Locate.Request(scan=wrong_frame))
+    assert not answer.success and "expected 'base_link'" in answer.message
+    assert server.drops.dropped() == 7
+    # Growing the map a margin at a time is a survey: 14 m out is taken once 8 m out was.
+    for x in (13.0, 19.0):
+        added = call(graph, AddFingerprint, "/location_server/add_fingerprint",
+                     AddFingerprint.Request(x=x, y=1.0, source="survey", scan=scan_message(rss_at(5.0, 1.0))))
+        assert added.success, added.message
+    answer = call(graph, Locate, "/location_server/locate", Locate.Request(scan=scan_message(rss_at(4.0, 1.0))))
+    assert answer.success and (answer.x, answer.y) == pytest.approx((4.0, 1.0))
+    graph.spin_until(lambda: graph.logged("location_server", "/location_server/add_fingerprint: dropped"),
+                     "the warning that counts the refused fingerprints")

@@ -179,7 +179,7 @@ def test_controller_drops_and_counts_non_finite_reads_and_stays_up(graph: Graph)
     ]
     bad_reads = 2 + 1 + 2 + 3
     commands = [controller.send_round(readings) for readings in rounds]
-    assert node.dropped_reads == bad_reads
+    assert node.drops.dropped("/rfid/reads") == bad_reads
     for command in commands:
         assert all(math.isfinite(v) for v in (command.linear.x, command.linear.y, command.linear.z,
                                               command.angular.x, command.angular.y, command.angular.z)), command
@@ -191,14 +191,14 @@ def test_controller_drops_and_counts_non_finite_reads_and_stays_up(graph: Graph)
     assert all(math.isfinite(f.phase_difference_rad) and math.isfinite(f.heading_change_rad)
                for f in controller.feedback)
     assert {f.target_tag_id for f in controller.feedback} == {"C1"}, "a NaN read of F1 counted as arrival"
-    graph.spin_until(lambda: graph.logged("heading_controller", "dropped reads with non-finite values"),
+    graph.spin_until(lambda: graph.logged("heading_controller", "/rfid/reads: dropped", "not finite"),
                      "the warning that counts dropped reads on /rosout")
 
     # Still alive and steering: a good read of F1 is an arrival, and the goal is still the same goal.
     controller.send_round([reading("F1", 3, 1.0), *target_round("C2", 0.0)])
     graph.spin_until(lambda: controller.feedback[-1].target_tag_id == "C2", "arrival at C1 after the bad reads")
     assert node.goals.active is not None and node.goals.active.handle.goal_id == handle.goal_id
-    assert node.dropped_reads == bad_reads
+    assert node.drops.dropped("/rfid/reads") == bad_reads
 
 
 # ---------------------------------------------------------------------------------------- rfid_reader_sim

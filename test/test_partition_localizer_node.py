@@ -162,12 +162,12 @@ def test_non_finite_reads_junk_ids_and_bad_odometry_are_dropped_counted_and_surv
     status = harness.send_round([reading(good), reading(other, rssi_dbm=math.nan), reading(other, i=math.inf),
                                  reading("NOT-A-TAG"), reading("E2801160600002054E7C1B64"),
                                  reading(good, antenna=2, q=math.nan)])   # not the floor antenna: not counted
-    assert node.dropped_reads == 2
+    assert node.drops.dropped("/rfid/reads") == 2
     assert status.undecodable_count == 2 and list(status.partition_tag_ids) == [good]
     assert (status.x, status.y) == pytest.approx(FIELD.lattice.position((0, 0)), abs=1e-12)
 
     harness.send_odometry(math.nan, 0.0, 0.0)
-    harness.spin_until(lambda: node.dropped_odometry == 1, "the bad odometry to be dropped")
+    harness.spin_until(lambda: node.drops.dropped("/odom") == 1, "the bad odometry to be dropped")
     assert node.odom is None
 
     # A rogue tag read with the true one (one against one: the one near the estimate stays).
@@ -178,7 +178,7 @@ def test_non_finite_reads_junk_ids_and_bad_odometry_are_dropped_counted_and_surv
 
     # Still alive and localizing after all of it.
     status = harness.send_round([reading(other, phase_rad=math.nan)])
-    assert node.dropped_reads == 3 and not list(status.partition_tag_ids) and status.position_valid
+    assert node.drops.dropped("/rfid/reads") == 3 and not list(status.partition_tag_ids) and status.position_valid
     status = harness.send_round([reading(other)])
     assert list(status.partition_tag_ids) == [other]
     assert (status.x, status.y) == pytest.approx(FIELD.lattice.position((1, 0)), abs=1e-12)

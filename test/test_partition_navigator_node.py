@@ -288,7 +288,7 @@ def test_a_status_with_non_finite_values_is_ignored_and_survived(harness: Harnes
     heard = node.goals.active.last_heard_s
     harness.status_pub.publish(harness.status(partitions[1], 1, yaw=0.0, **bad))
     harness.spin_until(lambda: node.goals.active.last_heard_s != heard, "the bad status to arrive")
-    harness.spin_until(lambda: harness.logged("ignored a localization status with non-finite values"),
+    harness.spin_until(lambda: harness.logged("/localization/status: dropped", "not finite"),
                        "the warning about the bad status on /rosout")
     assert state.partitions_entered == 1 and state.last_estimate.partition == partitions[0]
     assert node.goals.active.previous_partition == partitions[0]

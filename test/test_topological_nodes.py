@@ -71,8 +71,11 @@ class FollowerProbe:
         offsets = dict(zip(SONAR_FIELDS, WallFollowerParameters().sonar_offsets_m))
         for field, publisher in self.sonar_pubs.items():
             value = self.ranges[field]
-            publisher.publish(Range(range=value - offsets[field] if math.isfinite(value) else value))
-        odom = Odometry()
+            reading = Range(range=value - offsets[field] if math.isfinite(value) else value)
+            reading.header.frame_id = "sonar_" + publisher.topic_name.removeprefix("/sonar/")
+            publisher.publish(reading)
+        odom = Odometry(child_frame_id="base_link")
+        odom.header.frame_id = "odom"
         odom.pose.pose.orientation.w = 1.0
         self.odom_pub.publish(odom)
 
@@ -110,7 +113,8 @@ def test_silent_or_nan_sonar_holds_the_robot_still_and_the_node_stays_up(graph: 
     graph.spin_until(lambda: probe.twists[-1].linear.x == 0.0, "a stop")
     probe.ranges["left"] = math.nan
     probe.silent = False
-    graph.spin_until(lambda: graph.logged("wall_follower", "/sonar/left: dropped a NaN range"), "the NaN warning")
+    graph.spin_until(lambda: graph.logged("wall_follower", "/sonar/left: dropped", "nan is not finite"),
+                     "the NaN warning")
     probe.command("sideways")
     graph.spin_until(lambda: graph.logged("wall_follower", "unknown action 'sideways'"), "the unknown-action error")
     probe.ranges["left"] = 0.8
@@ -141,10 +145,20 @@ class ExecutorProbe:
         return sent.result()
 
     def read(self, *tags: str) -> None:
-        self.reads_pub.publish(TagReadArray(readings=[TagReading(tag_id=tag, antenna=1) for tag in tags]))
+        msg = TagReadArray(readings=[TagReading(tag_id=tag, antenna=1, rssi_dbm=-60.0, frequency_hz=2.45e9)
+                                     for tag in tags])
+        msg.header.frame_id = "base_link"
+        self.reads_pub.publish(msg)
 
     def event(self, name: str) -> None:
-        self.event_pub.publish(WallFollowerEvent(event=name))
+        self.event_pub.publish(follower_report(event=name))
+
+
+def follower_report(event: str = "", state: str = "") -> WallFollowerEvent:
+    """A WallFollowerEvent as the wall follower sends it (in odom)."""
+    report = WallFollowerEvent(event=event, state=state)
+    report.header.frame_id = "odom"
+    return report
 
 
 def executor_node(graph: Graph) -> MissionExecutorNode:
@@ -211,13 +225,13 @@ def test_a_wall_follower_that_says_it_is_idle_during_a_mission_is_commanded_agai
     graph.spin_until(lambda: probe.commands == [("follow", 0.0)], "the follow command")
     probe.read("23")
     graph.spin_until(lambda: probe.commands[-1] == ("right", 0.0), "the turn for h")
-    state_pub.publish(WallFollowerEvent(state="following"))      # heard: nothing to do
-    state_pub.publish(WallFollowerEvent(state="idle"))           # restarted, or the command was lost
+    state_pub.publish(follower_report(state="following"))      # heard: nothing to do
+    state_pub.publish(follower_report(state="idle"))           # restarted, or the command was lost
     graph.spin_until(lambda: probe.commands[2:] == [("follow", 0.0), ("right", 0.0)], "the commands again")
     probe.read("19")
     graph.spin_until(lambda: probe.commands[-1][0] == "stop", "the stop")
     count = len(probe.commands)
-    state_pub.publish(WallFollowerEvent(state="idle"))           # idle after the stop: the mission is ending
+    state_pub.publish(follower_report(state="idle"))           # idle after the stop: the mission is ending
     for _ in range(10):
         graph.executor.spin_once(timeout_sec=0.05)
     assert len(probe.commands) == count

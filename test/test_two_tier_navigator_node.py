@@ -45,14 +45,18 @@ def sensors(graph: Graph):
     scan_pub = graph.probe.create_publisher(WifiScan, "/wifi/scan", SENSOR_QOS)
 
     def publish() -> None:
-        odom = Odometry()
+        odom = Odometry(child_frame_id="base_link")
+        odom.header.frame_id = "odom"
         odom.pose.pose.orientation.w = 1.0
         odom_pub.publish(odom)
         compass = Imu()
+        compass.header.frame_id = "compass"
         compass.orientation.x, compass.orientation.y, compass.orientation.z, compass.orientation.w = \
             yaw_to_quaternion(0.0)
         compass_pub.publish(compass)
-        scan_pub.publish(WifiScan(access_points=[AccessPointRss(bssid=b, rssi_dbm=v) for b, v in RSS.items()]))
+        scan = WifiScan(access_points=[AccessPointRss(bssid=b, rssi_dbm=v) for b, v in RSS.items()])
+        scan.header.frame_id = "base_link"
+        scan_pub.publish(scan)
     return publish
 
 

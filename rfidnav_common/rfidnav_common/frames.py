@@ -16,6 +16,14 @@ from rfidnav_common.geometry import wrap_angle
 BASE_FRAME = "base_link"
 ODOM_FRAME = "odom"
 MAP_FRAME = "map"
+# The frames the consuming nodes expect of the robot's sensors (rfidnav_common.inputs drops the rest). A reader's
+# /rfid/reads and a WiFi scan are in base_link: the antennas' frames hang from it on /tf_static, and nothing links
+# another reader frame to the robot. The compass is at the base's centre, in base_link or its own frame; each
+# rangefinder NAME of /sonar/NAME in SONAR_FRAME_PREFIX + NAME (sonar_sim's frames, in base_link).
+READER_FRAME = BASE_FRAME
+WIFI_FRAME = BASE_FRAME
+COMPASS_FRAMES = ("compass", BASE_FRAME)
+SONAR_FRAME_PREFIX = "sonar_"
 
 Quaternion = tuple[float, float, float, float]       # x, y, z, w
 

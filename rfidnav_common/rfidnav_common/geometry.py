@@ -8,7 +8,10 @@ import numpy as np
 
 
 def wrap_angle(angle: float) -> float:
-    """Wrap an angle to (-pi, pi]."""
+    """Wrap an angle to (-pi, pi]: exact for any finite angle, however large (IEEE remainder); a ValueError
+    naming the value for NaN or an infinity, which have no direction."""
+    if not math.isfinite(angle):
+        raise ValueError(f"wrap_angle: {angle} is not a finite angle")
     wrapped = math.remainder(angle, 2.0 * math.pi)
     return math.pi if wrapped == -math.pi else wrapped
 

@@ -116,8 +116,9 @@ def stop_requested() -> bool:
     return _STOP.requested
 
 
-def spin_until_shutdown(executor: Executor, node: Node) -> int:
-    while rclpy.ok(context=node.context) and not stop_requested():
+def spin_until_shutdown(executor: Executor, node: Node, until: Callable[[], bool] = lambda: False) -> int:
+    """Spin until a stop signal or shutdown (or ``until()`` holds); 0."""
+    while rclpy.ok(context=node.context) and not stop_requested() and not until():
         # Bounded waits: Python signal handlers run only when control returns from the executor.
         executor.spin_once(timeout_sec=0.1)
     return 0

@@ -1,10 +1,12 @@
 """heading_controller: action server /follow_tag_route driving /cmd_vel from /rfid/reads (paper 001).
 
 A thin adapter around TagRouteFollower: every TagReadArray (one inventory round) while a goal is
-active becomes one follower step and one /cmd_vel. Reads with a non-finite number are dropped and
-counted before they reach the controller; rounds whose left and right reads of the target are on different
-channels are not steered on (tag_route.pair_phases) and counted too, each with a throttled warning. One route
-at a time, cancel and the watchdog on /rfid/reads: rfidnav_common.goal_server.
+active becomes one follower step and one /cmd_vel. A round in another frame than base_link, and reads with a
+number no reader reports (rfidnav_common.inputs.tag_read: non-finite, an RSS or a frequency beyond physics, port
+0), are dropped and counted before they reach the controller (phases of any size are wrapped); rounds whose left
+and right reads of the target are on different channels are not steered on (tag_route.pair_phases) and counted
+too, each with a throttled warning. One route at a time, cancel and the watchdog on /rfid/reads:
+rfidnav_common.goal_server.
 """
 
 from __future__ import annotations
@@ -14,13 +16,14 @@ from typing import Any
 
 from geometry_msgs.msg import Twist
 
+from rfidnav_common import inputs
 from rfidnav_common.goal_server import ActiveGoal, GoalOutcome, SingleGoalServer, Watchdog
 from rfidnav_common.robot_map import load_route_map
 from rfidnav_common.ros import COMMAND_QOS, SENSOR_QOS, declare_parameters, run_node, seconds_of, twist
 from rfidnav_common.stepped_node import SteppedNode
 from rfidnav_control.fuzzy import FuzzyHeadingController
 from rfidnav_control.parameters import HeadingControllerParameters
-from rfidnav_control.tag_route import Command, TagRouteFollower, observe
+from rfidnav_control.tag_route import Command, TagRouteFollower
 from rfidnav_msgs.action import FollowTagRoute
 from rfidnav_msgs.msg import TagReadArray
 
@@ -39,7 +42,7 @@ class HeadingControllerNode(SteppedNode):
         route_map = load_route_map(self.params.map_file)
         self.follower = TagRouteFollower(self.params.follower_settings(),
                                          FuzzyHeadingController(self.params.fuzzy_spec()), route_map.arrival_tags)
-        self.dropped_reads = 0
+        self.drops = inputs.Drops(self.get_logger().warning)
         self.cmd_pub = self.create_publisher(Twist, "/cmd_vel", COMMAND_QOS)
         self.create_subscription(TagReadArray, "/rfid/reads", self.on_reads, SENSOR_QOS)
         self.goals: SingleGoalServer[RouteGoal] = SingleGoalServer(
@@ -75,12 +78,10 @@ class HeadingControllerNode(SteppedNode):
                                      tags_reached=goal.tags_reached, elapsed_s=self.now_s() - goal.started_s)
 
     def on_reads(self, msg: TagReadArray) -> None:
-        observations = [observe(reading) for reading in msg.readings]
-        valid = [o for o in observations if o is not None]
-        if len(valid) < len(observations):
-            self.dropped_reads += len(observations) - len(valid)
-            self.get_logger().warning(f"dropped reads with non-finite values ({self.dropped_reads} so far)",
-                                      throttle_duration_sec=5.0)
+        # The phase difference needs both phases and the channels they were read on.
+        valid = inputs.round_reads(msg, self.drops, required=("phase_rad", "frequency_hz"))
+        if valid is None:
+            return
         goal = self.goals.running
         if goal is None:
             return

@@ -34,32 +34,24 @@ import numpy as np
 
 from rfidnav_common.errors import ParameterError
 from rfidnav_common.geometry import wrap_angle
+from rfidnav_common.inputs import BadInput, TagRead, tag_read
 from rfidnav_common.rf import range_change_m
 
 ARRIVAL_MODES = ("first_read", "closest_approach")
 
 
-@dataclass(frozen=True)
-class TagObservation:
-    """One validated tag read (finite numbers only; the node drops the rest)."""
-
-    tag_id: str
-    antenna: int
-    phase_rad: float
-    rssi_dbm: float
-    frequency_hz: float
+# One checked tag read (rfidnav_common.inputs.tag_read: finite numbers in their physical ranges, the phase from I/Q
+# as in paper 001 eq. (1), phi = atan2(Q, I), or the reported phase angle when I = Q = 0); the node drops the rest.
+TagObservation = TagRead
 
 
 def observe(read) -> TagObservation | None:
-    """A TagObservation from a TagReading message (or anything with its fields); None if a number is not finite.
-
-    The phase comes from I/Q as in paper 001 eq. (1), phi = atan2(Q, I); readers that report only the
-    phase angle (I = Q = 0) are taken at their word."""
-    numbers = (read.i, read.q, read.phase_rad, read.rssi_dbm, read.frequency_hz)
-    if not all(math.isfinite(value) for value in numbers) or read.frequency_hz <= 0.0:
+    """A TagObservation from a TagReading message (or anything with its fields), as heading_controller takes it
+    (rfidnav_common.inputs.tag_read); None for a read it drops."""
+    try:
+        return tag_read(read)
+    except BadInput:
         return None
-    phase = math.atan2(read.q, read.i) % (2.0 * math.pi) if (read.i or read.q) else read.phase_rad
-    return TagObservation(read.tag_id, int(read.antenna), phase, read.rssi_dbm, read.frequency_hz)
 
 
 @dataclass(frozen=True)

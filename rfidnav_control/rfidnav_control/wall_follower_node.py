@@ -7,8 +7,11 @@ and the latest odometry pose, and publishes its velocity and events. It is idle 
 ``follow`` or a turn starts a new follower (what was measured of the walls on an earlier drive is not kept); its
 ``stopped`` event makes it idle again. Its state (``idle`` or the follower's) goes out on /wall_follower/state
 every STATE_PERIOD_S, so a commander can tell a lost command from a slow one. While a sonar is silent longer than
-``sonar_timeout_s`` it stops the robot rather than drive blind, and says so; a NaN range or pose is dropped with
-a warning.
+``sonar_timeout_s`` it stops the robot rather than drive blind, and says so. Inputs are checked
+(rfidnav_common.inputs) and what fails is dropped and counted with a throttled warning: a range that is NaN, negative
+or beyond any sonar's reach (+-inf are kept: no echo, closer than the minimum, REP 117) or not in its rangefinder's
+frame (sonar_NAME for /sonar/NAME), an /odom pose that is not finite, beyond any map or not odom -> base_link, a
+stop distance that is not a finite distance.
 """
 
 from __future__ import annotations
@@ -20,7 +23,9 @@ from geometry_msgs.msg import Pose2D, Twist
 from nav_msgs.msg import Odometry
 from sensor_msgs.msg import Range
 
-from rfidnav_common.ros import COMMAND_QOS, SENSOR_QOS, declare_parameters, odometry_pose, run_node, twist
+from rfidnav_common import inputs
+from rfidnav_common.frames import ODOM_FRAME, SONAR_FRAME_PREFIX
+from rfidnav_common.ros import COMMAND_QOS, SENSOR_QOS, declare_parameters, run_node, twist
 from rfidnav_common.stepped_node import SteppedNode
 from rfidnav_control.parameters import SONAR_FIELDS, WallFollowerParameters
 from rfidnav_control.wall_following import ACTIONS, STOPPED, OdomPose, Sonar, WallFollower
@@ -39,6 +44,7 @@ class WallFollowerNode(SteppedNode):
         self.follower: WallFollower | None = None          # None: idle
         self.ranges: dict[str, tuple[float, float]] = {}    # field -> (range from the centre, sim time received)
         self.odom: OdomPose | None = None
+        self.drops = inputs.Drops(self.get_logger().warning)
         self.cmd_pub = self.create_publisher(Twist, "/cmd_vel", COMMAND_QOS)
         self.event_pub = self.create_publisher(WallFollowerEvent, "/wall_follower/event", COMMAND_QOS)
         self.state_pub = self.create_publisher(WallFollowerEvent, "/wall_follower/state", COMMAND_QOS)
@@ -56,32 +62,36 @@ class WallFollowerNode(SteppedNode):
 
     # ---------------------------------------------------------------------------------------- inputs
     def range_callback(self, field: str, topic: str, offset: float):
+        expected_frame = SONAR_FRAME_PREFIX + topic.rsplit("/", 1)[-1]
+
         def on_range(msg: Range) -> None:
-            if math.isnan(msg.range):
-                self.get_logger().warning(f"{topic}: dropped a NaN range", throttle_duration_sec=5.0)
+            try:
+                inputs.frame(msg.header.frame_id, expected_frame)
+                # +inf (no echo) stays inf; -inf (closer than the minimum, REP 117) stays below any threshold.
+                distance = msg.range if math.isinf(msg.range) else inputs.length(msg.range, "range") + offset
+            except inputs.BadInput as error:
+                self.drops.drop(topic, error)
                 return
-            # +inf (no echo) stays inf; -inf (closer than the minimum, REP 117) stays below any threshold.
-            self.ranges[field] = (msg.range + offset if math.isfinite(msg.range) else msg.range, self.now_s())
+            self.ranges[field] = (distance, self.now_s())
         return on_range
 
     def on_odom(self, msg: Odometry) -> None:
-        pose = odometry_pose(msg)
-        if not all(math.isfinite(v) for v in pose):
-            self.get_logger().warning("dropped an odometry message with non-finite values", throttle_duration_sec=5.0)
-            return
-        self.odom = OdomPose(*pose)
+        try:
+            self.odom = OdomPose(*inputs.odometry_pose(msg))
+        except inputs.BadInput as error:
+            self.drops.drop("/odom", error)
 
     def on_command(self, msg: WallFollowerCommand) -> None:
         action = msg.action
         if action not in (*ACTIONS, WallFollowerCommand.FOLLOW, WallFollowerCommand.STOP):
-            self.get_logger().error(f"/wall_follower/command: unknown action '{action}' ignored")
+            self.drops.drop("/wall_follower/command", f"unknown action '{action}'")
             return
         if action == WallFollowerCommand.STOP:
             if self.follower is not None:
                 try:
-                    self.follower.command_stop(msg.stop_within_m)
-                except ValueError as error:
-                    self.get_logger().error(f"/wall_follower/command: {error}; stopping at once")
+                    self.follower.command_stop(inputs.length(msg.stop_within_m, "stop_within_m"))
+                except (inputs.BadInput, ValueError) as error:
+                    self.drops.drop("/wall_follower/command", f"{error}; stopping at once")
                     self.follower.command_stop(0.0)
             return
         if self.follower is None:
@@ -132,7 +142,7 @@ class WallFollowerNode(SteppedNode):
         if self.odom is not None:
             msg.odom_pose = Pose2D(x=float(self.odom.x), y=float(self.odom.y), theta=float(self.odom.yaw))
         msg.header.stamp = self.get_clock().now().to_msg()
-        msg.header.frame_id = "odom"
+        msg.header.frame_id = ODOM_FRAME
         return msg
 
 

@@ -9,28 +9,37 @@ warned about. A bumper, cliff or wheel drop that starts stops the base from that
 command) and is published on /base/event, as is its end; while a bumper is pressed forward motion is refused, while
 a cliff or wheel drop holds all motion is. The command watchdog runs in the same thread, on the monotonic clock, so
 that it stops the base even when the executor is stuck. Message stamps are the node's clock.
+
+A /cmd_vel beyond the base's limits (``max_wheel_speed_mps`` forward, both wheels at it in opposite directions
+turning) is scaled down to them, keeping the arc, and counted as clamped; one with a NaN or an infinity anywhere
+is dropped and counted (rfidnav_common.inputs). The base is stopped (Drive Direct 0, 0) on every way out: Ctrl-C,
+SIGTERM and an exception end the spin and destroy_node stops it; a serial thread that ends -- a bug, or the port
+failing for SERIAL_FAILURE_LIMIT_S on end (a cable pulled) -- stops it first, and the process then exits with
+SERIAL_THREAD_ENDED (1), so the orchestrator respawns it on a freshly opened port rather than leave a node up that
+no longer drives anything.
 """
 
 from __future__ import annotations
 
 import errno
-import math
 import threading
 import time
 from typing import Any
 
+import rclpy
 import serial
 from geometry_msgs.msg import Twist
 from nav_msgs.msg import Odometry
-from rclpy.executors import SingleThreadedExecutor
+from rclpy.executors import Executor, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.publisher import Publisher
 from tf2_msgs.msg import TFMessage
 
 from rfidnav_common import base_safety as safety
+from rfidnav_common import inputs
 from rfidnav_common.frames import Frame
 from rfidnav_common.geometry import yaw_to_quaternion
-from rfidnav_common.ros import COMMAND_QOS, SENSOR_QOS, declare_parameters, run_node
+from rfidnav_common.ros import COMMAND_QOS, SENSOR_QOS, declare_parameters, run_node, spin_until_shutdown
 from rfidnav_common.transforms import TF_QOS, tf_message
 from rfidnav_drivers import create_oi as oi
 from rfidnav_drivers.errors import DriverError
@@ -42,6 +51,8 @@ WRITE_TIMEOUT_S = 0.1
 START_PAUSE_S = 0.05       # between Start and the mode: the OI needs a moment after Start (serial thread only)
 WARN_EVERY_S = 5.0
 SERIAL_ERRORS = (serial.SerialException, OSError)
+SERIAL_FAILURE_LIMIT_S = 2.0   # every serial read and write failing this long: the port is gone (a cable pulled)
+SERIAL_THREAD_ENDED = 1        # exit code when the serial thread ended while the node was not stopping
 
 
 def port_error(port: str, error: OSError) -> DriverError:
@@ -84,6 +95,9 @@ class CreateBaseNode(Node):
         self.last_reply_s: float | None = None
         self.missed_replies = 0
         self.io_errors = 0
+        self.failing_since: float | None = None           # time.monotonic() of the first failure in a row
+        self.drops = inputs.Drops(self.get_logger().warning, WARN_EVERY_S)
+        self.max_angular_radps = 2.0 * p.max_wheel_speed_mps / p.wheel_base_m   # both wheels at the limit
 
         self.odom_pub = self.create_publisher(Odometry, "/odom", SENSOR_QOS)
         self.tf_pub = self.create_publisher(TFMessage, "/tf", TF_QOS) if self.params.publish_tf else None
@@ -99,13 +113,19 @@ class CreateBaseNode(Node):
 
     # ---------------------------------------------------------------------------------------- executor side
     def on_cmd_vel(self, msg: Twist) -> None:
-        values = (msg.linear.x, msg.linear.y, msg.linear.z, msg.angular.x, msg.angular.y, msg.angular.z)
-        if not all(math.isfinite(v) for v in values):
-            self.get_logger().warning("/cmd_vel: dropped a command with NaN or infinite values",
-                                      throttle_duration_sec=WARN_EVERY_S)
+        try:
+            for name in ("linear.y", "linear.z", "angular.x", "angular.y"):   # unused, but a NaN there is garbage
+                inputs.number(getattr(getattr(msg, name.split(".")[0]), name.split(".")[1]), name)
+            command = inputs.velocity(msg.linear.x, msg.angular.z, self.params.max_wheel_speed_mps,
+                                      self.max_angular_radps)
+        except inputs.BadInput as error:
+            self.drops.drop("/cmd_vel", error)
             return
+        if command.clamped:
+            self.drops.clamp("/cmd_vel", f"({msg.linear.x:g} m/s, {msg.angular.z:g} rad/s) beyond the base's limits, "
+                                         f"scaled to ({command.linear_mps:g}, {command.angular_radps:g})")
         with self.lock:
-            self.command = (msg.linear.x, msg.angular.z)
+            self.command = (command.linear_mps, command.angular_radps)
             self.last_command_s = time.monotonic()
         self.wake.set()
 
@@ -134,6 +154,8 @@ class CreateBaseNode(Node):
             period = 1.0 / self.params.sensor_rate_hz
             next_query = time.monotonic()
             while not self.stopping.is_set():
+                if self.port_lost():
+                    return
                 self.send_pending_command()
                 self.check_watchdog()
                 now = time.monotonic()
@@ -145,9 +167,19 @@ class CreateBaseNode(Node):
                     self.wake.clear()
         finally:
             if not self.stopping.is_set():
-                # A bug ended the thread (its traceback follows): with no watchdog left, stop the base now.
-                self.get_logger().fatal("the serial thread failed: stopping the base; restart create_base")
+                # A bug (its traceback follows) or a lost port ended the thread: with no watchdog left, stop the
+                # base now; main() then exits SERIAL_THREAD_ENDED, and the orchestrator respawns the node.
+                self.get_logger().fatal("the serial thread ended: stopping the base; create_base exits to be "
+                                        "restarted")
                 self.write(oi.STOP_DRIVING)
+
+    def port_lost(self) -> bool:
+        """Whether every serial read and write has failed for SERIAL_FAILURE_LIMIT_S (said once, as fatal)."""
+        if self.failing_since is None or time.monotonic() - self.failing_since < SERIAL_FAILURE_LIMIT_S:
+            return False
+        self.get_logger().fatal(f"serial port {self.params.port}: every read and write failed for "
+                                f"{SERIAL_FAILURE_LIMIT_S:g} s ({self.io_errors} errors): the port is lost")
+        return True
 
     def start_oi(self) -> None:
         """Start, then Safe or Full; bytes the base sent before (its boot banner) are dropped."""
@@ -168,6 +200,8 @@ class CreateBaseNode(Node):
 
     def io_failed(self, error: OSError) -> None:
         self.io_errors += 1
+        if self.failing_since is None:
+            self.failing_since = time.monotonic()
         self.get_logger().error(f"serial port {self.params.port}: {error} ({self.io_errors} errors so far)",
                                 throttle_duration_sec=WARN_EVERY_S)
 
@@ -208,6 +242,7 @@ class CreateBaseNode(Node):
             self.io_failed(error)
             return
         received = time.monotonic()
+        self.failing_since = None            # the port answers (a garbled reply is the link's, not the port's)
         try:
             state = oi.decode_sensors(reply)
         except ValueError as error:
@@ -270,10 +305,19 @@ class CreateBaseNode(Node):
                 raise
 
 
+def spin(executor: Executor, node: Node) -> int:
+    """Until Ctrl-C or SIGTERM (0), or until the serial thread ends (SERIAL_THREAD_ENDED): a node whose thread is
+    gone drives nothing and watches nothing, so it exits to be respawned rather than stay up."""
+    if not isinstance(node, CreateBaseNode):
+        raise TypeError(f"spin: expected create_base's node, got {type(node).__name__}")
+    spin_until_shutdown(executor, node, until=lambda: not node.thread.is_alive())
+    return SERIAL_THREAD_ENDED if rclpy.ok(context=node.context) and not node.thread.is_alive() else 0
+
+
 def main(args: list[str] | None = None) -> int:
     # SingleThreadedExecutor: the serial thread publishes /odom and /base/event beside the executor, and with
     # rclpy's EventsExecutor that once ended in a RuntimeError out of spin_once at shutdown (CI, a loaded machine).
-    return run_node(CreateBaseNode, args, make_executor=SingleThreadedExecutor)
+    return run_node(CreateBaseNode, args, make_executor=SingleThreadedExecutor, spin=spin)
 
 
 if __name__ == "__main__":

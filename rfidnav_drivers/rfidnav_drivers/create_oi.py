@@ -56,7 +56,9 @@ def drive_direct_command(right_mps: float, left_mps: float) -> bytes:
     """Drive Direct with the wheel speeds in m/s, right first as the OI wants it; each is rounded to mm/s and
     clamped to the OI's +-500 (a last guard: wheel_speeds already keeps them within the configured limit)."""
     def mm_s(speed_mps: float) -> int:
-        return max(-MAX_WHEEL_MM_S, min(MAX_WHEEL_MM_S, round(speed_mps * 1000.0)))
+        if not math.isfinite(speed_mps):
+            raise ValueError(f"drive_direct_command: wheel speed {speed_mps} is not finite")
+        return max(-MAX_WHEEL_MM_S, min(MAX_WHEEL_MM_S, round(max(-1.0, min(1.0, speed_mps)) * 1000.0)))
     return struct.pack(">Bhh", DRIVE_DIRECT, mm_s(right_mps), mm_s(left_mps))
 
 
@@ -72,14 +74,16 @@ class WheelSpeeds:
 def wheel_speeds(linear_mps: float, angular_radps: float, wheel_base_m: float, max_wheel_mps: float) -> WheelSpeeds:
     """Differential-drive wheel speeds v -+ w*b/2 of a body velocity, both scaled down by the same factor when
     either would exceed ``max_wheel_mps``: the robot then drives the commanded arc (same curvature) more
-    slowly, rather than a different arc, which clamping each wheel on its own would give."""
-    half = angular_radps * wheel_base_m / 2.0
-    left, right = linear_mps - half, linear_mps + half
-    fastest = max(abs(left), abs(right))
-    if fastest > max_wheel_mps:
-        scale = max_wheel_mps / fastest
-        left, right = left * scale, right * scale
-    return WheelSpeeds(left, right)
+    slowly, rather than a different arc, which clamping each wheel on its own would give. Any finite command
+    gives finite speeds (the faster wheel's |v| + |w b/2| is formed halved, so 1e308 m/s does not overflow)."""
+    if not (math.isfinite(linear_mps) and math.isfinite(angular_radps)):
+        raise ValueError(f"wheel_speeds: ({linear_mps}, {angular_radps}) is not a finite velocity")
+    half = angular_radps * (wheel_base_m / 2.0)
+    half_fastest = abs(linear_mps) / 2.0 + abs(half) / 2.0
+    if half_fastest > max_wheel_mps / 2.0:
+        scale = max_wheel_mps / 2.0 / half_fastest
+        linear_mps, half = linear_mps * scale, half * scale
+    return WheelSpeeds(linear_mps - half, linear_mps + half)
 
 
 @dataclass(frozen=True)

@@ -1,5 +1,5 @@
-"""Localization domain objects <-> ROS messages: estimates (PoseWithCovarianceStamped, LocalizationStatus),
-WiFi scans and floor tags of the location server."""
+"""Localization domain objects <-> ROS messages: estimates (PoseWithCovarianceStamped, LocalizationStatus) and
+floor tags of the location server (a WiFi scan is read by rfidnav_common.inputs.wifi_rss, checked)."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ from geometry_msgs.msg import PoseWithCovarianceStamped
 from rfidnav_common.geometry import yaw_to_quaternion
 from rfidnav_localization.location_store import TagRecord
 from rfidnav_localization.partition import LocalizationEstimate
-from rfidnav_msgs.msg import FloorTag, LocalizationStatus, WifiScan
+from rfidnav_msgs.msg import FloorTag, LocalizationStatus
 
 # Yaw variance published while the heading is unknown: no consumer should mistake it for information.
 UNKNOWN_YAW_VARIANCE = 1e6
@@ -62,15 +62,6 @@ def status_message(estimate: LocalizationEstimate, stamp: Time, frame_id: str) -
     message.rogue_count = int(estimate.rogue_count)
     message.undecodable_count = int(estimate.undecodable_count)
     return message
-
-
-def scan_rss(scan: WifiScan) -> dict[str, float]:
-    """A WifiScan as the matcher takes it: bssid -> RSS [dBm] (the strongest when an AP is listed twice)."""
-    rss: dict[str, float] = {}
-    for access_point in scan.access_points:
-        value = float(access_point.rssi_dbm)
-        rss[access_point.bssid] = max(value, rss.get(access_point.bssid, value))
-    return rss
 
 
 def floor_tag_message(tag: TagRecord) -> FloorTag:

@@ -30,12 +30,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from rfidnav_common import inputs
 from rfidnav_common.errors import ParameterError
 from rfidnav_localization.errors import LocateError
 
 SOURCES = ("grid", "survey", "robot")   # a generated grid, a manual survey, the robot's own automatic survey
 WEIGHTINGS = ("inverse_distance", "uniform")
 _EPSILON_DB = 1e-6                      # keeps an exact match's inverse-distance weight finite
+# A fingerprint further than this outside what the map covers (its tag groups, deployment area and fingerprints) is
+# refused: no scan taken there can be of this map. A survey still grows the map, a margin at a time.
+MAP_MARGIN_M = 10.0
 _SPACING_CHUNK = 256                    # rows per block of the pairwise spacing computation (bounds memory)
 
 
@@ -52,9 +56,7 @@ class Fingerprint:
     source: str = "survey"
 
     def __post_init__(self) -> None:
-        x, y = (float(value) for value in self.position)
-        if not (math.isfinite(x) and math.isfinite(y)):
-            raise ValueError(f"position: must be finite, got {self.position}")
+        x, y = inputs.point(*self.position, "position")
         if self.source not in SOURCES:
             raise ValueError(f"source: '{self.source}' is not one of {', '.join(SOURCES)}")
         pairs = self.rss.items() if isinstance(self.rss, Mapping) else self.rss
@@ -64,13 +66,41 @@ class Fingerprint:
                 raise ValueError(f"rss: a BSSID must be a non-empty string, got {bssid!r}")
             if bssid in readings:
                 raise ValueError(f"rss[{bssid}]: given twice")
-            readings[bssid] = float(value)
-            if not math.isfinite(readings[bssid]):
-                raise ValueError(f"rss[{bssid}]: must be a finite dBm value, got {value}")
+            readings[bssid] = inputs.rss_dbm(value, f"rss[{bssid}]")
         if not readings:
             raise ValueError("rss: a fingerprint needs at least one access point")
         object.__setattr__(self, "position", (x, y))
         object.__setattr__(self, "rss", tuple(sorted(readings.items())))
+
+
+@dataclass(frozen=True)
+class Extent:
+    """An axis-aligned rectangle of the map frame [m]: where the location server's map lies."""
+    x_min: float
+    y_min: float
+    x_max: float
+    y_max: float
+
+    @classmethod
+    def around(cls, points: Iterable[tuple[float, float]]) -> Extent | None:
+        """The smallest extent holding ``points``; None without any."""
+        listed = list(points)
+        if not listed:
+            return None
+        xs, ys = zip(*listed)
+        return cls(min(xs), min(ys), max(xs), max(ys))
+
+    def including(self, x: float, y: float) -> Extent:
+        return Extent(min(self.x_min, x), min(self.y_min, y), max(self.x_max, x), max(self.y_max, y))
+
+    def grown(self, margin_m: float) -> Extent:
+        return Extent(self.x_min - margin_m, self.y_min - margin_m, self.x_max + margin_m, self.y_max + margin_m)
+
+    def contains(self, x: float, y: float) -> bool:
+        return self.x_min <= x <= self.x_max and self.y_min <= y <= self.y_max
+
+    def __str__(self) -> str:
+        return f"[{self.x_min:g}, {self.x_max:g}] x [{self.y_min:g}, {self.y_max:g}] m"
 
 
 @dataclass(frozen=True)
@@ -201,10 +231,11 @@ def _checked_scan(scan: Mapping[str, float]) -> dict[str, float]:
         raise LocateError("the scan is empty: no access point was heard")
     readings: dict[str, float] = {}
     for bssid, value in scan.items():
-        rss = float(value) if isinstance(value, numbers.Real) else math.nan
-        if not math.isfinite(rss):
-            raise LocateError(f"access point {bssid}: RSS {value!r} is not a finite dBm value")
-        readings[bssid] = rss
+        try:
+            readings[bssid] = inputs.rss_dbm(float(value) if isinstance(value, numbers.Real) else value,
+                                             f"access point {bssid}: RSS")
+        except inputs.BadInput as error:
+            raise LocateError(str(error)) from None
     return readings
 
 

@@ -10,6 +10,11 @@ answers three services:
 * ``/location_server/add_fingerprint`` (AddFingerprint): a scan taken at a known position joins the radio
   map (paper 003's automatic radio map construction: the robot contributes samples at its tier-two fixes).
 
+Every request is checked (rfidnav_common.inputs) and refused with success false and the reason, counted with a
+throttled warning: a scan not in base_link (the WiFi antenna's frame), an RSS outside the physical range or an
+empty BSSID; a point beyond any map; a fingerprint further than MAP_MARGIN_M outside what the map covers (its tag
+groups, deployment area and fingerprints: a survey grows it a margin at a time).
+
 A missing database (unless ``create_database``), a corrupt one or one of an unknown schema is one error at
 start (exit 2). The tag groups of ``map_file`` are loaded into the tag map at start, once, and its radio map
 file into an empty radio map.
@@ -17,16 +22,17 @@ file into an empty radio map.
 
 from __future__ import annotations
 
-import math
 from pathlib import Path
 from typing import Any
 
+from rfidnav_common import inputs
+from rfidnav_common.frames import WIFI_FRAME
 from rfidnav_common.robot_map import RouteMap, load_route_map
 from rfidnav_common.ros import declare_parameters, run_node, seconds_of
 from rfidnav_common.stepped_node import SteppedNode
-from rfidnav_localization.conversions import floor_tag_message, scan_rss
+from rfidnav_localization.conversions import floor_tag_message
 from rfidnav_localization.errors import LocateError, StoreError
-from rfidnav_localization.fingerprint import Fingerprint, RadioMap
+from rfidnav_localization.fingerprint import MAP_MARGIN_M, Extent, Fingerprint, RadioMap
 from rfidnav_localization.location_store import LocationStore, TagGroupRecord
 from rfidnav_localization.parameters import LocationServerParameters
 from rfidnav_localization.radio_map_file import load_radio_map
@@ -38,10 +44,19 @@ class LocationServerNode(SteppedNode):
         super().__init__("location_server", **node_options)
         self.params: LocationServerParameters = declare_parameters(self, LocationServerParameters)
         self.settings = self.params.locate_settings()
+        self.drops = inputs.Drops(self.get_logger().warning)
         self.store = LocationStore.open(self.params.database_path(), create=self.params.create_database)
+        area: list[tuple[float, float]] = []
         if self.params.map_file != "unused":
-            self.load_map(load_route_map(Path(self.params.map_file)))
+            robot_map = load_route_map(Path(self.params.map_file))
+            self.load_map(robot_map)
+            if robot_map.deployment_area is not None:
+                x_min, y_min, x_max, y_max = robot_map.deployment_area
+                area = [(x_min, y_min), (x_max, y_max)]
         self.radio_map = RadioMap(self.store.fingerprints())
+        # What the map covers: None while it has nothing (the first fingerprint may then be anywhere on Earth).
+        self.extent = Extent.around(area + [tag[1] for group in self.store.tag_groups() for tag in group.tags]
+                                    + [fingerprint.position for fingerprint in self.radio_map.fingerprints])
         self.create_service(Locate, "/location_server/locate", self.on_locate)
         self.create_service(GetTagMap, "/location_server/tag_map", self.on_tag_map)
         self.create_service(AddFingerprint, "/location_server/add_fingerprint", self.on_add_fingerprint)
@@ -59,9 +74,18 @@ class LocationServerNode(SteppedNode):
                 self.store.add_tag_group(TagGroupRecord(group.group_id, group.shape, group.centre, group.size_m,
                                                         group.rotation_rad, dict(group.tags())))
 
+    def refuse(self, service: str, response: Any, problem: object) -> Any:
+        """``response`` refusing the request (success false, the reason), counted and warned about."""
+        self.drops.drop(service, problem)
+        response.success, response.message = False, str(problem)
+        return response
+
     def on_locate(self, request: Locate.Request, response: Locate.Response) -> Locate.Response:
         try:
-            result = self.radio_map.locate(scan_rss(request.scan), self.settings)
+            inputs.frame(request.scan.header.frame_id, WIFI_FRAME, "scan.header.frame_id")
+            result = self.radio_map.locate(inputs.wifi_rss(request.scan), self.settings)
+        except inputs.BadInput as error:
+            return self.refuse("/location_server/locate", response, error)
         except LocateError as error:
             response.success, response.message = False, str(error)
             return response
@@ -75,28 +99,40 @@ class LocationServerNode(SteppedNode):
         return response
 
     def on_tag_map(self, request: GetTagMap.Request, response: GetTagMap.Response) -> GetTagMap.Response:
-        if not (math.isfinite(request.x) and math.isfinite(request.y) and math.isfinite(request.radius_m)
-                and request.radius_m > 0.0):
-            response.success = False
-            response.message = f"bad query: ({request.x}, {request.y}) radius {request.radius_m} m"
-            return response
-        tags = sorted(self.store.tags_near(request.x, request.y, request.radius_m), key=lambda tag: tag.tag_id)
+        try:
+            x, y = inputs.point(request.x, request.y, "query")
+            if not inputs.length(request.radius_m, "radius_m") > 0.0:
+                raise inputs.BadInput("radius_m: must be positive, got 0")
+        except inputs.BadInput as error:
+            return self.refuse("/location_server/tag_map", response, f"bad query: {error}")
+        tags = sorted(self.store.tags_near(x, y, request.radius_m), key=lambda tag: tag.tag_id)
         response.success, response.message = True, f"{len(tags)} tags"
         response.tags = [floor_tag_message(tag) for tag in tags]
         return response
 
     def on_add_fingerprint(self, request: AddFingerprint.Request,
                            response: AddFingerprint.Response) -> AddFingerprint.Response:
+        response.fingerprint_count = len(self.radio_map)
         try:
-            fingerprint = Fingerprint((request.x, request.y), scan_rss(request.scan), request.source or "robot")
-            if not fingerprint.rss:
-                raise ValueError("scan: no access point heard")
+            inputs.frame(request.scan.header.frame_id, WIFI_FRAME, "scan.header.frame_id")
+            x, y = inputs.point(request.x, request.y, "position")
+            if self.extent is not None and not self.extent.grown(MAP_MARGIN_M).contains(x, y):
+                raise inputs.BadInput(f"position ({x:g}, {y:g}) is more than {MAP_MARGIN_M:g} m outside the map "
+                                      f"({self.extent})")
+            rss = inputs.wifi_rss(request.scan)
+            if not rss:
+                raise inputs.BadInput("scan: no access point heard")
+            fingerprint = Fingerprint((x, y), rss, request.source or "robot")
+        except (inputs.BadInput, ValueError) as error:
+            return self.refuse("/location_server/add_fingerprint", response, f"not stored: {error}")
+        try:
             self.store.add_fingerprint(fingerprint, created_s=seconds_of(request.scan.header.stamp))
-        except (ValueError, LocateError, StoreError) as error:
+        except StoreError as error:
             response.success, response.message = False, f"not stored: {error}"
-        else:
-            self.radio_map.add(fingerprint)
-            response.success, response.message = True, "stored"
+            return response
+        self.radio_map.add(fingerprint)
+        self.extent = Extent(x, y, x, y) if self.extent is None else self.extent.including(x, y)
+        response.success, response.message = True, "stored"
         response.fingerprint_count = len(self.radio_map)
         return response
 

@@ -2,21 +2,20 @@
 
 A thin adapter around PartitionLocalizer: every TagReadArray (one inventory round) becomes one update with
 the ids its floor antenna read and the latest /odom pose, and one pose and status stamped with the round's
-own stamp. Positions and the read range come from the tag ids themselves, so the node needs no map. Reads
-with a non-finite number and /odom messages with one are dropped and counted; junk ids are counted by the
-localizer (LocalizationStatus.undecodable_count). The pose is published once a tag has been read; the
-status from the first round on.
+own stamp. Positions and the read range come from the tag ids themselves, so the node needs no map. Rounds not
+in base_link, floor reads no reader reports and /odom messages that are not a pose in odom are dropped and counted
+(rfidnav_common.inputs); junk ids are counted by the localizer (LocalizationStatus.undecodable_count). The pose
+is published once a tag has been read; the status from the first round on.
 """
 
 from __future__ import annotations
 
-import math
 from typing import Any
 
 from geometry_msgs.msg import PoseWithCovarianceStamped
 from nav_msgs.msg import Odometry
 
-from rfidnav_common.geometry import quaternion_to_yaw
+from rfidnav_common import inputs
 from rfidnav_common.ros import SENSOR_QOS, declare_parameters, run_node, seconds_of
 from rfidnav_common.seeding import rng_for
 from rfidnav_common.stepped_node import SteppedNode
@@ -32,11 +31,6 @@ NODE_NAME = "partition_localizer"
 ODOMETRY_ORIGIN = (0.0, 0.0, 0.0)
 
 
-def finite_reading(reading: Any) -> bool:
-    return all(math.isfinite(value) for value in (reading.rssi_dbm, reading.phase_rad, reading.i, reading.q,
-                                                   reading.frequency_hz))
-
-
 class PartitionLocalizerNode(SteppedNode):
     def __init__(self, **node_options: Any) -> None:
         """``node_options``: keyword arguments of rclpy's Node (``context``, ``parameter_overrides``), for tests."""
@@ -44,8 +38,7 @@ class PartitionLocalizerNode(SteppedNode):
         self.params: PartitionLocalizerParameters = declare_parameters(self, PartitionLocalizerParameters)
         self.localizer = PartitionLocalizer(self.params.settings(), rng_for(self.params.seed, NODE_NAME))
         self.odom: tuple[float, float, float] | None = None
-        self.dropped_reads = 0
-        self.dropped_odometry = 0
+        self.drops = inputs.Drops(self.get_logger().warning)
         self.rounds = 0
         self.pose_pub = self.create_publisher(PoseWithCovarianceStamped, "/localization/pose", SENSOR_QOS)
         self.frames = FrameBroadcaster(self) if self.params.publish_tf else None   # map -> odom
@@ -56,23 +49,16 @@ class PartitionLocalizerNode(SteppedNode):
                                f"publishing in frame '{self.params.map_frame}'")
 
     def on_odometry(self, msg: Odometry) -> None:
-        pose = msg.pose.pose
-        q = pose.orientation
-        odom = (pose.position.x, pose.position.y, quaternion_to_yaw(q.x, q.y, q.z, q.w))
-        if not all(math.isfinite(value) for value in odom):
-            self.dropped_odometry += 1
-            self.get_logger().warning(f"dropped /odom with a non-finite pose ({self.dropped_odometry} so far)",
-                                      throttle_duration_sec=5.0)
-            return
-        self.odom = odom
+        try:
+            self.odom = inputs.odometry_pose(msg)
+        except inputs.BadInput as error:
+            self.drops.drop("/odom", error)
 
     def on_reads(self, msg: TagReadArray) -> None:
-        floor_reads = [reading for reading in msg.readings if reading.antenna == self.params.antenna]
-        tag_ids = [reading.tag_id for reading in floor_reads if finite_reading(reading)]
-        if len(tag_ids) < len(floor_reads):
-            self.dropped_reads += len(floor_reads) - len(tag_ids)
-            self.get_logger().warning(f"dropped floor reads with non-finite values ({self.dropped_reads} so far)",
-                                      throttle_duration_sec=5.0)
+        floor_reads = inputs.round_reads(msg, self.drops, ports=(self.params.antenna,))
+        if floor_reads is None:
+            return
+        tag_ids = [read.tag_id for read in floor_reads]
         if self.odom is None and floor_reads:
             self.get_logger().warning("no /odom yet: taking the robot to stand at the odometry origin",
                                       throttle_duration_sec=5.0)

@@ -8,6 +8,7 @@ from builtin_interfaces.msg import Time
 from geometry_msgs.msg import Point, PoseStamped
 from nav_msgs.msg import Path
 
+from rfidnav_common import inputs
 from rfidnav_common.geometry import yaw_to_quaternion
 from rfidnav_common.tag_lattice import Coordinate, Lattice, TagIdError, decode_tag_id, partition_centre
 from rfidnav_localization.partition import LocalizationEstimate
@@ -19,7 +20,14 @@ def estimate_from_status(msg: LocalizationStatus, stamp_s: float,
                          previous_partition: frozenset[Coordinate] | None) -> LocalizationEstimate:
     """The localizer's estimate as the navigator core takes it; the lattice comes from the tag IDs again.
 
-    The status names tags the localizer accepted, so they decode; one that does not is left out."""
+    The status names tags the localizer accepted, so they decode; one that does not is left out. A position
+    beyond any map, a heading or bound that is not finite or turns away, a read range that is no distance: BadInput
+    (rfidnav_common.inputs), whatever the valid flags say."""
+    x, y = inputs.point(msg.x, msg.y, "status")
+    # A heading and its bounds, which may reach past +-pi (a bound is the heading -+ a spread), but not by turns.
+    yaw, lower, upper = (inputs.bounded(getattr(msg, name), name, -2.0 * math.tau, 2.0 * math.tau, "rad")
+                         for name in ("yaw_rad", "yaw_lower_rad", "yaw_upper_rad"))
+    read_range_m = inputs.length(msg.read_range_m, "read_range_m")
     lattice: Lattice | None = None
     partition: set[Coordinate] = set()
     for tag_id in msg.partition_tag_ids:
@@ -30,15 +38,15 @@ def estimate_from_status(msg: LocalizationStatus, stamp_s: float,
         lattice = lattice or Lattice(decoded.layout, decoded.spacing_m)
         partition.add(decoded.coordinate)
     frozen = frozenset(partition)
-    bounds = (msg.yaw_lower_rad, msg.yaw_upper_rad) if msg.orientation_valid else None
+    bounds = (lower, upper) if msg.orientation_valid else None
     return LocalizationEstimate(
         stamp_s=stamp_s, method=msg.method, partition=frozen, partition_tag_ids=tuple(msg.partition_tag_ids),
         partition_changed=bool(frozen) and frozen != previous_partition,
         partitions_traversed=msg.partitions_traversed,
-        position=(msg.x, msg.y) if msg.position_valid else None, position_covariance=(0.0, 0.0, 0.0),
-        yaw=msg.yaw_rad if msg.orientation_valid else None, yaw_bounds=bounds,
+        position=(x, y) if msg.position_valid else None, position_covariance=(0.0, 0.0, 0.0),
+        yaw=yaw if msg.orientation_valid else None, yaw_bounds=bounds,
         yaw_std=(bounds[1] - bounds[0]) / 4.0 if bounds else None,
-        read_range_m=msg.read_range_m if msg.read_range_m > 0.0 else None, lattice=lattice,
+        read_range_m=read_range_m if read_range_m > 0.0 else None, lattice=lattice,
         rejected_tag_ids=tuple(msg.rejected_tag_ids), rogue_count=msg.rogue_count,
         undecodable_count=msg.undecodable_count)
 

@@ -10,15 +10,19 @@ kept for later goals. A goal is refused for a node not in the map, while another
 follower listens on /wall_follower/command. A follower that says it is idle (/wall_follower/state) while a mission
 runs did not hear its command (it restarted, or its subscription matched after the command went out): it is told
 again to follow, with the turn waiting for the next junction. One goal at a time and cancel:
-rfidnav_common.goal_server.
+rfidnav_common.goal_server. A round not in base_link and reads no reader reports (rfidnav_common.inputs: an
+empty tag id, port 0, numbers beyond physics) are dropped and counted with a throttled warning, as are follower
+events and states not in odom or with a pose beyond any map: a wall tag is taken only from a read that could be
+a reader's.
 """
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from typing import Any
 
+from rfidnav_common import inputs
+from rfidnav_common.frames import ODOM_FRAME
 from rfidnav_common.goal_server import ActiveGoal, GoalOutcome, SingleGoalServer
 from rfidnav_common.ros import COMMAND_QOS, SENSOR_QOS, declare_parameters, run_node
 from rfidnav_common.stepped_node import SteppedNode
@@ -44,6 +48,7 @@ class MissionExecutorNode(SteppedNode):
         self.params: MissionExecutorParameters = declare_parameters(self, MissionExecutorParameters)
         self.map = load_topological_map(self.params.map_file)
         self.executor_core = MissionExecutor(self.map, self.params.weight, self.params.recover_missed_tags)
+        self.drops = inputs.Drops(self.get_logger().warning)
         self.command_pub = self.create_publisher(WallFollowerCommand, "/wall_follower/command", COMMAND_QOS)
         self.create_subscription(TagReadArray, "/rfid/reads", self.on_reads, SENSOR_QOS)
         self.create_subscription(WallFollowerEvent, "/wall_follower/event", self.on_event, COMMAND_QOS)
@@ -79,14 +84,29 @@ class MissionExecutorNode(SteppedNode):
 
     # ---------------------------------------------------------------------------------- sensing
     def on_reads(self, msg: TagReadArray) -> None:
-        if self.goals.running is None or not msg.readings:
+        reads = inputs.round_reads(msg, self.drops)
+        if self.goals.running is None or not reads:
             return
-        for decision in self.executor_core.on_reads(reading.tag_id for reading in msg.readings):
+        tag_ids = [read.tag_id for read in reads]
+        for decision in self.executor_core.on_reads(tag_ids):
             self.apply(decision)
 
+    def follower_report(self, topic: str, msg: WallFollowerEvent) -> bool:
+        """Whether the follower's event or state is usable: in odom, its pose within any map (then fed to the
+        executor for the distance driven); else dropped and counted."""
+        try:
+            inputs.frame(msg.header.frame_id, ODOM_FRAME)
+            x, y = inputs.point(msg.odom_pose.x, msg.odom_pose.y, "odom_pose")
+        except inputs.BadInput as error:
+            self.drops.drop(topic, error)
+            return False
+        # An idle follower may have no pose yet: it is left out.
+        if msg.state != IDLE:
+            self.executor_core.on_odometry(x, y)
+        return True
+
     def on_event(self, msg: WallFollowerEvent) -> None:
-        self.feed_odometry(msg)
-        if self.goals.running is None:
+        if not self.follower_report("/wall_follower/event", msg) or self.goals.running is None:
             return
         if msg.event == STOPPED:
             outcome = self.executor_core.state.outcome
@@ -125,16 +145,8 @@ class MissionExecutorNode(SteppedNode):
             last_tag=mission.last_tag or "", next_action=goal.next_action,
             tags_missed=mission.tags_missed, replans=mission.replans), always=True)   # one per decision
 
-    def feed_odometry(self, msg: WallFollowerEvent) -> None:
-        """The follower's odometry pose, which it reports with every event and state, for the distance driven
-        (an idle follower may have none yet: its pose is left out)."""
-        pose = msg.odom_pose
-        if msg.state != IDLE and math.isfinite(pose.x) and math.isfinite(pose.y):
-            self.executor_core.on_odometry(pose.x, pose.y)
-
     def on_follower_state(self, msg: WallFollowerEvent) -> None:
-        self.feed_odometry(msg)
-        if self.goals.running is None or msg.state != IDLE:
+        if not self.follower_report("/wall_follower/state", msg) or self.goals.running is None or msg.state != IDLE:
             return
         if self.executor_core.state.stop_commanded:
             return                  # idle after the stop: the mission ends with its "stopped" event

@@ -6,6 +6,8 @@ angle" is a turn on the spot closed on /odom (the core's TurnOnTheSpot), after w
 the turn is done.
 Every new plan is published on /planning/path (partition centres) and /planning/partitions (their tags).
 One goal at a time, cancel and the watchdog on /localization/status: rfidnav_common.goal_server.
+A status not in the map frame or with a value beyond any map, and /odom that is not a pose in odom, are dropped and
+counted with a throttled warning (rfidnav_common.inputs); a goal tolerance beyond any map is refused.
 """
 
 from __future__ import annotations
@@ -17,7 +19,9 @@ from typing import Any
 from geometry_msgs.msg import Pose2D, Twist
 from nav_msgs.msg import Odometry, Path
 
+from rfidnav_common import inputs
 from rfidnav_common.errors import ConfigError
+from rfidnav_common.frames import MAP_FRAME
 from rfidnav_common.goal_server import ActiveGoal, GoalOutcome, SingleGoalServer, Watchdog
 from rfidnav_common.robot_map import load_route_map
 from rfidnav_common.ros import (
@@ -25,7 +29,6 @@ from rfidnav_common.ros import (
     LATCHED_QOS,
     SENSOR_QOS,
     declare_parameters,
-    odometry_pose,
     run_node,
     seconds_of,
     twist,
@@ -66,6 +69,7 @@ class PartitionNavigatorNode(SteppedNode):
             raise ConfigError(self.params.map_file, "deployment_area", "partition navigation needs the tagged area")
         self.navigator = PartitionNavigator(self.params.settings(), robot_map.deployment_area)
         self.odom_pose: tuple[float, float, float] | None = None
+        self.drops = inputs.Drops(self.get_logger().warning)
         self.cmd_pub = self.create_publisher(Twist, "/cmd_vel", COMMAND_QOS)
         self.path_pub = self.create_publisher(Path, "/planning/path", LATCHED_QOS)
         self.partitions_pub = self.create_publisher(PartitionPath, "/planning/partitions", LATCHED_QOS)
@@ -88,8 +92,9 @@ class PartitionNavigatorNode(SteppedNode):
     # ------------------------------------------------------------------------------------ goals
     def refusal(self, goal: NavigateToPoint.Goal) -> str | None:
         try:
+            inputs.length(goal.tolerance_m, "tolerance_m")
             self.navigator.check_goal((goal.target.x, goal.target.y), goal.tolerance_m)
-        except GoalRejected as error:
+        except (inputs.BadInput, GoalRejected) as error:
             return str(error)
         return None
 
@@ -107,9 +112,10 @@ class PartitionNavigatorNode(SteppedNode):
 
     # ---------------------------------------------------------------------------------- sensing
     def on_odom(self, msg: Odometry) -> None:
-        pose = odometry_pose(msg)
-        if not all(math.isfinite(v) for v in pose):
-            self.get_logger().warning("dropped an odometry message with non-finite values", throttle_duration_sec=5.0)
+        try:
+            pose = inputs.odometry_pose(msg)
+        except inputs.BadInput as error:
+            self.drops.drop("/odom", error)
             return
         previous, self.odom_pose = self.odom_pose, pose
         active = self.goals.running
@@ -129,13 +135,17 @@ class PartitionNavigatorNode(SteppedNode):
 
     def on_status(self, msg: LocalizationStatus) -> None:
         active = self.goals.running
+        if active is not None:
+            self.goals.heard()
+        try:
+            inputs.frame(msg.header.frame_id, MAP_FRAME)
+            estimate = estimate_from_status(msg, seconds_of(msg.header.stamp),
+                                            active.previous_partition if active is not None else None)
+        except inputs.BadInput as error:
+            self.drops.drop("/localization/status", error)
+            return
         if active is None:
             return
-        self.goals.heard()
-        if not all(math.isfinite(v) for v in (msg.x, msg.y, msg.yaw_rad, msg.yaw_lower_rad, msg.yaw_upper_rad)):
-            self.get_logger().warning("ignored a localization status with non-finite values", throttle_duration_sec=5.0)
-            return
-        estimate = estimate_from_status(msg, seconds_of(msg.header.stamp), active.previous_partition)
         if estimate.partition:
             active.previous_partition = estimate.partition
         decision = self.navigator.on_estimate(estimate, active.travelled_m)
@@ -170,7 +180,7 @@ class PartitionNavigatorNode(SteppedNode):
     def publish_plan(self, decision: Decision) -> None:
         lattice = self.navigator.state.lattice
         path, partitions = plan_messages(decision.new_plan, lattice, self.navigator.state.replans,
-                                         self.get_clock().now().to_msg(), "map")
+                                         self.get_clock().now().to_msg(), MAP_FRAME)
         self.path_pub.publish(path)
         self.partitions_pub.publish(partitions)
 

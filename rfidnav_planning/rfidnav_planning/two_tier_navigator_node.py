@@ -8,6 +8,12 @@ the last fix on /localization/status. When the core asks the location server som
 /wifi/scan goes to /location_server/locate, or the tag-map query to /location_server/tag_map; an unanswered
 call (a server restarting, say) is sent again after ``service_timeout_s`` while the robot stands still.
 One goal at a time and cancel (checked at each control step): rfidnav_common.goal_server.
+
+Every input is checked (rfidnav_common.inputs) and what fails is dropped and counted with a throttled warning:
+/odom not a pose in odom, a compass reading not in its frame (compass or base_link) or not a rotation, a round or
+a scan not in base_link, floor reads no reader reports, a scan with an RSS outside the physical range; a goal
+beyond any map is refused; a location server answer with a position beyond any map is taken as a failed locate,
+and its tags beyond any map are left out.
 """
 
 from __future__ import annotations
@@ -22,9 +28,11 @@ from nav_msgs.msg import Odometry
 from rclpy.task import Future
 from sensor_msgs.msg import Imu
 
-from rfidnav_common.geometry import quaternion_to_yaw, yaw_to_quaternion
+from rfidnav_common import inputs
+from rfidnav_common.frames import COMPASS_FRAMES, WIFI_FRAME
+from rfidnav_common.geometry import yaw_to_quaternion
 from rfidnav_common.goal_server import ActiveGoal, GoalOutcome, SingleGoalServer
-from rfidnav_common.ros import COMMAND_QOS, SENSOR_QOS, declare_parameters, odometry_pose, run_node, twist
+from rfidnav_common.ros import COMMAND_QOS, SENSOR_QOS, declare_parameters, run_node, twist
 from rfidnav_common.stepped_node import SteppedNode
 from rfidnav_common.transforms import FrameBroadcaster
 from rfidnav_msgs.action import NavigateToPoint
@@ -49,6 +57,7 @@ class TwoTierNavigatorNode(SteppedNode):
         self.params: TwoTierNavigatorParameters = declare_parameters(self, TwoTierNavigatorParameters)
         self.navigator = TwoTierNavigator(self.params.settings())
         self.call: PendingCall | None = None
+        self.drops = inputs.Drops(self.get_logger().warning)
         self.odom: tuple[float, float, float] | None = None
         self.odom_stamp = Time()
         self.compass_yaw: float | None = None
@@ -81,38 +90,47 @@ class TwoTierNavigatorNode(SteppedNode):
 
     # ------------------------------------------------------------------------------------ sensing
     def on_odom(self, msg: Odometry) -> None:
-        pose = odometry_pose(msg)
-        if all(math.isfinite(v) for v in pose):
-            self.odom, self.odom_stamp = pose, msg.header.stamp
-        else:
-            self.get_logger().warning("dropped an odometry message with non-finite values", throttle_duration_sec=5.0)
+        try:
+            self.odom, self.odom_stamp = inputs.odometry_pose(msg), msg.header.stamp
+        except inputs.BadInput as error:
+            self.drops.drop("/odom", error)
 
     def on_compass(self, msg: Imu) -> None:
-        q = msg.orientation
-        yaw = quaternion_to_yaw(q.x, q.y, q.z, q.w)
-        if math.isfinite(yaw):
-            self.compass_yaw = yaw
-            # sensor_msgs/Imu: the heading's variance is orientation_covariance[8]; -1 in [0] or 0 mean unknown.
-            variance = msg.orientation_covariance[8]
-            known = msg.orientation_covariance[0] != -1.0 and math.isfinite(variance) and variance > 0.0
-            self.compass_yaw_variance = float(variance) if known else UNKNOWN_YAW_VARIANCE
-        else:
-            self.get_logger().warning("dropped a compass reading with a non-finite heading", throttle_duration_sec=5.0)
+        try:
+            inputs.frame(msg.header.frame_id, COMPASS_FRAMES)
+            self.compass_yaw = inputs.yaw(msg.orientation, "orientation")
+        except inputs.BadInput as error:
+            self.drops.drop("/compass", error)
+            return
+        # sensor_msgs/Imu: the heading's variance is orientation_covariance[8]; -1 in [0] or 0 mean unknown.
+        variance = msg.orientation_covariance[8]
+        known = msg.orientation_covariance[0] != -1.0 and math.isfinite(variance) and variance > 0.0
+        self.compass_yaw_variance = float(variance) if known else UNKNOWN_YAW_VARIANCE
 
     def on_reads(self, msg: TagReadArray) -> None:
         """Keep the round with the odometry pose it was read at: the control step comes up to a period later,
         1 cm further at 0.2 m/s, which a fix taken at the step's pose would add to its error."""
-        tag_ids = [r.tag_id for r in msg.readings if r.antenna == self.params.floor_antenna]
+        floor_reads = inputs.round_reads(msg, self.drops, ports=(self.params.floor_antenna,))
+        tag_ids = [read.tag_id for read in floor_reads or ()]
         if tag_ids and self.odom is not None:
             self.reads.append((self.odom, tag_ids))
 
     def on_scan(self, msg: WifiScan) -> None:
+        """The latest scan, for the next locate; one the location server would refuse is dropped here."""
+        try:
+            inputs.frame(msg.header.frame_id, WIFI_FRAME)
+            inputs.wifi_rss(msg)
+        except inputs.BadInput as error:
+            self.drops.drop("/wifi/scan", error)
+            return
         self.scan = msg
 
     # -------------------------------------------------------------------------------------- goals
     def refusal(self, goal: NavigateToPoint.Goal) -> str | None:
-        if not (math.isfinite(goal.target.x) and math.isfinite(goal.target.y)):
-            return f"target ({goal.target.x}, {goal.target.y}) is not finite"
+        try:
+            inputs.point(goal.target.x, goal.target.y, "target")
+        except inputs.BadInput as error:
+            return str(error)
         return None
 
     def on_started(self, goal: ActiveGoal) -> None:
@@ -184,14 +202,30 @@ class TwoTierNavigatorNode(SteppedNode):
         self.call = None
         response = future.result()
         if call.request.kind == LOCATE:
-            position = (response.x, response.y) if response.success else None
-            if not response.success:
+            position, uncertainty_m = None, 0.0
+            if response.success:
+                try:
+                    position = inputs.point(response.x, response.y, "position")
+                    uncertainty_m = inputs.length(response.uncertainty_m, "uncertainty_m")
+                except inputs.BadInput as error:
+                    position = None
+                    self.drops.drop("/location_server/locate", f"answer taken as a failure: {error}")
+            else:
                 self.get_logger().warning(f"tier one failed: {response.message}")
-            decision = self.navigator.on_located(position, response.uncertainty_m)
+            decision = self.navigator.on_located(position, uncertainty_m)
         else:
-            tags = [MapTag(t.tag_id, (t.x, t.y), t.group_id, t.shape) for t in response.tags]
-            decision = self.navigator.on_tag_map(tags)
+            decision = self.navigator.on_tag_map(self.map_tags(response.tags))
         self.apply(decision)
+
+    def map_tags(self, tags: list[Any]) -> list[MapTag]:
+        """The tag map's answer, without tags beyond any map (dropped and counted)."""
+        kept = []
+        for index, tag in enumerate(tags):
+            try:
+                kept.append(MapTag(tag.tag_id, inputs.point(tag.x, tag.y, f"tags[{index}]"), tag.group_id, tag.shape))
+            except inputs.BadInput as error:
+                self.drops.drop("/location_server/tag_map", error)
+        return kept
 
     # ------------------------------------------------------------------------------------- output
     def drive(self, linear: float, angular: float) -> None:

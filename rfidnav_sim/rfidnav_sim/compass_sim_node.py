@@ -14,11 +14,14 @@ from typing import Any
 from nav_msgs.msg import Odometry
 from sensor_msgs.msg import Imu
 
+from rfidnav_common import inputs
+from rfidnav_common.frames import MAP_FRAME
 from rfidnav_common.geometry import yaw_to_quaternion
-from rfidnav_common.ros import SENSOR_QOS, declare_parameters, odometry_pose, run_node, seconds_of
+from rfidnav_common.ros import SENSOR_QOS, declare_parameters, run_node, seconds_of
 from rfidnav_common.seeding import rng_for
 from rfidnav_common.stepped_node import SteppedNode
 from rfidnav_common.transforms import publish_static_frames
+from rfidnav_sim.conversions import ground_truth_pose
 from rfidnav_sim.parameters import CompassParameters
 from rfidnav_sim.schedule import GroundTruthSchedule
 
@@ -31,16 +34,20 @@ class CompassSimNode(SteppedNode):
         self.params: CompassParameters = declare_parameters(self, CompassParameters)
         self.model = self.params.model()
         self.rng = rng_for(self.params.seed, "compass_sim")
+        self.drops = inputs.Drops(self.get_logger().warning)
         self.schedule = GroundTruthSchedule(1.0 / self.params.rate_hz)
         self.publisher = self.create_publisher(Imu, "/compass", SENSOR_QOS)
         publish_static_frames(self, self.params.frames())
         self.create_subscription(Odometry, "/sim/ground_truth", self.on_ground_truth, SENSOR_QOS)
 
     def on_ground_truth(self, msg: Odometry) -> None:
+        pose = ground_truth_pose(msg, MAP_FRAME, self.drops)   # the compass needs no world: the map's frame
+        if pose is None:
+            return
         now_s = seconds_of(msg.header.stamp)
         if not self.schedule.due(now_s):
             return
-        heading = self.model.measure(odometry_pose(msg)[2], self.rng)
+        heading = self.model.measure(pose[2], self.rng)
         reading = Imu()
         reading.header.stamp = msg.header.stamp
         reading.header.frame_id = self.params.frame_id

@@ -8,6 +8,7 @@ from nav_msgs.msg import Odometry
 from std_msgs.msg import ColorRGBA
 from visualization_msgs.msg import Marker, MarkerArray
 
+from rfidnav_common import inputs
 from rfidnav_common.base_safety import BaseEventRecord
 from rfidnav_common.geometry import yaw_to_quaternion
 from rfidnav_common.tag_lattice import Deployment
@@ -25,6 +26,16 @@ def base_event_message(event: BaseEventRecord, stamp: Time) -> BaseEvent:
     msg.header.stamp = stamp
     msg.header.frame_id = "base_link"
     return msg
+
+
+def ground_truth_pose(msg: Odometry, frame_id: str, drops: inputs.Drops) -> tuple[float, float, float] | None:
+    """(x, y, yaw) of a /sim/ground_truth message in the world's ``frame_id``; None, dropped and counted, when it is
+    in another frame or not a pose (rfidnav_common.inputs)."""
+    try:
+        return inputs.odometry_pose(msg, frame_id)
+    except inputs.BadInput as error:
+        drops.drop("/sim/ground_truth", error)
+        return None
 
 
 def odometry_message(pose: Pose2D, velocity: tuple[float, float], stamp: Time, frame_id: str) -> Odometry:

@@ -105,6 +105,10 @@ class DiffDriveBase:
         self.distance_travelled_m = 0.0
 
     def set_command(self, linear_mps: float, angular_radps: float) -> None:
+        """The commanded (v, w); finite, else a ValueError (a NaN would make the pose NaN for good). Beyond the
+        wheel limits is allowed: the wheels saturate (step), as a real base's do."""
+        if not (math.isfinite(linear_mps) and math.isfinite(angular_radps)):
+            raise ValueError(f"set_command: ({linear_mps}, {angular_radps}) is not a finite velocity")
         self.command = (linear_mps, angular_radps)
         self.command_age_s = 0.0
 

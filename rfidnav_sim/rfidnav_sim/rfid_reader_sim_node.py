@@ -13,11 +13,12 @@ from typing import Any
 
 from nav_msgs.msg import Odometry
 
-from rfidnav_common.ros import SENSOR_QOS, declare_parameters, odometry_pose, run_node, seconds_of
+from rfidnav_common import inputs
+from rfidnav_common.ros import SENSOR_QOS, declare_parameters, run_node, seconds_of
 from rfidnav_common.stepped_node import SteppedNode
 from rfidnav_common.transforms import publish_static_frames
 from rfidnav_msgs.msg import TagReadArray
-from rfidnav_sim.conversions import reads_message
+from rfidnav_sim.conversions import ground_truth_pose, reads_message
 from rfidnav_sim.parameters import ReaderParameters
 from rfidnav_sim.world import load_world
 
@@ -28,6 +29,8 @@ class RfidReaderSimNode(SteppedNode):
         super().__init__("rfid_reader_sim", **node_options)
         self.params: ReaderParameters = declare_parameters(self, ReaderParameters)
         world = load_world(self.params.world_file)
+        self.world_frame = world.frame_id
+        self.drops = inputs.Drops(self.get_logger().warning)
         self.reader = self.params.simulated_reader(world, self.params.seed)
         self.reads_pub = self.create_publisher(TagReadArray, "/rfid/reads", SENSOR_QOS)
         publish_static_frames(self, self.params.antenna_frames())
@@ -44,7 +47,10 @@ class RfidReaderSimNode(SteppedNode):
         return f"{polling.interval_s:g}-{polling.max_interval_s:g}"
 
     def on_ground_truth(self, msg: Odometry) -> None:
-        reads = self.reader.round_at(*odometry_pose(msg), seconds_of(msg.header.stamp))
+        pose = ground_truth_pose(msg, self.world_frame, self.drops)
+        if pose is None:
+            return
+        reads = self.reader.round_at(*pose, seconds_of(msg.header.stamp))
         if reads is None:
             return
         self.reads_pub.publish(reads_message(reads, msg.header.stamp, self.params.frame_id))

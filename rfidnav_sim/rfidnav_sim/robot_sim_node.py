@@ -13,13 +13,16 @@ Owns simulated time: steps the base at ``step_s`` and publishes /clock (at ``odo
   on; a /cmd_vel that answers a step is applied from the next. ``rtf`` is then a ceiling (0: none), and a run
   depends on its seed, not on the machine's load.
 
+A /cmd_vel beyond the base's limits (its wheel speed forward, both wheels at it in opposite directions turning) is
+scaled down to them and counted as clamped; one with a NaN or an infinity is dropped and counted
+(rfidnav_common.inputs).
+
 With ``start_paused`` the clock stays at zero until ``~/start`` (std_srvs/Trigger) is called, so slow process
 start-up costs no sim time.
 """
 
 from __future__ import annotations
 
-import math
 import time
 from typing import Any
 
@@ -30,6 +33,7 @@ from rosgraph_msgs.msg import Clock as ClockMsg
 from std_srvs.srv import Trigger
 from visualization_msgs.msg import MarkerArray
 
+from rfidnav_common import inputs
 from rfidnav_common.base_safety import BaseEventRecord
 from rfidnav_common.errors import ConfigError
 from rfidnav_common.frames import BASE_FRAME, ODOM_FRAME, Frame
@@ -59,6 +63,7 @@ class RobotSimNode(SteppedNode):
         self.world = load_world(p.world_file)
         self.base = p.base(self.world.wall_segments())
         self.steps = 0
+        self.drops = inputs.Drops(self.get_logger().warning)
         self.steps_per_odom = max(1, round(1.0 / (p.odom_rate_hz * p.step_s)))
         self.running = False   # until the end of construction: counted publishers and subscriptions call advance
         self.stepping = False  # within advance(): its own publications must not step again
@@ -102,10 +107,17 @@ class RobotSimNode(SteppedNode):
         return time_msg(self.steps * self.params.step_s)
 
     def on_cmd_vel(self, msg: Twist) -> None:
-        if not (math.isfinite(msg.linear.x) and math.isfinite(msg.angular.z)):
-            self.get_logger().warning("ignored /cmd_vel with a non-finite value", throttle_duration_sec=5.0)
+        limits = self.base.limits
+        try:
+            command = inputs.velocity(msg.linear.x, msg.angular.z, limits.max_wheel_speed_mps,
+                                      2.0 * limits.max_wheel_speed_mps / limits.track_width_m)
+        except inputs.BadInput as error:
+            self.drops.drop("/cmd_vel", error)
             return
-        self.base.set_command(msg.linear.x, msg.angular.z)
+        if command.clamped:
+            self.drops.clamp("/cmd_vel", f"({msg.linear.x:g} m/s, {msg.angular.z:g} rad/s) beyond the base's limits, "
+                                         f"scaled to ({command.linear_mps:g}, {command.angular_radps:g})")
+        self.base.set_command(command.linear_mps, command.angular_radps)
 
     def on_start(self, _request, response):
         if not self.running:

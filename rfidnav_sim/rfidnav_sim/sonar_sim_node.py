@@ -12,10 +12,12 @@ from typing import Any
 from nav_msgs.msg import Odometry
 from sensor_msgs.msg import Range
 
-from rfidnav_common.ros import SENSOR_QOS, declare_parameters, odometry_pose, run_node, seconds_of
+from rfidnav_common import inputs
+from rfidnav_common.ros import SENSOR_QOS, declare_parameters, run_node, seconds_of
 from rfidnav_common.seeding import rng_for
 from rfidnav_common.stepped_node import SteppedNode
 from rfidnav_common.transforms import publish_static_frames
+from rfidnav_sim.conversions import ground_truth_pose
 from rfidnav_sim.parameters import SonarParameters
 from rfidnav_sim.schedule import GroundTruthSchedule
 from rfidnav_sim.sonar_model import PAPER_LAYOUT
@@ -27,6 +29,8 @@ class SonarSimNode(SteppedNode):
         super().__init__("sonar_sim", **node_options)
         self.params: SonarParameters = declare_parameters(self, SonarParameters)
         world = load_world(self.params.world_file)
+        self.world_frame = world.frame_id
+        self.drops = inputs.Drops(self.get_logger().warning)
         self.model = self.params.model(world.wall_segments())
         publish_static_frames(self, self.params.frames())
         self.rng = rng_for(self.params.seed, "sonar_sim")
@@ -38,10 +42,13 @@ class SonarSimNode(SteppedNode):
                                f"{self.params.rate_hz:g} sweeps/s")
 
     def on_ground_truth(self, msg: Odometry) -> None:
+        pose = ground_truth_pose(msg, self.world_frame, self.drops)
+        if pose is None:
+            return
         now_s = seconds_of(msg.header.stamp)
         if not self.schedule.due(now_s):
             return
-        readings = self.model.ranges(*odometry_pose(msg), self.rng)
+        readings = self.model.ranges(*pose, self.rng)
         for rangefinder in PAPER_LAYOUT:
             reading = Range(radiation_type=Range.ULTRASOUND, field_of_view=2.0 * rangefinder.beam_half_angle_rad,
                             min_range=rangefinder.min_range_m, max_range=rangefinder.max_range_m,

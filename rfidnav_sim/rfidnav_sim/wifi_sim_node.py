@@ -13,11 +13,12 @@ from typing import Any
 
 from nav_msgs.msg import Odometry
 
-from rfidnav_common.ros import SENSOR_QOS, declare_parameters, odometry_pose, run_node, seconds_of
+from rfidnav_common import inputs
+from rfidnav_common.ros import SENSOR_QOS, declare_parameters, run_node, seconds_of
 from rfidnav_common.seeding import rng_for
 from rfidnav_common.stepped_node import SteppedNode
 from rfidnav_msgs.msg import WifiScan
-from rfidnav_sim.conversions import wifi_scan_message
+from rfidnav_sim.conversions import ground_truth_pose, wifi_scan_message
 from rfidnav_sim.parameters import WifiSimParameters
 from rfidnav_sim.schedule import GroundTruthSchedule
 from rfidnav_sim.wifi_model import WifiModel
@@ -29,6 +30,8 @@ class WifiSimNode(SteppedNode):
         super().__init__("wifi_sim", **node_options)
         self.params: WifiSimParameters = declare_parameters(self, WifiSimParameters)
         world = load_world(self.params.world_file)
+        self.world_frame = world.frame_id
+        self.drops = inputs.Drops(self.get_logger().warning)
         receiver = dataclasses.replace(world.wifi, scan_noise_sd_db=self.params.scan_noise_sd_db,
                                        sensitivity_dbm=self.params.sensitivity_dbm)
         self.model = WifiModel(world.access_points, world.wall_segments(), receiver, world.wifi_seed)
@@ -40,10 +43,13 @@ class WifiSimNode(SteppedNode):
                                f"a scan every {self.params.scan_period_s:g} s")
 
     def on_ground_truth(self, msg: Odometry) -> None:
+        pose = ground_truth_pose(msg, self.world_frame, self.drops)
+        if pose is None:
+            return
         now_s = seconds_of(msg.header.stamp)
         if not self.schedule.due(now_s):
             return
-        x, y, _ = odometry_pose(msg)
+        x, y, _ = pose
         readings = self.model.scan(x, y, self.rng)
         self.publisher.publish(wifi_scan_message(readings, msg.header.stamp, self.params.frame_id,
                                                  self.params.interface))

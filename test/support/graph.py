@@ -73,7 +73,7 @@ class Graph:
 def ground_truth(x: float, y: float, yaw_deg: float, stamp_s: float) -> Odometry:
     msg = Odometry()
     msg.header.stamp = time_msg(stamp_s)
-    msg.header.frame_id = "map"
+    msg.header.frame_id, msg.child_frame_id = "map", "base_link"
     msg.pose.pose.position.x, msg.pose.pose.position.y = x, y
     qx, qy, qz, qw = yaw_to_quaternion(math.radians(yaw_deg))
     msg.pose.pose.orientation.x, msg.pose.pose.orientation.y = qx, qy

@@ -23,6 +23,7 @@ from rclpy.node import Node
 from rfidnav_bringup.errors import ReadinessError
 from rfidnav_bringup.processes import DomainLease, child_environment
 from rfidnav_bringup.scenario import CONFIG_DIR
+from rfidnav_common.frames import WIFI_FRAME
 from rfidnav_common.robot_map import load_route_map
 from rfidnav_experiments.runners.two_tier import floor_extent, wifi_model
 from rfidnav_localization.fingerprint import RadioMap
@@ -94,6 +95,7 @@ def _round_trips(node: Node, executor: SingleThreadedExecutor, server: subproces
     for scan in samples:
         request = Locate.Request(scan=WifiScan(access_points=[AccessPointRss(bssid=b, rssi_dbm=v)
                                                               for b, v in scan.items()]))
+        request.scan.header.frame_id = WIFI_FRAME
         started = time.perf_counter()
         future = client.call_async(request)
         while not future.done():
