@@ -28,7 +28,7 @@ writer's ``flush()``: the chunk in progress finished, the stream flushed to the 
 message more than ``CHUNK_DURATION_NS`` of bag time after the chunk's first, or once it holds ``CHUNK_SIZE``
 bytes, or at a ``checkpoint()`` (the recorder's, every wall second). What a killed recorder loses is the chunk
 in progress: at most a second of bag time, or a wall second, whichever is shorter. metadata.yaml is written when
-the bag is opened and rewritten (a temporary file, then ``os.replace``: a reader never sees half of it) at every
+the bag is opened and rewritten (rfidnav_common.files.write_atomically: a reader never sees half of it) at every
 checkpoint, split and close; it counts what is in written chunks, so after a crash it says what is on disk up to
 the last checkpoint. Chunks are not fsync'ed: the operating system keeps what a killed process wrote, a power
 cut may not.
@@ -41,7 +41,6 @@ that) and raises :class:`BagWriteError`; the files keep every chunk written befo
 from __future__ import annotations
 
 import contextlib
-import os
 from collections import Counter
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -55,6 +54,7 @@ from rosbags.interfaces import Qos
 
 from rfidnav_bag.errors import BagError, BagWriteError
 from rfidnav_bag.salvage import scan_file
+from rfidnav_common.files import write_atomically
 
 __all__ = ["CHUNK_DURATION_NS", "CHUNK_SIZE", "COMPRESSIONS", "MIN_SPLIT_SIZE", "BagWriter", "StorageOptions",
            "Topic"]
@@ -341,9 +341,7 @@ class BagWriter:
 
     def _write_metadata(self) -> None:
         """metadata.yaml through a temporary file: a reader sees the old one or the new one, never half."""
-        temporary = self.path / "metadata.yaml.tmp"
-        temporary.write_text(_dump({"rosbag2_bagfile_information": self._information()}), encoding="utf-8")
-        os.replace(temporary, self.path / "metadata.yaml")
+        write_atomically(self.path / "metadata.yaml", _dump({"rosbag2_bagfile_information": self._information()}))
         self.metadata_current = True
 
     def _stop(self, error: OSError) -> BagWriteError:
