@@ -396,6 +396,7 @@ def run_killing_the_recorder(out: Path, scenario: str) -> tuple[int, int, str]:
             while latest[0] < KILL_AT_NS and run.poll() is None:
                 assert time.monotonic() < deadline, "the run's clock never reached the kill"
                 executor.spin_once(timeout_sec=0.01)
+            assert run.poll() is None, "".join(head) + run.stdout.read()
             recorders = [p for p in psutil.Process(run.pid).children(recursive=True)
                          if any(part.endswith("/recorder") for part in p.cmdline())]
             assert len(recorders) == 1, recorders

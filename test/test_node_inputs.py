@@ -182,16 +182,29 @@ def reads(*readings: TagReading) -> TagReadArray:
     return framed(TagReadArray(readings=list(readings)), "base_link")
 
 
-def read_cases(tag: str = "readings[0]", unknown_tag: str = "ZZ-UNKNOWN", one_port: bool = False) -> list[Case]:
+def read_cases(tag: str = "readings[0]", unknown_tag: str = "ZZ-UNKNOWN", one_port: bool = False,
+               needs: tuple[str, ...] = ()) -> list[Case]:
     """What a read can carry: phases of any size are wrapped (no I/Q: the phase is taken), I/Q of any size give a
-    phase; the rest has a physical range. A node that reads ``one_port`` ignores a read of port 0 as another's."""
+    phase; the rest has a physical range. NaN is "not reported" (the LLRP driver's convention): dropped by a node
+    that ``needs`` that measurement, taken by the others. A node that reads ``one_port`` ignores a read of port 0
+    as another's."""
+    def unreported(name: str) -> str:
+        return DROP if name in needs else ACCEPT
+
     no_iq = [Case(f"{tag}.phase_rad={label} (no I/Q)",
                   lambda m, value=value: (setting(f"{tag}.i", 0.0)(m), setting(f"{tag}.q", 0.0)(m),
                                           setting(f"{tag}.phase_rad", value)(m)), ACCEPT) for label, value in HUGE]
-    return (no_iq + cases(f"{tag}.phase_rad", NON_FINITE, DROP)
+    no_phase = Case(f"{tag}.i/q/phase_rad=nan (not reported)",
+                    lambda m: [setting(f"{tag}.{name}", NAN)(m) for name in ("i", "q", "phase_rad")],
+                    unreported("phase_rad"))
+    infinite = (("inf", INF), ("-inf", -INF))
+    return (no_iq + [no_phase] + cases(f"{tag}.phase_rad", infinite, DROP)
+            + cases(f"{tag}.phase_rad", (("nan (I/Q given)", NAN),), ACCEPT)
             + numbers(f"{tag}.i", huge=ACCEPT) + numbers(f"{tag}.q", huge=ACCEPT)
-            + numbers(f"{tag}.rssi_dbm") + cases(f"{tag}.rssi_dbm", (("+200", 200.0),), DROP)
-            + cases(f"{tag}.frequency_hz", EXTREMES + (("0", 0.0), ("-915e6", -915e6)), DROP)
+            + cases(f"{tag}.rssi_dbm", HUGE + infinite + (("+200", 200.0),), DROP)
+            + cases(f"{tag}.rssi_dbm", (("nan", NAN),), unreported("rssi_dbm"))
+            + cases(f"{tag}.frequency_hz", HUGE + infinite + (("0", 0.0), ("-915e6", -915e6)), DROP)
+            + cases(f"{tag}.frequency_hz", (("nan", NAN),), unreported("frequency_hz"))
             + cases(f"{tag}.antenna", (("0", 0),), ACCEPT if one_port else DROP)
             + cases(f"{tag}.antenna", (("65535", UINT16_MAX),), ACCEPT)
             + cases(f"{tag}.tag_id", (("''", ""),), DROP) + cases(f"{tag}.tag_id", (("unknown", unknown_tag),), ACCEPT)
@@ -299,7 +312,8 @@ POINT_GOAL_TAKEN = goal_cases([("target.x", (("-0.0", -0.0),), ACCEPT)])     # l
 SPECS = [
     NodeSpec("heading_controller", lambda graph, _tmp: HeadingControllerNode(
         context=graph.context, parameter_overrides=stepped(map_file=str(CONFIG / "maps/line_follow.yaml"))),
-        [TopicInput("/rfid/reads", lambda: reads(read("C1", 1, 1.2), read("C1", 2, 1.0)), read_cases()),
+        [TopicInput("/rfid/reads", lambda: reads(read("C1", 1, 1.2), read("C1", 2, 1.0)),
+                    read_cases(needs=("phase_rad", "frequency_hz"))),
          GoalInput("/follow_tag_route", FollowTagRoute, lambda: FollowTagRoute.Goal(tag_ids=["C1"]), [
              Case("tag_ids=[]", setting("tag_ids", []), REFUSE),
              Case("tag_ids=[unknown]", setting("tag_ids", ["ZZ"]), REFUSE),

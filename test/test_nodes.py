@@ -172,9 +172,9 @@ def test_controller_drops_and_counts_non_finite_reads_and_stays_up(graph: Graph)
         # The left antenna's only read of the target is bad: the target counts as unheard this round.
         [reading("C1", 1, 0.0, phase_rad=NAN, i=0.0, q=0.0), reading("C1", 2, 1.0)],
         # A bad read of the floor tag must not count as arriving under C1.
-        target_round("C1", -0.3) + [reading("F1", 3, 1.0, i=-INF), reading("F1", 3, 1.0, rssi_dbm=NAN)],
+        target_round("C1", -0.3) + [reading("F1", 3, 1.0, i=-INF), reading("F1", 3, 1.0, rssi_dbm=INF)],
         # Nothing usable at all.
-        [reading("C1", 1, 0.0, i=NAN, q=NAN), reading("C1", 2, 0.0, frequency_hz=INF),
+        [reading("C1", 1, 0.0, i=NAN, q=NAN, phase_rad=NAN), reading("C1", 2, 0.0, frequency_hz=INF),
          reading("C2", 1, 0.0, frequency_hz=NAN)],
     ]
     bad_reads = 2 + 1 + 2 + 3

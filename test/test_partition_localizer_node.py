@@ -159,7 +159,7 @@ def test_non_finite_reads_junk_ids_and_bad_odometry_are_dropped_counted_and_surv
     node = harness.node
     good = tag_id((0, 0))
     other = tag_id((1, 0))
-    status = harness.send_round([reading(good), reading(other, rssi_dbm=math.nan), reading(other, i=math.inf),
+    status = harness.send_round([reading(good), reading(other, rssi_dbm=math.inf), reading(other, i=math.inf),
                                  reading("NOT-A-TAG"), reading("E2801160600002054E7C1B64"),
                                  reading(good, antenna=2, q=math.nan)])   # not the floor antenna: not counted
     assert node.drops.dropped("/rfid/reads") == 2
@@ -177,7 +177,7 @@ def test_non_finite_reads_junk_ids_and_bad_odometry_are_dropped_counted_and_surv
     assert list(status.partition_tag_ids) == [good]
 
     # Still alive and localizing after all of it.
-    status = harness.send_round([reading(other, phase_rad=math.nan)])
+    status = harness.send_round([reading(other, phase_rad=math.inf)])
     assert node.drops.dropped("/rfid/reads") == 3 and not list(status.partition_tag_ids) and status.position_valid
     status = harness.send_round([reading(other)])
     assert list(status.partition_tag_ids) == [other]
