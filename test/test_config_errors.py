@@ -139,8 +139,8 @@ CASES = {
                           "params: ../params/reader_uhf_2ant.yaml, overrides: {rate_hz: fast}}"),
         SCENARIO, "nodes.rfid_reader.overrides.rate_hz", ("number",)),
     "validate() error naming no single field": Case(
-        lambda root: edit(root / "params/reader_uhf_2ant.yaml", "hop_dwell_s: 0.2", "hop_dwell_s: 0.0"),
-        "params/reader_uhf_2ant.yaml", "rfid_reader_sim.ros__parameters", ("hop_dwell_s", "positive")),
+        lambda root: edit(root / "params/flc_tuned.yaml", "right_antenna: 2", "right_antenna: 1"),
+        "params/flc_tuned.yaml", "heading_controller.ros__parameters", ("left_antenna and right_antenna", "differ")),
     "unknown package": Case(
         lambda root: edit(root / SCENARIO, "package: rfidnav_control,", "package: nope_pkg,"),
         SCENARIO, "nodes.heading_controller.package", ("unknown package 'nope_pkg'",)),
@@ -282,17 +282,6 @@ def test_cli_run_with_an_unknown_package_names_the_scenario_field_and_starts_not
     assert str((config / SCENARIO).resolve()) in lines[0]
     assert "nodes.heading_controller.package" in lines[0] and "nope_pkg" in lines[0]
     assert not out.exists() or not any(out.iterdir())
-
-
-def test_require_positive_names_the_first_field_that_is_not() -> None:
-    from types import SimpleNamespace
-
-    from rfidnav_common.config import require_positive
-
-    require_positive(SimpleNamespace(a=1.0, b=2), "a", "b")
-    for bad in (0.0, -1.0, float("nan"), float("inf")):
-        with pytest.raises(ValueError, match=rf"^b: must be positive, got {bad}"):
-            require_positive(SimpleNamespace(a=1.0, b=bad), "a", "b")
 
 
 def test_a_validate_error_names_its_field_as_data_and_reads_as_before() -> None:

@@ -24,7 +24,7 @@ from rclpy.parameter import Parameter
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.signals import SignalHandlerOptions
 
-from rfidnav_common.config import parameters_from_mapping
+from rfidnav_common.config import did_you_mean, parameters_from_mapping
 from rfidnav_common.errors import ConfigError, RfidnavError
 from rfidnav_common.geometry import quaternion_to_yaw
 
@@ -214,16 +214,17 @@ def interface_class(type_name: str) -> type:
 
 
 def fill_message(message: Any, values: dict[str, Any], where: str) -> Any:
-    """Set ``message``'s fields from a plain mapping (nested mappings fill nested messages)."""
+    """Set ``message``'s fields from a plain mapping (nested mappings fill nested messages, built with their
+    fields' types and ranges checked, as ``message`` was if it was built with ``check_fields=True``)."""
     fields = message.get_fields_and_field_types()
     for name, value in values.items():
         if name not in fields:
             raise ConfigError(where, name, f"no such field in {type(message).__name__} "
-                              f"(fields: {', '.join(fields)})")
+                              f"({did_you_mean(str(name), fields)}fields: {', '.join(fields)})")
         current = getattr(message, name)
         try:
             if isinstance(value, dict) and hasattr(current, "get_fields_and_field_types"):
-                fill_message(current, value, f"{where}.{name}")
+                setattr(message, name, fill_message(type(current)(check_fields=True), value, f"{where}.{name}"))
             else:
                 setattr(message, name, float(value) if isinstance(current, float) and isinstance(value, int)
                         else value)
