@@ -76,6 +76,15 @@ def wifi_model(world: World) -> WifiModel:
     return WifiModel(world.access_points, world.wall_segments(), settings, world.wifi_seed)
 
 
+MAX_GRID_POINTS = 100_000     # a grid survey's points at most (~0.5 ms each)
+
+
+def grid_points(world: World, spacing_m: float) -> float:
+    """How many points a survey on a ``spacing_m`` grid visits (a float: it may be far beyond any integer loop)."""
+    width, height = floor_extent(world)
+    return max(0.0, math.ceil(width / spacing_m - 0.5)) * max(0.0, math.ceil(height / spacing_m - 0.5))
+
+
 def grid_radio_map(world: World, spacing_m: float, rng: np.random.Generator, scans_per_point: int = 3) -> RadioMap:
     """A site survey on a regular grid at known positions (the usual manual way): each fingerprint is the mean
     of a few scans, as surveyors average."""
@@ -230,6 +239,18 @@ def survey(world: World, robot_map: RouteMap, grid_spacing_m: float | None,
     if grid_spacing_m is not None:
         if not grid_spacing_m > 0.0:
             raise ConfigError("--grid", "", f"must be a positive spacing, got {grid_spacing_m}")
+        if not world.walls:
+            raise ConfigError("--grid", "", f"the world {world.name} has no walls: a grid survey covers the floor "
+                                            "they enclose")
+        points = grid_points(world, grid_spacing_m)
+        if points > MAX_GRID_POINTS:
+            width, height = floor_extent(world)
+            raise ConfigError("--grid", "", f"a {grid_spacing_m:g} m grid over {world.name}'s {width:g} x {height:g} m "
+                                            f"floor has {points:.3g} points, more than {MAX_GRID_POINTS:,} (about a "
+                                            "minute of surveying): take a wider spacing")
+        if points < 1:
+            raise ConfigError("--grid", "", f"a {grid_spacing_m:g} m grid has no point on {world.name}'s floor "
+                                            f"({' x '.join(f'{side:g}' for side in floor_extent(world))} m)")
         fingerprints = list(grid_radio_map(world, grid_spacing_m, rng_for(seed, "grid survey")).fingerprints)
         return fingerprints, f"site survey of {world.name} on a {grid_spacing_m:g} m grid, seed {seed}"
     if not robot_map.tag_groups:
