@@ -15,6 +15,7 @@ import os
 import subprocess
 import sys
 import tempfile
+import typing
 from collections.abc import Callable
 from importlib.metadata import entry_points
 from pathlib import Path
@@ -109,6 +110,16 @@ start_seconds = checked_number(float, "a number of seconds", lambda value: 0.0 <
                                lambda text: f"expected seconds from 0 to {MAX_OPTION_S:g}, got {text}")
 
 
+def topic_name(text: str) -> str:
+    """An argparse ``type`` for a topic name ROS accepts (rclpy's own check)."""
+    from rfidnav_common.ros import topic_name_problem  # here, not at the top: it loads rclpy
+
+    problem = topic_name_problem(text, "rfidnav")
+    if problem is not None:
+        raise argparse.ArgumentTypeError(f"'{text}' is not a valid ROS topic name: {problem}")
+    return text
+
+
 def output_folder(text: str) -> Path:
     """An argparse ``type`` for a folder to write into (created if missing): not a file, not under one, and one this
     user can create folders in (tried: /proc and /sys accept no folders, whatever the permissions say)."""
@@ -183,9 +194,17 @@ def add_run_options(parser: argparse.ArgumentParser, default_rtf: float) -> None
                         help=f"serve the running graph to Foxglove over its WebSocket protocol (port {LIVE_PORT})")
 
 
+class OneLineParser(argparse.ArgumentParser):
+    """argparse's parser, a bad option told in one line (``rfidnav run: error: argument --out: ...``) rather than
+    after the verb's usage, which ``--help`` shows; its sub-parsers (every verb's) are of this class too."""
+
+    def error(self, message: str) -> typing.NoReturn:
+        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+
+
 def parser() -> tuple[argparse.ArgumentParser, dict[str, Handler]]:
     """The command line and the handler of each verb, this package's and those the entry points add."""
-    top = argparse.ArgumentParser(prog="rfidnav", description="RFID navigation for ROS 2 Jazzy (see README.md)")
+    top = OneLineParser(prog="rfidnav", description="RFID navigation for ROS 2 Jazzy (see README.md)")
     verbs = top.add_subparsers(dest="verb", required=True)
     verbs.add_parser("setup", help="create/refresh .venv, build rfidnav_msgs, install packages")
     demo = verbs.add_parser("demo", help=f"the {DEMO_SCENARIO} scenario over DDS, about a minute")
@@ -200,7 +219,7 @@ def parser() -> tuple[argparse.ArgumentParser, dict[str, Handler]]:
     replay = verbs.add_parser("replay", help="republish a bag")
     replay.add_argument("bag", type=Path)
     replay.add_argument("--rate", type=option_rate, default=1.0, help="playback speed (1: as recorded)")
-    replay.add_argument("--topics", nargs="+", default=[])
+    replay.add_argument("--topics", nargs="+", type=topic_name, default=[], help="republish only these topics")
     replay.add_argument("--loop", action="store_true")
     replay.add_argument("--clock", action="store_true", help="publish /clock from the bag's time")
     replay.add_argument("--start", type=start_seconds, default=0.0, help="skip the first S seconds")
@@ -217,7 +236,7 @@ def parser() -> tuple[argparse.ArgumentParser, dict[str, Handler]]:
     draw.add_argument("map", type=Path)
     draw.add_argument("--out", type=output_file, help="the PNG to write (default: beside the map, .png)")
     echo = verbs.add_parser("echo", help="print a topic's messages as YAML (checking a driver alone)")
-    echo.add_argument("topic")
+    echo.add_argument("topic", type=topic_name)
     echo.add_argument("--count", type=count_value(MAX_ECHO_COUNT), default=5, help="messages to print, then exit 0")
     echo.add_argument("--wait", type=option_seconds, default=10.0, help="seconds to wait for a publisher")
     echo.add_argument("--timeout", type=option_seconds, default=30.0,

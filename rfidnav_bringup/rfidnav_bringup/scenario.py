@@ -25,6 +25,7 @@ from rfidnav_common.config import (
     check_number,
     node_parameter_section,
     parameters_from_mapping,
+    type_name,
     typed_values,
 )
 from rfidnav_common.errors import ConfigError
@@ -33,6 +34,7 @@ from rfidnav_common.topological_map import TopologicalMap, load_topological_map
 from rfidnav_control.parameters import HeadingControllerParameters, WallFollowerParameters
 from rfidnav_drivers.parameters import CreateBaseParameters, LlrpReaderParameters, WifiScannerParameters
 from rfidnav_localization.parameters import LocationServerParameters, PartitionLocalizerParameters
+from rfidnav_localization.radio_map_file import load_radio_map
 from rfidnav_planning.parameters import (
     MissionExecutorParameters,
     PartitionNavigatorParameters,
@@ -240,6 +242,8 @@ def load_scenario(name_or_path: str, swaps: dict[str, str] | None = None,
     for role, file in (param_files or {}).items():
         if role not in nodes:
             raise ConfigError("--params", role, f"no role '{role}' in {path.name} (roles: {', '.join(nodes)})")
+        if not Path(file).is_file():
+            raise ConfigError("--params", role, f"parameter file not found: {Path(file).resolve()}")
         nodes[role] = replace(nodes[role], param_files=(Path(file).resolve(),))
     if sum(spec.clock_source for spec in nodes.values()) > 1:
         raise section.error("nodes", "only one node can be the clock_source")
@@ -271,6 +275,7 @@ def load_scenario(name_or_path: str, swaps: dict[str, str] | None = None,
     if scenario.mission.server is not None and scenario.mission.server not in nodes:
         raise mission_file.error("server", f"no role '{scenario.mission.server}' (roles: {', '.join(nodes)})")
     goal_class = _check_action(scenario, mission_file)
+    _check_server(scenario, mission_file)
     _check_goal_numbers(scenario.mission.goal, mission, "")
     _check_route(scenario, mission)
     _check_goal_area(scenario, mission)
@@ -280,7 +285,6 @@ def load_scenario(name_or_path: str, swaps: dict[str, str] | None = None,
     parameters = {role: node_parameters(scenario, spec, seed=0, rtf=1.0) for role, spec in scenario.nodes.items()}
     _check_antenna_ports(scenario, parameters)
     _check_speeds(scenario, parameters)
-    _check_server(scenario, parameters, mission_file)
     return scenario
 
 
@@ -353,17 +357,21 @@ def _program(command: tuple[str, ...], source: str, field: str) -> tuple[str, ..
 
 
 def _robot_map(map_file: Path) -> dict[str, Any]:
-    """The scenario's map: a topological map (paper 004) if it has ``nodes``, else a route map."""
+    """The scenario's map: a topological map (paper 004) if it has ``nodes``, else a route map, with the radio map
+    it names read (the location server starts from it)."""
     if Section.from_file(map_file).has("nodes"):
         return {"route_map": None, "topological_map": load_topological_map(map_file)}
-    return {"route_map": load_route_map(map_file)}
+    route_map = load_route_map(map_file)
+    if route_map.radio_map_file is not None:
+        load_radio_map(route_map.radio_map_file)
+    return {"route_map": route_map}
 
 
 def _check_action(scenario: Scenario, mission: Section) -> type:
     """The action name is a valid ROS name and the type an installed action; its Goal class."""
-    from rfidnav_common.ros import interface_class  # here, not at the top: it loads rclpy (~0.3 s)
+    from rfidnav_common.ros import interface_class, topic_name_problem  # here, not at the top: they load rclpy
 
-    problem = _name_problem(scenario.mission.action)
+    problem = topic_name_problem(scenario.mission.action, ORCHESTRATOR_NODE)
     if problem is not None:
         raise mission.error("action", f"'{scenario.mission.action}' is not a valid ROS name: {problem}")
     action_type = scenario.mission.action_type
@@ -376,19 +384,11 @@ def _check_action(scenario: Scenario, mission: Section) -> type:
     return action.Goal
 
 
-def _name_problem(name: str) -> str | None:
-    """Why ``name`` is no valid action (topic) name for the orchestrator's node, in rclpy's words; None if it is."""
-    from rclpy.exceptions import InvalidTopicNameException
+def _expanded(name: str) -> str:
+    """An action name as the orchestrator's node resolves it (``follow_tag_route`` is ``/follow_tag_route``)."""
     from rclpy.expand_topic_name import expand_topic_name
-    from rclpy.validate_full_topic_name import validate_full_topic_name
 
-    try:
-        validate_full_topic_name(expand_topic_name(name, ORCHESTRATOR_NODE, "/"))
-    except InvalidTopicNameException as error:          # "Invalid topic name: PROBLEM:\n  'NAME'\n    ^"
-        return str(error).splitlines()[0].removeprefix("Invalid topic name: ").rstrip(":")
-    except ValueError as error:                          # "topic name 'NAME' is invalid: PROBLEM, at FILE:LINE"
-        return str(error).partition("is invalid: ")[2].rpartition(", at ")[0] or str(error)
-    return None
+    return expand_topic_name(name, ORCHESTRATOR_NODE, "/")
 
 
 def _check_goal(scenario: Scenario, goal_class: type, mission: Section) -> None:
@@ -399,8 +399,9 @@ def _check_goal(scenario: Scenario, goal_class: type, mission: Section) -> None:
     goal = scenario.mission.goal
     try:
         fill_message(goal_class(check_fields=True), goal, "goal")
-    except ConfigError as error:
-        raise mission.error("goal", f"{error.field}: {error.problem}") from None
+    except ConfigError as error:       # error.source: "goal", or "goal.target" for a field of a nested message
+        where = ".".join((*error.source.split(".")[1:], error.field))
+        raise mission.error("goal", f"{where}: {error.problem}") from None
     required = REQUIRED_GOAL_FIELDS.get(scenario.mission.action_type)
     if required is not None and required not in goal:
         raise mission.error("goal", f"{required}: missing ({scenario.mission.action_type} needs it)")
@@ -419,9 +420,9 @@ def _check_goal_numbers(values: Any, mission: Section, where: str) -> None:
             _check_goal_numbers(value, mission, f"{where}[{index}]")
     elif isinstance(values, (int, float)) and not isinstance(values, bool):
         try:
-            check_number(values, mission.source, mission.field("goal"))
+            check_number(values, mission.source, where)
         except ConfigError as error:
-            raise mission.error("goal", f"{where}: {error.problem}") from None
+            raise mission.error("goal", f"{error.field}: {error.problem}") from None
 
 
 def _check_map_in_world(scenario: Scenario) -> None:
@@ -429,27 +430,24 @@ def _check_map_in_world(scenario: Scenario) -> None:
     ceiling and arrival floor tags, a tag group, a topological map's wall tags. One error names the map's field."""
     if SIMULATED_READER not in {(spec.package, spec.executable) for spec in scenario.nodes.values()}:
         return
-    world, source = scenario.world, str(scenario.map_file)
-    where = f"(not in the world {scenario.world_file})"
+    world, source, where = scenario.world, str(scenario.map_file), f"not in the world {scenario.world_file}"
     if scenario.route_map is not None:
         tags = {tag.tag_id for tag in world.tags}
         for ceiling, floor in scenario.route_map.arrival_tags.items():
             for tag in (ceiling, floor):
                 if tag not in tags:
-                    raise ConfigError(source, f"arrival_tags.{ceiling}", f"tag '{tag}' is no tag of the world {where}")
+                    raise ConfigError(source, f"arrival_tags.{ceiling}", f"tag '{tag}' is {where}")
         groups = {group.group_id for group in world.tag_groups}
         for index, group in enumerate(scenario.route_map.tag_groups):
             if group.group_id not in groups:
-                raise ConfigError(source, f"tag_groups[{index}].id",
-                                  f"tag group '{group.group_id}' is no tag group of the world {where}")
+                raise ConfigError(source, f"tag_groups[{index}].id", f"tag group '{group.group_id}' is {where}")
     if scenario.topological_map is not None:
         wall_tags = {tag.tag_id for tag in world.wall_tags}
         for name, node in scenario.topological_map.nodes.items():
             for side, hallway in node.hallways.items():
                 missing = [tag for tag in hallway.tags if tag not in wall_tags]
                 if missing:
-                    raise ConfigError(source, f"nodes.{name}.{side}.tags",
-                                      f"tag '{missing[0]}' is no wall tag of the world {where}")
+                    raise ConfigError(source, f"nodes.{name}.{side}.tags", f"wall tag '{missing[0]}' is {where}")
 
 
 def _check_goal_node(scenario: Scenario, mission: Section) -> None:
@@ -457,6 +455,8 @@ def _check_goal_node(scenario: Scenario, mission: Section) -> None:
     node = scenario.mission.goal.get("goal_node")
     if node is None:
         return
+    if not isinstance(node, str):
+        raise mission.error("goal", f"goal_node: expected a node name, got {type_name(node)}")
     topological_map = scenario.topological_map
     if topological_map is None:
         raise mission.error("goal", f"goal_node: the map {scenario.map_file} is not a topological map")
@@ -542,16 +542,18 @@ def _check_speeds(scenario: Scenario, parameters: dict[str, Any]) -> None:
                                                f"({_origin(scenario, base_role, limit_name)})")
 
 
-def _check_server(scenario: Scenario, parameters: dict[str, Any], mission: Section) -> None:
+def _check_server(scenario: Scenario, mission: Section) -> None:
     """The role serving the mission (mission.server, else the first non-simulator role), when it is one of our
-    action servers (its parameters' ``ACTION``), serves the mission's action name and type."""
+    action servers (its parameter class's ``ACTION``), serves the mission's action name and type."""
     role = scenario.mission.server or next((role for role, spec in scenario.nodes.items() if not spec.sim), None)
-    served = getattr(parameters.get(role), "ACTION", None) if role is not None else None
+    spec = scenario.nodes.get(role or "")
+    known = KNOWN_NODES.get((spec.package or "", spec.executable or "")) if spec is not None else None
+    served = getattr(known[1], "ACTION", None) if known is not None else None
     if role is None or served is None:
         return
     name, action_type = served
     node = scenario.nodes[role].name or role
-    if scenario.mission.action != name:
+    if _expanded(scenario.mission.action) != name:
         raise mission.error("action", f"{node} (role {role}) serves {name}, not {scenario.mission.action}")
     if scenario.mission.action_type != action_type:
         raise mission.error("type", f"{node} (role {role}) serves {action_type}, not {scenario.mission.action_type}")

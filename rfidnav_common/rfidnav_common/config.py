@@ -392,8 +392,8 @@ def _number_text(value: float | None) -> str:
 
 
 # The ranges most parameters share (MAX_* above: the bounds of what is plausible).
-POSITIVE = Limits(0.0, MAX_MAGNITUDE, low_open=True)
-NON_NEGATIVE = Limits(0.0, MAX_MAGNITUDE)
+POSITIVE = Limits(0.0, low_open=True)                    # (every number is within MAX_MAGNITUDE, when read)
+NON_NEGATIVE = Limits(0.0)
 FRACTION = Limits(0.0, 1.0)                              # [0, 1]
 PROBABILITY = Limits(0.0, 1.0, high_open=True)           # [0, 1): at 1 nothing would ever be read
 DURATION_S = Limits(0.0, MAX_DURATION_S, low_open=True)
@@ -404,8 +404,8 @@ YAW_DEG = Limits(-360.0, 360.0)
 YAW_RATE_RADPS = Limits(0.0, 10.0, low_open=True)        # more than a turn and a half a second: no indoor robot
 DBM = Limits(-200.0, 100.0)                              # radio powers, from below any noise floor to 10 kW
 PORT = Limits(1, MAX_PORT)
-SEED = Limits(0, INT64_MAX)
-AT_LEAST_ONE = Limits(1, INT64_MAX)
+SEED = Limits(0)                                         # (every integer fits int64, when read)
+AT_LEAST_ONE = Limits(1)
 
 
 def param(doc: str, default: Any, limits: Limits | None = None) -> Any:

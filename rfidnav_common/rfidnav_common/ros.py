@@ -213,6 +213,22 @@ def interface_class(type_name: str) -> type:
     return found
 
 
+def topic_name_problem(name: str, node_name: str) -> str | None:
+    """Why ``name`` is no valid topic (or action, service) name for node ``node_name``, in rclpy's words ("topic
+    name must not contain repeated '/'"); None when it is one."""
+    from rclpy.exceptions import InvalidTopicNameException
+    from rclpy.expand_topic_name import expand_topic_name
+    from rclpy.validate_full_topic_name import validate_full_topic_name
+
+    try:
+        validate_full_topic_name(expand_topic_name(name, node_name, "/"))
+    except InvalidTopicNameException as error:          # "Invalid topic name: PROBLEM:\n  'NAME'\n    ^"
+        return str(error).splitlines()[0].removeprefix("Invalid topic name: ").rstrip(":")
+    except ValueError as error:                          # "topic name 'NAME' is invalid: PROBLEM, at FILE:LINE"
+        return str(error).partition("is invalid: ")[2].rpartition(", at ")[0] or str(error)
+    return None
+
+
 def fill_message(message: Any, values: dict[str, Any], where: str) -> Any:
     """Set ``message``'s fields from a plain mapping (nested mappings fill nested messages, built with their
     fields' types and ranges checked, as ``message`` was if it was built with ``check_fields=True``)."""

@@ -171,13 +171,14 @@ def run_reproduce(args: argparse.Namespace) -> int:
 def run_survey(args: argparse.Namespace) -> int:
     from rfidnav_bringup.scenario import load_scenario
     from rfidnav_common.progress import stage
-    from rfidnav_experiments.runners.two_tier import survey
+    from rfidnav_experiments.runners.two_tier import check_survey, survey
     from rfidnav_localization.radio_map_file import write_radio_map
 
     scenario = load_scenario(args.scenario)
     if scenario.route_map is None:
         raise ConfigError(str(scenario.map_file), "", "a survey needs a route map with tag_groups (this is a "
                                                      "topological map)")
+    check_survey(scenario.world, scenario.route_map, scenario.map_file, args.grid)
     with stage(f"survey {scenario.name}"):
         fingerprints, description = survey(scenario.world, scenario.route_map, args.grid, args.seed)
     write_radio_map(args.out, fingerprints, description)
