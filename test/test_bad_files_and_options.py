@@ -218,6 +218,8 @@ FILE_CASES: dict[str, FileCase] = {
     "scenario that is a list": FileCase(LF, written(S_LF, "- name: x\n"), S_LF, "", ("expected a mapping",)),
     "scenario YAML syntax": FileCase(LF, replaced(S_LF, GOAL_LF, "goal: {tag_ids: [C1, C2}"), S_LF, "",
                                      ("not valid YAML", "line 14")),
+    "scenario nested 5000 deep": FileCase(LF, replaced(S_LF, "metrics: [tracking]", "metrics: [tracking]\ndeep: "
+                                                  + "[" * 5000 + "]" * 5000), S_LF, "", ("nested too deeply",)),
     "no scenario name": FileCase(LF, replaced(S_LF, "name: line_follow_90\n", ""), S_LF, "name", ("missing",)),
     "scenario name a number": FileCase(LF, replaced(S_LF, "name: line_follow_90", "name: 90"), S_LF, "name",
                                        ("non-empty string",)),
@@ -631,6 +633,8 @@ FILE_CASES: dict[str, FileCase] = {
     "--goal key twice": FileCase(LF, lambda root: None, "--goal", "", ("duplicate key 'tag_ids'",),
                                  ("--goal", "{tag_ids: [C1], tag_ids: [C2]}")),
     "--goal a list": FileCase(LF, lambda root: None, "--goal", "", ("mapping",), ("--goal", "[C1]")),
+    "--goal that contains itself": FileCase(LF, lambda root: None, "--goal", "", ("alias *a inside the node",),
+                                            ("--goal", "{tag_ids: &a [C1, *a]}")),
     "--goal field typo": FileCase(LF, lambda root: None, "--goal", "mission.goal", ("tag_idz", "did you mean"),
                                   ("--goal", "{tag_idz: [H1]}")),
     "--goal tag not in the map": FileCase(LF, lambda root: None, "--goal", "mission.goal", ("C9",),

@@ -35,7 +35,33 @@ MAX_PORT = 65535               # reader antenna ports (TagReading.antenna is a u
 
 
 class _UniqueKeyLoader(yaml.SafeLoader):
-    """yaml.SafeLoader that refuses a key given twice in one mapping (PyYAML keeps the last one silently)."""
+    """yaml.SafeLoader that refuses a key given twice in one mapping (PyYAML keeps the last one silently) and an
+    alias inside the node it names (``a: &x [*x]``: a structure that contains itself, which no check can walk)."""
+
+    def __init__(self, stream: str) -> None:
+        super().__init__(stream)
+        self.open_anchors: set[str] = set()
+
+    def compose_node(self, parent: Any, index: Any) -> Any:
+        if self.check_event(yaml.AliasEvent) and self.peek_event().anchor in self.open_anchors:
+            event = self.peek_event()
+            raise yaml.composer.ComposerError(None, None, f"alias *{event.anchor} inside the node it names (a "
+                                                          "structure that contains itself)", event.start_mark)
+        return super().compose_node(parent, index)
+
+    def compose_sequence_node(self, anchor: str | None) -> Any:
+        return self._composing(anchor, super().compose_sequence_node)
+
+    def compose_mapping_node(self, anchor: str | None) -> Any:
+        return self._composing(anchor, super().compose_mapping_node)
+
+    def _composing(self, anchor: str | None, compose: Any) -> Any:
+        if anchor is not None:
+            self.open_anchors.add(anchor)
+        try:
+            return compose(anchor)
+        finally:
+            self.open_anchors.discard(anchor or "")
 
     def construct_mapping(self, node: yaml.MappingNode, deep: bool = False) -> dict[Any, Any]:
         first_line: dict[Any, int] = {}
