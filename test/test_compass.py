@@ -10,6 +10,8 @@ from nav_msgs.msg import Odometry
 from rclpy.parameter import Parameter
 from sensor_msgs.msg import Imu
 
+from rfidnav_common.config import parameters_from_mapping
+from rfidnav_common.errors import ConfigError
 from rfidnav_common.geometry import quaternion_to_yaw
 from rfidnav_common.ros import SENSOR_QOS
 from rfidnav_sim.compass_model import CompassModel
@@ -34,8 +36,8 @@ def test_readings_carry_the_bias_and_the_noise_and_stay_wrapped() -> None:
 
 @pytest.mark.parametrize("field, value", [("noise_sd_deg", -1.0), ("rate_hz", 0.0), ("bias_deg", math.inf)])
 def test_bad_parameters_name_the_field(field: str, value: float) -> None:
-    with pytest.raises(ValueError, match=field.replace("_deg", "")):
-        CompassParameters(**{field: value}).validate()
+    with pytest.raises(ConfigError, match=field.replace("_deg", "")):
+        parameters_from_mapping(CompassParameters, {field: value}, "compass_sim.yaml")
 
 
 @pytest.mark.tier("node")

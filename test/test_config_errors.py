@@ -139,8 +139,8 @@ CASES = {
                           "params: ../params/reader_uhf_2ant.yaml, overrides: {rate_hz: fast}}"),
         SCENARIO, "nodes.rfid_reader.overrides.rate_hz", ("number",)),
     "validate() error naming no single field": Case(
-        lambda root: edit(root / "params/reader_uhf_2ant.yaml", "hop_dwell_s: 0.2", "hop_dwell_s: 0.0"),
-        "params/reader_uhf_2ant.yaml", "rfid_reader_sim.ros__parameters", ("hop_dwell_s", "positive")),
+        lambda root: edit(root / "params/flc_tuned.yaml", "right_antenna: 2", "right_antenna: 1"),
+        "params/flc_tuned.yaml", "heading_controller.ros__parameters", ("left_antenna and right_antenna", "differ")),
     "unknown package": Case(
         lambda root: edit(root / SCENARIO, "package: rfidnav_control,", "package: nope_pkg,"),
         SCENARIO, "nodes.heading_controller.package", ("unknown package 'nope_pkg'",)),
@@ -284,17 +284,6 @@ def test_cli_run_with_an_unknown_package_names_the_scenario_field_and_starts_not
     assert not out.exists() or not any(out.iterdir())
 
 
-def test_require_positive_names_the_first_field_that_is_not() -> None:
-    from types import SimpleNamespace
-
-    from rfidnav_common.config import require_positive
-
-    require_positive(SimpleNamespace(a=1.0, b=2), "a", "b")
-    for bad in (0.0, -1.0, float("nan"), float("inf")):
-        with pytest.raises(ValueError, match=rf"^b: must be positive, got {bad}"):
-            require_positive(SimpleNamespace(a=1.0, b=bad), "a", "b")
-
-
 def test_a_validate_error_names_its_field_as_data_and_reads_as_before() -> None:
     from rfidnav_common.errors import ParameterError
     from rfidnav_planning.parameters import PartitionNavigatorParameters
@@ -306,3 +295,78 @@ def test_a_validate_error_names_its_field_as_data_and_reads_as_before() -> None:
     assert str(raised.value) == "max_replans: must not be negative"
     between_fields = "rate_hz and hop_dwell_s must be positive"
     assert str(ParameterError("", between_fields)) == between_fields
+
+
+# ------------------------------------------------------------------------------- the loader and declared limits
+
+def test_a_yaml_merge_key_may_override_what_it_merges_but_a_key_given_twice_is_refused(tmp_path: Path) -> None:
+    from rfidnav_common.config import load_yaml_file
+
+    merged = tmp_path / "merged.yaml"
+    merged.write_text("base: &base {a: 1, b: 2}\nitem:\n  <<: *base\n  b: 3\n")
+    assert load_yaml_file(merged)["item"] == {"a": 1, "b": 3}
+    twice = tmp_path / "twice.yaml"
+    twice.write_text("item:\n  a: 1\n  b: 2\n  a: 3\n")
+    with pytest.raises(ConfigError, match=r"twice.yaml: not valid YAML: line 4, column 3: duplicate key 'a' "
+                                          r"\(first given on line 2\)"):
+        load_yaml_file(twice)
+
+
+def test_text_that_is_not_utf8_is_named_by_its_byte_offset_and_line(tmp_path: Path) -> None:
+    from rfidnav_common.config import load_yaml_file
+
+    latin1 = tmp_path / "latin1.yaml"
+    latin1.write_bytes("name: x\ndescription: café\n".encode("latin-1"))
+    with pytest.raises(ConfigError, match=r"latin1.yaml: not UTF-8 text: byte 0xe9 at offset 24 \(line 2\)"):
+        load_yaml_file(latin1)
+
+
+def test_limits_are_declared_with_the_field_and_checked_item_by_item() -> None:
+    import dataclasses
+
+    from rfidnav_common.config import PORT, Limits, check_limits, param
+    from rfidnav_common.errors import ParameterError
+
+    @dataclasses.dataclass(frozen=True)
+    class Example:
+        ports: list[int] = param("ports", [1, 2], PORT)
+        mode: str = param("mode", "a", Limits(choices=("a", "b")))
+        fraction: float = param("fraction", 0.5, Limits(0.0, 1.0, high_open=True))
+
+    field = dataclasses.fields(Example)[0]
+    assert field.metadata == {"doc": "ports", "min": 1, "max": 65535}
+    check_limits(Example())
+    for bad, name, problem in ((Example(ports=[1, 0]), "ports[1]", "must be in [1, 65535], got 0"),
+                               (Example(mode="c"), "mode", "'c' is not one of: a, b"),
+                               (Example(fraction=1.0), "fraction", "must be in [0, 1), got 1")):
+        with pytest.raises(ParameterError) as raised:
+            check_limits(bad)
+        assert (raised.value.field, raised.value.problem) == (name, problem)
+
+
+def test_every_shipped_scenario_with_every_robot_profile_and_every_parameter_file_is_within_its_ranges() -> None:
+    from rfidnav_bringup.scenario import KNOWN_NODES, ROBOT_DIR, SCENARIO_DIR
+    from rfidnav_common.config import Section, node_parameter_section, parameters_from_mapping
+
+    for scenario in sorted(SCENARIO_DIR.glob("*.yaml")):
+        load_scenario(str(scenario))
+    for profile in sorted(ROBOT_DIR.glob("*.yaml")):
+        load_scenario("line_follow_90", robot_profile_name=str(profile))
+    classes = dict(KNOWN_NODES.values())
+    required = {"world_file": "w.yaml", "map_file": "m.yaml"}
+    checked = 0
+    for file in sorted((CONFIG_DIR / "params").glob("*.yaml")):
+        for node in Section.from_file(file).keys():
+            cls = classes[node]
+            section = node_parameter_section(file, node)
+            values = {**{k: v for k, v in required.items() if k in cls.__dataclass_fields__}, **section.data}
+            if cls.__name__ == "PartitionLocalizerParameters":
+                values["map_file"] = section.data.get("map_file", "unused")
+            parameters_from_mapping(cls, values, section.source, section.prefix)
+            checked += 1
+    assert checked >= 24
+
+
+def test_a_relative_action_name_is_the_one_the_orchestrator_resolves(config: Path) -> None:
+    edit(config / SCENARIO, "action: /follow_tag_route", "action: follow_tag_route")
+    assert load_scenario(str(config / SCENARIO)).mission.action == "follow_tag_route"

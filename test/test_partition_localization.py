@@ -399,8 +399,8 @@ def test_settings_and_parameters_name_the_bad_field() -> None:
         PartitionLocalizer(LocalizerSettings(method="magic"), np.random.default_rng(0))
     with pytest.raises(ValueError, match="^boundary_softness_m: "):
         LocalizerSettings(boundary_softness_m=0.0).validate()
-    with pytest.raises(ValueError, match="^antenna: "):
-        PartitionLocalizerParameters(antenna=0).validate()
+    with pytest.raises(ConfigError, match="^test.yaml: antenna: "):
+        parameters_from_mapping(PartitionLocalizerParameters, {"antenna": 0}, "test.yaml")
     with pytest.raises(ConfigError, match="particles"):
         parameters_from_mapping(PartitionLocalizerParameters, {"particles": 3}, "test.yaml")
 

@@ -11,7 +11,8 @@ import numpy as np
 import pytest
 
 from rfidnav_bringup.scenario import CONFIG_DIR
-from rfidnav_common.errors import ParameterError
+from rfidnav_common.config import parameters_from_mapping
+from rfidnav_common.errors import ConfigError
 from rfidnav_common.polling import PollClock, Polling, next_on_grid
 from rfidnav_common.seeding import rng_for
 from rfidnav_experiments.runners.shipped import file_parameters
@@ -115,5 +116,5 @@ def test_a_reader_without_jitter_keeps_its_grid_and_draws_nothing() -> None:
                                               ("round_failure_probability", 1.0),
                                               ("round_failure_probability", -0.1)])
 def test_bad_polling_parameters_are_refused_naming_the_parameter(field: str, value: float) -> None:
-    with pytest.raises(ParameterError, match=field):
-        ReaderParameters(world_file="w.yaml", **{field: value}).validate()
+    with pytest.raises(ConfigError, match=field):
+        parameters_from_mapping(ReaderParameters, {"world_file": "w.yaml", field: value}, "reader.yaml")

@@ -15,6 +15,8 @@ import os
 import signal
 import subprocess
 import sys
+import tempfile
+import typing
 from collections.abc import Callable
 from importlib.metadata import entry_points
 from pathlib import Path
@@ -31,6 +33,7 @@ DEMO_SCENARIO = "hallway"
 DEMO_RTF = 3.0
 VERB_ENTRY_POINTS = "rfidnav.verbs"
 LIVE_PORT = 8765   # Foxglove's default WebSocket port
+MAX_ECHO_COUNT = 1_000_000
 
 Handler = Callable[[argparse.Namespace], int]
 
@@ -40,16 +43,6 @@ def key_value(text: str) -> tuple[str, str]:
         raise argparse.ArgumentTypeError(f"expected ROLE=VALUE, got '{text}'")
     role, value = text.split("=", 1)
     return role, value
-
-
-def rtf_value(text: str) -> float:
-    """``--rtf``: a number, or ``max`` (infinite: as fast as the stepped graph answers)."""
-    if text == "max":
-        return math.inf
-    try:
-        return float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number or 'max', got '{text}'") from None
 
 
 def checked_number(convert: Callable[[str], Any], unreadable: str, accepted: Callable[[Any], bool],
@@ -68,6 +61,13 @@ def checked_number(convert: Callable[[str], Any], unreadable: str, accepted: Cal
     return parse
 
 
+MAX_RTF = 1000.0        # a real-time factor beyond it: use max
+# --rtf: a number above 0 (at most MAX_RTF), or ``max`` (infinite: as fast as the stepped graph answers).
+rtf_value = checked_number(lambda text: math.inf if text == "max" else float(text), "a number or 'max'",
+                           lambda rtf: rtf == math.inf or 0.0 < rtf <= MAX_RTF,
+                           lambda text: f"expected a real-time factor above 0 and at most {MAX_RTF:g}, or max, "
+                                        f"got {text}")
+
 MAX_DOMAIN_ID = 101     # ROS 2 on Linux: higher ids run into the ephemeral port range
 
 domain_id = checked_number(int, "a whole number", lambda value: 0 <= value <= MAX_DOMAIN_ID,
@@ -84,6 +84,76 @@ def bag_size_value(text: str) -> int:
     parse = checked_number(int, "a number of bytes", lambda size: size == 0 or size >= MIN_SPLIT_SIZE,
                            lambda text: f"expected 0 (one file) or at least {MIN_SPLIT_SIZE} bytes, got {int(text)}")
     return parse(text)
+
+
+SEED_MAX = (1 << 63) - 1    # a ROS integer parameter (int64): every node's seed derives from the run's
+seed_value = checked_number(int, "a whole number", lambda seed: 0 <= seed <= SEED_MAX,
+                            lambda text: f"expected a seed 0-{SEED_MAX}, got {text}")
+
+
+def count_value(most: int) -> Callable[[str], int]:
+    """An argparse ``type`` for a count of runs, seeds, messages, ...: a whole number from 1 to ``most``."""
+    return checked_number(int, "a whole number", lambda count: 1 <= count <= most,
+                          lambda text: f"expected a whole number 1-{most}, got {text}")
+
+
+def positive_number(what: str, most: float) -> Callable[[str], float]:
+    """An argparse ``type`` for a finite number above 0 and at most ``most`` (seconds, a rate, a spacing)."""
+    return checked_number(float, what, lambda value: math.isfinite(value) and 0.0 < value <= most,
+                          lambda text: f"expected {what} above 0 and at most {most:g}, got {text}")
+
+
+MAX_OPTION_S = 86400.0      # waits, timeouts, offsets into a bag: one day
+MAX_RATE = 1000.0           # playback speed-ups
+option_seconds = positive_number("a number of seconds", MAX_OPTION_S)
+option_rate = positive_number("a rate", MAX_RATE)
+start_seconds = checked_number(float, "a number of seconds", lambda value: 0.0 <= value <= MAX_OPTION_S,
+                               lambda text: f"expected seconds from 0 to {MAX_OPTION_S:g}, got {text}")
+
+
+def topic_name(text: str) -> str:
+    """An argparse ``type`` for a topic name ROS accepts (rclpy's own check)."""
+    from rfidnav_common.ros import topic_name_problem  # here, not at the top: it loads rclpy
+
+    problem = topic_name_problem(text, "rfidnav")
+    if problem is not None:
+        raise argparse.ArgumentTypeError(f"'{text}' is not a valid ROS topic name: {problem}")
+    return text
+
+
+def output_folder(text: str) -> Path:
+    """An argparse ``type`` for a folder to write into (created if missing): not a file, not under one, and one this
+    user can create folders in (tried: /proc and /sys accept no folders, whatever the permissions say)."""
+    path = Path(text)
+    if path.exists() and not path.is_dir():
+        raise argparse.ArgumentTypeError(f"{text} is a file, not a folder")
+    existing = next(parent for parent in (path, *path.parents) if parent.exists())
+    if not existing.is_dir():
+        raise argparse.ArgumentTypeError(f"{existing} is a file, not a folder")
+    try:
+        Path(tempfile.mkdtemp(dir=existing, prefix=".rfidnav-probe-")).rmdir()
+    except OSError as error:
+        raise argparse.ArgumentTypeError(f"cannot write in {existing}: {error.strerror}") from None
+    return path
+
+
+def output_file(text: str) -> Path:
+    """An argparse ``type`` for a file to write: not a folder, in an existing folder this user can write in."""
+    path = Path(text)
+    if path.is_dir():
+        raise argparse.ArgumentTypeError(f"{text} is a folder, not a file")
+    folder = path.parent
+    if not folder.is_dir():
+        raise argparse.ArgumentTypeError(f"{folder} is not a folder" if folder.exists() else
+                                         f"no folder {folder} (create it first)")
+    try:
+        with tempfile.NamedTemporaryFile(dir=folder, prefix=".rfidnav-probe-"):
+            pass
+    except OSError as error:
+        raise argparse.ArgumentTypeError(f"cannot write in {folder}: {error.strerror}") from None
+    if path.exists() and not os.access(path, os.W_OK):
+        raise argparse.ArgumentTypeError(f"cannot write {text}: permission denied")
+    return path
 
 
 def port_number(text: str, lowest: int = 1) -> int:
@@ -112,8 +182,8 @@ def add_run_options(parser: argparse.ArgumentParser, default_rtf: float) -> None
     parser.add_argument("--clock", choices=CLOCKS, default="stepped",
                         help="stepped (default): the simulator waits for our nodes to answer each step, so a run "
                              "follows its seed, not the machine's load; free: free-running at the RTF")
-    parser.add_argument("--seed", type=int, default=1, help="run seed (every node derives its own)")
-    parser.add_argument("--out", type=Path, default=RUNS_DIR, help="folder for the run folder")
+    parser.add_argument("--seed", type=seed_value, default=1, help="run seed (every node derives its own)")
+    parser.add_argument("--out", type=output_folder, default=RUNS_DIR, help="folder for the run folder")
     parser.add_argument("--robot", metavar="PROFILE",
                         help="run the roles a robot profile (config/robots/PROFILE.yaml) names with its drivers")
     parser.add_argument("--swap", type=key_value, action="append", default=[], metavar="ROLE=CMD",
@@ -134,9 +204,17 @@ def add_run_options(parser: argparse.ArgumentParser, default_rtf: float) -> None
                         help=f"serve the running graph to Foxglove over its WebSocket protocol (port {LIVE_PORT})")
 
 
+class OneLineParser(argparse.ArgumentParser):
+    """argparse's parser, a bad option told in one line (``rfidnav run: error: argument --out: ...``) rather than
+    after the verb's usage, which ``--help`` shows; its sub-parsers (every verb's) are of this class too."""
+
+    def error(self, message: str) -> typing.NoReturn:
+        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+
+
 def parser() -> tuple[argparse.ArgumentParser, dict[str, Handler]]:
     """The command line and the handler of each verb, this package's and those the entry points add."""
-    top = argparse.ArgumentParser(prog="rfidnav", description="RFID navigation for ROS 2 Jazzy (see README.md)")
+    top = OneLineParser(prog="rfidnav", description="RFID navigation for ROS 2 Jazzy (see README.md)")
     verbs = top.add_subparsers(dest="verb", required=True)
     verbs.add_parser("setup", help="create/refresh .venv, build rfidnav_msgs, install packages")
     demo = verbs.add_parser("demo", help=f"the {DEMO_SCENARIO} scenario over DDS, about a minute")
@@ -150,11 +228,11 @@ def parser() -> tuple[argparse.ArgumentParser, dict[str, Handler]]:
     add_run_options(run, 1.0)
     replay = verbs.add_parser("replay", help="republish a bag")
     replay.add_argument("bag", type=Path)
-    replay.add_argument("--rate", type=float, default=1.0)
-    replay.add_argument("--topics", nargs="+", default=[])
+    replay.add_argument("--rate", type=option_rate, default=1.0, help="playback speed (1: as recorded)")
+    replay.add_argument("--topics", nargs="+", type=topic_name, default=[], help="republish only these topics")
     replay.add_argument("--loop", action="store_true")
     replay.add_argument("--clock", action="store_true", help="publish /clock from the bag's time")
-    replay.add_argument("--start", type=float, default=0.0, help="skip the first S seconds")
+    replay.add_argument("--start", type=start_seconds, default=0.0, help="skip the first S seconds")
     add_graph_options(replay, "replay", "a free one of 51-101, leased as a run leases one")
     bag = verbs.add_parser("bag", help="bag tools")
     bag_verbs = bag.add_subparsers(dest="bag_verb", required=True)
@@ -170,18 +248,19 @@ def parser() -> tuple[argparse.ArgumentParser, dict[str, Handler]]:
     check.add_argument("map", type=Path)
     draw = map_verbs.add_parser("draw", help="a PNG of a topological map: compass-placed edges and tag ids")
     draw.add_argument("map", type=Path)
-    draw.add_argument("--out", type=Path, help="the PNG to write (default: beside the map, .png)")
+    draw.add_argument("--out", type=output_file, help="the PNG to write (default: beside the map, .png)")
     echo = verbs.add_parser("echo", help="print a topic's messages as YAML (checking a driver alone)")
-    echo.add_argument("topic")
-    echo.add_argument("--count", type=int, default=5, help="messages to print, then exit 0")
-    echo.add_argument("--wait", type=float, default=10.0, help="seconds to wait for a publisher")
-    echo.add_argument("--timeout", type=float, default=30.0, help="seconds to wait for the messages (else exit 2)")
+    echo.add_argument("topic", type=topic_name)
+    echo.add_argument("--count", type=count_value(MAX_ECHO_COUNT), default=5, help="messages to print, then exit 0")
+    echo.add_argument("--wait", type=option_seconds, default=10.0, help="seconds to wait for a publisher")
+    echo.add_argument("--timeout", type=option_seconds, default=30.0,
+                      help="seconds to wait for the messages (else exit 2)")
     add_graph_options(echo, "graph to listen to", "$ROS_DOMAIN_ID, else 0", default_discovery=None)
     view = verbs.add_parser("view", help="serve a recorded run to Foxglove with its timeline (WebSocket)")
     view.add_argument("bag", type=Path, metavar="RUN_OR_BAG")
     view.add_argument("--port", type=lambda text: port_number(text, lowest=0), default=LIVE_PORT,
                       help=f"TCP port (default {LIVE_PORT}; 0: any free port)")
-    view.add_argument("--rate", type=float, default=1.0, help="playback speed until Foxglove sets its own")
+    view.add_argument("--rate", type=option_rate, default=1.0, help="playback speed until Foxglove sets its own")
     report = verbs.add_parser("report", help="plots and recomputed metrics of a run")
     report.add_argument("run", type=Path)
     report.add_argument("--json", action="store_true")
@@ -228,24 +307,18 @@ def verb_setup(_args) -> int:
 
 
 def verb_run(args, scenario_name: str | None = None) -> int:
-    import yaml
-
     from rfidnav_bringup.orchestrator import Orchestrator, RunOptions, print_summary
     from rfidnav_bringup.scenario import load_scenario
+    from rfidnav_common.config import load_yaml_text
 
     goal = None
     if getattr(args, "goal", None):
-        try:
-            goal = yaml.safe_load(args.goal)
-        except yaml.YAMLError as error:
-            raise ConfigError("--goal", "", f"not valid YAML: {getattr(error, 'problem', None) or error}") from None
+        goal = load_yaml_text(args.goal, "--goal")
         if not isinstance(goal, dict):
             raise ConfigError("--goal", "", "expected a YAML mapping of goal fields")
     scenario = load_scenario(scenario_name or args.scenario, swaps=dict(args.swap),
                              param_files={role: Path(file) for role, file in args.params}, goal=goal,
                              robot_profile_name=getattr(args, "robot", None))
-    if math.isnan(args.rtf) or args.rtf <= 0:
-        raise ConfigError("--rtf", "", f"must be a positive number or max, got {args.rtf}")
     options = RunOptions(rtf=args.rtf, clock=args.clock, seed=args.seed, out_dir=args.out,
                          record=not args.no_record, live_port=args.live, quiet=args.quiet, domain=args.domain,
                          discovery=args.discovery, compress=args.compress, max_bag_size=args.max_bag_size,
@@ -363,8 +436,6 @@ def verb_view(args) -> int:
     from rfidnav_bag.bag_view import serve_bag
     from rfidnav_bringup.report import locate_run
 
-    if not (math.isfinite(args.rate) and args.rate > 0):
-        raise ConfigError("--rate", "", f"must be a positive number, got {args.rate}")
     _, bag = locate_run(args.bag)
     return serve_bag(bag, args.port, speed=args.rate, announce=lambda line: print(line, flush=True))
 
@@ -372,8 +443,6 @@ def verb_view(args) -> int:
 def verb_echo(args) -> int:
     from rfidnav_bringup.echo import echo
 
-    if args.count < 1:
-        raise ConfigError("--count", "", f"must be at least 1, got {args.count}")
     domain = args.domain if args.domain is not None else int(os.environ.get("ROS_DOMAIN_ID") or 0)
     discovery = args.discovery or os.environ.get("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST").lower()
     if discovery not in ("localhost", "subnet"):

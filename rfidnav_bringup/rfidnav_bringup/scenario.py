@@ -19,13 +19,22 @@ from typing import Any
 import yaml
 
 from rfidnav_bringup.processes import UnknownExecutableError, package_share, resolve_executable
-from rfidnav_common.config import Section, node_parameter_section, parameters_from_mapping, typed_values
+from rfidnav_common.config import (
+    MAX_DURATION_S,
+    Section,
+    check_number,
+    node_parameter_section,
+    parameters_from_mapping,
+    type_name,
+    typed_values,
+)
 from rfidnav_common.errors import ConfigError
 from rfidnav_common.robot_map import RouteMap, load_route_map
 from rfidnav_common.topological_map import TopologicalMap, load_topological_map
 from rfidnav_control.parameters import HeadingControllerParameters, WallFollowerParameters
 from rfidnav_drivers.parameters import CreateBaseParameters, LlrpReaderParameters, WifiScannerParameters
 from rfidnav_localization.parameters import LocationServerParameters, PartitionLocalizerParameters
+from rfidnav_localization.radio_map_file import load_radio_map
 from rfidnav_planning.parameters import (
     MissionExecutorParameters,
     PartitionNavigatorParameters,
@@ -67,6 +76,14 @@ KNOWN_NODES: dict[tuple[str, str], tuple[str, type]] = {
 # drivers talk to hardware on its own time and never take part.
 STEPPED_PACKAGES = ("rfidnav_sim", "rfidnav_control", "rfidnav_localization", "rfidnav_planning")
 METRIC_GROUPS = ("tracking", "partition", "two_tier", "topological")
+MAX_MISSION_S = MAX_DURATION_S          # mission.timeout_s: one day of sim time (the orchestrator's wall limit follows)
+MAX_RESPAWNS = 100
+SIMULATED_READER = ("rfidnav_sim", "rfid_reader_sim")   # reads the world's tags
+ORCHESTRATOR_NODE = "rfidnav_orchestrator"   # the node that sends the goal (relative action names are its)
+# What a goal of each action type must give (the server refuses a goal without it, once everything runs).
+REQUIRED_GOAL_FIELDS = {"rfidnav_msgs/action/FollowTagRoute": "tag_ids",
+                        "rfidnav_msgs/action/NavigateToNode": "goal_node",
+                        "rfidnav_msgs/action/NavigateToPoint": "target"}
 
 
 @dataclass(frozen=True)
@@ -225,13 +242,15 @@ def load_scenario(name_or_path: str, swaps: dict[str, str] | None = None,
     for role, file in (param_files or {}).items():
         if role not in nodes:
             raise ConfigError("--params", role, f"no role '{role}' in {path.name} (roles: {', '.join(nodes)})")
+        if not Path(file).is_file():
+            raise ConfigError("--params", role, f"parameter file not found: {Path(file).resolve()}")
         nodes[role] = replace(nodes[role], param_files=(Path(file).resolve(),))
     if sum(spec.clock_source for spec in nodes.values()) > 1:
         raise section.error("nodes", "only one node can be the clock_source")
     for role, spec in nodes.items():
         if spec.process is not None and spec.process in nodes and nodes[spec.process].process != spec.process:
             raise section.error(f"nodes.{role}.process", f"'{spec.process}' is the name of another role's process")
-    mission = section.section("mission")
+    mission_file = mission = section.section("mission")
     mission.reject_unknown(("action", "type", "server", "goal", "timeout_s"))
     if goal is None:
         goal = mission.raw("goal")
@@ -247,17 +266,25 @@ def load_scenario(name_or_path: str, swaps: dict[str, str] | None = None,
     scenario = Scenario(
         name=section.string("name"), description=section.string("description", ""), path=path,
         world_file=world_file, map_file=map_file,
-        robot=(robot.number("x"), robot.number("y"), robot.number("yaw_deg", 0.0)), nodes=nodes,
-        mission=MissionSpec(mission.string("action"), mission.string("type"), goal,
-                            mission.number("timeout_s", 600.0, positive=True), mission.raw("server", None)),
+        robot=(robot.number("x"), robot.number("y"), robot.number("yaw_deg", 0.0, minimum=-360.0, maximum=360.0)),
+        nodes=nodes,
+        mission=MissionSpec(mission_file.string("action"), mission_file.string("type"), goal,
+                            mission_file.number("timeout_s", 600.0, positive=True, maximum=MAX_MISSION_S),
+                            mission_file.raw("server", None)),
         metrics=tuple(metrics), world=load_world(world_file), **_robot_map(map_file))
     if scenario.mission.server is not None and scenario.mission.server not in nodes:
-        raise mission.error("server", f"no role '{scenario.mission.server}' (roles: {', '.join(nodes)})")
+        raise mission_file.error("server", f"no role '{scenario.mission.server}' (roles: {', '.join(nodes)})")
+    goal_class = _check_action(scenario, mission_file)
+    _check_server(scenario, mission_file)
+    _check_goal_numbers(scenario.mission.goal, mission, "")
     _check_route(scenario, mission)
     _check_goal_area(scenario, mission)
     _check_goal_node(scenario, mission)
+    _check_goal(scenario, goal_class, mission)
+    _check_map_in_world(scenario)
     parameters = {role: node_parameters(scenario, spec, seed=0, rtf=1.0) for role, spec in scenario.nodes.items()}
     _check_antenna_ports(scenario, parameters)
+    _check_speeds(scenario, parameters)
     return scenario
 
 
@@ -296,7 +323,7 @@ def _node_spec(role: str, entry: Section, base: Path) -> NodeSpec:
         name=entry.string("name", executable) if package is not None else entry.raw("name", None),
         param_files=files, overrides=dict(overrides), sim=entry.boolean("sim", False),
         clock_source=entry.boolean("clock_source", False), respawn=entry.boolean("respawn", False),
-        max_respawns=entry.integer("max_respawns", 3, minimum=0), process=process,
+        max_respawns=entry.integer("max_respawns", 3, minimum=0, maximum=MAX_RESPAWNS), process=process,
         stepped=entry.boolean("stepped", False) if entry.has("stepped") else None)
 
 
@@ -330,10 +357,97 @@ def _program(command: tuple[str, ...], source: str, field: str) -> tuple[str, ..
 
 
 def _robot_map(map_file: Path) -> dict[str, Any]:
-    """The scenario's map: a topological map (paper 004) if it has ``nodes``, else a route map."""
+    """The scenario's map: a topological map (paper 004) if it has ``nodes``, else a route map, with the radio map
+    it names read (the location server starts from it)."""
     if Section.from_file(map_file).has("nodes"):
         return {"route_map": None, "topological_map": load_topological_map(map_file)}
-    return {"route_map": load_route_map(map_file)}
+    route_map = load_route_map(map_file)
+    if route_map.radio_map_file is not None:
+        load_radio_map(route_map.radio_map_file)
+    return {"route_map": route_map}
+
+
+def _check_action(scenario: Scenario, mission: Section) -> type:
+    """The action name is a valid ROS name and the type an installed action; its Goal class."""
+    from rfidnav_common.ros import interface_class, topic_name_problem  # here, not at the top: they load rclpy
+
+    problem = topic_name_problem(scenario.mission.action, ORCHESTRATOR_NODE)
+    if problem is not None:
+        raise mission.error("action", f"'{scenario.mission.action}' is not a valid ROS name: {problem}")
+    action_type = scenario.mission.action_type
+    if action_type.count("/") != 2 or action_type.split("/")[1] != "action":
+        raise mission.error("type", f"expected an action type like pkg/action/Name, got '{action_type}'")
+    try:
+        action = interface_class(action_type)
+    except ConfigError as error:
+        raise mission.error("type", f"'{action_type}': {error.problem}") from None
+    return action.Goal
+
+
+def _expanded(name: str) -> str:
+    """An action name as the orchestrator's node resolves it (``follow_tag_route`` is ``/follow_tag_route``)."""
+    from rclpy.expand_topic_name import expand_topic_name
+
+    return expand_topic_name(name, ORCHESTRATOR_NODE, "/")
+
+
+def _check_goal(scenario: Scenario, goal_class: type, mission: Section) -> None:
+    """The goal fills the action's Goal message as the orchestrator will send it (its fields, their types and
+    ranges) and gives what its action needs."""
+    from rfidnav_common.ros import fill_message
+
+    goal = scenario.mission.goal
+    try:
+        fill_message(goal_class(check_fields=True), goal, "goal")
+    except ConfigError as error:       # error.source: "goal", or "goal.target" for a field of a nested message
+        where = ".".join((*error.source.split(".")[1:], error.field))
+        raise mission.error("goal", f"{where}: {error.problem}") from None
+    required = REQUIRED_GOAL_FIELDS.get(scenario.mission.action_type)
+    if required is not None and required not in goal:
+        raise mission.error("goal", f"{required}: missing ({scenario.mission.action_type} needs it)")
+    tolerance = goal.get("tolerance_m", 0.0)
+    if isinstance(tolerance, (int, float)) and tolerance < 0.0:
+        raise mission.error("goal", f"tolerance_m: must not be negative, got {tolerance}")
+
+
+def _check_goal_numbers(values: Any, mission: Section, where: str) -> None:
+    """Every number of a goal (nested mappings and lists included) finite and within MAX_MAGNITUDE."""
+    if isinstance(values, dict):
+        for key, value in values.items():
+            _check_goal_numbers(value, mission, f"{where}.{key}" if where else str(key))
+    elif isinstance(values, list):
+        for index, value in enumerate(values):
+            _check_goal_numbers(value, mission, f"{where}[{index}]")
+    elif isinstance(values, (int, float)) and not isinstance(values, bool):
+        try:
+            check_number(values, mission.source, where)
+        except ConfigError as error:
+            raise mission.error("goal", f"{error.field}: {error.problem}") from None
+
+
+def _check_map_in_world(scenario: Scenario) -> None:
+    """With the simulated reader (which reads the world's tags), every tag the map names is in the world: a route's
+    ceiling and arrival floor tags, a tag group, a topological map's wall tags. One error names the map's field."""
+    if SIMULATED_READER not in {(spec.package, spec.executable) for spec in scenario.nodes.values()}:
+        return
+    world, source, where = scenario.world, str(scenario.map_file), f"not in the world {scenario.world_file}"
+    if scenario.route_map is not None:
+        tags = {tag.tag_id for tag in world.tags}
+        for ceiling, floor in scenario.route_map.arrival_tags.items():
+            for tag in (ceiling, floor):
+                if tag not in tags:
+                    raise ConfigError(source, f"arrival_tags.{ceiling}", f"tag '{tag}' is {where}")
+        groups = {group.group_id for group in world.tag_groups}
+        for index, group in enumerate(scenario.route_map.tag_groups):
+            if group.group_id not in groups:
+                raise ConfigError(source, f"tag_groups[{index}].id", f"tag group '{group.group_id}' is {where}")
+    if scenario.topological_map is not None:
+        wall_tags = {tag.tag_id for tag in world.wall_tags}
+        for name, node in scenario.topological_map.nodes.items():
+            for side, hallway in node.hallways.items():
+                missing = [tag for tag in hallway.tags if tag not in wall_tags]
+                if missing:
+                    raise ConfigError(source, f"nodes.{name}.{side}.tags", f"wall tag '{missing[0]}' is {where}")
 
 
 def _check_goal_node(scenario: Scenario, mission: Section) -> None:
@@ -341,6 +455,8 @@ def _check_goal_node(scenario: Scenario, mission: Section) -> None:
     node = scenario.mission.goal.get("goal_node")
     if node is None:
         return
+    if not isinstance(node, str):
+        raise mission.error("goal", f"goal_node: expected a node name, got {type_name(node)}")
     topological_map = scenario.topological_map
     if topological_map is None:
         raise mission.error("goal", f"goal_node: the map {scenario.map_file} is not a topological map")
@@ -408,6 +524,39 @@ def _check_antenna_ports(scenario: Scenario, parameters: dict[str, Any]) -> None
     raise ConfigError(source, key, f"{what}, but {uses}: missing port{'s' if len(missing) > 1 else ''} "
                                    f"{', '.join(map(str, missing))} (add {'them' if len(missing) > 1 else 'it'} to "
                                    f"the reader's ports, or point the node at a port the reader has)")
+
+
+def _check_speeds(scenario: Scenario, parameters: dict[str, Any]) -> None:
+    """No node commands a forward speed above what the base drives (``speed_limit()`` of the base's parameters:
+    robot_sim's or create_base's ``max_wheel_speed_mps``); one error names the node's parameter and the base's."""
+    limits = [(role, value.speed_limit()) for role, value in parameters.items() if hasattr(value, "speed_limit")]
+    if len(limits) != 1:
+        return
+    (base_role, (limit_name, limit)), = limits
+    for role, value in parameters.items():
+        for name, speed in (value.commanded_speeds().items() if hasattr(value, "commanded_speeds") else ()):
+            if speed > limit:
+                source, key = _origin_key(scenario, role, name)
+                raise ConfigError(source, key, f"{speed:g} m/s is faster than the base drives: {base_role}'s "
+                                               f"{limit_name} is {limit:g} "
+                                               f"({_origin(scenario, base_role, limit_name)})")
+
+
+def _check_server(scenario: Scenario, mission: Section) -> None:
+    """The role serving the mission (mission.server, else the first non-simulator role), when it is one of our
+    action servers (its parameter class's ``ACTION``), serves the mission's action name and type."""
+    role = scenario.mission.server or next((role for role, spec in scenario.nodes.items() if not spec.sim), None)
+    spec = scenario.nodes.get(role or "")
+    known = KNOWN_NODES.get((spec.package or "", spec.executable or "")) if spec is not None else None
+    served = getattr(known[1], "ACTION", None) if known is not None else None
+    if role is None or served is None:
+        return
+    name, action_type = served
+    node = scenario.nodes[role].name or role
+    if _expanded(scenario.mission.action) != name:
+        raise mission.error("action", f"{node} (role {role}) serves {name}, not {scenario.mission.action}")
+    if scenario.mission.action_type != action_type:
+        raise mission.error("type", f"{node} (role {role}) serves {action_type}, not {scenario.mission.action_type}")
 
 
 def _origin_key(scenario: Scenario, role: str, name: str) -> tuple[str, str]:

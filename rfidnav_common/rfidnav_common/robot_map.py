@@ -69,6 +69,9 @@ def load_route_map(path: Path) -> RouteMap:
                     radio_map_file=radio_map)
 
 
+MAX_TAGS_PER_SIDE = 2500      # a tag group's size over its tag spacing: no group of more than ~10,000 tags
+
+
 def tag_groups_of(section: Section) -> tuple[TagGroup, ...]:
     """The ``tag_groups`` list of a map or world file (schema above); group ids unique."""
     groups: list[TagGroup] = []
@@ -80,10 +83,15 @@ def tag_groups_of(section: Section) -> tuple[TagGroup, ...]:
             raise entry.error("id", f"duplicate tag group '{group_id}' (also at {seen[group_id]})")
         seen[group_id] = entry.prefix
         centre = entry.numbers("centre", length=2)
+        size_m = entry.number("size_m", 0.30, positive=True)
+        spacing_m = entry.number("tag_spacing_m", 0.05, positive=True)
+        if size_m / spacing_m > MAX_TAGS_PER_SIDE:
+            raise entry.error("tag_spacing_m", f"a tag every {spacing_m:g} m of a {size_m:g} m group is "
+                                               f"{size_m / spacing_m:.3g} tags a side, more than {MAX_TAGS_PER_SIDE:,}")
         try:
-            groups.append(TagGroup(group_id, entry.string("shape"), (centre[0], centre[1]),
-                                   entry.number("size_m", 0.30), math.radians(entry.number("rotation_deg", 0.0)),
-                                   entry.number("tag_spacing_m", 0.05)))
+            groups.append(TagGroup(group_id, entry.string("shape"), (centre[0], centre[1]), size_m,
+                                   math.radians(entry.number("rotation_deg", 0.0, minimum=-360.0, maximum=360.0)),
+                                   spacing_m))
         except ValueError as error:          # the message names the field: "... size_m: expected ..."
             raise ConfigError(entry.source, entry.prefix, str(error)) from None
     return tuple(groups)

@@ -27,7 +27,7 @@ from rclpy.parameter import Parameter
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.signals import SignalHandlerOptions
 
-from rfidnav_common.config import parameters_from_mapping
+from rfidnav_common.config import did_you_mean, parameters_from_mapping
 from rfidnav_common.errors import ConfigError, RfidnavError
 from rfidnav_common.geometry import quaternion_to_yaw
 
@@ -244,17 +244,34 @@ def interface_class(type_name: str) -> type:
     return found
 
 
+def topic_name_problem(name: str, node_name: str) -> str | None:
+    """Why ``name`` is no valid topic (or action, service) name for node ``node_name``, in rclpy's words ("topic
+    name must not contain repeated '/'"); None when it is one."""
+    from rclpy.exceptions import InvalidTopicNameException
+    from rclpy.expand_topic_name import expand_topic_name
+    from rclpy.validate_full_topic_name import validate_full_topic_name
+
+    try:
+        validate_full_topic_name(expand_topic_name(name, node_name, "/"))
+    except InvalidTopicNameException as error:          # "Invalid topic name: PROBLEM:\n  'NAME'\n    ^"
+        return str(error).splitlines()[0].removeprefix("Invalid topic name: ").rstrip(":")
+    except ValueError as error:                          # "topic name 'NAME' is invalid: PROBLEM, at FILE:LINE"
+        return str(error).partition("is invalid: ")[2].rpartition(", at ")[0] or str(error)
+    return None
+
+
 def fill_message(message: Any, values: dict[str, Any], where: str) -> Any:
-    """Set ``message``'s fields from a plain mapping (nested mappings fill nested messages)."""
+    """Set ``message``'s fields from a plain mapping (nested mappings fill nested messages, built with their
+    fields' types and ranges checked, as ``message`` was if it was built with ``check_fields=True``)."""
     fields = message.get_fields_and_field_types()
     for name, value in values.items():
         if name not in fields:
             raise ConfigError(where, name, f"no such field in {type(message).__name__} "
-                              f"(fields: {', '.join(fields)})")
+                              f"({did_you_mean(str(name), fields)}fields: {', '.join(fields)})")
         current = getattr(message, name)
         try:
             if isinstance(value, dict) and hasattr(current, "get_fields_and_field_types"):
-                fill_message(current, value, f"{where}.{name}")
+                setattr(message, name, fill_message(type(current)(check_fields=True), value, f"{where}.{name}"))
             else:
                 setattr(message, name, float(value) if isinstance(current, float) and isinstance(value, int)
                         else value)

@@ -434,10 +434,22 @@ def partition_centre(lattice: Lattice, tags: Iterable[Coordinate]) -> tuple[floa
 
 
 def make_deployment(layout: str, read_range_m: float, area: tuple[float, float, float, float]) -> Deployment:
-    """A deployment of ``layout`` for read range r over ``area``; DeploymentError on a bad description."""
+    """A deployment of ``layout`` for read range r over ``area``; DeploymentError on a bad description, naming the
+    field of the description (layout, read_range_m, area) that its tag ids cannot hold."""
     if layout not in LAYOUTS:
         raise DeploymentError(f"layout: '{layout}' is not one of {', '.join(LAYOUTS)}")
     if not (isinstance(read_range_m, (int, float)) and math.isfinite(read_range_m) and read_range_m > 0.0):
         raise DeploymentError(f"read_range_m: must be a positive number, got {read_range_m}")
-    return Deployment(Lattice(layout, spacing_for(layout, read_range_m)), float(read_range_m),
-                      tuple(float(v) for v in area))
+    spacing_m = spacing_for(layout, read_range_m)
+    largest_m = ((1 << SPACING_BITS) - 1) * 1e-6
+    if not 0.0 < spacing_m <= largest_m:
+        lowest, highest = (bound / spacing_for(layout, 1.0) for bound in (1e-6, largest_m))
+        raise DeploymentError(f"read_range_m: {read_range_m:g} m gives a {layout} spacing of {spacing_m * 1e6:.0f} "
+                              f"um, which the tag ids (whole micrometres, {SPACING_BITS} bits) cannot hold: "
+                              f"{lowest:.2g}-{highest:.3g} m")
+    reach = max(abs(float(v)) for v in area) + read_range_m
+    if math.isfinite(reach) and reach / spacing_m >= COORDINATE_BIAS:
+        raise DeploymentError(f"area: reaches {reach:g} m from the origin, beyond the {COORDINATE_BITS}-bit lattice "
+                              f"coordinates of the tag ids at a {spacing_m:g} m spacing "
+                              f"({COORDINATE_BIAS * spacing_m:.3g} m)")
+    return Deployment(Lattice(layout, spacing_m), float(read_range_m), tuple(float(v) for v in area))

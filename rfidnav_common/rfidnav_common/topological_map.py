@@ -294,7 +294,7 @@ class _Reader:
                 self.problems.append(document.error(str(key), "unknown field (expected one of: description, "
                                                               "name, nodes, north_deg, tag_to_node_m)"))
         name = self.attempt(document.string, "name")
-        north_deg = self.attempt(document.number, "north_deg", DEFAULT_NORTH_DEG)
+        north_deg = self.attempt(document.number, "north_deg", DEFAULT_NORTH_DEG, minimum=-360.0, maximum=360.0)
         tag_to_node_m = self.attempt(document.number, "tag_to_node_m", 0.0, minimum=0.0)
         nodes_section = self.attempt(document.section, "nodes")
         if nodes_section is None:

@@ -6,57 +6,58 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 from pathlib import Path
 
-from rfidnav_bringup.cli import RUNS_DIR, Handler, checked_number
+from rfidnav_bringup.cli import (
+    RUNS_DIR,
+    Handler,
+    checked_number,
+    count_value,
+    option_seconds,
+    output_file,
+    output_folder,
+    positive_number,
+    rtf_value,
+    seed_value,
+)
 from rfidnav_common.errors import ConfigError
+
+MAX_RUNS = 100_000          # runs, seeds, missions, plans, evaluations of one experiment
+MAX_HOGS = 64               # busy loops beside a benchmark
+MAX_GRID_SPACING_M = 1000.0
 
 
 def rtf_list(text: str) -> list[float]:
-    """``--rtfs``: comma-separated positive numbers, ``max`` among them (infinite: the stepped clock unbounded)."""
-    from rfidnav_bringup.cli import rtf_value
-
-    values = [rtf_value(part) for part in text.split(",")]
-    if not all(value > 0 for value in values):
-        raise argparse.ArgumentTypeError(f"expected positive numbers or max, got '{text}'")
-    return values
+    """``--rtfs``: comma-separated real-time factors, ``max`` among them (infinite: the stepped clock unbounded)."""
+    return [rtf_value(part) for part in text.split(",")]
 
 
-def float_list(text: str) -> list[float]:
-    try:
-        values = [float(part) for part in text.split(",")]
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected comma-separated numbers, got '{text}'") from None
-    if not all(math.isfinite(value) and value > 0 for value in values):
-        raise argparse.ArgumentTypeError(f"expected positive numbers, got '{text}'")
-    return values
+runs_value = count_value(MAX_RUNS)
+hogs_value = checked_number(int, "a whole number", lambda hogs: 0 <= hogs <= MAX_HOGS,
+                            lambda text: f"expected 0-{MAX_HOGS} busy loops, got {text}")
+MAX_MIN_PAIRS = 1_000_000
 
 
 def add_reproduce(verbs: argparse._SubParsersAction) -> Handler:
     reproduce = verbs.add_parser("reproduce", help="the papers' experiments in-process, beside the papers' figures")
     names = reproduce.add_subparsers(dest="name", required=True, metavar="EXPERIMENT")
     common = argparse.ArgumentParser(add_help=False)
-    common.add_argument("--out", type=Path, default=RUNS_DIR / "reproduce",
+    common.add_argument("--out", type=output_folder, default=RUNS_DIR / "reproduce",
                         help="folder for the rows, tables and plots")
     common.add_argument("--json", action="store_true", help="print the rows as JSON on stdout")
     flc = names.add_parser("flc", parents=[common], help="paper 001 sec. V: the fuzzy heading controller's "
                                                          "line and route experiments")
-    flc.add_argument("--seeds", type=int, default=10, help="seeds per setting")
+    flc.add_argument("--seeds", type=runs_value, default=10, help="seeds per setting")
     partitions = names.add_parser("partitions", parents=[common], help="paper 000 sec. 6: navigations by "
                                                                        "partitions, Figs. 11-14")
-    partitions.add_argument("--runs", type=int, help="runs per (read range, level, method), default 250")
+    partitions.add_argument("--runs", type=runs_value, help="runs per (read range, level, method), default 250")
     two_tier = names.add_parser("two_tier", parents=[common], help="paper 003 sec. 4.2: WiFi fingerprints and "
                                                                    "tag groups, Figs. 10-12")
-    two_tier.add_argument("--runs", type=int, help="runs per route, default 20")
+    two_tier.add_argument("--runs", type=runs_value, help="runs per route, default 20")
     topological = names.add_parser("topological", parents=[common], help="paper 004 sec. 5: topological "
                                                                          "missions under read failures")
-    topological.add_argument("--runs", type=int, help="missions per miss rate, default 100")
+    topological.add_argument("--runs", type=runs_value, help="missions per miss rate, default 100")
     return run_reproduce
-
-
-positive_seconds = checked_number(float, "seconds", lambda value: math.isfinite(value) and value > 0,
-                                  lambda text: f"expected a positive number of seconds, got '{text}'")
 
 
 def add_calibrate(verbs: argparse._SubParsersAction) -> Handler:
@@ -65,23 +66,23 @@ def add_calibrate(verbs: argparse._SubParsersAction) -> Handler:
     names = calibrate.add_subparsers(dest="name", required=True, metavar="SETTING")
     flc = names.add_parser("flc", help="paper 001's phase noise and output range, fitted to Figs. 8/9 (the line "
                                        "experiments)")
-    flc.add_argument("--out", type=Path, help="the parameter file to write (default: the shipped one, "
+    flc.add_argument("--out", type=output_file, help="the parameter file to write (default: the shipped one, "
                                               "config/params/flc_paper_calibrated.yaml)")
     flc.add_argument("--json", action="store_true")
     offset = names.add_parser("phase-offset", help="heading_controller's phase_difference_offset_rad from "
                                                    "/rfid/reads, the robot standing still under (or squarely in "
                                                    "front of) a tag")
-    offset.add_argument("--out", type=Path, help="the --params file with the offset set, may be the same file "
-                                                 "(default: print only)")
+    offset.add_argument("--out", type=output_file,
+                        help="the --params file with the offset set, may be the same file (default: print only)")
     offset.add_argument("--json", action="store_true")
     offset.add_argument("--params", type=Path,
                         help="the heading_controller parameter file (its left and right antenna ports; the base of "
                              "--out); default: the shipped config/params/flc_tuned.yaml")
     offset.add_argument("--tag", help="the tag's id (EPC hex); default: the tag with the most same-channel pairs")
-    offset.add_argument("--duration", type=positive_seconds, default=20.0, help="seconds to listen once reads arrive")
-    offset.add_argument("--wait", type=positive_seconds, default=10.0,
+    offset.add_argument("--duration", type=option_seconds, default=20.0, help="seconds to listen once reads arrive")
+    offset.add_argument("--wait", type=option_seconds, default=10.0,
                         help="seconds to wait for the first /rfid/reads message")
-    offset.add_argument("--min-pairs", type=int, default=None,
+    offset.add_argument("--min-pairs", type=count_value(MAX_MIN_PAIRS), default=None,
                         help="fewest same-channel pairs to give an offset (default 50)")
     return run_calibrate
 
@@ -95,8 +96,6 @@ def run_calibrate(args: argparse.Namespace) -> int:
         if not args.params.is_file():
             raise ConfigError("--params", "", f"no such parameter file: {args.params}")
         min_pairs = MIN_PAIRS if args.min_pairs is None else args.min_pairs
-        if min_pairs < 1:
-            raise ConfigError("--min-pairs", "", f"must be at least 1, got {min_pairs}")
         return calibrate_phase_offset(args.params, args.out, args.tag, args.duration, args.wait, min_pairs,
                                       args.json)
     from rfidnav_experiments.calibrate.flc import CALIBRATED_FILE, calibrate_flc
@@ -108,12 +107,12 @@ def add_survey(verbs: argparse._SubParsersAction) -> Handler:
     survey = verbs.add_parser("survey", help="paper 003: build a radio map file for a scenario's world (in-process)")
     survey.add_argument("scenario", help="a scenario name or file; its world has the access points")
     how = survey.add_mutually_exclusive_group(required=True)
-    how.add_argument("--grid", type=float, metavar="SPACING_M",
+    how.add_argument("--grid", type=positive_number("a spacing in metres", MAX_GRID_SPACING_M), metavar="SPACING_M",
                      help="a site survey at known positions on a grid this many metres apart")
     how.add_argument("--robot", action="store_true",
                      help="the robot's own survey: it visits the map's landmarks and scans near its tag fixes")
-    survey.add_argument("--seed", type=int, default=1)
-    survey.add_argument("--out", type=Path, required=True, help="the radio map file to write (YAML)")
+    survey.add_argument("--seed", type=seed_value, default=1)
+    survey.add_argument("--out", type=output_file, required=True, help="the radio map file to write (YAML)")
     return run_survey
 
 
@@ -123,7 +122,7 @@ def add_bench(verbs: argparse._SubParsersAction) -> Handler:
     common = argparse.ArgumentParser(add_help=False)
     common.add_argument("--json", action="store_true", help="print the figures as JSON on stdout")
     flc = names.add_parser("flc", parents=[common], help="the fuzzy controller's fast path against scikit-fuzzy")
-    flc.add_argument("--evaluations", type=int, default=2000, help="evaluations per timing")
+    flc.add_argument("--evaluations", type=runs_value, default=2000, help="evaluations per timing")
     rtf = names.add_parser("rtf", parents=[common], help="a scenario over DDS at rising RTF")
     rtf.add_argument("--scenario", default="hallway", help="the scenario to run")
     rtf.add_argument("--rtfs", type=rtf_list, default=[1.0, 3.0, 5.0, 8.0, 12.0],
@@ -131,17 +130,18 @@ def add_bench(verbs: argparse._SubParsersAction) -> Handler:
     rtf.add_argument("--clock", choices=("free", "stepped"), default="free",
                      help="the clock of the runs (free: how high an RTF the free-running clock stands; stepped: "
                           "whether the figures follow the seed at every RTF)")
-    rtf.add_argument("--hogs", type=int, default=0,
+    rtf.add_argument("--hogs", type=hogs_value, default=0,
                      help="busy-loop processes kept running through the sweep (a loaded machine)")
-    rtf.add_argument("--tolerance", type=float, default=0.10, help="allowed RMSE growth over the lowest RTF")
-    rtf.add_argument("--seeds", type=int, default=3, help="runs per RTF (seeds 1..N)")
-    rtf.add_argument("--out", type=Path, default=RUNS_DIR / "bench_rtf", help="folder for the runs")
+    rtf.add_argument("--tolerance", type=positive_number("a fraction", 100.0), default=0.10,
+                     help="allowed RMSE growth over the lowest RTF")
+    rtf.add_argument("--seeds", type=runs_value, default=3, help="runs per RTF (seeds 1..N)")
+    rtf.add_argument("--out", type=output_folder, default=RUNS_DIR / "bench_rtf", help="folder for the runs")
     planner = names.add_parser("planner", parents=[common], help="Algorithm 1 and a reader round in a 30 x 30 m "
                                                                  "field at r = 2 cm")
-    planner.add_argument("--plans", type=int, default=200, help="random segments planned")
+    planner.add_argument("--plans", type=runs_value, default=200, help="random segments planned")
     partitions = names.add_parser("partitions", parents=[common], help="the navigations of paper 000 Figs. 12-14 "
                                                                        "in-process")
-    partitions.add_argument("--runs", type=int, default=250, help="runs per (read range, level)")
+    partitions.add_argument("--runs", type=runs_value, default=250, help="runs per (read range, level)")
     partitions.add_argument("--method", choices=["paper", "filter", "filter_boom_spin"], default="paper",
                             help="the configuration (reproduce partitions' METHOD_FILES)")
     names.add_parser("location_server", parents=[common], help="paper 003's tier-one locate over DDS")
@@ -171,13 +171,14 @@ def run_reproduce(args: argparse.Namespace) -> int:
 def run_survey(args: argparse.Namespace) -> int:
     from rfidnav_bringup.scenario import load_scenario
     from rfidnav_common.progress import stage
-    from rfidnav_experiments.runners.two_tier import survey
+    from rfidnav_experiments.runners.two_tier import check_survey, survey
     from rfidnav_localization.radio_map_file import write_radio_map
 
     scenario = load_scenario(args.scenario)
     if scenario.route_map is None:
         raise ConfigError(str(scenario.map_file), "", "a survey needs a route map with tag_groups (this is a "
                                                      "topological map)")
+    check_survey(scenario.world, scenario.route_map, scenario.map_file, args.grid)
     with stage(f"survey {scenario.name}"):
         fingerprints, description = survey(scenario.world, scenario.route_map, args.grid, args.seed)
     write_radio_map(args.out, fingerprints, description)

@@ -9,14 +9,16 @@ them and config/params/partition_localizer_filter.yaml selects the particle filt
 from __future__ import annotations
 
 import dataclasses
+import math
 from dataclasses import dataclass
 from pathlib import Path
 
-from rfidnav_common.config import param
+from rfidnav_common.config import AT_LEAST_ONE, DBM, NON_NEGATIVE, PORT, POSITIVE, SEED, Limits, param
 from rfidnav_common.errors import ParameterError
 from rfidnav_common.robot_map import load_route_map
-from rfidnav_localization.fingerprint import LocateSettings
+from rfidnav_localization.fingerprint import WEIGHTINGS, LocateSettings
 from rfidnav_localization.partition import LocalizerSettings
+from rfidnav_localization.partition.estimate import METHODS
 
 
 @dataclass(frozen=True)
@@ -25,35 +27,36 @@ class PartitionLocalizerParameters:
     # empty default cannot be declared, as parameter strings must be non-empty (rfidnav_common.config).
     map_file: str = param("robot map: its deployment_area tells the filter where tags exist ('unused': no map)",
                           "unused")
-    method: str = param("paper (partition centre, sec. 4.2 orientation bounds) or filter (particle filter)", "paper")
-    antenna: int = param("reader port of the downward antenna that reads the floor tags", 1)
+    method: str = param("paper (partition centre, sec. 4.2 orientation bounds) or filter (particle filter)", "paper",
+                        Limits(choices=METHODS))
+    antenna: int = param("reader port of the downward antenna that reads the floor tags", 1, PORT)
     map_frame: str = param("frame of the published pose", "map")
     publish_tf: bool = param("publish map -> odom on /tf from each estimate with a heading (REP 105); turn it off "
                              "where another localizer's estimate drives the mission", True)
-    seed: int = param("run seed; the node draws its own random stream from it", 0)
+    seed: int = param("run seed; the node draws its own random stream from it", 0, SEED)
     turn_threshold_rad: float = param(
-        "odometry heading change that ends a straight stretch (the partitions traversed start again) [rad]", 0.05)
-    particles: int = param("filter: number of particles", 500)
-    motion_noise_fraction: float = param("filter: odometry translation and rotation noise, relative", 0.02)
-    motion_noise_floor_m: float = param("filter: translation noise added to each step that moves [m]", 0.001)
-    motion_noise_yaw_rad_per_m: float = param("filter: heading noise per metre travelled [rad/m]", 0.02)
+        "odometry heading change that ends a straight stretch (the partitions traversed start again) [rad]", 0.05,
+        Limits(0.0, math.pi, low_open=True))
+    particles: int = param("filter: number of particles", 500, Limits(10, 1_000_000))
+    motion_noise_fraction: float = param("filter: odometry translation and rotation noise, relative", 0.02,
+                                         Limits(0.0, 1.0))
+    motion_noise_floor_m: float = param("filter: translation noise added to each step that moves [m]", 0.001,
+                                        NON_NEGATIVE)
+    motion_noise_yaw_rad_per_m: float = param("filter: heading noise per metre travelled [rad/m]", 0.02,
+                                              NON_NEGATIVE)
     boundary_softness_m: float = param(
         "filter: width of the soft read/no-read edge of a tag's disc (about the distance moved per round) [m]",
-        0.004)
+        0.004, POSITIVE)
     read_error_probability: float = param(
-        "filter: chance that a tag's read or no-read contradicts the disc geometry (missed or spurious read)", 0.01)
+        "filter: chance that a tag's read or no-read contradicts the disc geometry (missed or spurious read)", 0.01,
+        Limits(0.0, 0.5, low_open=True, high_open=True))
     rogue_distance_factor: float = param(
-        "tags read in one round lie within this factor times the read range of each other; others are rogue", 2.0)
+        "tags read in one round lie within this factor times the read range of each other; others are rogue", 2.0,
+        POSITIVE)
     antenna_offset_m: float = param(
         "filter: how far ahead of the rotation axis the floor antenna reads [m] (paper method: 0 only)", 0.0)
 
     def validate(self) -> None:
-        if not 1 <= self.antenna <= 65535:
-            raise ParameterError("antenna", f"a reader port is 1..65535, got {self.antenna}")
-        if not self.map_frame:
-            raise ParameterError("map_frame", "must not be empty")
-        if self.seed < 0:
-            raise ParameterError("seed", f"must not be negative, got {self.seed}")
         self.settings().validate()
 
     def antenna_ports_read(self) -> dict[str, int]:
@@ -79,11 +82,14 @@ class LocationServerParameters:
                                   False)
     map_file: str = param("robot map: its tag_groups, and its radio_map when the database has no fingerprints, are "
                           "loaded at start ('unused': none)", "unused")
-    k: int = param("neighbours averaged by the fingerprint matcher (k-nearest neighbours, RADAR)", 3)
+    k: int = param("neighbours averaged by the fingerprint matcher (k-nearest neighbours, RADAR)", 3,
+                   Limits(1, 10_000))
     missing_rss_dbm: float = param(
-        "RSS substituted for an AP heard on one side only (scan or fingerprint) [dBm]: below any sensitivity", -100.0)
-    min_common_aps: int = param("a fingerprint sharing fewer APs with the scan is not a candidate", 1)
-    weighting: str = param("inverse_distance (1 / signal distance) or uniform", "inverse_distance")
+        "RSS substituted for an AP heard on one side only (scan or fingerprint) [dBm]: below any sensitivity", -100.0,
+        DBM)
+    min_common_aps: int = param("a fingerprint sharing fewer APs with the scan is not a candidate", 1, AT_LEAST_ONE)
+    weighting: str = param("inverse_distance (1 / signal distance) or uniform", "inverse_distance",
+                           Limits(choices=WEIGHTINGS))
 
     def validate(self) -> None:
         if not self.database_file:

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import yaml
 
-from rfidnav_common.config import Section, check_number
+from rfidnav_common.config import DBM, Section, check_number
 from rfidnav_common.errors import ConfigError
 from rfidnav_common.files import write_atomically
 from rfidnav_localization.fingerprint import Fingerprint
@@ -29,8 +29,8 @@ def load_radio_map(path: Path) -> list[Fingerprint]:
         entry.reject_unknown(("position", "rss", "source"))
         position = entry.numbers("position", length=2)
         readings = entry.section("rss")
-        rss = {str(bssid): check_number(readings.raw(bssid), readings.source, readings.field(bssid))
-               for bssid in readings.keys()}
+        rss = {str(bssid): check_number(readings.raw(bssid), readings.source, readings.field(bssid),
+                                        minimum=DBM.low, maximum=DBM.high) for bssid in readings.keys()}
         try:
             fingerprints.append(Fingerprint((position[0], position[1]), rss, entry.string("source", "survey")))
         except ValueError as error:          # the message names the field: "source: ..."

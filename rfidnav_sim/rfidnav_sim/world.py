@@ -39,7 +39,7 @@ from pathlib import Path
 
 import numpy as np
 
-from rfidnav_common.config import Section, check_number
+from rfidnav_common.config import DBM, Section, check_number
 from rfidnav_common.errors import ConfigError, ParameterError
 from rfidnav_common.robot_map import tag_groups_of
 from rfidnav_common.tag_groups import TagGroup
@@ -163,7 +163,8 @@ def _access_points(section: Section) -> tuple[AccessPoint, ...]:
             raise entry.error("ssid", "expected a string (may be empty: a hidden network)")
         try:
             access_points.append(AccessPoint(bssid, ssid, (position[0], position[1]),
-                                             entry.number("tx_power_dbm", 20.0), entry.integer("channel", 6)))
+                                             entry.number("tx_power_dbm", 20.0, minimum=DBM.low, maximum=DBM.high),
+                                             entry.integer("channel", 6)))
         except ValueError as error:          # the message names the field: "channel: 15 is not ..."
             raise ConfigError(entry.source, entry.prefix, str(error)) from None
     return tuple(access_points)
@@ -178,7 +179,7 @@ def _wifi(entry: Section) -> tuple[PropagationSettings, int]:
         settings.validate()
     except ParameterError as error:
         raise entry.error(error.field, error.problem) from None
-    return settings, entry.integer("shadowing_seed", 1)
+    return settings, entry.integer("shadowing_seed", 1, minimum=0)
 
 
 def _deployment(entry: Section) -> Deployment:

@@ -165,10 +165,9 @@ def with_offset(text: str, offset_rad: float) -> str:
 def write_offset(controller_file: Path, out: Path, offset_rad: float) -> float:
     """Write ``controller_file`` with the offset set to ``out`` (they may be the same file); returns the offset the
     file had. The file written is read back as the controller would read it."""
-    text = controller_file.read_text()
     before = node_parameter_values(HeadingControllerParameters, controller_file, NODE_NAME).get(
-        OFFSET_KEY, HeadingControllerParameters().phase_difference_offset_rad)
-    out.write_text(with_offset(text, offset_rad))
+        OFFSET_KEY, HeadingControllerParameters().phase_difference_offset_rad)   # read, and checked (UTF-8 among it)
+    out.write_text(with_offset(controller_file.read_text(), offset_rad))
     written = node_parameter_values(HeadingControllerParameters, out, NODE_NAME).get(OFFSET_KEY)
     if written is None or abs(written - offset_rad) > 1e-4:
         raise CalibrationError(f"{out}: {OFFSET_KEY} reads back as {written}, not {offset_rad:.4f}")

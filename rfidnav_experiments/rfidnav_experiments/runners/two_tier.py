@@ -17,6 +17,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
@@ -74,6 +75,15 @@ def wifi_model(world: World) -> WifiModel:
     settings = dataclasses.replace(world.wifi, scan_noise_sd_db=receiver.scan_noise_sd_db,
                                    sensitivity_dbm=receiver.sensitivity_dbm)
     return WifiModel(world.access_points, world.wall_segments(), settings, world.wifi_seed)
+
+
+MAX_GRID_POINTS = 100_000     # a grid survey's points at most (~0.5 ms each)
+
+
+def grid_points(world: World, spacing_m: float) -> float:
+    """How many points a survey on a ``spacing_m`` grid visits (a float: it may be far beyond any integer loop)."""
+    width, height = floor_extent(world)
+    return max(0.0, math.ceil(width / spacing_m - 0.5)) * max(0.0, math.ceil(height / spacing_m - 0.5))
 
 
 def grid_radio_map(world: World, spacing_m: float, rng: np.random.Generator, scans_per_point: int = 3) -> RadioMap:
@@ -223,17 +233,33 @@ def robot_survey(site: Site, robot_map: RouteMap, seed: int, spacing_m: float = 
     return list(site.radio_map.fingerprints)
 
 
+def check_survey(world: World, robot_map: RouteMap, map_file: Path, grid_spacing_m: float | None) -> None:
+    """What ``./rfidnav survey`` is asked can be done, before anything runs: a grid of at least one and at most
+    MAX_GRID_POINTS points over the world's walled floor, or a map with landmarks for the robot's own survey."""
+    if grid_spacing_m is None:
+        if not robot_map.tag_groups:
+            raise ConfigError(str(map_file), "tag_groups", "the robot's survey visits the map's landmarks: none")
+        return
+    if not world.walls:
+        raise ConfigError("--grid", "", f"the world {world.name} has no walls: a grid survey covers the floor they "
+                                        "enclose")
+    points, (width, height) = grid_points(world, grid_spacing_m), floor_extent(world)
+    if points > MAX_GRID_POINTS:
+        raise ConfigError("--grid", "", f"a {grid_spacing_m:g} m grid over {world.name}'s {width:g} x {height:g} m "
+                                        f"floor has {points:.3g} points, more than {MAX_GRID_POINTS:,} (about a minute "
+                                        "of surveying): take a wider spacing")
+    if points < 1:
+        raise ConfigError("--grid", "", f"a {grid_spacing_m:g} m grid has no point on {world.name}'s {width:g} x "
+                                        f"{height:g} m floor")
+
+
 def survey(world: World, robot_map: RouteMap, grid_spacing_m: float | None,
            seed: int) -> tuple[list[Fingerprint], str]:
-    """``./rfidnav survey``: a grid site survey at known positions, or the robot's own survey of the map's
-    landmarks (grid_spacing_m None). Returns the fingerprints and a one-line description."""
+    """``./rfidnav survey`` (checked by :func:`check_survey`): a grid site survey at known positions, or the robot's
+    own survey of the map's landmarks (grid_spacing_m None). Returns the fingerprints and a one-line description."""
     if grid_spacing_m is not None:
-        if not grid_spacing_m > 0.0:
-            raise ConfigError("--grid", "", f"must be a positive spacing, got {grid_spacing_m}")
         fingerprints = list(grid_radio_map(world, grid_spacing_m, rng_for(seed, "grid survey")).fingerprints)
         return fingerprints, f"site survey of {world.name} on a {grid_spacing_m:g} m grid, seed {seed}"
-    if not robot_map.tag_groups:
-        raise ConfigError(str(robot_map.name), "tag_groups", "the robot's survey visits the map's landmarks: none")
     fingerprints = robot_survey(Site.of(world, RadioMap()), robot_map, seed)
     return fingerprints, (f"the robot's own survey of {world.name} through {len(robot_map.tag_groups)} landmarks, "
                           f"seed {seed}")
