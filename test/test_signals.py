@@ -15,10 +15,12 @@ from pathlib import Path
 
 import psutil
 import pytest
+from rosgraph_msgs.msg import Clock
 
 from rfidnav_bag.bags import bag_info
 from rfidnav_bringup.errors import LaunchError
 from rfidnav_bringup.processes import DomainLease, lock_folder, open_lock_file
+from rfidnav_common.ros import standalone_node
 from support.runs import WORKSPACE, mission_started, start_cli
 
 pytestmark = pytest.mark.tier("graph")
@@ -94,6 +96,15 @@ def test_the_nodes_of_a_sigkilled_orchestrator_stop_and_its_recorder_closes_the_
 def test_a_stopped_simulator_is_named_within_seconds_and_the_run_goes_on_when_it_resumes(tmp_path: Path) -> None:
     out = tmp_path / "runs"
     with start_cli("run", "line_follow_90", "--rtf", RTF, "--out", str(out), "--no-record", "--quiet") as cli:
+        reach = next(line for line in cli.stdout if line.startswith("graph on "))
+        domain = int(reach.split("ROS_DOMAIN_ID=")[1].split()[0])
+        with standalone_node("test_signals_clock", domain) as (node, executor):
+            clock_s = [0.0]
+            node.create_subscription(Clock, "/clock", lambda m: clock_s.__setitem__(0, m.clock.sec), 10)
+            deadline = time.monotonic() + 180
+            while clock_s[0] < 2.0:   # the mission runs: the orchestrator has seen the clock start
+                assert time.monotonic() < deadline and cli.poll() is None, "the clock never passed 2 s"
+                executor.spin_once(timeout_sec=0.1)
         nodes = mission_started(out, cli)
         simulator = next(p for p in nodes if "rfidnav_bringup.container" in " ".join(p.cmdline()))
         simulator.suspend()
