@@ -14,6 +14,7 @@ import subprocess
 import sys
 import time
 from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from typing import Any
 
 import pytest
@@ -445,22 +446,29 @@ def test_main_prints_one_line_and_exits_2_for_a_missing_port():
     assert len(fatal) == 1 and MISSING_PORT in fatal[0] and "Traceback" not in done.stderr, done.stderr
 
 
-@pytest.mark.tier("graph")
-@pytest.mark.parametrize("signal_number", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
-def test_ctrl_c_or_sigterm_stops_the_base_then_the_open_interface_without_a_traceback(
-        graph: Graph, fake: FakeCreate, signal_number: int):
+@contextmanager
+def create_base_process(graph: Graph, fake: FakeCreate) -> Iterator[subprocess.Popen]:
+    """create_base in its own process on the fake's port, once it queries the sensors; killed if still running."""
     process = subprocess.Popen([sys.executable, "-m", "rfidnav_drivers.create_base_node", "--ros-args",
                                 "-p", f"port:={fake.slave_path}"], stderr=subprocess.PIPE, text=True)
     try:
         graph.spin_until(lambda: fake.queries >= 10 or process.poll() is not None, "the node's sensor queries",
                          timeout_s=60.0)
         assert process.poll() is None, process.communicate()[1]
-        process.send_signal(signal_number)
-        stderr = process.communicate(timeout=60)[1]
+        yield process
     finally:
         if process.poll() is None:
             process.kill()
             process.wait()
+
+
+@pytest.mark.tier("graph")
+@pytest.mark.parametrize("signal_number", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
+def test_ctrl_c_or_sigterm_stops_the_base_then_the_open_interface_without_a_traceback(
+        graph: Graph, fake: FakeCreate, signal_number: int):
+    with create_base_process(graph, fake) as process:
+        process.send_signal(signal_number)
+        stderr = process.communicate(timeout=60)[1]
     assert process.returncode == 0 and "Traceback" not in stderr, stderr
     graph.spin_until(lambda: fake.opcodes()[-1:] == [oi.STOP], "Stop from the interrupted node")
     assert fake.received()[-2] == Command(oi.DRIVE_DIRECT, (0, 0, 0, 0)) and fake.mode == "off"
@@ -469,17 +477,8 @@ def test_ctrl_c_or_sigterm_stops_the_base_then_the_open_interface_without_a_trac
 @pytest.mark.tier("graph")
 def test_a_lost_port_ends_the_process_with_exit_1_so_that_it_is_respawned(graph: Graph):
     fake = FakeCreate()
-    process = subprocess.Popen([sys.executable, "-m", "rfidnav_drivers.create_base_node", "--ros-args",
-                                "-p", f"port:={fake.slave_path}"], stderr=subprocess.PIPE, text=True)
-    try:
-        graph.spin_until(lambda: fake.queries >= 10 or process.poll() is not None, "the node's sensor queries",
-                         timeout_s=60.0)
-        assert process.poll() is None, process.communicate()[1]
+    with create_base_process(graph, fake) as process:
         fake.close()                           # the cable pulled: every read and write fails from now on
         stderr = process.communicate(timeout=60)[1]
-    finally:
-        if process.poll() is None:
-            process.kill()
-            process.wait()
     assert process.returncode == SERIAL_THREAD_ENDED, stderr
     assert "the port is lost" in stderr and "Traceback" not in stderr, stderr
