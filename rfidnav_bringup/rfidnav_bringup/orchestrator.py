@@ -140,6 +140,7 @@ class Orchestrator:
         self.stop_signal: int | None = None       # the first of STOP_SIGNALS that came
         self.terminal_lost = False                 # SIGHUP on a terminal: nothing more is printed
         self.clock_source_says = ""                # the clock source's last warning on /rosout
+        self.clock_source_name = next((spec.name for spec in scenario.nodes.values() if spec.clock_source), None)
         # Nodes of a respawned process, and until when (wall): the dead one stays in the graph until its DDS lease
         # ends, so two of the name are expected for that long.
         self.respawned_until: dict[str, float] = {}
@@ -298,8 +299,7 @@ class Orchestrator:
         self.outcome.message = f"interrupted ({name})"
 
     def on_log(self, message: Log) -> None:
-        clock_source = next((spec.name for spec in self.scenario.nodes.values() if spec.clock_source), None)
-        if message.name == clock_source and message.level >= Log.WARN:
+        if message.name == self.clock_source_name and message.level >= Log.WARN:
             self.clock_source_says = message.msg
 
     def say(self, text: str, always: bool = False) -> None:
