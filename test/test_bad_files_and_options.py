@@ -13,6 +13,7 @@ breaks one thing there."""
 
 from __future__ import annotations
 
+import importlib
 import os
 import re
 import subprocess
@@ -389,6 +390,9 @@ FILE_CASES: dict[str, FileCase] = {
                                "lattices[0].read_range_m", ("positive",)),
     "lattice layout unknown": FileCase(PF, replaced(W_PF, "layout: triangular", "layout: hexagonal"), W_PF,
                                        "lattices[0].layout", ("not one of",)),
+    "grid lattice for the partition navigator": FileCase(PF, replaced(W_PF, "layout: triangular", "layout: grid"),
+                                                         W_PF, "lattices[0].layout", ("needs a triangular lattice",
+                                                                                      "'grid'")),
     "lattice area inverted": FileCase(PF, replaced(W_PF, "area: [0.0, 0.0, 5.0, 5.0]", "area: [5.0, 0.0, 0.0, 5.0]"),
                                       W_PF, "lattices[0].area", ("x_max > x_min",)),
     "lattice area 1e300": FileCase(PF, replaced(W_PF, "area: [0.0, 0.0, 5.0, 5.0]", "area: [0.0, 0.0, 1.0e+300, 5.0]"),
@@ -768,6 +772,10 @@ TRIPWIRES = ("rfidnav_bringup.orchestrator.Orchestrator", "subprocess.Popen", "r
 
 @pytest.fixture
 def nothing_starts(monkeypatch: pytest.MonkeyPatch) -> None:
+    # Imported before any tripwire is set: a first import may start processes of its own (matplotlib's font cache
+    # runs fc-list on a fresh machine), which are not the run's.
+    for target in TRIPWIRES:
+        importlib.import_module(target.rpartition(".")[0])
     for target in TRIPWIRES:
         def tripwire(*_args, _target=target, **_kwargs):
             raise AssertionError(f"{_target} was reached: the bad input was not refused before it")

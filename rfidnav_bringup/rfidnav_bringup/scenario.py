@@ -40,6 +40,7 @@ from rfidnav_planning.parameters import (
     PartitionNavigatorParameters,
     TwoTierNavigatorParameters,
 )
+from rfidnav_planning.partition_planner import lattice_refusal
 from rfidnav_sim.parameters import (
     CompassParameters,
     ReaderParameters,
@@ -79,6 +80,7 @@ METRIC_GROUPS = ("tracking", "partition", "two_tier", "topological")
 MAX_MISSION_S = MAX_DURATION_S          # mission.timeout_s: one day of sim time (the orchestrator's wall limit follows)
 MAX_RESPAWNS = 100
 SIMULATED_READER = ("rfidnav_sim", "rfid_reader_sim")   # reads the world's tags
+PARTITION_NAVIGATOR = ("rfidnav_planning", "partition_navigator")   # plans on triangular lattices only
 ORCHESTRATOR_NODE = "rfidnav_orchestrator"   # the node that sends the goal (relative action names are its)
 # What a goal of each action type must give (the server refuses a goal without it, once everything runs).
 REQUIRED_GOAL_FIELDS = {"rfidnav_msgs/action/FollowTagRoute": "tag_ids",
@@ -282,6 +284,7 @@ def load_scenario(name_or_path: str, swaps: dict[str, str] | None = None,
     _check_goal_node(scenario, mission)
     _check_goal(scenario, goal_class, mission)
     _check_map_in_world(scenario)
+    _check_partition_lattices(scenario)
     parameters = {role: node_parameters(scenario, spec, seed=0, rtf=1.0) for role, spec in scenario.nodes.items()}
     _check_antenna_ports(scenario, parameters)
     _check_speeds(scenario, parameters)
@@ -557,6 +560,19 @@ def _check_server(scenario: Scenario, mission: Section) -> None:
         raise mission.error("action", f"{node} (role {role}) serves {name}, not {scenario.mission.action}")
     if scenario.mission.action_type != action_type:
         raise mission.error("type", f"{node} (role {role}) serves {action_type}, not {scenario.mission.action_type}")
+
+
+def _check_partition_lattices(scenario: Scenario) -> None:
+    """A partition navigator (paper 000) walks the triangles of a triangular lattice: a simulated world whose floor
+    deployment it cannot plan on (a grid) is refused here, naming the world's field, not once the robot has
+    started and read its first tag."""
+    roles = {(spec.package, spec.executable) for spec in scenario.nodes.values()}
+    if PARTITION_NAVIGATOR not in roles or SIMULATED_READER not in roles:   # real tags: known once read
+        return
+    for index, deployment in enumerate(scenario.world.deployments):
+        refusal = lattice_refusal(deployment)
+        if refusal is not None:
+            raise ConfigError(str(scenario.world_file), f"lattices[{index}].layout", refusal)
 
 
 def _origin_key(scenario: Scenario, role: str, name: str) -> tuple[str, str]:

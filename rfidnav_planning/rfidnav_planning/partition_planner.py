@@ -273,10 +273,19 @@ def plan_partition_path(deployment: Deployment, start: Point, goal: Point) -> Pa
     return PartitionPlan(start_point, goal_point, sweep.finish())
 
 
+def lattice_refusal(deployment: Deployment) -> str | None:
+    """Why Algorithm 1 cannot plan on ``deployment`` (it walks lattice triangles: a grid has none); None when it
+    can. The scenario check refuses such a world before any process starts with the same words."""
+    if deployment.lattice.triangular:
+        return None
+    return (f"partition path planning needs a triangular lattice (layouts 'triangular' or 'compressed'); the "
+            f"deployment is a '{deployment.lattice.layout}' lattice")
+
+
 def _check_request(deployment: Deployment, start: Point, goal: Point) -> None:
-    if not deployment.lattice.triangular:
-        raise PlanningError(f"partition path planning needs a triangular lattice (layouts 'triangular' or "
-                            f"'compressed'); the deployment is a '{deployment.lattice.layout}' lattice")
+    refusal = lattice_refusal(deployment)
+    if refusal is not None:
+        raise PlanningError(refusal)
     for name, point in (("start", start), ("goal", goal)):
         if not deployment.contains_point(float(point[0]), float(point[1])):
             raise PlanningError(f"{name} ({point[0]}, {point[1]}) lies outside the deployment area "
