@@ -156,6 +156,7 @@ def goal(scenario: str, old: str, new: str, *words: str) -> FileCase:
 
 
 GOAL_LF, GOAL_PF = "goal: {tag_ids: [C1, C2]}", "goal: {target: {x: 4.0, y: 3.8, z: 0.0}, tolerance_m: 0.0}"
+GOAL_TT = "goal: {target: {x: 10.8, y: 6.8, z: 0.0}, tolerance_m: 0.0}"
 
 FILE_CASES: dict[str, FileCase] = {
     # ---- every file kind: text that is not UTF-8 (file, byte offset)
@@ -449,6 +450,17 @@ FILE_CASES: dict[str, FileCase] = {
                                                  M_PF, "deployment_area", ("expected 4 numbers",)),
     "deployment area NaN": FileCase(PF, replaced(M_PF, "[0.0, 0.0, 5.0, 5.0]", "[0.0, 0.0, .nan, 5.0]"), M_PF,
                                     "deployment_area[2]", ("finite",)),
+    "two-tier goal 4 m outside the home": goal(TT, GOAL_TT,
+                                               "goal: {target: {x: 16.0, y: 4.0, z: 0.0}, tolerance_m: 0.0}",
+                                               "target (16.0, 4.0) is outside the map's extent [0.0, 0.0, 12.0, 8.0]"),
+    "map walls a mapping": FileCase(TT, replaced(M_TT, "walls:\n", "walls: {}\nx_walls:\n"), M_TT, "x_walls",
+                                    ("unknown",)),
+    "map wall of three numbers": FileCase(TT, replaced(M_TT, "- [0.0, 0.0, 12.0, 0.0]", "- [0.0, 0.0, 12.0]"), M_TT,
+                                          "walls[0]", ("expected [x1, y1, x2, y2]",)),
+    "map wall NaN": FileCase(TT, replaced(M_TT, "- [0.0, 0.0, 12.0, 0.0]", "- [0.0, .nan, 12.0, 0.0]"), M_TT,
+                             "walls[0][1]", ()),
+    "map extent inverted": FileCase(TT, replaced(M_TT, "extent: [0.0, 0.0, 12.0, 8.0]",
+                                                 "extent: [12.0, 0.0, 0.0, 8.0]"), M_TT, "extent", ("max > min",)),
     "radio map missing": FileCase(TT, lambda root: (root / RADIO).unlink(), M_TT, "radio_map", ("no such file",)),
     "map tag group missing from the world": FileCase(TT, replaced(M_TT, "{id: M4, shape: cross",
                                                                   "{id: M5, shape: cross"),

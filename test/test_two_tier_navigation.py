@@ -166,12 +166,12 @@ def test_a_seeded_run_through_the_flat_arrives_and_its_fixes_stay_within_bounds(
 
 
 @pytest.mark.tier("slow")
-def test_a_run_whose_search_drives_into_a_wall_stalls_there_and_fails_with_its_bumps_counted(site: Site) -> None:
-    # Seed 3: the WiFi estimate puts the first spiral in the flat's south-west corner, and the walls stop it.
+def test_a_run_whose_search_drives_into_a_wall_backs_off_asks_tier_one_and_still_arrives(site: Site) -> None:
+    # Seed 3, no floor plan: the WiFi estimate puts the first spiral in the flat's south-west corner, where the walls
+    # stop it. The stalled wheels (odometry that does not follow the command) send it back and to tier one.
     run = run_two_tier(site, (1.0, 1.0, 0.3), (10.8, 6.8), SETTINGS, np.random.default_rng(3), 3, max_time_s=300.0)
-    assert not run.success and run.bumps > 0
-    x, y = run.final_position
-    assert x >= 0.17 - 1e-6 and y >= 0.17 - 1e-6            # held at its footprint from the walls, not through them
+    assert run.success, run.message
+    assert 0 < run.bumps <= SETTINGS.stall_steps * SETTINGS.max_stalls     # pressed only until it noticed, each time
 
 
 def test_without_intermediate_landmarks_dead_reckoning_drifts_further(site: Site) -> None:

@@ -482,16 +482,18 @@ def _check_route(scenario: Scenario, mission: Section) -> None:
 
 
 def _check_goal_area(scenario: Scenario, mission: Section) -> None:
-    """A point goal must lie on the tagged area the map declares (the navigator would refuse it)."""
-    target = scenario.mission.goal.get("target")
-    area = scenario.route_map.deployment_area if scenario.route_map is not None else None
-    if not isinstance(target, dict) or area is None:
+    """A point goal must lie in the map's extent (paper 000: the tagged area; paper 003: the home's floor plan):
+    the navigator would refuse it."""
+    target, route_map = scenario.mission.goal.get("target"), scenario.route_map
+    area = route_map.extent if route_map is not None else None
+    if not isinstance(target, dict) or route_map is None or area is None:
         return
     x, y = target.get("x"), target.get("y")
     if not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in (x, y)):
         raise mission.error("goal", "target: expected numbers x and y")
     if not (area[0] <= x <= area[2] and area[1] <= y <= area[3]):
-        raise mission.error("goal", f"target ({x}, {y}) is outside the map's deployment_area {list(area)}")
+        what = "deployment_area" if area == route_map.deployment_area else "extent"
+        raise mission.error("goal", f"target ({x}, {y}) is outside the map's {what} {list(area)}")
 
 
 def _check_antenna_ports(scenario: Scenario, parameters: dict[str, Any]) -> None:

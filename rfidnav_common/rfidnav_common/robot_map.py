@@ -10,6 +10,10 @@ They hold no tag positions: the robot never knows where tags are. A map has any 
   registered (the paper's landmarks). Worlds describe their groups with the same schema.
 * ``radio_map`` (paper 003): a file of WiFi fingerprints (``./rfidnav survey`` writes one) the location server
   starts from when its database holds none; relative to the map file.
+* ``walls`` and ``extent`` (paper 003): the home's floor plan as its owner knows it, the walls as segments and the
+  rectangle the robot may drive in. The two-tier navigator plans its legs round the walls and keeps its spiral
+  searches inside; a goal outside the extent is refused. Without ``extent`` it is the walls' bounding box, then
+  the ``deployment_area``.
 
 Schema::
 
@@ -22,6 +26,9 @@ Schema::
       - {id: G1, shape: cross, centre: [1.0, 2.0], size_m: 0.30, rotation_deg: 0.0, tag_spacing_m: 0.05}
         # shape: cross | circle | triangle | square; size_m: cross bar length, circle diameter, side
     radio_map: two_tier_home_radio_map.yaml
+    walls:                 # segments [x1, y1, x2, y2] [m], map frame
+      - [0.0, 0.0, 12.0, 0.0]
+    extent: [0.0, 0.0, 12.0, 8.0]          # x_min, y_min, x_max, y_max [m]
 """
 
 from __future__ import annotations
@@ -30,9 +37,12 @@ import math
 from dataclasses import dataclass
 from pathlib import Path
 
-from rfidnav_common.config import Section
+from rfidnav_common.config import Section, check_number
 from rfidnav_common.errors import ConfigError
 from rfidnav_common.tag_groups import TagGroup
+
+Wall = tuple[float, float, float, float]          # x1, y1, x2, y2 [m]
+Rectangle = tuple[float, float, float, float]     # x_min, y_min, x_max, y_max [m]
 
 
 @dataclass(frozen=True)
@@ -42,6 +52,19 @@ class RouteMap:
     deployment_area: tuple[float, float, float, float] | None = None
     tag_groups: tuple[TagGroup, ...] = ()
     radio_map_file: Path | None = None
+    walls: tuple[Wall, ...] = ()
+    declared_extent: Rectangle | None = None
+
+    @property
+    def extent(self) -> Rectangle | None:
+        """Where the robot may be: the declared extent, else the walls' bounding box, else the deployment area."""
+        if self.declared_extent is not None:
+            return self.declared_extent
+        if self.walls:
+            xs = [x for wall in self.walls for x in (wall[0], wall[2])]
+            ys = [y for wall in self.walls for y in (wall[1], wall[3])]
+            return min(xs), min(ys), max(xs), max(ys)
+        return self.deployment_area
 
     def unknown_tags(self, route: list[str]) -> list[str]:
         return [tag for tag in route if tag not in self.arrival_tags]
@@ -49,14 +72,12 @@ class RouteMap:
 
 def load_route_map(path: Path) -> RouteMap:
     section = Section.from_file(Path(path))
-    section.reject_unknown(("name", "description", "arrival_tags", "deployment_area", "tag_groups", "radio_map"))
+    section.reject_unknown(("name", "description", "arrival_tags", "deployment_area", "tag_groups", "radio_map",
+                            "walls", "extent"))
     arrival = _arrival_tags(section) if section.has("arrival_tags") else {}
-    area = None
-    if section.has("deployment_area"):
-        x_min, y_min, x_max, y_max = section.numbers("deployment_area", length=4)
-        if not (x_max > x_min and y_max > y_min):
-            raise section.error("deployment_area", "expected [x_min, y_min, x_max, y_max] with max > min")
-        area = (x_min, y_min, x_max, y_max)
+    area = rectangle_of(section, "deployment_area")
+    extent = rectangle_of(section, "extent")
+    walls = walls_of(section)
     groups = tag_groups_of(section)
     radio_map = None
     if section.has("radio_map"):
@@ -66,7 +87,32 @@ def load_route_map(path: Path) -> RouteMap:
     if not arrival and area is None and not groups:
         raise section.error("arrival_tags", "a map needs arrival_tags, a deployment_area or tag_groups (none given)")
     return RouteMap(name=section.string("name"), arrival_tags=arrival, deployment_area=area, tag_groups=groups,
-                    radio_map_file=radio_map)
+                    radio_map_file=radio_map, walls=walls, declared_extent=extent)
+
+
+def rectangle_of(section: Section, key: str) -> Rectangle | None:
+    """An optional ``[x_min, y_min, x_max, y_max]`` with max > min."""
+    if not section.has(key):
+        return None
+    x_min, y_min, x_max, y_max = section.numbers(key, length=4)
+    if not (x_max > x_min and y_max > y_min):
+        raise section.error(key, "expected [x_min, y_min, x_max, y_max] with max > min")
+    return x_min, y_min, x_max, y_max
+
+
+def walls_of(section: Section) -> tuple[Wall, ...]:
+    """The optional ``walls`` list of a map or world file: segments ``[x1, y1, x2, y2]`` of finite numbers."""
+    raw_walls = section.raw("walls", [])
+    if not isinstance(raw_walls, list):
+        raise section.error("walls", "expected a list of [x1, y1, x2, y2]")
+    walls = []
+    for index, wall in enumerate(raw_walls):
+        field = f"{section.field('walls')}[{index}]"
+        if not isinstance(wall, list) or len(wall) != 4:
+            raise ConfigError(section.source, field, "expected [x1, y1, x2, y2]")
+        x1, y1, x2, y2 = (check_number(value, section.source, f"{field}[{i}]") for i, value in enumerate(wall))
+        walls.append((x1, y1, x2, y2))
+    return tuple(walls)
 
 
 MAX_TAGS_PER_SIDE = 2500      # a tag group's size over its tag spacing: no group of more than ~10,000 tags

@@ -89,7 +89,8 @@ class TwoTierNavigatorParameters:
 
     ACTION: ClassVar[tuple[str, str]] = ("/navigate_to_point", "rfidnav_msgs/action/NavigateToPoint")   # it serves
 
-    map_file: str = param("robot map (unused: the tag map comes from the location server)", "unused")
+    map_file: str = param("robot map: its walls and extent, when it has them (the tag map comes from the location "
+                          "server); 'unused': none", "unused")
     floor_antenna: int = param("reader port of the HF floor antenna that reads the tag groups", 1, PORT)
     control_rate_hz: float = param("control steps per second [Hz, sim time]", 20.0, RATE_HZ)
     service_timeout_s: float = param("a location server call unanswered this long is sent again [s]", 2.0,
@@ -112,6 +113,16 @@ class TwoTierNavigatorParameters:
                                     "every crossing of a tag line", 0.14, SPEED_MPS)
     read_range_m: float = param("the floor reader's range [m]: a tag fix is this good", 0.05, READ_RANGE_M)
     drift_per_m: float = param("dead reckoning: position sd growth per metre driven", 0.05, Limits(0.0, 1.0))
+    wall_clearance_m: float = param("ours: legs are planned this far from the map's walls [m]", 0.30, POSITIVE)
+    waypoint_tolerance_m: float = param("ours: a waypoint round a wall is passed within this [m]", 0.10, POSITIVE)
+    search_wall_clearance_m: float = param(
+        "ours: a spiral search ends when dead reckoning puts the robot this near a map wall or its extent's edge [m]",
+        0.20, POSITIVE)
+    stall_steps: int = param("ours: control steps commanding motion that the odometry does not follow before the "
+                             "robot takes itself to be stalled at a wall", 10, AT_LEAST_ONE)
+    back_off_m: float = param("ours: how far a stalled robot backs off before asking tier one where it is [m]", 0.25,
+                              Limits(0.0, 10.0))
+    max_stalls: int = param("ours: give up after stalling at a wall this many times", 10, AT_LEAST_ONE)
     speed_mps: float = param("driving speed [m/s]", 0.2, SPEED_MPS)
     turn_rate_radps: float = param("largest yaw rate [rad/s]", 0.8, YAW_RATE_RADPS)
     heading_gain_per_s: float = param("yaw rate per radian of heading error [1/s]", 2.0, POSITIVE)

@@ -42,9 +42,13 @@ from rfidnav_control.go_to import GoToSettings, go_to_command
 from rfidnav_control.spiral import SpiralSearch, separation_for_group
 from rfidnav_localization.dead_reckoning import TIER_TAG, TIER_WIFI, DeadReckoning, DeadReckoningEstimate, Fix
 from rfidnav_localization.tag_fix import TagFix, tag_fix
+from rfidnav_planning.wall_paths import FloorPlan, Point, WallPlanner
 
-LOCATING, MAPPING, TO_LANDMARK, SEARCHING, TO_TARGET, DONE = (
-    "locating", "mapping", "to_landmark", "searching", "to_target", "done")
+LOCATING, MAPPING, TO_LANDMARK, SEARCHING, TO_TARGET, BACKING_OFF, DONE = (
+    "locating", "mapping", "to_landmark", "searching", "to_target", "backing_off", "done")
+STALL_SPEED_MPS = 0.02        # a command at least this fast that the odometry does not follow is a stall...
+STALL_MOVE_M = 1e-4           # ...when a control step's odometry moves less than this (stalled wheels do not count)
+BACK_OFF_SPEED_MPS = 0.1
 LOCATE, TAG_MAP = "locate", "tag_map"
 
 
@@ -63,16 +67,30 @@ class TwoTierSettings:
     search_speed_mps: float = 0.14
     read_range_m: float = 0.05             # the floor reader's range: a tag fix is this good
     drift_per_m: float = 0.05              # dead reckoning: position sd growth per metre (paper 003: 1 m per 20 m)
+    # Ours, with a floor plan in the robot's map (rfidnav_planning.wall_paths): legs keep this far from its walls
+    # (the base's 17 cm radius and a margin for dead reckoning)...
+    wall_clearance_m: float = 0.30
+    waypoint_tolerance_m: float = 0.10     # ...and pass the waypoints round them this near
+    search_wall_clearance_m: float = 0.20  # a spiral ends when dead reckoning puts the robot this near a wall or edge
+    # Ours: a wall the estimate did not expect (the estimate is off) stalls the wheels. After this many control
+    # steps commanding motion the odometry does not follow, the robot backs off and asks tier one where it is...
+    stall_steps: int = 10
+    back_off_m: float = 0.25
+    max_stalls: int = 10                   # ...and gives up after this many stalls
     go_to: GoToSettings = field(default_factory=GoToSettings)
 
     def validate(self) -> None:
         for name in ("landmark_spacing_m", "calibration_distance_m", "deviation_threshold_m", "tag_map_radius_m",
-                     "search_radius_sigmas", "search_min_radius_m", "search_speed_mps", "read_range_m"):
+                     "search_radius_sigmas", "search_min_radius_m", "search_speed_mps", "read_range_m",
+                     "wall_clearance_m", "waypoint_tolerance_m", "search_wall_clearance_m"):
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0.0):
                 raise ParameterError(name, f"must be a positive number, got {value}")
-        if self.max_searches < 1:
-            raise ParameterError("max_searches", f"must be at least 1, got {self.max_searches}")
+        for name in ("max_searches", "stall_steps", "max_stalls"):
+            if getattr(self, name) < 1:
+                raise ParameterError(name, f"must be at least 1, got {getattr(self, name)}")
+        if not (math.isfinite(self.back_off_m) and self.back_off_m >= 0.0):
+            raise ParameterError("back_off_m", f"must not be negative, got {self.back_off_m}")
         if not (math.isfinite(self.drift_per_m) and self.drift_per_m >= 0.0):
             raise ParameterError("drift_per_m", f"must not be negative, got {self.drift_per_m}")
         self.go_to.validate()
@@ -125,6 +143,8 @@ class Progress:
     fixes: list[Fix] = field(default_factory=list)
     searches: int = 0                       # spirals started
     failed_searches: int = 0
+    cut_searches: int = 0                   # of the failed: ended at a known wall or the map's edge
+    stalls: int = 0                         # wheels stalled at a wall the estimate did not expect
     search_length_m: float = 0.0            # driven while searching
     tier_one_requests: int = 0
     unknown_tags: int = 0
@@ -132,9 +152,17 @@ class Progress:
 
 
 class TwoTierNavigator:
-    def __init__(self, settings: TwoTierSettings) -> None:
+    def __init__(self, settings: TwoTierSettings, floor: FloorPlan = FloorPlan()) -> None:
         settings.validate()
         self.settings = settings
+        self.floor = floor
+        self.planner = None if floor.empty else WallPlanner(floor, settings.wall_clearance_m)
+        self.route: list[Point] = []                  # the current leg's waypoints round the walls, its goal last
+        self.route_key: tuple[Point, int] | None = None   # (goal, fixes made) the route was planned for
+        self.to_target_m: dict[str, float] = {}       # path length from each landmark to the target
+        self.last_linear_mps = 0.0                    # the last command's, for the stall check
+        self.stalled_steps = 0
+        self.back_off_from_m = 0.0
         self.reckoning = DeadReckoning(settings.drift_per_m)
         self.tags: dict[str, MapTag] = {}
         self.landmarks: dict[str, Landmark] = {}
@@ -153,15 +181,27 @@ class TwoTierNavigator:
     def start(self, target: tuple[float, float], known_start: Fix | None = None) -> Decision:
         """Navigate to ``target``: from tier one (A6), or from ``known_start`` when the robot knows where it
         starts (a dock on a landmark: how a robot surveys a site whose radio map is still empty)."""
-        if not all(math.isfinite(v) for v in target):
-            raise ValueError(f"target ({target[0]}, {target[1]}) is not a finite point")
+        refusal = self.refusal(target)
+        if refusal is not None:
+            raise ValueError(refusal)
         self.target = (float(target[0]), float(target[1]))
+        self.route_key, self.to_target_m = None, {}
         self.progress = Progress()
         self.outcome = None
         if known_start is None:
             return self.ask(Request(LOCATE), LOCATING)
         self.fixed(known_start)
         return self.ask(Request(TAG_MAP, known_start.position, self.settings.tag_map_radius_m), MAPPING)
+
+    def refusal(self, target: tuple[float, float]) -> str | None:
+        """Why ``target`` cannot be navigated to (not a finite point, outside the map's extent), None if it can."""
+        if not all(math.isfinite(v) for v in target):
+            return f"target ({target[0]}, {target[1]}) is not a finite point"
+        extent = self.floor.extent
+        if extent is not None and not (extent[0] <= target[0] <= extent[2] and extent[1] <= target[1] <= extent[3]):
+            return (f"target ({target[0]:g}, {target[1]:g}) is outside the map's extent [x_min, y_min, x_max, y_max] "
+                    f"= {list(extent)}")
+        return None
 
     def estimate(self) -> DeadReckoningEstimate:
         return self.reckoning.estimate()
@@ -197,7 +237,7 @@ class TwoTierNavigator:
             self.fixed(Fix(position, uncertainty_m, TIER_WIFI))
             return self.ask(Request(TAG_MAP, position, self.settings.tag_map_radius_m), MAPPING)
         deviation = math.dist(position, estimate.position)
-        if self.phase == SEARCHING or deviation > self.settings.deviation_threshold_m:
+        if self.phase in (SEARCHING, BACKING_OFF) or deviation > self.settings.deviation_threshold_m:
             # Tier two failed or dead reckoning drifted: trust tier one and fix at the landmark nearest to it.
             self.fixed(Fix(position, uncertainty_m, TIER_WIFI))
             return self.head_for(self.nearest_landmark(position))
@@ -219,11 +259,21 @@ class TwoTierNavigator:
     # ------------------------------------------------------------------------------------ control step
     def step(self, odom: tuple[float, float, float], compass_yaw: float | None, tag_ids: list[str]) -> Decision:
         """One control step: the odometry pose, the latest compass heading and the floor tags read."""
+        decision = self._step(odom, compass_yaw, tag_ids)
+        self.last_linear_mps = decision.command[0]
+        return decision
+
+    def _step(self, odom: tuple[float, float, float], compass_yaw: float | None, tag_ids: list[str]) -> Decision:
         if self.outcome is not None:
             return self.outcome
         if compass_yaw is not None:
             self.reckoning.on_compass(compass_yaw)
+        before_m = self.travelled_m
         self.reckoning.on_odometry(odom)
+        stalled = abs(self.last_linear_mps) >= STALL_SPEED_MPS and self.travelled_m - before_m < STALL_MOVE_M
+        self.stalled_steps = self.stalled_steps + 1 if stalled else 0
+        if self.stalled_steps >= self.settings.stall_steps and self.phase != BACKING_OFF:
+            return self.back_off()
         if self.pending is not None:
             return Decision(self.phase, (0.0, 0.0))          # waiting for the server: stand still
         known = [self.tags[t] for t in dict.fromkeys(tag_ids) if t in self.tags]
@@ -271,25 +321,76 @@ class TwoTierNavigator:
         estimate = self.reckoning.estimate()
         if estimate.yaw is None:
             return Decision(self.phase, (0.0, 0.0))          # no compass reading yet
+        if self.phase == BACKING_OFF:
+            if self.travelled_m - self.back_off_from_m < self.settings.back_off_m \
+                    and self.stalled_steps < self.settings.stall_steps:
+                return Decision(BACKING_OFF, (-BACK_OFF_SPEED_MPS, 0.0))
+            self.stalled_steps = 0
+            return self.ask(Request(LOCATE), BACKING_OFF)
         if self.phase == SEARCHING:
             command = self.search.command(self.travelled_m - self.search_start_m)
-            if command is None:
-                self.progress.failed_searches += 1
-                self.progress.search_length_m += self.travelled_m - self.search_start_m
-                if self.progress.failed_searches >= self.settings.max_searches:
-                    return self.finish(False, f"{self.progress.failed_searches} spiral searches found no tag")
+            cut = (command is not None and self.planner is not None
+                   and self.planner.clearance(estimate.position) < self.settings.search_wall_clearance_m)
+            if command is None or cut:
+                progress = self.progress
+                progress.failed_searches += 1
+                progress.cut_searches += cut
+                progress.search_length_m += self.travelled_m - self.search_start_m
+                if progress.failed_searches >= self.settings.max_searches:
+                    return self.finish(False, f"{progress.failed_searches} spiral searches found no tag "
+                                              f"({progress.cut_searches} ended at a wall or the map's edge)")
                 return self.ask(Request(LOCATE), SEARCHING)
             return Decision(SEARCHING, command)
         if self.travelled_m - self.checked_at_m > self.settings.calibration_distance_m:
             return self.ask(Request(LOCATE), self.phase)     # A5
         goal = self.waypoint.centre if self.phase == TO_LANDMARK else self.target
-        command = go_to_command(estimate.position, estimate.yaw, goal, self.settings.go_to)
+        waypoint = self.next_waypoint(estimate.position, goal)
+        if waypoint is None:
+            return self.finish(False, f"no way round the map's walls from {_text(estimate.position)} to "
+                                      f"{_text(goal)}")
+        command = go_to_command(estimate.position, estimate.yaw, waypoint, self.settings.go_to)
         if command is not None:
             return Decision(self.phase, command)
         if self.phase == TO_TARGET:
             return self.finish(True, f"arrived within {self.settings.go_to.tolerance_m:g} m of the target "
                                      f"by dead reckoning, {estimate.distance_since_fix_m:.2f} m after the last fix")
         return self.start_search(estimate)
+
+    def back_off(self) -> Decision:
+        """The wheels stalled at a wall where the estimate saw none: it is off. Back off and ask tier one (a search
+        under way ends unfound)."""
+        progress = self.progress
+        progress.stalls += 1
+        self.stalled_steps = 0
+        if self.phase == SEARCHING:
+            progress.failed_searches += 1
+            progress.search_length_m += self.travelled_m - self.search_start_m
+            self.search = None
+        if progress.stalls >= self.settings.max_stalls:
+            return self.finish(False, f"stalled at a wall {progress.stalls} times: the position estimate keeps "
+                                      f"driving the robot into walls")
+        self.phase, self.back_off_from_m = BACKING_OFF, self.travelled_m
+        return Decision(BACKING_OFF, (-BACK_OFF_SPEED_MPS, 0.0))
+
+    def next_waypoint(self, position: Point, goal: Point) -> Point | None:
+        """Where to drive next on the way to ``goal``: the goal itself without a floor plan, else the next waypoint
+        of the path round the walls, planned again after every fix (the position it started from has moved); None
+        when the walls close every way."""
+        if self.planner is None:
+            return goal
+        key = (goal, len(self.progress.fixes))
+        if key != self.route_key:
+            route = self.planner.path(position, goal)
+            if route is None:
+                return None
+            self.route, self.route_key = route, key
+        while len(self.route) > 1 and math.dist(position, self.route[0]) <= self.settings.waypoint_tolerance_m:
+            self.route.pop(0)
+        return self.route[0]
+
+    def distance_m(self, start: Point, goal: Point) -> float:
+        """How far the robot drives from ``start`` to ``goal``: round the map's walls when it has them."""
+        return math.dist(start, goal) if self.planner is None else self.planner.length(start, goal)
 
     def start_search(self, estimate: DeadReckoningEstimate) -> Decision:
         """A7: the landmark is not where dead reckoning says: spiral out from here until a tag is read."""
@@ -306,19 +407,23 @@ class TwoTierNavigator:
     def next_leg(self) -> Decision:
         """Geographic forwarding (Fig. 4) from the fix just made."""
         here = self.reckoning.position
-        remaining = math.dist(here, self.target)
+        remaining = self.distance_m(here, self.target)
         spacing = self.settings.landmark_spacing_m
+        for landmark in self.landmarks.values():
+            if landmark.group_id not in self.to_target_m:
+                self.to_target_m[landmark.group_id] = self.distance_m(landmark.centre, self.target)
         candidates = [landmark for landmark in self.landmarks.values()
-                      if math.dist(here, landmark.centre) <= spacing
-                      and math.dist(landmark.centre, self.target) < remaining - self.settings.read_range_m
-                      and landmark.group_id not in self.progress.visited[-1:]]
+                      if self.to_target_m[landmark.group_id] < remaining - self.settings.read_range_m
+                      and landmark.group_id not in self.progress.visited[-1:]
+                      and math.dist(here, landmark.centre) <= spacing
+                      and self.distance_m(here, landmark.centre) <= spacing]
         target_landmark = next((mark for mark in self.landmarks.values() if self.target_is(mark)), None)
         if remaining <= spacing or not candidates:
             if target_landmark is not None:
                 return self.head_for(target_landmark)
             self.waypoint, self.phase = None, TO_TARGET
             return self.drive()
-        return self.head_for(min(candidates, key=lambda landmark: math.dist(landmark.centre, self.target)))
+        return self.head_for(min(candidates, key=lambda landmark: self.to_target_m[landmark.group_id]))
 
     def head_for(self, landmark: Landmark) -> Decision:
         self.waypoint, self.phase, self.search = landmark, TO_LANDMARK, None
@@ -334,3 +439,7 @@ class TwoTierNavigator:
     def target_is(self, landmark: Landmark) -> bool:
         """The target is this landmark: within half the group's size of its centre."""
         return math.dist(landmark.centre, self.target) <= max(landmark.size_m / 2.0, self.settings.read_range_m)
+
+
+def _text(point: Point | None) -> str:
+    return "nowhere" if point is None else f"({point[0]:.2f}, {point[1]:.2f})"

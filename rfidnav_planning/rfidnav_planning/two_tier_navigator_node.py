@@ -12,14 +12,15 @@ One goal at a time and cancel (checked at each control step): rfidnav_common.goa
 Every input is checked (rfidnav_common.inputs) and what fails is dropped and counted with a throttled warning:
 /odom not a pose in odom, a compass reading not in its frame (compass or base_link) or not a rotation, a round or
 a scan not in base_link, floor reads no reader reports, a scan with an RSS outside the physical range; a goal
-beyond any map is refused; a location server answer with a position beyond any map is taken as a failed locate,
-and its tags beyond any map are left out.
+beyond any map, or outside the extent of the robot map's floor plan, is refused; a location server answer with a
+position beyond any map is taken as a failed locate, and its tags beyond any map are left out.
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 from builtin_interfaces.msg import Time
@@ -32,6 +33,7 @@ from rfidnav_common import inputs
 from rfidnav_common.frames import COMPASS_FRAMES, WIFI_FRAME
 from rfidnav_common.geometry import yaw_to_quaternion
 from rfidnav_common.goal_server import ActiveGoal, GoalOutcome, SingleGoalServer
+from rfidnav_common.robot_map import load_route_map
 from rfidnav_common.ros import COMMAND_QOS, SENSOR_QOS, declare_parameters, run_node, twist
 from rfidnav_common.stepped_node import SteppedNode
 from rfidnav_common.transforms import FrameBroadcaster
@@ -40,6 +42,7 @@ from rfidnav_msgs.msg import LocalizationStatus, TagReadArray, WifiScan
 from rfidnav_msgs.srv import GetTagMap, Locate
 from rfidnav_planning.parameters import TwoTierNavigatorParameters
 from rfidnav_planning.two_tier_navigation import LOCATE, Decision, MapTag, Request, TwoTierNavigator
+from rfidnav_planning.wall_paths import FloorPlan
 
 UNKNOWN_YAW_VARIANCE = 1e6    # [rad^2] on the pose when no heading, or none with a known noise, was read
 
@@ -55,7 +58,9 @@ class TwoTierNavigatorNode(SteppedNode):
     def __init__(self, **node_options: Any) -> None:
         super().__init__("two_tier_navigator", **node_options)
         self.params: TwoTierNavigatorParameters = declare_parameters(self, TwoTierNavigatorParameters)
-        self.navigator = TwoTierNavigator(self.params.settings())
+        map_file = self.params.map_file
+        floor = FloorPlan() if map_file == "unused" else FloorPlan.of(load_route_map(Path(map_file)))
+        self.navigator = TwoTierNavigator(self.params.settings(), floor)
         self.call: PendingCall | None = None
         self.drops = inputs.Drops(self.get_logger().warning)
         self.odom: tuple[float, float, float] | None = None
@@ -131,7 +136,7 @@ class TwoTierNavigatorNode(SteppedNode):
             inputs.point(goal.target.x, goal.target.y, "target")
         except inputs.BadInput as error:
             return str(error)
-        return None
+        return self.navigator.refusal((goal.target.x, goal.target.y))
 
     def on_started(self, goal: ActiveGoal) -> None:
         target = goal.handle.request.target

@@ -88,6 +88,7 @@ from rfidnav_experiments.runners.two_tier import (  # noqa: E402
     run_two_tier,
 )
 from rfidnav_localization.fingerprint import RadioMap  # noqa: E402
+from rfidnav_planning.wall_paths import FloorPlan  # noqa: E402
 from rfidnav_sim.parameters import CompassParameters, WifiSimParameters  # noqa: E402
 from rfidnav_sim.world import World, load_world  # noqa: E402
 
@@ -184,6 +185,14 @@ NAVIGATOR_SOURCES: dict[str, tuple[str, str]] = {
                                                     "5 cm apart is read across; the paper searches at its speed"),
     "two_tier_navigator.read_range_m": ("paper", "sec. 4.1: about 5 cm"),
     "two_tier_navigator.drift_per_m": ("paper", "sec. 4.1 item 2: 1 m of error after 20 m with 1 kg on board"),
+    "two_tier_navigator.wall_clearance_m": ("ours", "the paper's robot drives straight: legs round the map's walls "
+                                                    "keep the 17 cm base this far off"),
+    "two_tier_navigator.waypoint_tolerance_m": ("ours", "as above"),
+    "two_tier_navigator.search_wall_clearance_m": ("ours", "a spiral ends this near a map wall or the map's edge"),
+    "two_tier_navigator.stall_steps": ("ours", "the paper's robot has no wall handling: odometry that does not follow "
+                                               "the command for 0.5 s is a stall"),
+    "two_tier_navigator.back_off_m": ("ours", "a stalled robot backs off this far, then asks tier one"),
+    "two_tier_navigator.max_stalls": ("ours", "as above: it gives up after this many"),
     "two_tier_navigator.speed_mps": ("ours", "the paper gives none (the Create drives up to 0.5 m/s): 10-12 cm "
                                              "between two polls"),
     "two_tier_navigator.turn_rate_radps": ("ours", "the paper gives none"),
@@ -394,6 +403,12 @@ class Leg:
     all_tag_positions_m: tuple[float, ...]
 
 
+@functools.cache
+def floor_plan() -> FloorPlan:
+    """The flat's walls and extent as the robot's map gives them (its legs are planned round the walls)."""
+    return FloorPlan.of(load_route_map(MAP_FILE))
+
+
 def fig12_route(job: tuple[str, int, int]) -> list[Leg]:
     """One run of a route, leg by leg (one navigation per turning point, as in the paper)."""
     name, run, seed = job
@@ -407,7 +422,8 @@ def fig12_route(job: tuple[str, int, int]) -> list[Leg]:
         centre = landmarks[point].centre
         scan = {r.bssid: r.rssi_dbm for r in site.wifi.scan(*centre, rng)}
         fingerprint = math.dist(site.radio_map.locate(scan).position, centre)
-        result = run_two_tier(site, pose, centre, SETTINGS, rng, derive_seed(seed, f"fig12:{name}:{run}:{point}"))
+        result = run_two_tier(site, pose, centre, SETTINGS, rng, derive_seed(seed, f"fig12:{name}:{run}:{point}"),
+                              floor=floor_plan())
         arrived = result.success and bool(result.fix_errors_m)
         legs.append(Leg(name, run, point, fingerprint, result.fix_errors_m[-1] if arrived else None,
                         result.tag_position_errors_m[-1] if arrived else None, result.fix_errors_m,
@@ -430,7 +446,7 @@ def fig11_run(job: tuple[str, int, int]) -> tuple[str, int, float | None]:
     start, target = LONG_ROUTE
     settings = dataclasses.replace(SETTINGS, landmark_spacing_m=FIG11_SPACINGS_M[kind], calibration_distance_m=1000.0)
     result = run_two_tier(grid_site(seed), start, target, settings, rng_for(seed, f"fig11:{run}"),
-                          derive_seed(seed, f"fig11:{run}:reader"))
+                          derive_seed(seed, f"fig11:{run}:reader"), floor=floor_plan())
     return kind, run, result.final_error_m if result.success else None
 
 

@@ -32,6 +32,7 @@ from rfidnav_localization.errors import LocateError
 from rfidnav_localization.fingerprint import Fingerprint, LocateSettings, RadioMap
 from rfidnav_planning.parameters import TwoTierNavigatorParameters
 from rfidnav_planning.two_tier_navigation import LOCATE, MapTag, Request, TwoTierNavigator, TwoTierSettings
+from rfidnav_planning.wall_paths import FloorPlan
 from rfidnav_sim.compass_model import CompassModel
 from rfidnav_sim.kinematics import moves_into_wall, unicycle_step
 from rfidnav_sim.parameters import CompassParameters, ReaderParameters, RobotSimParameters, WifiSimParameters
@@ -138,13 +139,14 @@ def run_two_tier(site: Site, start: tuple[float, float, float], target: tuple[fl
                  settings: TwoTierSettings, rng: np.random.Generator, reader_seed: int,
                  odometry_scale_error: float = ODOMETRY_SCALE_ERROR, compass: CompassModel = COMPASS,
                  locate: LocateSettings = LocateSettings(), max_time_s: float = 1800.0,
-                 survey_spacing_m: float | None = None, known_start: Fix | None = None) -> TwoTierRun:
+                 survey_spacing_m: float | None = None, known_start: Fix | None = None,
+                 floor: FloorPlan = FloorPlan()) -> TwoTierRun:
     """One navigation from ``start`` (true pose) to ``target``, the compass and WiFi drawn from ``rng``, the floor
     reader's streams seeded from ``reader_seed`` (as the rfid_reader_sim node seeds them from its seed). With
     ``survey_spacing_m`` the robot also surveys (paper 003's automatic radio map construction): a scan every that
     many metres while its position is fresh from a tag fix (within SURVEY_FRESH_M), recorded at the position it
     believes (never the true one) and added to the site's radio map at once, as the add_fingerprint service
-    does."""
+    does. ``floor``: the walls and extent of the robot's map, which its legs are planned round."""
     x, y, yaw = start
     reader = FLOOR_READER.simulated_reader(site.world, reader_seed)
     floor_port = NAVIGATOR.floor_antenna
@@ -152,7 +154,7 @@ def run_two_tier(site: Site, start: tuple[float, float, float], target: tuple[fl
     survey: list[tuple[tuple[float, float], dict[str, float]]] = []
     surveyed_at_m = -math.inf
     odom = (0.0, 0.0, 0.0)
-    navigator = TwoTierNavigator(settings)
+    navigator = TwoTierNavigator(settings, floor)
     decision = navigator.start(target, known_start)
     fix_errors: list[float] = []
     tag_position_errors: list[float] = []
@@ -227,7 +229,7 @@ def robot_survey(site: Site, robot_map: RouteMap, seed: int, spacing_m: float = 
     known = Fix(first, HF_READ_RANGE_M, TIER_TAG, f"{robot_map.tag_groups[0].group_id} (dock)")
     for leg, group in enumerate(robot_map.tag_groups[1:]):
         run = run_two_tier(site, pose, group.centre, SETTINGS, rng, derive_seed(seed, f"robot survey:{leg}"),
-                           survey_spacing_m=spacing_m, known_start=known)
+                           survey_spacing_m=spacing_m, known_start=known, floor=FloorPlan.of(robot_map))
         pose = (run.final_position[0], run.final_position[1], 0.0)
         known = None if not run.success else Fix(group.centre, HF_READ_RANGE_M, TIER_TAG, group.group_id)
     return list(site.radio_map.fingerprints)

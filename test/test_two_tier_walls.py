@@ -1,0 +1,179 @@
+"""Paper 003's navigator and the home's walls (issue 18): legs planned round the robot map's walls, spiral searches
+kept inside its extent, targets outside it refused, and wheels stalled at an unexpected wall noticed."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from rfidnav_bringup.scenario import CONFIG_DIR
+from rfidnav_common.robot_map import load_route_map
+from rfidnav_common.tag_groups import TagGroup
+from rfidnav_experiments.runners.two_tier import SETTINGS, Site, grid_radio_map, run_two_tier
+from rfidnav_localization.dead_reckoning import TIER_TAG, Fix
+from rfidnav_planning.two_tier_navigation import (
+    BACKING_OFF,
+    LOCATE,
+    SEARCHING,
+    TAG_MAP,
+    MapTag,
+    TwoTierNavigator,
+    TwoTierSettings,
+)
+from rfidnav_planning.wall_paths import FloorPlan, WallPlanner, segment_distances
+from rfidnav_sim.kinematics import unicycle_step
+from rfidnav_sim.world import load_world
+
+pytestmark = pytest.mark.tier("unit")
+
+HOME_MAP = CONFIG_DIR / "maps" / "two_tier_home.yaml"
+HOME = FloorPlan.of(load_route_map(HOME_MAP))
+CLEARANCE_M = 0.3
+
+
+def crosses_a_wall(points: list[tuple[float, float]], walls: np.ndarray, clearance_m: float) -> bool:
+    return any(np.any(segment_distances(np.array(a), np.array(b), walls) < clearance_m - 1e-9)
+               for a, b in zip(points, points[1:]))
+
+
+def test_the_home_map_carries_the_worlds_walls_and_its_extent() -> None:
+    world = load_world(CONFIG_DIR / "worlds" / "two_tier_home.yaml")
+    assert sorted(HOME.walls) == sorted(world.walls)
+    assert HOME.extent == (0.0, 0.0, 12.0, 8.0)
+
+
+def test_a_map_without_a_declared_extent_takes_its_walls_bounding_box(tmp_path) -> None:
+    path = tmp_path / "map.yaml"
+    path.write_text("name: m\ntag_groups: [{id: G, shape: cross, centre: [0.0, 0.0]}]\n"
+                    "walls: [[-3.0, -2.0, 3.0, -2.0], [3.0, -2.0, 3.0, 4.0]]\n")
+    assert load_route_map(path).extent == (-3.0, -2.0, 3.0, 4.0)
+
+
+def test_a_leg_from_the_west_rooms_to_the_east_goes_through_the_door_and_keeps_its_clearance() -> None:
+    planner = WallPlanner(HOME, CLEARANCE_M)
+    start, goal = (3.0, 1.5), (9.0, 3.6)
+    assert not planner.segment_clear(start, goal)                 # straight through the x = 6 wall
+    waypoints = planner.path(start, goal)
+    assert waypoints is not None and waypoints[-1] == goal
+    points = [start, *waypoints]
+    assert not crosses_a_wall(points, planner.walls, CLEARANCE_M)
+    at_the_wall = [(a, b) for a, b in zip(points, points[1:]) if (a[0] - 6.0) * (b[0] - 6.0) <= 0.0]
+    (a, b), = at_the_wall
+    y = a[1] + (b[1] - a[1]) * (6.0 - a[0]) / (b[0] - a[0])
+    assert 3.0 + CLEARANCE_M - 1e-6 <= y <= 4.2 - CLEARANCE_M + 1e-6      # in the door, clear of both jambs
+    assert math.dist(start, goal) < planner.length(start, goal) < 1.2 * math.dist(start, goal)
+
+
+def test_a_room_whose_door_is_walled_up_has_no_way_in() -> None:
+    closed = FloorPlan(HOME.walls + ((6.0, 3.0, 6.0, 4.2),), HOME.extent)
+    assert WallPlanner(closed, CLEARANCE_M).path((3.0, 1.5), (9.0, 3.6)) is None
+
+
+def test_a_robot_that_believes_it_is_against_a_wall_can_still_leave_it() -> None:
+    planner = WallPlanner(HOME, CLEARANCE_M)
+    waypoints = planner.path((5.9, 1.0), (3.0, 1.5))           # 10 cm from the x = 6 wall
+    assert waypoints == [(3.0, 1.5)]
+    assert planner.path((12.05, 1.0), (9.0, 1.5)) is not None   # dead reckoning 5 cm outside the flat
+
+
+def test_a_target_outside_the_maps_extent_is_refused_by_the_core() -> None:
+    navigator = TwoTierNavigator(SETTINGS, HOME)
+    assert "outside the map's extent" in navigator.refusal((16.0, 4.0))
+    assert navigator.refusal((10.8, 6.8)) is None
+    with pytest.raises(ValueError, match="outside the map's extent"):
+        navigator.start((16.0, 4.0))
+    assert TwoTierNavigator(SETTINGS).refusal((16.0, 4.0)) is None   # no floor plan: nothing to refuse against
+
+
+def group_tags(group: TagGroup) -> list[MapTag]:
+    return [MapTag(tag_id, position, group.group_id, group.shape) for tag_id, position in group.tags()]
+
+
+def drive(navigator: TwoTierNavigator, decision, pose, odom, steps: int, step_s: float = 0.05):
+    """Step the core with exact odometry and compass; every decision with the true pose it was taken at."""
+    trace = []
+    for _ in range(steps):
+        if decision.finished or decision.request is not None:
+            break
+        linear, angular = decision.command
+        dx, dy, dyaw = unicycle_step(pose[2], linear, angular, step_s)
+        pose = (pose[0] + dx, pose[1] + dy, pose[2] + dyaw)
+        dx, dy, dyaw = unicycle_step(odom[2], linear, angular, step_s)
+        odom = (odom[0] + dx, odom[1] + dy, odom[2] + dyaw)
+        decision = navigator.step(odom, pose[2], [])
+        trace.append((decision, pose))
+    return decision, pose, odom, trace
+
+
+def test_a_spiral_search_ends_before_it_leaves_the_maps_extent() -> None:
+    # A landmark 1 m from two edges of an empty 12 x 8 m extent, a start fix so vague (30 cm) that the spiral would
+    # reach out 1 m: it ends, unfound, when the estimate comes within 20 cm of an edge, and tier one is asked.
+    settings = TwoTierSettings(go_to=SETTINGS.go_to)
+    navigator = TwoTierNavigator(settings, FloorPlan((), (0.0, 0.0, 12.0, 8.0)))
+    decision = navigator.start((1.0, 1.0), Fix((2.0, 2.0), 0.3, TIER_TAG, "dock"))
+    assert decision.request is not None and decision.request.kind == TAG_MAP
+    group = TagGroup("G", "cross", (1.0, 1.0), 0.3, 0.0, 0.05)
+    navigator.on_tag_map(group_tags(group))      # no tag will be read: the landmark is not where the robot looks
+    pose = odom = (2.0, 2.0, 0.0)
+    navigator.step(odom, pose[2], [])
+    decision = navigator.drive()
+    decision, pose, odom, trace = drive(navigator, decision, pose, odom, 20_000)
+    assert any(step.phase == SEARCHING for step, _ in trace)
+    assert decision.request is not None and decision.request.kind == LOCATE
+    assert navigator.progress.cut_searches == 1 and navigator.progress.failed_searches == 1
+    assert min(min(x, y) for _, (x, y, _) in trace) >= settings.search_wall_clearance_m - 0.02
+
+
+def test_wheels_stalled_at_a_wall_back_the_robot_off_and_ask_tier_one_then_give_up_after_the_last_stall() -> None:
+    settings = TwoTierSettings(go_to=SETTINGS.go_to, max_stalls=2)
+    navigator = TwoTierNavigator(settings)
+    navigator.start((5.0, 0.0), Fix((0.0, 0.0), 0.02, TIER_TAG, "dock"))
+    navigator.on_tag_map(group_tags(TagGroup("G", "cross", (5.0, 0.0), 0.3, 0.0, 0.05)))
+    odom = (0.0, 0.0, 0.0)
+    navigator.step(odom, 0.0, [])
+    decision = navigator.drive()
+    assert decision.command[0] > 0.0
+    for _ in range(settings.stall_steps):                   # commanded forward, the odometry stands: a stall
+        decision = navigator.step(odom, 0.0, [])
+    assert decision.phase == BACKING_OFF and decision.command[0] < 0.0
+    backed = 0.0
+    while decision.request is None:
+        backed += -decision.command[0] * 0.05
+        odom = (odom[0] + decision.command[0] * 0.05, 0.0, 0.0)
+        decision = navigator.step(odom, 0.0, [])
+    assert decision.request.kind == LOCATE and backed == pytest.approx(settings.back_off_m, abs=0.01)
+    decision = navigator.on_located((0.0, 0.0), 1.0)        # tier one: back where it started
+    for _ in range(settings.stall_steps + 20):
+        if decision.finished:
+            break
+        decision = navigator.step(odom, 0.0, [])
+    assert decision.finished and not decision.success
+    assert "stalled at a wall 2 times" in decision.message
+
+
+@pytest.fixture(scope="module")
+def site() -> Site:
+    world = load_world(CONFIG_DIR / "worlds" / "two_tier_home.yaml")
+    return Site.of(world, grid_radio_map(world, 1.0, np.random.default_rng(1)))
+
+
+@pytest.mark.tier("slow")
+def test_legs_planned_round_the_homes_walls_arrive_more_often_than_straight_ones_on_the_same_streams(
+        site: Site) -> None:
+    # Route 1 of Fig. 12 (T1 -> T2 -> T3 -> T4 -> T5 from the south-west corner), four runs, both ways on the same
+    # seeds. A leg that stalls backs off either way; the floor plan keeps the legs out of the walls.
+    landmarks = {group.group_id: group.centre for group in load_route_map(HOME_MAP).tag_groups}
+    arrived = {}
+    for name, floor in (("straight", FloorPlan()), ("planned", HOME)):
+        arrived[name] = 0
+        for run in range(4):
+            rng, pose = np.random.default_rng(100 + run), (1.0, 1.0, 0.3)
+            for index, point in enumerate(("T1", "T2", "T3", "T4", "T5")):
+                result = run_two_tier(site, pose, landmarks[point], SETTINGS, rng, 1000 * run + index, floor=floor,
+                                      max_time_s=600.0)
+                arrived[name] += result.success
+                pose = (*result.final_position, 0.0)
+    assert arrived["planned"] >= 17, arrived             # of 20 legs
+    assert arrived["planned"] >= arrived["straight"]
