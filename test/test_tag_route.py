@@ -214,7 +214,7 @@ def test_the_newest_same_channel_pair_of_a_batch_is_the_one_subtracted():
 
 
 def test_a_cross_channel_round_does_not_steer_the_robot_and_is_counted():
-    route = follower(unheard_timeout_s=1.0)
+    route = follower(unheard_timeout_s=1.0, unheard_search=False)
     route.start(["C1"], 0.0)
     # Left minus right across the channels would be -2.5 rad: a hard left turn on a meaningless difference.
     command = route.step(0.04, [read("C1", 1, 0.5), read("C1", 2, 3.0, OTHER_CHANNEL_HZ)])
@@ -231,8 +231,8 @@ def test_a_cross_channel_round_does_not_steer_the_robot_and_is_counted():
 
 # ------------------------------------------------------------------------------------------------ unheard target
 
-def test_target_unheard_longer_than_the_timeout_fails_naming_the_tag():
-    route = follower(unheard_timeout_s=2.0)
+def test_without_the_search_a_target_unheard_longer_than_the_timeout_fails_naming_the_tag():
+    route = follower(unheard_timeout_s=2.0, unheard_search=False)
     route.start(["C1", "C2"], 0.0)
     route.step(0.5, ceiling_pair("C1", 1.0, 1.0))                 # heard at 0.5 s
     only_left = [TagObservation("C1", 1, 1.0, -60.0, FREQUENCY_HZ)]  # one antenna is not enough to steer
@@ -246,7 +246,7 @@ def test_target_unheard_longer_than_the_timeout_fails_naming_the_tag():
 
 
 def test_unheard_clock_restarts_at_each_new_target():
-    route = follower(unheard_timeout_s=2.0)
+    route = follower(unheard_timeout_s=2.0, unheard_search=False)
     route.start(["C1", "C2"], 0.0)
     assert route.step(1.9, [floor_read("F1")]).target_tag_id == "C2"
     assert route.step(3.8, []).mode == "unheard"       # 1.9 s since C2 became the target
