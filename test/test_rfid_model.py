@@ -1,5 +1,6 @@
 """UHF reader model (paper 001 sec. IV-A, V): phase formula, left/right sign of the phase difference, wrapping,
-distance-proportional noise, read range and beam cone, read misses, channel hopping, seeding.
+distance-proportional noise, read range and beam cone, reach from the link budget, read misses, channel hopping,
+seeding.
 
 Pure-module tests: no ROS. Distances and phases are computed here from the geometry, independently of the model.
 """
@@ -11,6 +12,8 @@ import math
 import numpy as np
 import pytest
 
+from rfidnav_common.config import parameters_from_mapping
+from rfidnav_common.errors import ConfigError
 from rfidnav_common.geometry import wrap_angle, wrap_angles
 from rfidnav_common.rf import (
     SPEED_OF_LIGHT_MPS,
@@ -19,7 +22,7 @@ from rfidnav_common.rf import (
     wavelength_m,
 )
 from rfidnav_sim.parameters import ReaderParameters
-from rfidnav_sim.rfid_model import Antenna, ReaderModel, ReaderSimulator
+from rfidnav_sim.rfid_model import Antenna, ReaderModel, ReaderSimulator, budget_range_m, reach_m
 
 pytestmark = pytest.mark.tier("unit")
 
@@ -374,3 +377,55 @@ def test_a_side_antenna_reads_the_wall_tags_in_its_induction_area_and_nothing_el
     assert ("C1", 2) in by_antenna and ("C1", 1) not in by_antenna   # ceiling tags: the up antenna only
     read = next(r for r in reads if r.tag_id == "8")
     assert read.rssi_dbm == pytest.approx(-40.0 - 40.0 * math.log10(math.hypot(0.1, 0.8)))
+
+
+# ------------------------------------------------------------------------------------------------------- reach
+
+def shipped_model() -> ReaderModel:
+    return ReaderParameters(world_file="unused").reader_model()
+
+
+@pytest.mark.parametrize("tag_z, expected_m", [(3.0, 9.09), (2.5, 8.58)])
+def test_the_reach_of_a_ceiling_tag_is_what_the_shipped_link_budget_gives_by_hand(tag_z, expected_m) -> None:
+    """-40 + 20 log10(h) - 60 log10(d) >= -90 with h the tag's height above the 30 cm antennas: d = 9.49 m for
+    h = 2.7 m, so r = sqrt(d^2 - h^2) = 9.09 m; 8.58 m for h = 2.2 m."""
+    model = shipped_model()
+    height = tag_z - ANTENNA_HEIGHT_M
+    slant = 10.0 ** ((-40.0 + 90.0 + 20.0 * math.log10(height)) / 60.0)
+    assert math.sqrt(slant ** 2 - height ** 2) == pytest.approx(expected_m, abs=0.005)
+    for antenna in model.antennas[:2]:
+        assert reach_m(model, antenna, tag_z) == pytest.approx(expected_m, abs=0.005)
+
+
+def test_the_simulator_hears_a_ceiling_tag_just_inside_its_reach_and_not_just_beyond() -> None:
+    model = two_antenna_model()
+    reach = reach_m(model, model.antennas[0], CEILING_M)
+    for distance, heard in ((reach - 0.01, True), (reach + 0.01, False)):
+        reads = simulator(model, {"C": (distance, 0.0, CEILING_M)}).inventory(0.0, 0.0, 0.0, 0.0)
+        assert bool(reads) is heard, distance
+
+
+def test_the_cone_and_the_range_cap_bound_the_reach_where_they_bind_before_the_budget() -> None:
+    narrow = ReaderModel(antennas=(Antenna(1, (0.0, 0.0, 0.3), True, 12.0, math.radians(30.0)),),
+                         channels_hz=(FREQUENCY_HZ,))
+    assert reach_m(narrow, narrow.antennas[0], 3.3) == pytest.approx(3.0 * math.tan(math.radians(30.0)))
+    capped = ReaderModel(antennas=(up_antenna(1, 0.0, max_range_m=4.0),), channels_hz=(FREQUENCY_HZ,))
+    assert reach_m(capped, capped.antennas[0], 3.3) == pytest.approx(math.sqrt(16.0 - 9.0))
+    assert reach_m(capped, capped.antennas[0], 0.0) == 0.0          # below an upward antenna: never
+
+
+def test_a_reader_file_cannot_claim_a_range_beyond_the_link_budget() -> None:
+    assert budget_range_m(shipped_model()) == pytest.approx(10.0 ** 1.25)          # 17.78 m on boresight
+    source, prefix = "reader_uhf_2ant.yaml", "rfid_reader_sim.ros__parameters"
+    data = {"world_file": "w.yaml", "antenna_max_range_m": [12.0, 20.0, 0.10]}
+    with pytest.raises(ConfigError) as refused:
+        parameters_from_mapping(ReaderParameters, data, source, prefix)
+    assert refused.value.source == source and refused.value.field == f"{prefix}.antenna_max_range_m[1]"
+    assert "more than the link budget reaches: 17.78 m on boresight" in refused.value.problem
+    # A weaker budget makes the shipped 12 m a claim too far; side antennas (an induction depth) are not bound.
+    with pytest.raises(ConfigError, match="link budget"):
+        parameters_from_mapping(ReaderParameters, {"world_file": "w.yaml", "sensitivity_dbm": -80.0}, source, prefix)
+    parameters_from_mapping(ReaderParameters, {"world_file": "w.yaml", "antenna_positions": [0.0, 0.2, 0.1],
+                                               "antenna_facing": ["left"], "antenna_max_range_m": [30.0],
+                                               "antenna_half_angle_deg": [85.0], "antenna_phase_offset_rad": [0.0]},
+                            source, prefix)

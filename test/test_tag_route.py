@@ -1,6 +1,6 @@
-"""Tag-route follower (paper 001 sec. IV-C): arrival on the floor tag, finishing, steering sign, the unheard
-failure, validation of reads (NaN/Inf dropped, phase from I/Q), phase pairs on one channel only, and the
-receding-target guard.
+"""Tag-route follower (paper 001 sec. IV-C): arrival on the floor tag, finishing, steering sign, the search for an
+unheard target and the paper's unheard failure, validation of reads (NaN/Inf dropped, phase from I/Q), phase pairs
+on one channel only, and the receding-target guard.
 
 Pure-module tests with a linear heading controller and with the real fuzzy controller of the paper."""
 
@@ -14,6 +14,7 @@ import pytest
 from rfidnav_common.rf import round_trip_phase, wavelength_m
 from rfidnav_control.fuzzy import FuzzyHeadingController, paper_spec
 from rfidnav_control.tag_route import (
+    SEARCH_MODES,
     FollowerSettings,
     PhaseTrack,
     TagObservation,
@@ -214,7 +215,7 @@ def test_the_newest_same_channel_pair_of_a_batch_is_the_one_subtracted():
 
 
 def test_a_cross_channel_round_does_not_steer_the_robot_and_is_counted():
-    route = follower(unheard_timeout_s=1.0)
+    route = follower(unheard_timeout_s=1.0, unheard_search=False)
     route.start(["C1"], 0.0)
     # Left minus right across the channels would be -2.5 rad: a hard left turn on a meaningless difference.
     command = route.step(0.04, [read("C1", 1, 0.5), read("C1", 2, 3.0, OTHER_CHANNEL_HZ)])
@@ -231,8 +232,8 @@ def test_a_cross_channel_round_does_not_steer_the_robot_and_is_counted():
 
 # ------------------------------------------------------------------------------------------------ unheard target
 
-def test_target_unheard_longer_than_the_timeout_fails_naming_the_tag():
-    route = follower(unheard_timeout_s=2.0)
+def test_without_the_search_a_target_unheard_longer_than_the_timeout_fails_naming_the_tag():
+    route = follower(unheard_timeout_s=2.0, unheard_search=False)
     route.start(["C1", "C2"], 0.0)
     route.step(0.5, ceiling_pair("C1", 1.0, 1.0))                 # heard at 0.5 s
     only_left = [TagObservation("C1", 1, 1.0, -60.0, FREQUENCY_HZ)]  # one antenna is not enough to steer
@@ -246,12 +247,102 @@ def test_target_unheard_longer_than_the_timeout_fails_naming_the_tag():
 
 
 def test_unheard_clock_restarts_at_each_new_target():
-    route = follower(unheard_timeout_s=2.0)
+    route = follower(unheard_timeout_s=2.0, unheard_search=False)
     route.start(["C1", "C2"], 0.0)
     assert route.step(1.9, [floor_read("F1")]).target_tag_id == "C2"
     assert route.step(3.8, []).mode == "unheard"       # 1.9 s since C2 became the target
     command = route.step(4.0, [])
     assert command.mode == "failed" and "C2" in command.failure
+
+
+def drive(route: TagRouteFollower, until_s: float, heard=lambda x, y: False, start_s: float = 0.0):
+    """Step ``route`` every round from ``start_s`` and integrate its commands (unicycle, from (0, 0) heading +x);
+    ``heard(x, y)``: the target C2 is paired there. The commands and the poses they drove to."""
+    x = y = yaw = 0.0
+    commands, poses = [], []
+    t = start_s
+    while t < until_s:
+        t += ROUND_S
+        command = route.step(t, ceiling_pair("C2", 0.3, 0.3) if heard(x, y) else [])
+        commands.append(command)
+        if command.failure:
+            break
+        yaw += command.angular_radps * ROUND_S
+        x += command.linear_mps * math.cos(yaw) * ROUND_S
+        y += command.linear_mps * math.sin(yaw) * ROUND_S
+        poses.append((x, y, yaw))
+    return commands, poses
+
+
+def at_c2(**settings) -> TagRouteFollower:
+    route = follower(**settings)
+    route.start(["C1", "C2"], 0.0)
+    assert route.step(0.0, [floor_read("F1")]).target_tag_id == "C2"     # at C1: C2, the next, is unheard
+    return route
+
+
+def test_an_unheard_target_is_searched_for_with_a_full_turn_on_the_spot_then_an_expanding_square_spiral():
+    commands, poses = drive(at_c2(search_radius_m=6.0, search_spacing_m=3.0), 400.0)
+    modes = [command.mode for command in commands]
+    first_turn = modes.index("search_turn")
+    # A missed round is common: straight on for search_after_s (1 s) first.
+    assert set(modes[:first_turn]) == {"unheard"} and first_turn * ROUND_S == pytest.approx(1.0, abs=2 * ROUND_S)
+    turn = [c for c in commands if c.mode == "search_turn"]
+    assert all(c.linear_mps == 0.0 and c.angular_radps == 1.0 for c in turn)
+    assert len(turn) * ROUND_S == pytest.approx(2.0 * math.pi, abs=ROUND_S)          # one full turn at 1 rad/s
+    spiral = [(c, pose) for c, pose in zip(commands, poses) if c.mode == "search_spiral"]
+    assert all((c.linear_mps == 0.0) != (c.angular_radps == 0.0) for c, _ in spiral)  # drive, or turn on the spot
+    # Legs 3, 3, 6, 6, 9, 9, 12, 12, 15 m: the first along the old heading, then quarter turns CCW.
+    legs, length = [], 0.0
+    for c, _ in spiral:
+        if c.linear_mps:
+            length += c.linear_mps * ROUND_S
+        elif length:
+            legs, length = legs + [length], 0.0
+    legs.append(length)
+    assert legs == pytest.approx([3, 3, 6, 6, 9, 9, 12, 12, 15], abs=0.05)
+    xs, ys = [pose[0] for _, pose in spiral], [pose[1] for _, pose in spiral]
+    # The square of half-width 6 m about where it began, 0.2 m on from the tag (turns held for whole rounds: 0.5 m).
+    assert (min(xs), max(xs), min(ys), max(ys)) == pytest.approx((-5.8, 9.2, -6.0, 6.0), abs=0.5)
+    assert commands[-1].mode == "failed"
+
+
+def test_a_target_never_heard_fails_after_the_whole_search_saying_what_was_searched():
+    commands, _ = drive(at_c2(), 1000.0)
+    failed = commands[-1]
+    searched_s = sum(ROUND_S for c in commands if c.mode in SEARCH_MODES)
+    assert failed.mode == "failed" and (failed.linear_mps, failed.angular_radps) == (0.0, 0.0)
+    assert "target tag 'C2'" in failed.failure and "not heard during the whole search" in failed.failure
+    assert "a full turn on the spot at 1 rad/s, then a square spiral 3 m apart out to 6 m" in failed.failure
+    assert f"{searched_s:.0f} s)" in failed.failure and "75 m driven" in failed.failure
+    assert "unheard for" in failed.failure and searched_s > 10.0       # long past the paper's 10 s timeout
+
+
+def test_the_search_ends_the_round_the_target_is_paired_and_seeking_resumes():
+    """C2 at (-4, 5), heard within 3 m: out of reach from C1 and along the first legs, found on the spiral."""
+    def heard(x, y):
+        return math.hypot(x + 4.0, y - 5.0) < 3.0
+    commands, poses = drive(at_c2(), 400.0, heard)
+    found = next(i for i, c in enumerate(commands) if c.mode == "seeking")
+    assert commands[found - 1].mode in SEARCH_MODES and heard(*poses[found - 1][:2])
+    assert not any(heard(*pose[:2]) for pose in poses[:found - 1])     # the first round in reach ends it
+    assert all(c.mode == "seeking" for c, pose in zip(commands[found:], poses[found - 1:]) if heard(*pose[:2]))
+
+
+def test_a_search_starts_afresh_when_the_target_is_lost_again():
+    route = at_c2()
+    commands, _ = drive(route, 3.0)                                  # 1 s straight on, then the turn
+    assert commands[-1].mode == "search_turn"
+    assert route.step(3.04, ceiling_pair("C2", 0.3, 0.3)).mode == "seeking"
+    commands, _ = drive(route, 6.0, start_s=3.04)
+    modes = [c.mode for c in commands]
+    assert modes[0] == "unheard" and "search_turn" in modes and "search_spiral" not in modes
+
+
+def test_a_search_radius_below_its_spacing_is_refused():
+    with pytest.raises(ValueError, match="search_radius_m"):
+        follower(search_radius_m=1.0, search_spacing_m=3.0)
+    follower(search_radius_m=1.0, search_spacing_m=3.0, unheard_search=False)
 
 
 # -------------------------------------------------------------------------------------------- read validation

@@ -319,6 +319,8 @@ def verb_run(args, scenario_name: str | None = None) -> int:
     scenario = load_scenario(scenario_name or args.scenario, swaps=dict(args.swap),
                              param_files={role: Path(file) for role, file in args.params}, goal=goal,
                              robot_profile_name=getattr(args, "robot", None))
+    for warning in scenario.warnings:
+        print(f"rfidnav {args.verb}: warning: {warning}", file=sys.stderr)
     options = RunOptions(rtf=args.rtf, clock=args.clock, seed=args.seed, out_dir=args.out,
                          record=not args.no_record, live_port=args.live, quiet=args.quiet, domain=args.domain,
                          discovery=args.discovery, compress=args.compress, max_bag_size=args.max_bag_size,

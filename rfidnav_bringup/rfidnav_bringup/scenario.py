@@ -10,6 +10,7 @@ See README.md, "Scenario files", for the schema.
 
 from __future__ import annotations
 
+import math
 import shlex
 import shutil
 from dataclasses import dataclass, field, replace
@@ -48,6 +49,7 @@ from rfidnav_sim.parameters import (
     SonarParameters,
     WifiSimParameters,
 )
+from rfidnav_sim.rfid_model import reach_m
 from rfidnav_sim.world import World, load_world
 
 CONFIG_DIR = package_share("rfidnav_bringup") / "config"   # installed with the package, or linked by set-up
@@ -129,6 +131,7 @@ class Scenario:
     world: World = field(repr=False)
     route_map: RouteMap | None = field(repr=False)          # papers 000, 001, 003
     topological_map: TopologicalMap | None = field(default=None, repr=False)   # paper 004: a map with nodes
+    warnings: tuple[str, ...] = ()           # what loading found doubtful but runnable, one line each
 
     def step_participants(self) -> list[NodeSpec]:
         """The roles a stepped clock waits for: our nodes of the simulated loop, not the clock source itself, not a
@@ -288,7 +291,7 @@ def load_scenario(name_or_path: str, swaps: dict[str, str] | None = None,
     parameters = {role: node_parameters(scenario, spec, seed=0, rtf=1.0) for role, spec in scenario.nodes.items()}
     _check_antenna_ports(scenario, parameters)
     _check_speeds(scenario, parameters)
-    return scenario
+    return replace(scenario, warnings=route_reach_warnings(scenario, parameters))
 
 
 def _node_spec(role: str, entry: Section, base: Path) -> NodeSpec:
@@ -451,6 +454,34 @@ def _check_map_in_world(scenario: Scenario) -> None:
                 missing = [tag for tag in hallway.tags if tag not in wall_tags]
                 if missing:
                     raise ConfigError(source, f"nodes.{name}.{side}.tags", f"wall tag '{missing[0]}' is {where}")
+
+
+def route_reach_warnings(scenario: Scenario, parameters: dict[str, Any]) -> tuple[str, ...]:
+    """With the simulated reader, one warning per leg of the goal's route (``tag_ids``, positions from the world)
+    whose next tag is farther away horizontally than the reader's receiving antennas reach at that tag's height
+    (rfidnav_sim.rfid_model.reach_m, from the reader's link budget): the heading controller will not hear it from
+    the previous tag and has to search for it (or, without unheard_search, fails)."""
+    route = scenario.mission.goal.get("tag_ids")
+    readers = [(role, parameters[role]) for role, spec in scenario.nodes.items()
+               if (spec.package, spec.executable) == SIMULATED_READER]
+    if not isinstance(route, list) or not readers:
+        return ()
+    role, reader = readers[0]
+    model = reader.reader_model()
+    receiving = [antenna for antenna in model.antennas if antenna.facing_up and antenna.side_bearing_rad is None]
+    listed = {tag.tag_id: tag.position for tag in scenario.world.tags}
+    warnings = []
+    for here, there in zip(route, route[1:]):
+        if here not in listed or there not in listed or not receiving:
+            continue
+        (x1, y1, _), (x2, y2, z2) = listed[here], listed[there]
+        reach = min(reach_m(model, antenna, z2) for antenna in receiving)
+        leg = math.hypot(x2 - x1, y2 - y1)
+        if leg > reach:
+            warnings.append(f"{scenario.path}: mission.goal.tag_ids: the leg {here} -> {there} is {leg:.1f} m, "
+                            f"beyond the reach of the reader '{role}' for a tag {z2:g} m up ({reach:.2f} m, from "
+                            f"its link budget): the heading controller has to search for {there}")
+    return tuple(warnings)
 
 
 def _check_goal_node(scenario: Scenario, mission: Section) -> None:

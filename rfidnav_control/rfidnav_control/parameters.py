@@ -49,7 +49,9 @@ class HeadingControllerParameters:
     max_yaw_rate_radps: float = param("largest yaw rate commanded [rad/s]", 2.0, YAW_RATE_RADPS)
     nominal_round_s: float = param("expected time between inventory rounds [s]; bounds the measured one", 0.04,
                                    DURATION_S)
-    unheard_timeout_s: float = param("fail when the target is not heard for this long [s]", 10.0, DURATION_S)
+    unheard_timeout_s: float = param("without unheard_search: fail when the target is not heard for this long [s]; "
+                                     "with or without it, stop when no inventory round arrives for this long",
+                                     10.0, DURATION_S)
     filter_rounds: int = param("circular mean of the last N phase differences (1 = paper: latest only)", 1,
                                AT_LEAST_ONE)
     receding_detection: bool = param("turn when the phase-derived range to the target grows", True)
@@ -64,6 +66,17 @@ class HeadingControllerParameters:
     approach_speed_fraction: float = param(
         "forward speed once the target's floor tag is heard, as a fraction, so the robot can stop and turn over it "
         "(1 = constant)", 1.0, Limits(0.0, 1.0, low_open=True))
+    unheard_search: bool = param(
+        "search for a target unheard for search_after_s: a full turn on the spot, then an expanding square spiral "
+        "(README \"Reach\"), failing only once it has all passed; false: the paper, straight on until "
+        "unheard_timeout_s", True)
+    search_after_s: float = param("unheard this long, straight on, before the search begins [s]", 1.0, DURATION_S)
+    search_turn_rate_radps: float = param("yaw rate of the search's full turn and the spiral's quarter turns "
+                                          "[rad/s]", 1.0, YAW_RATE_RADPS)
+    search_spacing_m: float = param("distance between the search spiral's rings [m]; at most twice the reach "
+                                    "leaves no gap", 3.0, Limits(0.1, 100.0))
+    search_radius_m: float = param("the search spiral's rings reach this far from where the search began [m]", 6.0,
+                                   Limits(0.1, 100.0))
     input_range_rad: float = param("universe of the input dphi: [-r, r] [rad]", 3.141592653589793, HALF_TURN_RAD)
     output_range_rad: float = param("universe of the output dtheta: [-r, r] [rad per round]", 0.1, HALF_TURN_RAD)
     input_set_names: list[str] = param("input fuzzy sets", ["neg", "zero", "pos"])

@@ -22,6 +22,16 @@ Beyond the paper, and switchable so the faithful baseline stays available:
   proportionally more phase differences (the same lag in distance) for the final centimetres.
 * Speed scheduling in turns (``turn_speed_fraction``): slow down while the controller commands large
   heading changes, so corners are turned on a tighter radius.
+* Search for an unheard target (``unheard_search``). The paper's robot always hears its next tag; a route leg
+  longer than the reader's reach (rfidnav_sim.rfid_model.reach_m: about 9 m for a 3 m ceiling) leaves it deaf at
+  the corner, where driving straight on in the old heading rarely brings the tag into reach. Unheard for
+  ``search_after_s`` (a missed round is common: straight on till then, as the paper), the robot turns once on the
+  spot at ``search_turn_rate_radps``, then drives an expanding square spiral, open loop (the follower has no
+  odometry): legs a, a, 2a, 2a, 3a, ... (a = ``search_spacing_m``) with a quarter turn on the spot after each,
+  CCW, the first leg along its heading when the search began, until the rings reach ``search_radius_m`` from where
+  it began. The target paired in any round ends the search and seeking resumes; the route fails only when the
+  whole search has passed unheard, saying what was searched and for how long. Off, the target unheard for
+  ``unheard_timeout_s`` fails the route.
 """
 
 from __future__ import annotations
@@ -38,6 +48,7 @@ from rfidnav_common.inputs import BadInput, TagRead, tag_read
 from rfidnav_common.rf import range_change_m
 
 ARRIVAL_MODES = ("first_read", "closest_approach")
+SEARCH_MODES = ("search_turn", "search_spiral")
 
 
 # One checked tag read (rfidnav_common.inputs.tag_read: finite numbers in their physical ranges, the phase from I/Q
@@ -113,6 +124,11 @@ class FollowerSettings:
     arrival: str = "first_read"
     turn_speed_fraction: float = 1.0           # forward speed at the largest heading change, as a fraction
     approach_speed_fraction: float = 1.0       # forward speed once the target's floor tag is heard, as a fraction
+    unheard_search: bool = True                # search for an unheard target (False: the paper, straight on)
+    search_after_s: float = 1.0                # unheard this long: the search begins
+    search_turn_rate_radps: float = 1.0        # yaw rate of the full turn and the spiral's quarter turns
+    search_spacing_m: float = 3.0              # distance between the spiral's rings
+    search_radius_m: float = 6.0               # the spiral's rings reach this far from where the search began
 
     def validate(self) -> None:
         if self.arrival not in ARRIVAL_MODES:
@@ -127,13 +143,55 @@ class FollowerSettings:
             raise ParameterError("approach_speed_fraction", "must be in (0, 1]")
         if self.left_antenna == self.right_antenna:
             raise ParameterError("", "left_antenna and right_antenna must differ")
+        if self.unheard_search and self.search_radius_m < self.search_spacing_m:
+            raise ParameterError("search_radius_m", f"{self.search_radius_m:g} m is less than search_spacing_m "
+                                                    f"({self.search_spacing_m:g} m): the spiral has no ring")
+
+
+@dataclass(frozen=True)
+class SearchLeg:
+    """One piece of the search for an unheard target: a command held for a while."""
+    duration_s: float
+    linear_mps: float
+    angular_radps: float
+    mode: str                      # search_turn (the full turn on the spot) or search_spiral
+
+
+class UnheardSearch:
+    """The search of an unheard target (module docstring): a full turn on the spot, then the expanding square
+    spiral, as commands held for fixed times from the search's start."""
+
+    def __init__(self, settings: FollowerSettings) -> None:
+        rate, spacing, speed = settings.search_turn_rate_radps, settings.search_spacing_m, settings.forward_speed_mps
+        self.settings = settings
+        self.legs = [SearchLeg(2.0 * math.pi / rate, 0.0, rate, "search_turn")]
+        for k in range(1, 4 * math.ceil(settings.search_radius_m / spacing - 1e-9) + 2):
+            if k > 1:
+                self.legs.append(SearchLeg(0.5 * math.pi / rate, 0.0, rate, "search_spiral"))
+            self.legs.append(SearchLeg(spacing * math.ceil(k / 2) / speed, speed, 0.0, "search_spiral"))
+        self.duration_s = sum(leg.duration_s for leg in self.legs)
+        self.distance_m = sum(leg.duration_s * leg.linear_mps for leg in self.legs)
+
+    def leg_at(self, elapsed_s: float) -> SearchLeg | None:
+        """The leg ``elapsed_s`` into the search; None once it has all passed."""
+        for leg in self.legs:
+            if elapsed_s < leg.duration_s:
+                return leg
+            elapsed_s -= leg.duration_s
+        return None
+
+    def describe(self) -> str:
+        s = self.settings
+        return (f"a full turn on the spot at {s.search_turn_rate_radps:g} rad/s, then a square spiral "
+                f"{s.search_spacing_m:g} m apart out to {s.search_radius_m:g} m ({self.distance_m:.0f} m driven, "
+                f"{self.duration_s:.0f} s)")
 
 
 @dataclass(frozen=True)
 class Command:
     linear_mps: float
     angular_radps: float
-    mode: str                      # seeking, receding_turn, unheard, arriving, finished, failed
+    mode: str                      # seeking, receding_turn, unheard, search_turn, search_spiral, finished, failed
     target_index: int
     target_tag_id: str
     phase_difference_rad: float
@@ -166,6 +224,7 @@ class TagRouteFollower:
                  arrival_tags: dict[str, str]) -> None:
         settings.validate()
         self.settings = settings
+        self.search = UnheardSearch(settings) if settings.unheard_search else None
         self.heading_controller = heading_controller
         self.arrival_tags = dict(arrival_tags)
         self.route: list[str] = []
@@ -191,15 +250,21 @@ class TagRouteFollower:
     def _reset_target(self, time_s: float) -> None:
         self.last_heard_s = time_s
         self.target_cross_channel_rounds = 0       # since the target was last paired
-        self.differences: list[float] = []
-        self.tracks = {self.settings.left_antenna: PhaseTrack(), self.settings.right_antenna: PhaseTrack()}
-        self.range_rate_mps: float | None = None
+        self.search_started_s: float | None = None
+        self._reset_steering()
         self.last_difference = 0.0
-        self.receding = False
         self.floor_track = PhaseTrack()
         self.floor_range_m = 0.0
         self.floor_minimum_m = 0.0
         self.floor_seen = False
+
+    def _reset_steering(self) -> None:
+        """Forget the phase differences and the range rate: at a new target, or after a search, whose turns make
+        them stale."""
+        self.differences: list[float] = []
+        self.tracks = {self.settings.left_antenna: PhaseTrack(), self.settings.right_antenna: PhaseTrack()}
+        self.range_rate_mps: float | None = None
+        self.receding = False
 
     @property
     def target(self) -> str:
@@ -249,16 +314,10 @@ class TagRouteFollower:
         if left is None or right is None:
             self.cross_channel_rounds += pairing.cross_channel
             self.target_cross_channel_rounds += pairing.cross_channel
-            unheard_s = time_s - self.last_heard_s
-            if unheard_s > s.unheard_timeout_s:
-                on_two = (f" (in {self.target_cross_channel_rounds} rounds heard by both antennas, but never on "
-                          f"one channel)" if self.target_cross_channel_rounds else "")
-                return Command(0.0, 0.0, "failed", self.index, target, self.last_difference, 0.0,
-                               failure=f"target tag '{target}' unheard for {unheard_s:.1f} s{on_two}")
-            # Keep going straight: a missed round is common and the heading is still good.
-            return Command(s.forward_speed_mps, 0.0, "unheard", self.index, target, self.last_difference, 0.0)
+            return self._unheard(time_s)
         self.last_heard_s = time_s
         self.target_cross_channel_rounds = 0
+        self.search_started_s = None
         difference = wrap_angle(pairing.difference_rad - s.phase_difference_offset_rad)
         # Over the floor tag the robot slows down, so the same lag in distance allows a longer average.
         window = s.filter_rounds if not self.floor_seen else round(s.filter_rounds / s.approach_speed_fraction)
@@ -284,6 +343,32 @@ class TagRouteFollower:
         if self.floor_seen:
             speed *= s.approach_speed_fraction
         return Command(speed, angular, "seeking", self.index, target, filtered, heading_change)
+
+    def _unheard(self, time_s: float) -> Command:
+        """A round without the target paired: straight on (a missed round is common and the heading is still
+        good), then the search (or, without it, the paper's timeout); failed once that has passed."""
+        s, target = self.settings, self.target
+        unheard_s = time_s - self.last_heard_s
+        leg = None
+        if self.search is not None and unheard_s > s.search_after_s:
+            if self.search_started_s is None:
+                self.search_started_s = time_s
+                self._reset_steering()
+            leg = self.search.leg_at(time_s - self.search_started_s)
+            if leg is None:
+                return self._failed(f"target tag '{target}' unheard for {unheard_s:.1f} s: not heard during the "
+                                    f"whole search ({self.search.describe()})")
+        elif self.search is None and unheard_s > s.unheard_timeout_s:
+            return self._failed(f"target tag '{target}' unheard for {unheard_s:.1f} s")
+        if leg is None:
+            return Command(s.forward_speed_mps, 0.0, "unheard", self.index, target, self.last_difference, 0.0)
+        return Command(leg.linear_mps, leg.angular_radps, leg.mode, self.index, target, self.last_difference, 0.0)
+
+    def _failed(self, failure: str) -> Command:
+        on_two = (f" (in {self.target_cross_channel_rounds} rounds heard by both antennas, but never on one "
+                  f"channel)" if self.target_cross_channel_rounds else "")
+        return Command(0.0, 0.0, "failed", self.index, self.target, self.last_difference, 0.0,
+                       failure=failure + on_two)
 
     def _update_range_rate(self, time_s: float, *reads: TagObservation) -> None:
         changes = (self.tracks[read.antenna].update(time_s, read.phase_rad, read.frequency_hz) for read in reads)

@@ -144,6 +144,9 @@ def add_bench(verbs: argparse._SubParsersAction) -> Handler:
     partitions.add_argument("--runs", type=runs_value, default=250, help="runs per (read range, level)")
     partitions.add_argument("--method", choices=["paper", "filter", "filter_boom_spin"], default="paper",
                             help="the configuration (reproduce partitions' METHOD_FILES)")
+    routes = names.add_parser("routes", parents=[common], help="paper 001's routes and long_legs in-process with "
+                                                               "the shipped files, both controllers")
+    routes.add_argument("--seeds", type=runs_value, default=3, help="runs per (route, controller): seeds 1..N")
     names.add_parser("location_server", parents=[common], help="paper 003's tier-one locate over DDS")
     names.add_parser("llrp", parents=[common], help="the llrp_reader driver against llrpkit's LLRP emulator "
                                                     "(latency, lossless rate)")
@@ -194,6 +197,10 @@ def run_bench(args: argparse.Namespace) -> int:
         return bench_rtf(args)
     if args.name == "partitions":
         return bench_partitions(args)
+    if args.name == "routes":
+        from rfidnav_experiments.bench.routes import bench_routes
+
+        return bench_routes(args.seeds, args.json)
     with stage(f"bench {args.name}"):
         return timed_bench(args)
 

@@ -34,7 +34,7 @@ from rfidnav_common.polling import PollClock, Polling
 from rfidnav_common.seeding import rng_for
 from rfidnav_sim.compass_model import CompassModel
 from rfidnav_sim.kinematics import BaseLimits, DiffDriveBase, OdometryDrift, Pose2D
-from rfidnav_sim.rfid_model import Antenna, PolledReader, ReaderModel, ReaderSimulator
+from rfidnav_sim.rfid_model import Antenna, PolledReader, ReaderModel, ReaderSimulator, budget_range_m
 from rfidnav_sim.sonar_model import PAPER_LAYOUT, SonarModel
 from rfidnav_sim.world import World
 
@@ -133,8 +133,10 @@ class ReaderParameters:
     antenna_facing: list[str] = param("boresight of each antenna: up (ceiling tags), down (floor tags), or left / "
                                       "right (wall tags, in an induction area)", ["up", "up", "down"],
                                       Limits(choices=FACINGS))
-    antenna_max_range_m: list[float] = param("read range of each antenna [m]; side antennas: the induction "
-                                             "area's depth", [12.0, 12.0, 0.10], READ_RANGE_M)
+    antenna_max_range_m: list[float] = param(
+        "cap on each antenna's slant read range [m], at most the link budget's boresight range (the budget, "
+        "rfid_model.reach_m, decides how far a tag is heard); side antennas: the induction area's depth",
+        [12.0, 12.0, 0.10], READ_RANGE_M)
     antenna_half_angle_deg: list[float] = param("beam cone half-angle of each antenna [deg]", [85.0, 85.0, 60.0],
                                                 HALF_ANGLE_DEG)
     antenna_phase_offset_rad: list[float] = param("phase delay of each antenna port and cable [rad]",
@@ -168,6 +170,19 @@ class ReaderParameters:
                                **{name: len(getattr(self, name)) for name in PER_ANTENNA}})
         if not self.channels_mhz:
             raise ParameterError("channels_mhz", "at least one frequency is needed")
+        self.check_range_caps()
+
+    def check_range_caps(self) -> None:
+        """No antenna that reads by the link budget (up, down) claims a range beyond the budget's boresight range:
+        the budget decides the reach (rfid_model.reach_m), ``antenna_max_range_m`` can only cap it."""
+        budget = budget_range_m(self.reader_model())
+        for index, (facing, cap) in enumerate(zip(self.antenna_facing, self.antenna_max_range_m)):
+            if facing not in SIDE_BEARINGS and cap > budget:
+                raise ParameterError(
+                    f"antenna_max_range_m[{index}]",
+                    f"{cap:g} m is more than the link budget reaches: {budget:.2f} m on boresight (rssi_at_1m_dbm "
+                    f"{self.rssi_at_1m_dbm:g}, sensitivity_dbm {self.sensitivity_dbm:g}, 40 dB per decade), less "
+                    f"off it; the budget decides the reach, this only caps it")
 
     def published_antenna_ports(self) -> tuple[str, tuple[int, ...]]:
         """The parameter that gives the antennas (ports 1, 2, ... in order) and their ports, as the LLRP driver's

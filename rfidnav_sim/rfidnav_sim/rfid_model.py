@@ -16,6 +16,11 @@ measured horizontally: the read disc of paper 000 section 3.1 is the ground trut
 (paper 004) read the world's wall tags in their induction area (rfidnav_sim.wall_tag_model). Both receiving antennas
 of one round see the same backscatter (the paper's reader receives on two antennas at once), so the
 phase difference is free of motion between antenna switches.
+
+Reach (:func:`reach_m`) follows from that link budget: how far, horizontally, a tag at a given height is read by an
+upward (or downward) antenna. ``max_range_m`` only caps the slant range below the budget's (a near-field floor
+antenna's few centimetres); ReaderParameters refuses a cap beyond the budget's boresight range
+(:func:`budget_range_m`), so no file can claim a reach its link budget does not give.
 """
 
 from __future__ import annotations
@@ -57,6 +62,44 @@ class ReaderModel:
     side_area_width_m: float = 0.40          # side antennas: the induction area's width (paper 004 Fig. 3)
     passage_miss_probability: float = 0.0    # side antennas: a wall tag missed for a whole passage
     unreadable_tags: tuple[str, ...] = ()    # side antennas: wall tags never read (forced read failures)
+
+
+def link_rssi_dbm(model: ReaderModel, distance_m, cos_off_axis):
+    """The link budget: RSSI of a tag ``distance_m`` away, ``cos_off_axis`` off the boresight (arrays or floats):
+    two-way path loss of 40 dB per decade and the cos^n pattern on both ways."""
+    return (model.rssi_at_1m_dbm - 40.0 * np.log10(distance_m)
+            + 20.0 * model.pattern_exponent * np.log10(np.clip(cos_off_axis, 1e-6, 1.0)))
+
+
+def budget_range_m(model: ReaderModel) -> float:
+    """The farthest a tag is read on boresight by the link budget alone [m]: off the boresight it is less."""
+    return float(10.0 ** ((model.rssi_at_1m_dbm - model.sensitivity_dbm) / 40.0))
+
+
+def reach_m(model: ReaderModel, antenna: Antenna, tag_z_m: float) -> float:
+    """How far from the antenna, horizontally, a tag at height ``tag_z_m`` (in the world, the floor at 0, the
+    antenna at the robot's height for it) is read: the smallest of the three limits the simulator applies, each
+    falling with the horizontal distance r at the tag's height h above (up) or below (down) the antenna:
+
+    * the link budget: rssi_at_1m - 40 log d + 20 n log(h / d) >= sensitivity, d = sqrt(r^2 + h^2), so
+      d <= 10^((rssi_at_1m - sensitivity + 20 n log h) / (40 + 20 n));
+    * the beam cone: r <= h tan(half_angle);
+    * the cap on the slant range: d <= max_range_m.
+
+    0 for a tag the antenna does not face. Side antennas read wall tags in an induction area: no reach here."""
+    if antenna.side_bearing_rad is not None:
+        raise ValueError(f"antenna {antenna.port} is a side antenna: it reads wall tags in its induction area")
+    height = (tag_z_m - antenna.position[2]) * (1.0 if antenna.facing_up else -1.0)
+    if height <= 0.0:
+        return 0.0
+    n = model.pattern_exponent
+    margin_db = model.rssi_at_1m_dbm - model.sensitivity_dbm + 20.0 * n * math.log10(height)
+    budget = 10.0 ** (margin_db / (40.0 + 20.0 * n))
+    slant = min(budget, antenna.max_range_m)
+    if slant <= height:
+        return 0.0
+    cone = height * math.tan(antenna.half_angle_rad) if antenna.half_angle_rad < math.pi / 2.0 else math.inf
+    return min(math.sqrt(slant * slant - height * height), cone)
 
 
 @dataclass(frozen=True)
@@ -152,9 +195,7 @@ class ReaderSimulator:
                     coordinates = [c for c, keep in zip(coordinates, kept) if keep]
                 positions = deployment.lattice.positions(np.array(coordinates, dtype=float).reshape(-1, 2))
                 distance = np.maximum(np.sqrt(np.sum((positions - (ax, ay)) ** 2, axis=1) + az * az), 1e-3)
-                cos_off_axis = np.clip(abs(az) / distance, 1e-6, 1.0)
-                rssi = (self.model.rssi_at_1m_dbm - 40.0 * np.log10(distance)
-                        + 20.0 * self.model.pattern_exponent * np.log10(cos_off_axis))
+                rssi = link_rssi_dbm(self.model, distance, abs(az) / distance)
                 reads += self.reads_of([deployment.lattice.tag_id(c) for c in coordinates],
                                        np.full(len(coordinates), a), distance,
                                        np.full(len(coordinates), self.model.antennas[a].phase_offset_rad),
@@ -180,8 +221,7 @@ class ReaderSimulator:
         cos_off_axis = facing * offsets[:, :, 2] / distance
         max_range = np.array([a.max_range_m for a in model.antennas])[:, None]
         min_cos = np.cos(np.array([a.half_angle_rad for a in model.antennas]))[:, None]
-        gain_db = 20.0 * model.pattern_exponent * np.log10(np.clip(cos_off_axis, 1e-6, 1.0))
-        rssi = model.rssi_at_1m_dbm - 40.0 * np.log10(distance) + gain_db
+        rssi = link_rssi_dbm(model, distance, cos_off_axis)
         listing = np.array([a.side_bearing_rad is None for a in model.antennas])[:, None]   # side: wall tags only
         readable = listing & (distance <= max_range) & (cos_off_axis >= min_cos) & (rssi >= model.sensitivity_dbm)
         if model.miss_probability > 0.0:

@@ -20,7 +20,7 @@ from rfidnav_bringup.scenario import Scenario, node_parameters
 from rfidnav_common.seeding import rng_for
 from rfidnav_control.fuzzy import FuzzyHeadingController
 from rfidnav_control.parameters import HeadingControllerParameters
-from rfidnav_control.tag_route import Command, TagRouteFollower, observe
+from rfidnav_control.tag_route import SEARCH_MODES, Command, TagRouteFollower, observe
 from rfidnav_experiments.runners.shipped import file_parameters
 from rfidnav_sim.parameters import ReaderParameters, RobotSimParameters
 from rfidnav_sim.rfid_model import ReaderSimulator
@@ -36,6 +36,7 @@ class RouteRun:
     metrics: TrackingMetrics
     trajectory: Trajectory
     arrival_times_s: tuple[float, ...]
+    search_s: float = 0.0                  # sim time spent searching for an unheard target (tag_route.SEARCH_MODES)
 
 
 def role_parameters(scenario: Scenario, executable: str, seed: int):
@@ -79,7 +80,7 @@ def run_tag_route(scenario: Scenario, controller: HeadingControllerParameters, s
     next_round_s = 0.0
     times, positions, arrivals = [0.0], [(base.truth.x, base.truth.y)], []
     pending: deque[tuple[float, Command]] = deque()
-    success, message, step, now = False, "timeout", 0, 0.0
+    success, message, step, now, search_s = False, "timeout", 0, 0.0, 0.0
     while now < limit_s:
         while pending and pending[0][0] <= step * robot.step_s + 1e-9:
             delayed = pending.popleft()[1]
@@ -98,6 +99,8 @@ def run_tag_route(scenario: Scenario, controller: HeadingControllerParameters, s
         command = follower.step(now, [o for o in map(observe, reads) if o is not None])
         if command.arrived_index is not None:
             arrivals.append(now)
+        if command.mode in SEARCH_MODES:
+            search_s += round_period_s
         pending.append((now + command_delay_s, command))
         if command.failure:
             message = command.failure
@@ -107,4 +110,4 @@ def run_tag_route(scenario: Scenario, controller: HeadingControllerParameters, s
             break
     trajectory = Trajectory(np.array(times), np.array(positions))
     metrics = tracking_metrics(trajectory, tag_points(scenario, route), arrivals, 0.0, now)
-    return RouteRun(scenario.name, seed, success, message, now, metrics, trajectory, tuple(arrivals))
+    return RouteRun(scenario.name, seed, success, message, now, metrics, trajectory, tuple(arrivals), search_s)
