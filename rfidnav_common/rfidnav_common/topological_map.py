@@ -48,7 +48,7 @@ between the two positions, else 1 m (the topology alone then decides, as with ``
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any, NamedTuple
 
@@ -161,6 +161,18 @@ class TopologicalMap:
         if here is not None and there is not None:
             return math.dist(here, there)
         return None
+
+    def with_hallway(self, node_a: str, side_a: str, node_b: str, side_b: str) -> TopologicalMap:
+        """A copy in which the ``?`` hallway leaving ``node_a`` by ``side_a`` leads to ``node_b``, entered by
+        ``side_b`` (whose ``?`` leads back): a hallway explored (the mission executor learns it)."""
+        nodes = dict(self.nodes)
+        for name, side, other in ((node_a, side_a, node_b), (node_b, side_b, node_a)):
+            hallway = nodes[name].hallways.get(side)
+            if hallway is None or hallway.neighbour != UNKNOWN:
+                raise RouteError(f"map '{self.name}': {name}.{side} is not a '{UNKNOWN}' hallway to learn")
+            nodes[name] = replace(nodes[name], hallways={**nodes[name].hallways,
+                                                         side: replace(hallway, neighbour=other)})
+        return replace(self, nodes=nodes)
 
     def edges(self) -> list[Edge]:
         """Every hallway between two mapped nodes, once."""

@@ -3,8 +3,8 @@ tags read on /rfid/reads and the wall follower's events, and commanding the foll
 
 A thin adapter around rfidnav_planning.mission_executor.MissionExecutor, glued to the follower exactly as the
 in-process runner glues the two cores: each inventory round's tag ids go to ``on_reads``, each follower event to
-``on_junction`` (the odometry pose each event and state carries to ``on_odometry``, for the distance driven), each
-decision's ``follower_command`` to the follower; the goal ends with the follower's ``stopped`` (the executor's
+``on_junction`` (the odometry pose each event and state carries to ``on_odometry``, for the distance driven, which
+may find a dead-end goal whose tag was missed), each decision's ``follower_command`` to the follower; the goal ends with the follower's ``stopped`` (the executor's
 stop, driven on to the node) or at once when the executor gives up. What the executor learns of ``?`` hallways is
 kept for later goals. A goal is refused for a node not in the map, while another goal runs, or while no wall
 follower listens on /wall_follower/command. A follower that says it is idle (/wall_follower/state) while a mission
@@ -100,9 +100,11 @@ class MissionExecutorNode(SteppedNode):
         except inputs.BadInput as error:
             self.drops.drop(topic, error)
             return False
-        # An idle follower may have no pose yet: it is left out.
+        # An idle follower may have no pose yet: it is left out. The distance may find a dead-end goal.
         if msg.state != IDLE:
-            self.executor_core.on_odometry(x, y)
+            decision = self.executor_core.on_odometry(x, y)
+            if decision is not None and self.goals.running is not None:
+                self.apply(decision)
         return True
 
     def on_event(self, msg: WallFollowerEvent) -> None:

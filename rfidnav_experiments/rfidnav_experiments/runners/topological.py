@@ -148,7 +148,9 @@ def run_mission(world: World, topological_map: TopologicalMap, start_pose: tuple
 
     for _ in range(int(round(max_time_s * FOLLOWER.control_rate_hz))):
         truth, odom = base.truth, base.odom
-        executor.on_odometry(odom.x, odom.y)
+        at_dead_end = executor.on_odometry(odom.x, odom.y)
+        if at_dead_end is not None:
+            apply(at_dead_end, False)
         for decision in executor.on_reads(reader.read(truth.x, truth.y, truth.yaw, rng)):
             apply(decision, False)
         command = follower.step(centre_sonar(sonar_model.ranges(truth.x, truth.y, truth.yaw, rng), offsets),
