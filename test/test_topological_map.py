@@ -5,11 +5,13 @@ from __future__ import annotations
 import struct
 import textwrap
 from pathlib import Path
+from types import SimpleNamespace
 
 import networkx as nx
 import pytest
 
-from rfidnav_bringup.report import draw_map
+from rfidnav_bringup.metrics import topological_shortest_m
+from rfidnav_bringup.report import draw_map, learned_map
 from rfidnav_common.errors import ConfigError, RfidnavError
 from rfidnav_common.topological_map import (
     DIRECTIONS,
@@ -20,8 +22,10 @@ from rfidnav_common.topological_map import (
     RouteError,
     TopologicalMap,
     check_map,
+    hallway_text,
     load_topological_map,
     next_action,
+    parse_hallway_text,
     turn,
 )
 
@@ -251,6 +255,36 @@ def test_route_by_edges_and_by_length(tmp_path: Path) -> None:
     assert detour.route("s", "t", weight="length") == ["s", "y", "z", "t"]    # 3 hallways (6 m)
     assert detour.route("t", "s", weight="length") == ["t", "z", "y", "s"]
     assert detour.route("s", "s") == ["s"]
+
+
+def test_a_hallway_as_text_reads_back_and_is_learned_at_both_ends(paper_map: TopologicalMap) -> None:
+    assert hallway_text("d", "N", "x.1", "S") == "d.N -> x.1.S"
+    assert parse_hallway_text("d.N -> x.1.S") == ("d", "N", "x.1", "S")      # a node name may hold a dot
+    for bad in ("d.N", "d.N -> x", "d.Q -> e.W", ".N -> e.W"):
+        with pytest.raises(ValueError):
+            parse_hallway_text(bad)
+    # d's North is "?": joined to a new node's South it is routable, in a copy.
+    nodes = {**paper_map.nodes, "x": Node("x", {"S": Hallway(UNKNOWN, ("99",))}, (8.0, 24.0))}
+    with_x = TopologicalMap("with_x", nodes)
+    learned = with_x.with_hallway("d", "N", "x", "S")
+    assert learned.route("c", "x") == ["c", "d", "x"]
+    assert learned.nodes["x"].hallways["S"] == Hallway("d", ("99",))
+    assert with_x.nodes["d"].hallways["N"].neighbour == UNKNOWN
+    with pytest.raises(RouteError, match="d.E is not a '[?]' hallway"):
+        with_x.with_hallway("d", "E", "x", "S")
+
+
+def test_a_report_measures_the_shortest_path_on_the_map_the_executor_learned(tmp_path: Path) -> None:
+    # A goal beyond "?" hallways has no shortest path on the given map; on the learned one (the executor's
+    # last feedback over DDS) it has, as the in-process runner measures it.
+    text = PAPER_NODES + '  x: {position: [8.0, 24.0], S: {node: "?", tags: [99]}}\n'
+    path = write_map(tmp_path, text)
+    feedback = SimpleNamespace(learned_hallways=["d.N -> x.S"])
+    with pytest.raises(RouteError):
+        topological_shortest_m(load_topological_map(path), (8.0, 6.0), "c", "S", "x")
+    learned = learned_map(path, feedback)
+    assert topological_shortest_m(learned, (8.0, 6.0), "c", "S", "x") == pytest.approx(2.0 + 16.0)
+    assert learned_map(path, SimpleNamespace()).nodes["d"].hallways["N"].neighbour == UNKNOWN   # an older bag
 
 
 def test_hallway_length_from_length_positions_or_one_metre(paper_map: TopologicalMap) -> None:

@@ -70,6 +70,7 @@ _TURNS = ("straight", "right", "back", "left")        # by clockwise quarter tur
 _SIDE_FIELDS = ("node", "tags", "length_m")
 _POSITION_TOLERANCE_DEG = 45.0                        # beyond this a hallway points to another compass side
 _LENGTH_TOLERANCE_M = 1e-6
+_HALLWAY_ARROW = " -> "
 
 
 class RouteError(RfidnavError, ValueError):
@@ -220,6 +221,22 @@ class TopologicalMap:
             if not graph.has_edge(edge.node_a, edge.node_b) or graph[edge.node_a][edge.node_b]["weight"] > cost:
                 graph.add_edge(edge.node_a, edge.node_b, weight=cost)
         return graph
+
+
+def hallway_text(node_a: str, side_a: str, node_b: str, side_b: str) -> str:
+    """A hallway as text, ``a.N -> c.S`` (leaving ``a`` by its North side, entering ``c`` by its South side):
+    how the mission executor reports a learned hallway (NavigateToNode feedback)."""
+    return f"{node_a}.{side_a}{_HALLWAY_ARROW}{node_b}.{side_b}"
+
+
+def parse_hallway_text(text: str) -> tuple[str, str, str, str]:
+    """(node_a, side_a, node_b, side_b) of :func:`hallway_text`'s text; ValueError for text of another form."""
+    ends = text.split(_HALLWAY_ARROW)
+    if len(ends) == 2:
+        (node_a, _, side_a), (node_b, _, side_b) = (end.rpartition(".") for end in ends)
+        if node_a and node_b and side_a in _OPPOSITE and side_b in _OPPOSITE:
+            return node_a, side_a, node_b, side_b
+    raise ValueError(f"a hallway reads 'node.side{_HALLWAY_ARROW}node.side' (sides N, E, S, W), got '{text}'")
 
 
 def opposite(direction: str) -> str:

@@ -67,7 +67,16 @@ import math
 from collections.abc import Iterable
 from dataclasses import dataclass, field, replace
 
-from rfidnav_common.topological_map import DIRECTIONS, UNKNOWN, WEIGHTS, RouteError, TopologicalMap, opposite, turn
+from rfidnav_common.topological_map import (
+    DIRECTIONS,
+    UNKNOWN,
+    WEIGHTS,
+    RouteError,
+    TopologicalMap,
+    hallway_text,
+    opposite,
+    turn,
+)
 
 LEFT, RIGHT, STRAIGHT, BACK, STOP, FOLLOW = "left", "right", "straight", "back", "stop", "follow"
 TURNS = (LEFT, RIGHT, STRAIGHT, BACK)                 # the actions WallFollower.command_turn takes
@@ -104,6 +113,9 @@ class LearnedEdge:
     side_a: str
     node_b: str
     side_b: str
+
+    def text(self) -> str:
+        return hallway_text(self.node_a, self.side_a, self.node_b, self.side_b)
 
 
 @dataclass
