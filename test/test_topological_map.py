@@ -200,10 +200,29 @@ def test_a_node_only_reachable_through_question_marks_is_allowed(tmp_path: Path)
 
 def test_length_mismatch_is_reported_once(tmp_path: Path) -> None:
     path = broken(tmp_path, "a: {position: [0.0, 8.0], E: {node: c, tags: [1]}}",
-                  "a: {position: [0.0, 8.0], E: {node: c, tags: [1], length_m: 9.0}}")
+                  "a: {position: [0.0, 8.0], E: {node: c, tags: [1], length_m: 8.4}}")
     path.write_text(path.read_text().replace("W: {node: a, tags: [7]}", "W: {node: a, tags: [7], length_m: 8.0}"))
-    assert check_map(path) == [f"{path}: nodes.a.E.node: length_m 9 here but 8 at 'c'.W: the two ends of a "
+    assert check_map(path) == [f"{path}: nodes.a.E.node: length_m 8.4 here but 8 at 'c'.W: the two ends of a "
                                "hallway must agree"]
+
+
+@pytest.mark.parametrize("length_m, accepted", [(8.0, True), (8.79, True), (7.21, True), (8.81, False),
+                                                (7.19, False), (25.0, False)])
+def test_a_length_lies_within_a_tenth_of_the_distance_between_the_positions(tmp_path: Path, length_m: float,
+                                                                            accepted: bool) -> None:
+    path = broken(tmp_path, "a: {position: [0.0, 8.0], E: {node: c, tags: [1]}}",
+                  f"a: {{position: [0.0, 8.0], E: {{node: c, tags: [1], length_m: {length_m}}}}}")
+    problems = check_map(path)
+    assert problems == ([] if accepted else [
+        f"{path}: nodes.a.E.length_m: {length_m:g} m, but 'a' and 'c' are 8.00 m apart by their positions: a "
+        "hallway's length lies within 10% (at least 0.5 m) of that distance"])
+
+
+def test_a_short_hallways_length_may_be_off_by_half_a_metre(tmp_path: Path) -> None:
+    text = PAPER_NODES.replace("a: {position: [0.0, 8.0], E: {node: c, tags: [1]}}",
+                               "a: {position: [6.0, 8.0], E: {node: c, tags: [1], length_m: 2.45}}")
+    assert check_map(write_map(tmp_path, text)) == []                 # 2 m apart: 0.5 m, not 10 %, applies
+    assert len(check_map(write_map(tmp_path, text.replace("2.45", "2.55")))) == 1
 
 
 def test_check_map_lists_every_problem_and_load_raises_the_first(tmp_path: Path) -> None:

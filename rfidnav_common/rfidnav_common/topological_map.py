@@ -70,6 +70,9 @@ _TURNS = ("straight", "right", "back", "left")        # by clockwise quarter tur
 _SIDE_FIELDS = ("node", "tags", "length_m")
 _POSITION_TOLERANCE_DEG = 45.0                        # beyond this a hallway points to another compass side
 _LENGTH_TOLERANCE_M = 1e-6
+# A length_m given with both positions lies within max(metres, fraction of the distance) of the distance between
+# them: positions paced or taken off a plan, a hallway's centre line, never a hallway twice as long.
+LENGTH_SLACK = (0.5, 0.10)
 _HALLWAY_ARROW = " -> "
 
 
@@ -269,7 +272,7 @@ def next_action(topological_map: TopologicalMap, tag_id: str | int, goal: str,
 
 def load_topological_map(path: Path | str) -> TopologicalMap:
     """Read and check a map file; the first problem is raised as a ConfigError naming file and field."""
-    topological_map, problems = _read(Path(path))
+    topological_map, problems = read_map(Path(path))
     if topological_map is None:                      # None exactly when there are problems
         raise problems[0]
     return topological_map
@@ -277,7 +280,7 @@ def load_topological_map(path: Path | str) -> TopologicalMap:
 
 def check_map(path: Path | str) -> list[str]:
     """Every problem of a map file, one line each (``file: field: problem``); empty for a good map."""
-    return [str(problem) for problem in _read(Path(path))[1]]
+    return [str(problem) for problem in read_map(Path(path))[1]]
 
 
 def _check_weight(weight: str) -> None:
@@ -293,7 +296,8 @@ def _check_direction(direction: str) -> str:
 
 # ---------------------------------------------------------------- reading and checking
 
-def _read(path: Path) -> tuple[TopologicalMap | None, list[ConfigError]]:
+def read_map(path: Path) -> tuple[TopologicalMap | None, list[ConfigError]]:
+    """The map and every problem by the rules above; the map is None exactly when there are problems."""
     try:
         document = Section.from_file(path)
     except ConfigError as error:
@@ -434,10 +438,11 @@ class _Reader:
                         f"{found} (expected '{node.name}': a hallway is listed at both ends, on opposite sides)"))
                     continue
                 if (node.name, side) < (far_end.name, back_side):     # each pair once
-                    self.check_pair(source, where, node, side, hallway, far_end, mirror, north_deg)
+                    self.check_pair(nodes_section, node, side, hallway, far_end, mirror, north_deg)
 
-    def check_pair(self, source: str, where: str, node: Node, side: str, hallway: Hallway, far_end: Node,
+    def check_pair(self, nodes_section: Section, node: Node, side: str, hallway: Hallway, far_end: Node,
                    mirror: Hallway, north_deg: float) -> None:
+        source, where = nodes_section.source, f"{nodes_section.field(node.name)}.{side}.node"
         if (hallway.length_m is not None and mirror.length_m is not None
                 and abs(hallway.length_m - mirror.length_m) > _LENGTH_TOLERANCE_M):
             self.problems.append(ConfigError(
@@ -457,6 +462,18 @@ class _Reader:
             self.problems.append(ConfigError(
                 source, where, f"'{far_end.name}' lies {off:.0f} deg off the {side} of '{node.name}' by their "
                                f"positions (north_deg {north_deg:g}): positions and compass sides disagree"))
+        given = [(f"{nodes_section.field(name)}.{name_side}.length_m", end.length_m)
+                 for name, name_side, end in ((node.name, side, hallway), (far_end.name, _OPPOSITE[side], mirror))
+                 if end.length_m is not None]
+        if given:
+            field_name, length = given[0]
+            distance = math.hypot(dx, dy)
+            slack = max(LENGTH_SLACK[0], LENGTH_SLACK[1] * distance)
+            if abs(length - distance) > slack:
+                self.problems.append(ConfigError(
+                    source, field_name, f"{length:g} m, but '{node.name}' and '{far_end.name}' are {distance:.2f} m "
+                                        f"apart by their positions: a hallway's length lies within "
+                                        f"{LENGTH_SLACK[1]:.0%} (at least {LENGTH_SLACK[0]:g} m) of that distance"))
 
     def check_reachable(self, nodes_section: Section, nodes: dict[str, Node]) -> None:
         if not nodes:
