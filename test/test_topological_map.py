@@ -473,6 +473,15 @@ def test_the_map_verbs_check_and_draw_with_exit_codes(tmp_path: Path) -> None:
     bad = cli("check", str(broken))
     assert bad.returncode == 2
     assert len(bad.stderr.strip().splitlines()) == 3 and "duplicate tag '1'" in bad.stderr
+    # The evaluation floor was drawn by hand (B - F runs 20 degrees off South): the generator could not build it,
+    # so map check refuses it, and checks it by the map's own rules with --robot-only.
+    drawn_by_hand = str(workspace / "config/maps/building_eval.yaml")
+    generator_rules = cli("check", drawn_by_hand)
+    assert generator_rules.returncode == 2
+    assert generator_rules.stderr.splitlines() == [f"{drawn_by_hand}: nodes.B.S.node: the far node is +2.736 m off "
+                                                   "the S line; the world generator runs hallways straight along "
+                                                   "their compass direction"]
+    assert cli("check", "--robot-only", drawn_by_hand).returncode == 0
     png = tmp_path / "fig5.png"
     drawn = cli("draw", str(workspace / "config/maps/building_fig5.yaml"), "--out", str(png))
     assert drawn.returncode == 0 and png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"

@@ -59,6 +59,8 @@ LARGE_MAP = CONFIG_DIR / "maps" / "building_large.yaml"
 LARGE_WORLD = CONFIG_DIR / "worlds" / "building_large.yaml"
 EVAL_MAP = CONFIG_DIR / "maps" / "building_eval.yaml"
 EVAL_WORLD = CONFIG_DIR / "worlds" / "building_eval.yaml"
+RING_MAP = CONFIG_DIR / "maps" / "building_ring.yaml"
+RING_WORLD = CONFIG_DIR / "worlds" / "building_ring.yaml"
 FOLLOWER = shipped_parameters(WallFollowerParameters, "wall_follower")   # its sonar topics, offsets, settings
 ROBOT = shipped_parameters(RobotSimParameters, "robot_sim", world_file="-")   # the base: limits, odometry drift
 SONAR = shipped_parameters(SonarParameters, "sonar_sim", world_file="-")     # noise, rays, specular loss
@@ -202,7 +204,8 @@ class Floor:
     world_path: Path
 
 
-FLOORS = {"building_large": Floor(LARGE_MAP, LARGE_WORLD), "building_eval": Floor(EVAL_MAP, EVAL_WORLD)}
+FLOORS = {"building_large": Floor(LARGE_MAP, LARGE_WORLD), "building_eval": Floor(EVAL_MAP, EVAL_WORLD),
+          "building_ring": Floor(RING_MAP, RING_WORLD)}
 
 
 def paper_run(rng: np.random.Generator, miss_probability: float = 0.0, method: Method = METHODS["ours"]) \
