@@ -560,6 +560,20 @@ def test_the_odometry_decides_nothing_on_the_way_to_a_goal_with_a_junction(fig5:
     assert executor.state.outcome is None
 
 
+def test_after_a_u_turn_at_a_tag_the_next_junction_is_expected_nearer_not_farther() -> None:
+    # At F's tag (arriving from D, 2 m before the dead end) the way to A is back East: D lies 8 - 2 m ahead.
+    ring = load_topological_map(MAPS / "building_ring.yaml")
+    executor = MissionExecutor(ring)
+    executor.start("A")
+    executor.on_odometry(0.0, 0.0)
+    assert executor.on_tag(15).action == BACK
+    assert executor.state.leg_expected_m == pytest.approx(ring.hallway_length_m("F", "E") - ring.tag_to_node_m)
+    executor.on_junction(TURN_DONE)
+    executor.on_odometry(6.0, 0.0)
+    at_d = executor.on_junction(JUNCTION_CENTRE)                   # D's tag 14 missed: this junction is D
+    assert at_d.action == RIGHT and executor.state.current_node == "D" and executor.state.tags_missed == 1
+
+
 def test_another_tag_of_the_same_side_is_the_same_read_not_another_u_turn() -> None:
     ring = load_topological_map(MAPS / "building_ring.yaml")       # C's West side carries tags 9 and 10
     executor = MissionExecutor(ring)

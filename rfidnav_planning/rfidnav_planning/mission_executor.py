@@ -297,10 +297,11 @@ class MissionExecutor:
         return (f"after {driven:.1f} m of the {state.leg_expected_m:.1f} m to '{state.expected_node}': an opening "
                 "not on the map, followed on")
 
-    def _leg_length(self, node: str, departure: str, at_centre: bool) -> float | None:
+    def _leg_length(self, node: str, arrival: str, departure: str, at_centre: bool) -> float | None:
         """The map's distance from where the robot is (at ``node``'s centre, or at its tag ``tag_to_node_m``
-        before it) to the expected node, leaving by ``departure`` through the nodes passed; None if a length
-        is not known."""
+        before it on the hallway it arrived by) to the expected node, leaving by ``departure`` through the nodes
+        passed; None if a length is not known. A U-turn at the tag (leaving by the side arrived from) starts
+        ``tag_to_node_m`` along the hallway it leaves by, not before the node."""
         state = self._mission()
         if state.expected_node == UNKNOWN:
             return None
@@ -308,7 +309,8 @@ class MissionExecutor:
         lengths = [self.map.known_length_m(*leg) for leg in legs]
         if any(length is None for length in lengths):
             return None
-        return (0.0 if at_centre else self.map.tag_to_node_m) + sum(length for length in lengths if length is not None)
+        tag_offset = 0.0 if at_centre else self.map.tag_to_node_m * (-1.0 if departure == arrival else 1.0)
+        return tag_offset + sum(length for length in lengths if length is not None)
 
     def _assume_arrival(self, how: str) -> Decision:
         """A tag was missed: the robot is where the route leads next (the nodes passed on the way are visited)."""
@@ -363,7 +365,7 @@ class MissionExecutor:
         else:
             state.expected_node, state.expected_side, state.passing = self._next_sensed(node, departure)
             state.leg_from_m = self.odometry_m or 0.0
-            state.leg_expected_m = self._leg_length(node, departure, at_centre)
+            state.leg_expected_m = self._leg_length(node, side, departure, at_centre)
             goes = f"for '{state.expected_node}'"
         message = f"{how}: at '{node}' from {side}; {action}, leaving {departure} {goes}"
         if action == STRAIGHT and not opening:
