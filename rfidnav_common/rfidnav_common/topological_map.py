@@ -36,10 +36,14 @@ Rules (``check_map`` lists every break, ``load_topological_map`` raises the firs
 * every hallway is listed at both ends with opposite sides: ``c.N = d`` requires ``d.S = c``; lengths given at
   both ends agree;
 * where both ends have positions, the far end lies within 45 degrees of the side's compass direction, so a
-  drawing (and a person reading the map) sees the turns the robot will make;
+  drawing (and a person reading the map) sees the turns the robot will make, and a ``length_m`` lies within
+  ``LENGTH_SLACK`` (10 %, at least 0.5 m) of the straight distance between them;
 * every node is reachable from the first through mapped hallways, or it and the first node both lie in parts of
   the map with a ``?`` hallway (the parts may join through unexplored hallways: the mission executor explores
   them).
+
+These are the robot's rules (the scenario loader and the mission executor read maps by them). A map the world
+generator builds a floor from keeps ``rfidnav_common.floor_plan``'s too, which ``./rfidnav map check`` adds.
 
 Hallway length for ``route(..., weight="length")``: ``length_m`` from either end, else the straight distance
 between the two positions, else 1 m (the topology alone then decides, as with ``weight="edges"``).

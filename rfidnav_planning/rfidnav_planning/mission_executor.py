@@ -38,7 +38,8 @@ Beyond the paper (ours):
   the odometry (:meth:`on_odometry`) and where the map knows the hallways' lengths, the executor takes a
   junction centre (or a dead end's wall) for the expected node only once the robot has come within
   EARLY_MARGIN of the distance to it (from the tag read, or the junction centre, that set the expectation);
-  a junction well before that is an opening not on the map, followed straight on. The margin allows for map
+  a junction well before that is an opening not on the map, followed straight on (after a U-turn at a tag the
+  distance starts ``tag_to_node_m`` along the hallway left by, not before the node). The margin allows for map
   lengths taken between node positions (junction widths, tags a little nearer or farther than
   ``tag_to_node_m``) and for odometry drift, not for a floor's particular doors.
 * Off the route. Every tag plans again from its node, so a tag of an unexpected node (a missed turn, a wrong
