@@ -6,6 +6,7 @@ import math
 import numpy as np
 import pytest
 
+from rfidnav_common.errors import ConfigError
 from rfidnav_common.topological_map import load_topological_map
 from rfidnav_experiments.runners.topological import (
     EVAL_MAP,
@@ -135,7 +136,7 @@ def test_the_evaluation_floor_is_not_the_floor_its_map_would_generate():
     # The generator cannot even draw this map's floor (B-F is off its compass line); squared up, its walls are
     # still not the drawn ones.
     robot_map = load_topological_map(EVAL_MAP)
-    with pytest.raises(ValueError, match="off the S line"):
+    with pytest.raises(ConfigError, match="nodes.B.S.node: the far node is .* off the S line"):
         building_floor(robot_map)
     squared = dataclasses.replace(robot_map, nodes={**robot_map.nodes, "F": dataclasses.replace(
         robot_map.nodes["F"], position=(10.0, -8.0))})

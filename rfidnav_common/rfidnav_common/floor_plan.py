@@ -47,7 +47,6 @@ class SidePlan:
 
 @dataclass(frozen=True)
 class FloorPlan:
-    hallway_width_m: float
     sides: dict[tuple[str, str], SidePlan]  # by (node, direction), every node and direction
 
 
@@ -126,7 +125,7 @@ def plan_floor(topological_map: TopologicalMap, source: str, hallway_width_m: fl
                                                                 f"floor ({hallway_width_m:g} m-wide hallways)"))
     if problems:
         return None, problems
-    return FloorPlan(hallway_width_m, sides), []
+    return FloorPlan(sides), []
 
 
 def check_floor_map(path: Path | str) -> list[str]:
