@@ -1,28 +1,35 @@
-"""Floors of paper 004 built from topological maps (rfidnav_sim.building): walls, openings and left-wall tags.
+"""Floors of paper 004 built from topological maps (rfidnav_sim.building): walls, openings and left-wall tags, and
+the generator's checks, which ``map check`` runs too (rfidnav_common.floor_plan).
 
 Pure-module tests: no ROS. The two-node floor's walls and tag positions are worked out by hand; the generated
-Fig. 5 and large worlds are checked for every tag sitting on a wall and no wall doubling or crossing another.
+worlds are checked for every tag sitting on a wall and no wall doubling or crossing another; each kind of map the
+generator refuses is refused by ``map check`` with the same line; in-tree and mutated maps pass ``map check``
+exactly when the generator builds them, into sound floors.
 """
 
 from __future__ import annotations
 
+import copy
 import itertools
 import math
+import random
 from pathlib import Path
 
 import numpy as np
 import pytest
 import yaml
 
-from rfidnav_common.topological_map import TopologicalMap, load_topological_map
-from rfidnav_sim.building import building_floor, main, write_world
+from rfidnav_common.errors import ConfigError
+from rfidnav_common.floor_plan import check_floor_map
+from rfidnav_common.topological_map import TopologicalMap, check_map, load_topological_map
+from rfidnav_sim.building import Floor, building_floor, main, write_world
 from rfidnav_sim.wall_tag_model import InductionArea, WallTag, WallTagReader
 from rfidnav_sim.world import load_world
 
 pytestmark = pytest.mark.tier("unit")
 
 REPO = Path(__file__).resolve().parents[1]
-MAPS = ("building_fig5", "building_large")
+MAPS = ("building_fig5", "building_large", "building_ring")
 TWO_NODES = """\
 name: two_nodes
 north_deg: {north_deg}
@@ -118,19 +125,6 @@ def test_compass_directions_follow_north_deg(tmp_path: Path) -> None:
     assert tags["2"].normal == pytest.approx((0.0, -1.0))
 
 
-def test_a_node_without_a_position_is_an_error_naming_it(tmp_path: Path) -> None:
-    path = tmp_path / "unplaced.yaml"
-    path.write_text("name: unplaced\nnodes:\n  a:\n    position: [0.0, 0.0]\n    E: {node: lost}\n"
-                    "  lost:\n    W: {node: a}\n")
-    with pytest.raises(ValueError, match="node 'lost' has no position"):
-        building_floor(load_topological_map(path))
-
-
-def test_a_hallway_off_its_compass_line_is_an_error(tmp_path: Path) -> None:
-    with pytest.raises(ValueError, match="node 'a' side E: the far node is \\+1.000 m off the E line"):
-        building_floor(two_node_map(tmp_path, b="[8.0, 1.0]"))
-
-
 def test_an_unmapped_hallway_is_a_3_m_dead_end_and_a_dash_side_a_wall() -> None:
     walls = building_floor(load_topological_map(REPO / "config/maps/building_fig5.yaml")).walls
     d = (8.0, 16.0)
@@ -139,22 +133,21 @@ def test_an_unmapped_hallway_is_a_3_m_dead_end_and_a_dash_side_a_wall() -> None:
     assert ray_hit_m(walls, d, 0.0) == pytest.approx(8.0 + 0.8 + 3.0)     # d.E = e, then e.E = "?"
 
 
-@pytest.mark.parametrize("map_name", MAPS)
-def test_every_map_tag_is_on_a_wall_facing_into_the_hallway(map_name: str) -> None:
-    topological_map = load_topological_map(REPO / f"config/maps/{map_name}.yaml")
-    floor = building_floor(topological_map)
-    map_tags = {tag for node in topological_map.nodes.values() for hallway in node.hallways.values()
-                for tag in hallway.tags}
-    assert sorted(tag.tag_id for tag in floor.wall_tags) == sorted(map_tags)
+def tags_off_their_walls(topological_map: TopologicalMap, floor: Floor) -> list[str]:
+    """The map's tags missing from the floor, not on a wall, or facing a wall within 0.5 m (not into a hallway)."""
+    map_tags = sorted(tag for node in topological_map.nodes.values() for hallway in node.hallways.values()
+                      for tag in hallway.tags)
+    bad = sorted(set(map_tags) ^ {tag.tag_id for tag in floor.wall_tags})
     for tag in floor.wall_tags:
-        assert min(distance_to_segment_m(tag.position, wall) for wall in floor.walls) <= 0.05, tag.tag_id
-        # A step along the normal lands in open hallway: no wall within 0.5 m along it.
-        assert ray_hit_m(floor.walls, tag.position, math.atan2(tag.normal[1], tag.normal[0])) > 0.5, tag.tag_id
+        if (min(distance_to_segment_m(tag.position, wall) for wall in floor.walls) > 0.05
+                or ray_hit_m(floor.walls, tag.position, math.atan2(tag.normal[1], tag.normal[0])) <= 0.5):
+            bad.append(tag.tag_id)
+    return bad
 
 
-@pytest.mark.parametrize("map_name", MAPS)
-def test_no_two_walls_overlap_or_cross(map_name: str) -> None:
-    walls = building_floor(load_topological_map(REPO / f"config/maps/{map_name}.yaml")).walls
+def crossing_walls(walls: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
+    """Pairs of walls that cross, or lie on one line and overlap (touching ends are allowed)."""
+    found = []
     for first, second in itertools.combinations(walls, 2):
         p, r = first[:2], first[2:] - first[:2]
         q, s = second[:2], second[2:] - second[:2]
@@ -166,11 +159,171 @@ def test_no_two_walls_overlap_or_cross(map_name: str) -> None:
             unit = r / np.linalg.norm(r)
             a0, a1 = sorted((0.0, float(r @ unit)))
             b0, b1 = sorted((float(offset @ unit), float((offset + s) @ unit)))
-            assert min(a1, b1) - max(a0, b0) <= 1e-9, (first, second)    # collinear: touching ends at most
+            if min(a1, b1) - max(a0, b0) > 1e-9:                          # collinear: touching ends at most
+                found.append((first, second))
         else:
             t = (offset[0] * s[1] - offset[1] * s[0]) / cross
             u = (offset[0] * r[1] - offset[1] * r[0]) / cross
-            assert not (1e-9 < t < 1 - 1e-9 and 1e-9 < u < 1 - 1e-9), (first, second)   # no crossing
+            if 1e-9 < t < 1 - 1e-9 and 1e-9 < u < 1 - 1e-9:
+                found.append((first, second))
+    return found
+
+
+@pytest.mark.parametrize("map_name", MAPS)
+def test_every_map_tag_is_on_a_wall_facing_into_the_hallway(map_name: str) -> None:
+    topological_map = load_topological_map(REPO / f"config/maps/{map_name}.yaml")
+    assert tags_off_their_walls(topological_map, building_floor(topological_map)) == []
+
+
+@pytest.mark.parametrize("map_name", MAPS)
+def test_no_two_walls_overlap_or_cross(map_name: str) -> None:
+    assert crossing_walls(building_floor(load_topological_map(REPO / f"config/maps/{map_name}.yaml")).walls) == []
+
+
+# A three-junction L (a -- b east, a -- c north) with a "?" hallway west of a, on an 8 m grid.
+L_FLOOR = """\
+name: l_floor
+nodes:
+  a:
+    position: [0.0, 0.0]
+    E: {node: b, tags: [1]}
+    N: {node: c, tags: [2]}
+    W: {node: "?", tags: [3]}
+  b:
+    position: [8.0, 0.0]
+    W: {node: a, tags: [4]}
+  c:
+    position: [0.0, 8.0]
+    S: {node: a, tags: [5]}
+"""
+
+
+def refused(old: str, new: str, field: str, problem: str, robot_rule: bool = False, *, name: str) -> object:
+    return pytest.param(old, new, field, problem, robot_rule, id=name)
+
+
+GENERATOR_REFUSALS = [
+    refused("  b:\n    position: [8.0, 0.0]\n", "  b:\n", "nodes.b.position", "missing: the world generator builds",
+            name="node-without-position"),
+    refused("[8.0, 0.0]", "[8.0, 1.0]", "nodes.a.E.node", "the far node is +1.000 m off the E line",
+            name="hallway-off-its-compass-line"),
+    refused("[8.0, 0.0]", "[1.2, 0.0]", "nodes.a.E.node", "1.200 m away, closer than the hallway width 1.6 m",
+            name="nodes-closer-than-a-hallway-width"),
+    refused("[0.0, 8.0]", "[0.0, 2.0]", "nodes.a.N.tags[0]",
+            "tag '2' would be 1.00 m before the junction (tags 1 m before it, 0.3 m apart), beyond the 0.40 m "
+            "corridor",
+            name="a-tag-beyond-a-short-corridor"),
+    refused("W: {node: \"?\", tags: [3]}", "W: {node: \"?\", tags: [3, 30, 31, 32, 33, 34, 35, 36]}",
+            "nodes.a.W.tags[7]", "tag '36' would be 3.10 m before the junction",
+            name="more-tags-than-a-dead-end-holds"),
+    refused("  c:\n    position: [0.0, 8.0]\n    S: {node: a, tags: [5]}\n",
+            "  c:\n    position: [0.0, 8.0]\n    S: {node: a, tags: [5]}\n    E: {node: d, tags: [50]}\n"
+            "  d:\n    position: [4.0, 8.0]\n    W: {node: c, tags: [51]}\n    S: {node: e, tags: [52]}\n"
+            "  e:\n    position: [4.0, -4.0]\n    N: {node: d, tags: [53]}\n    W: {node: '?'}\n",
+            "nodes.a.E.node", "the hallway a.E (b) overlaps the hallway d.S (e)", name="hallways-that-cross"),
+    refused("  c:\n", "  x:\n    position: [4.0, 0.0]\n    N: {node: '?', tags: [60]}\n  c:\n", "nodes.x.position",
+            "the junction of 'x' overlaps the hallway a.E (b)", name="a-junction-on-a-hallway"),
+    refused("E: {node: b, tags: [1]}", "E: {node: b, tags: [1], length_m: 25.0}", "nodes.a.E.length_m",
+            "25 m, but 'a' and 'b' are 8.00 m apart by their positions", robot_rule=True,
+            name="length-far-from-the-node-distance"),
+    refused("W: {node: a, tags: [4]}", "W: {node: a, tags: [4], length_m: 7.0}", "nodes.b.W.length_m",
+            "within 10% (at least 0.5 m) of that distance", robot_rule=True, name="length-shorter-than-the-distance"),
+]
+
+
+@pytest.mark.parametrize("old, new, field, problem, robot_rule", GENERATOR_REFUSALS)
+def test_the_generator_and_map_check_refuse_a_map_with_the_same_line(tmp_path: Path, capsys: pytest.CaptureFixture,
+                                                                   old: str, new: str, field: str, problem: str,
+                                                                   robot_rule: bool) -> None:
+    assert old in L_FLOOR
+    path = tmp_path / "broken.yaml"
+    path.write_text(L_FLOOR.replace(old, new, 1))
+    problems = check_floor_map(path)
+    assert problems and problems[0].startswith(f"{path}: {field}: "), problems
+    assert problem in problems[0]
+    # The map's own rules (what the robot needs) pass it unless the break is theirs: the generator's are extra.
+    assert bool(check_map(path)) == robot_rule
+    world = tmp_path / "world.yaml"
+    assert main([str(path), str(world)]) == 2
+    assert capsys.readouterr().err.splitlines() == problems      # the same lines, no traceback
+    assert not world.exists()
+
+
+def test_the_l_floor_itself_is_built(tmp_path: Path) -> None:
+    path = tmp_path / "l_floor.yaml"
+    path.write_text(L_FLOOR)
+    assert check_floor_map(path) == [] and main([str(path), str(tmp_path / "world.yaml")]) == 0
+
+
+def mutants(count: int, seed: int) -> list[tuple[str, dict]]:
+    """``count`` seeded one-change variants of the in-tree generated maps: a node moved (along a grid line, off
+    it, onto another's junction), a position removed, tags added to a side, a length given."""
+    rng = random.Random(seed)
+    bases = {name: yaml.safe_load((REPO / f"config/maps/{name}.yaml").read_text()) for name in MAPS}
+    made = []
+    for index in range(count):
+        name = rng.choice(MAPS)
+        document = copy.deepcopy(bases[name])
+        nodes = document["nodes"]
+        node = rng.choice(sorted(nodes))
+        sides = [side for side in ("N", "E", "S", "W") if side in nodes[node] and nodes[node][side]["node"] != "-"]
+        kind = rng.choice(("move", "slide", "add", "unplace", "tags", "length"))
+        mapped = [side for side in sides if nodes[node][side]["node"] != "?"]
+        if kind == "move":
+            axis = rng.randrange(2)
+            nodes[node]["position"][axis] += rng.choice((-9.0, -6.0, -1.0, -0.5, 0.3, 1.0, 4.0, 7.0, 12.0))
+        elif kind == "slide":
+            # A node at the end of one mapped hallway (the others "?"), moved along it: nearer, farther, onto
+            # or past its neighbour; its hallway's length no longer given.
+            ends = [name for name in sorted(nodes) if sum(
+                nodes[name].get(side, {}).get("node", "-") not in ("-", "?") for side in ("N", "E", "S", "W")) == 1]
+            node = rng.choice(ends)
+            side = next(side for side in ("N", "E", "S", "W")
+                        if nodes[node].get(side, {}).get("node", "-") not in ("-", "?"))
+            nodes[node][side].pop("length_m", None)
+            nodes[nodes[node][side]["node"]][{"N": "S", "E": "W", "S": "N", "W": "E"}[side]].pop("length_m", None)
+            axis = 1 if (side in ("N", "S")) == (document.get("north_deg", 90) % 180 == 90) else 0
+            nodes[node]["position"][axis] += rng.choice((-7.0, -6.5, -3.0, 2.0, 5.0))
+        elif kind == "add":
+            # A new junction with one "?" hallway somewhere on the floor: in free space, or on a hallway.
+            x, y = (rng.choice([p[axis] for p in (n["position"] for n in nodes.values())]) + rng.choice(
+                (-4.0, -2.0, 0.0, 3.0, 4.0)) for axis in (0, 1))
+            nodes[f"new{index}"] = {"position": [x, y], rng.choice(("N", "E", "S", "W")): {"node": "?"}}
+        elif kind == "unplace":
+            del nodes[node]["position"]
+        elif kind == "tags" and sides:
+            side = rng.choice(sides)
+            nodes[node][side]["tags"] = [*nodes[node][side].get("tags", []),
+                                         *(f"extra{index}_{k}" for k in range(rng.randrange(1, 25)))]
+        elif kind == "length" and mapped:
+            side = rng.choice(mapped)
+            far = nodes[nodes[node][side]["node"]]["position"]
+            distance = math.dist(nodes[node]["position"], far)
+            nodes[node][side]["length_m"] = round(distance * rng.choice((0.5, 0.93, 1.0, 1.04, 1.3, 3.0)), 3)
+        made.append((f"{name}_{index}_{kind}", document))
+    return made
+
+
+def test_map_check_passes_exactly_the_maps_the_generator_builds_into_a_sound_floor(tmp_path: Path) -> None:
+    paths = [REPO / f"config/maps/{name}.yaml" for name in (*MAPS, "building_eval")]
+    for label, document in mutants(80, seed=18):
+        path = tmp_path / f"{label}.yaml"
+        path.write_text(yaml.safe_dump(document))
+        paths.append(path)
+    outcomes = []
+    for path in paths:
+        passes = check_floor_map(path) == []
+        try:
+            topological_map = load_topological_map(path)
+            floor = building_floor(topological_map)
+        except ConfigError:
+            floor = None
+        assert passes == (floor is not None), (path.name, check_floor_map(path))
+        if floor is not None:
+            assert tags_off_their_walls(topological_map, floor) == [], path.name
+            assert crossing_walls(floor.walls) == [], path.name
+        outcomes.append(passes)
+    assert 10 <= sum(outcomes) <= len(outcomes) - 10        # the mutants pass and fail: the test can fail
 
 
 def test_write_world_writes_name_walls_and_wall_tags(tmp_path: Path) -> None:

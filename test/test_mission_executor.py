@@ -380,6 +380,23 @@ def test_a_far_end_mapped_otherwise_is_not_learned(true_floor: TopologicalMap) -
     assert executor.learned == () and executor.explored == {("a", "N")}
 
 
+def test_a_question_mark_hallway_that_is_a_dead_end_is_recorded_as_one_not_as_a_hallway_to_itself(
+        true_floor: TopologicalMap) -> None:
+    executor = MissionExecutor(forget(true_floor, "a", "N"))
+    executor.start("d")
+    assert executor.on_tag(1).action == RIGHT                       # into a's ? hallway north
+    executor.on_junction(JUNCTION_CENTRE)
+    executor.on_junction(TURN_DONE)
+    executor.on_junction(OBSTACLE)                                  # its end wall: the follower turns back
+    back_at_a = executor.on_tag(2)                                  # a, arriving from that ? side
+    assert executor.dead_ends == executor.state.dead_ends == (("a", "N"),)
+    assert executor.learned == () and executor.explored == {("a", "N")}
+    assert executor.map.nodes["a"].hallways["N"].neighbour == UNKNOWN
+    # No ? hallway left to try from a (c's lies beyond the one just found closed): an honest failure.
+    assert (back_at_a.action, back_at_a.finished, back_at_a.success) == (STOP, True, False)
+    assert executor.state.nodes_visited == ["a", "a"]
+
+
 def test_a_goal_beyond_the_map_without_question_marks_fails() -> None:
     # Built directly (the map check would refuse a floor whose nodes are not all connected).
     split = TopologicalMap("split", {"a": Node("a", {"E": Hallway("b", ("1",))}),
@@ -513,6 +530,59 @@ def test_a_dead_end_goal_whose_tag_is_missed_is_reached_at_its_wall(large: Topol
     done = executor.on_junction(OBSTACLE)                      # E3's tag 138 missed: the dead end's wall
     assert (done.action, done.success, done.drive_on_m) == (STOP, True, 0.0)
     assert executor.state.nodes_visited == ["E2", "E3"] and executor.state.tags_missed == 1
+
+
+def test_a_dead_end_goal_whose_tag_is_missed_stops_where_the_odometry_says_it_is(large: TopologicalMap) -> None:
+    executor = MissionExecutor(large)
+    executor.start("E3")
+    executor.on_odometry(0.0, 0.0)
+    assert executor.on_tag(124).action == STRAIGHT             # at E2 from the South, leaving North for E3
+    to_e3 = large.tag_to_node_m + large.hallway_length_m("E2", "N")
+    executor.on_junction(JUNCTION_CENTRE)
+    for step in range(1, 200):                                 # E3's tag 138 missed: driving on, 10 cm a step
+        driven = step * 0.1
+        decision = executor.on_odometry(driven, 0.0)
+        if decision is not None:
+            break
+    assert driven == pytest.approx(to_e3, abs=0.1 + 1e-9)      # not before the map's distance, nor after it
+    assert (decision.action, decision.success, decision.drive_on_m) == (STOP, True, 0.0)
+    assert executor.follower_command(decision) == FollowerCommand(STOP, 0.0)
+    assert executor.state.nodes_visited == ["E2", "E3"] and executor.state.tags_missed == 1
+    assert executor.on_odometry(driven + 0.1, 0.0) is None     # decided once
+
+
+def test_the_odometry_decides_nothing_on_the_way_to_a_goal_with_a_junction(fig5: TopologicalMap) -> None:
+    executor = MissionExecutor(fig5)
+    executor.start("g")
+    executor.on_odometry(0.0, 0.0)
+    executor.on_tag(23)                                        # h from the West, right for g: g has a junction
+    assert all(executor.on_odometry(step * 0.5, 0.0) is None for step in range(1, 100))
+    assert executor.state.outcome is None
+
+
+def test_after_a_u_turn_at_a_tag_the_next_junction_is_expected_nearer_not_farther() -> None:
+    # At F's tag (arriving from D, 2 m before the dead end) the way to A is back East: D lies 8 - 2 m ahead.
+    ring = load_topological_map(MAPS / "building_ring.yaml")
+    executor = MissionExecutor(ring)
+    executor.start("A")
+    executor.on_odometry(0.0, 0.0)
+    assert executor.on_tag(15).action == BACK
+    assert executor.state.leg_expected_m == pytest.approx(ring.hallway_length_m("F", "E") - ring.tag_to_node_m)
+    executor.on_junction(TURN_DONE)
+    executor.on_odometry(6.0, 0.0)
+    at_d = executor.on_junction(JUNCTION_CENTRE)                   # D's tag 14 missed: this junction is D
+    assert at_d.action == RIGHT and executor.state.current_node == "D" and executor.state.tags_missed == 1
+
+
+def test_another_tag_of_the_same_side_is_the_same_read_not_another_u_turn() -> None:
+    ring = load_topological_map(MAPS / "building_ring.yaml")       # C's West side carries tags 9 and 10
+    executor = MissionExecutor(ring)
+    executor.start("D")
+    (back,) = executor.on_reads(["9"])                             # C from the West: D lies back West
+    assert executor.follower_command(back) == FollowerCommand(BACK)
+    turning = executor.on_reads(["10", "9", "10"])                 # both tags read on and off while turning
+    assert [executor.follower_command(decision) for decision in turning] == [None, None, None]
+    assert executor.state.nodes_visited == ["C"] and executor.state.last_tag == "9"
 
 
 def test_reads_are_new_only_when_the_tag_changes_and_a_stop_is_commanded_once(fig5: TopologicalMap) -> None:

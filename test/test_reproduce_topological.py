@@ -1,4 +1,4 @@
-"""./rfidnav reproduce topological at a small size: the conditions, the paper's run, both floors kept apart, the
+"""./rfidnav reproduce topological at a small size: the conditions, the paper's run, every floor kept apart, the
 rows with their intervals."""
 
 from __future__ import annotations
@@ -11,8 +11,7 @@ import yaml
 
 from rfidnav_common.errors import ConfigError
 from rfidnav_experiments.reproduce.topological import (
-    DEVELOPMENT,
-    EVALUATION,
+    FLOOR_ORDER,
     RATES,
     SOURCES,
     conditions,
@@ -43,7 +42,7 @@ def test_the_papers_loop_routes_by_edges_without_recovery_and_ours_by_lengths_wi
     assert (METHODS["ours"].weight, METHODS["ours"].recover_missed_tags) == ("length", True)
 
 
-def test_the_paper_run_and_both_floors_are_reported_with_intervals(tmp_path: Path,
+def test_the_paper_run_and_every_floor_are_reported_with_intervals(tmp_path: Path,
                                                                     capsys: pytest.CaptureFixture) -> None:
     reproduce_topological(missions=2, out_dir=tmp_path, as_json=False)
     rows = json.loads((tmp_path / "topological_rows.json").read_text())
@@ -52,9 +51,9 @@ def test_the_paper_run_and_both_floors_are_reported_with_intervals(tmp_path: Pat
     assert paper["success"] and 8.0 <= paper["ours"] <= 12.0          # a right turn at h, then ~8 m to tag 19
     success = [row for row in rows if row["metric"] == "success_pct"]
     assert [(row["setting"]["floor"], row["setting"]["method"], row["setting"]["miss_rate"]) for row in success] == [
-        (floor, method, rate) for floor in (EVALUATION, DEVELOPMENT) for method in ("paper", "ours")
+        (floor, method, rate) for floor in FLOOR_ORDER for method in ("paper", "ours")
         for rate in RATES[floor]]
-    assert {row["setting"]["role"] for row in success} == {"evaluation", "development"}
+    assert {row["setting"]["role"] for row in success} == {"evaluation", "development", "new layout"}
     bounds = [row["ours"] for row in rows if row["metric"] == "success_ci95_pct"]
     assert all(low <= high for low, high in bounds)
     assert any(row["metric"] == "paired_success_difference" for row in rows)

@@ -6,6 +6,7 @@ import math
 import numpy as np
 import pytest
 
+from rfidnav_common.errors import ConfigError
 from rfidnav_common.topological_map import load_topological_map
 from rfidnav_experiments.runners.topological import (
     EVAL_MAP,
@@ -104,6 +105,19 @@ def test_a_question_mark_hallway_is_explored_and_learned_on_the_way_to_its_far_e
     assert run.nodes_visited == ("h", "f") and run.turns == (("h", "straight"),)
 
 
+def test_a_dead_end_goal_whose_tag_is_missed_stops_within_the_success_radius():
+    # E3 of building_large is a dead end entered from the South; with its tag 138 gone the end wall would stop
+    # the robot 0.4 m past the node, at the radius' edge: the odometry distance stops it at the node.
+    floor = FLOORS["building_large"]
+    world = load_world(floor.world_path)
+    untagged = dataclasses.replace(world, wall_tags=tuple(tag for tag in world.wall_tags if tag.tag_id != "138"))
+    run = run_mission(untagged, load_topological_map(floor.map_path), start_pose_before_tag(world, "124"), "E3",
+                      np.random.default_rng(3))
+    assert run.success and run.tags_missed == 1, run.message
+    assert "odometry" in run.message
+    assert run.goal_distance_m < 0.25                           # half the radius: the margin odometry leaves
+
+
 @pytest.mark.tier("slow")
 def test_a_route_that_needs_a_wall_driven_through_fails_visibly(tmp_path):
     # The paper's run with the passage south of h walled off: the base stops at the wall and the robot never
@@ -122,7 +136,7 @@ def test_the_evaluation_floor_is_not_the_floor_its_map_would_generate():
     # The generator cannot even draw this map's floor (B-F is off its compass line); squared up, its walls are
     # still not the drawn ones.
     robot_map = load_topological_map(EVAL_MAP)
-    with pytest.raises(ValueError, match="off the S line"):
+    with pytest.raises(ConfigError, match="nodes.B.S.node: the far node is .* off the S line"):
         building_floor(robot_map)
     squared = dataclasses.replace(robot_map, nodes={**robot_map.nodes, "F": dataclasses.replace(
         robot_map.nodes["F"], position=(10.0, -8.0))})

@@ -5,11 +5,13 @@ from __future__ import annotations
 import struct
 import textwrap
 from pathlib import Path
+from types import SimpleNamespace
 
 import networkx as nx
 import pytest
 
-from rfidnav_bringup.report import draw_map
+from rfidnav_bringup.metrics import topological_shortest_m
+from rfidnav_bringup.report import draw_map, learned_map
 from rfidnav_common.errors import ConfigError, RfidnavError
 from rfidnav_common.topological_map import (
     DIRECTIONS,
@@ -20,8 +22,10 @@ from rfidnav_common.topological_map import (
     RouteError,
     TopologicalMap,
     check_map,
+    hallway_text,
     load_topological_map,
     next_action,
+    parse_hallway_text,
     turn,
 )
 
@@ -196,10 +200,29 @@ def test_a_node_only_reachable_through_question_marks_is_allowed(tmp_path: Path)
 
 def test_length_mismatch_is_reported_once(tmp_path: Path) -> None:
     path = broken(tmp_path, "a: {position: [0.0, 8.0], E: {node: c, tags: [1]}}",
-                  "a: {position: [0.0, 8.0], E: {node: c, tags: [1], length_m: 9.0}}")
+                  "a: {position: [0.0, 8.0], E: {node: c, tags: [1], length_m: 8.4}}")
     path.write_text(path.read_text().replace("W: {node: a, tags: [7]}", "W: {node: a, tags: [7], length_m: 8.0}"))
-    assert check_map(path) == [f"{path}: nodes.a.E.node: length_m 9 here but 8 at 'c'.W: the two ends of a "
+    assert check_map(path) == [f"{path}: nodes.a.E.node: length_m 8.4 here but 8 at 'c'.W: the two ends of a "
                                "hallway must agree"]
+
+
+@pytest.mark.parametrize("length_m, accepted", [(8.0, True), (8.79, True), (7.21, True), (8.81, False),
+                                                (7.19, False), (25.0, False)])
+def test_a_length_lies_within_a_tenth_of_the_distance_between_the_positions(tmp_path: Path, length_m: float,
+                                                                            accepted: bool) -> None:
+    path = broken(tmp_path, "a: {position: [0.0, 8.0], E: {node: c, tags: [1]}}",
+                  f"a: {{position: [0.0, 8.0], E: {{node: c, tags: [1], length_m: {length_m}}}}}")
+    problems = check_map(path)
+    assert problems == ([] if accepted else [
+        f"{path}: nodes.a.E.length_m: {length_m:g} m, but 'a' and 'c' are 8.00 m apart by their positions: a "
+        "hallway's length lies within 10% (at least 0.5 m) of that distance"])
+
+
+def test_a_short_hallways_length_may_be_off_by_half_a_metre(tmp_path: Path) -> None:
+    text = PAPER_NODES.replace("a: {position: [0.0, 8.0], E: {node: c, tags: [1]}}",
+                               "a: {position: [6.0, 8.0], E: {node: c, tags: [1], length_m: 2.45}}")
+    assert check_map(write_map(tmp_path, text)) == []                 # 2 m apart: 0.5 m, not 10 %, applies
+    assert len(check_map(write_map(tmp_path, text.replace("2.45", "2.55")))) == 1
 
 
 def test_check_map_lists_every_problem_and_load_raises_the_first(tmp_path: Path) -> None:
@@ -251,6 +274,36 @@ def test_route_by_edges_and_by_length(tmp_path: Path) -> None:
     assert detour.route("s", "t", weight="length") == ["s", "y", "z", "t"]    # 3 hallways (6 m)
     assert detour.route("t", "s", weight="length") == ["t", "z", "y", "s"]
     assert detour.route("s", "s") == ["s"]
+
+
+def test_a_hallway_as_text_reads_back_and_is_learned_at_both_ends(paper_map: TopologicalMap) -> None:
+    assert hallway_text("d", "N", "x.1", "S") == "d.N -> x.1.S"
+    assert parse_hallway_text("d.N -> x.1.S") == ("d", "N", "x.1", "S")      # a node name may hold a dot
+    for bad in ("d.N", "d.N -> x", "d.Q -> e.W", ".N -> e.W"):
+        with pytest.raises(ValueError):
+            parse_hallway_text(bad)
+    # d's North is "?": joined to a new node's South it is routable, in a copy.
+    nodes = {**paper_map.nodes, "x": Node("x", {"S": Hallway(UNKNOWN, ("99",))}, (8.0, 24.0))}
+    with_x = TopologicalMap("with_x", nodes)
+    learned = with_x.with_hallway("d", "N", "x", "S")
+    assert learned.route("c", "x") == ["c", "d", "x"]
+    assert learned.nodes["x"].hallways["S"] == Hallway("d", ("99",))
+    assert with_x.nodes["d"].hallways["N"].neighbour == UNKNOWN
+    with pytest.raises(RouteError, match="d.E is not a '[?]' hallway"):
+        with_x.with_hallway("d", "E", "x", "S")
+
+
+def test_a_report_measures_the_shortest_path_on_the_map_the_executor_learned(tmp_path: Path) -> None:
+    # A goal beyond "?" hallways has no shortest path on the given map; on the learned one (the executor's
+    # last feedback over DDS) it has, as the in-process runner measures it.
+    text = PAPER_NODES + '  x: {position: [8.0, 24.0], S: {node: "?", tags: [99]}}\n'
+    path = write_map(tmp_path, text)
+    feedback = SimpleNamespace(learned_hallways=["d.N -> x.S"])
+    with pytest.raises(RouteError):
+        topological_shortest_m(load_topological_map(path), (8.0, 6.0), "c", "S", "x")
+    learned = learned_map(path, feedback)
+    assert topological_shortest_m(learned, (8.0, 6.0), "c", "S", "x") == pytest.approx(2.0 + 16.0)
+    assert learned_map(path, SimpleNamespace()).nodes["d"].hallways["N"].neighbour == UNKNOWN   # an older bag
 
 
 def test_hallway_length_from_length_positions_or_one_metre(paper_map: TopologicalMap) -> None:
@@ -420,6 +473,15 @@ def test_the_map_verbs_check_and_draw_with_exit_codes(tmp_path: Path) -> None:
     bad = cli("check", str(broken))
     assert bad.returncode == 2
     assert len(bad.stderr.strip().splitlines()) == 3 and "duplicate tag '1'" in bad.stderr
+    # The evaluation floor was drawn by hand (B - F runs 20 degrees off South): the generator could not build it,
+    # so map check refuses it, and checks it by the map's own rules with --robot-only.
+    drawn_by_hand = str(workspace / "config/maps/building_eval.yaml")
+    generator_rules = cli("check", drawn_by_hand)
+    assert generator_rules.returncode == 2
+    assert generator_rules.stderr.splitlines() == [f"{drawn_by_hand}: nodes.B.S.node: the far node is +2.736 m off "
+                                                   "the S line; the world generator runs hallways straight along "
+                                                   "their compass direction"]
+    assert cli("check", "--robot-only", drawn_by_hand).returncode == 0
     png = tmp_path / "fig5.png"
     drawn = cli("draw", str(workspace / "config/maps/building_fig5.yaml"), "--out", str(png))
     assert drawn.returncode == 0 and png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"

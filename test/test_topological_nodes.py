@@ -193,6 +193,30 @@ def test_a_mission_from_tag_23_to_g_commands_the_follower_and_succeeds_on_stoppe
     assert (outcome.tags_missed, outcome.replans) == (0, 0)
 
 
+def test_a_goal_reached_through_an_explored_hallway_reports_the_hallway_in_its_feedback(graph: Graph,
+                                                                                      tmp_path) -> None:
+    # Fig. 5 with h - f unmapped at both ends: f is reached only by exploring h's "?" side East.
+    text = FIG5_MAP.read_text()
+    for known, unknown in (("E: {node: f, tags: [24]}", 'E: {node: "?", tags: [24]}'),
+                           ("W: {node: h, tags: [17]}", 'W: {node: "?", tags: [17]}')):
+        text = text.replace(known, unknown)
+    partial = tmp_path / "fig5_without_h_f.yaml"
+    partial.write_text(text)
+    graph.add(MissionExecutorNode(context=graph.context, parameter_overrides=[
+        Parameter("map_file", value=str(partial))]))
+    probe = ExecutorProbe(graph)
+    assert probe.send("f").accepted
+    graph.spin_until(lambda: probe.commands == [("follow", 0.0)], "the follow command")
+    probe.read("23")                        # h from the West: straight on into the "?" hallway East
+    graph.spin_until(lambda: probe.feedback and probe.feedback[-1].last_tag == "23", "the feedback of tag 23")
+    assert list(probe.feedback[-1].learned_hallways) == []
+    probe.event("junction_centre")
+    probe.read("17")                        # f from the West: the hallway is learned, and f is the goal
+    graph.spin_until(lambda: probe.commands[-1][0] == "stop", "the stop at f")
+    graph.spin_until(lambda: probe.feedback[-1].last_tag == "17", "the feedback of tag 17")
+    assert list(probe.feedback[-1].learned_hallways) == ["h.E -> f.W"]
+
+
 def test_goals_are_refused_for_unknown_nodes_or_without_a_wall_follower(graph: Graph) -> None:
     node = executor_node(graph)
     probe = ExecutorProbe(graph, listen=False)

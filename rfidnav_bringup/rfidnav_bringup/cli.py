@@ -244,8 +244,12 @@ def parser() -> tuple[argparse.ArgumentParser, dict[str, Handler]]:
     recover.add_argument("--out", type=Path, help="the bag folder to write (default: beside it, BAG_recovered)")
     map_parser = verbs.add_parser("map", help="paper 004: topological map tools")
     map_verbs = map_parser.add_subparsers(dest="map_verb", required=True)
-    check = map_verbs.add_parser("check", help="every problem of a topological map, one line each")
+    check = map_verbs.add_parser("check", help="every problem of a topological map, one line each: its own rules "
+                                               "and the world generator's (python -m rfidnav_sim.building)")
     check.add_argument("map", type=Path)
+    check.add_argument("--robot-only", action="store_true",
+                       help="only the map's own rules: the map of a floor drawn by hand, not generated from it "
+                            "(building_eval)")
     draw = map_verbs.add_parser("draw", help="a PNG of a topological map: compass-placed edges and tag ids")
     draw.add_argument("map", type=Path)
     draw.add_argument("--out", type=output_file, help="the PNG to write (default: beside the map, .png)")
@@ -476,9 +480,11 @@ def verb_report(args) -> int:
 
 def verb_map(args) -> int:
     from rfidnav_bringup.report import draw_map
+    from rfidnav_common.floor_plan import check_floor_map
     from rfidnav_common.topological_map import check_map, load_topological_map
 
-    problems = check_map(args.map)
+    floor = args.map_verb == "check" and not args.robot_only
+    problems = check_floor_map(args.map) if floor else check_map(args.map)
     for problem in problems:
         print(problem, file=sys.stderr)
     if args.map_verb == "check":

@@ -36,7 +36,12 @@ from rfidnav_bringup.metrics import (  # noqa: E402
     tracking_metrics,
     two_tier_metrics,
 )
-from rfidnav_common.topological_map import UNKNOWN, TopologicalMap, load_topological_map  # noqa: E402
+from rfidnav_common.topological_map import (  # noqa: E402
+    UNKNOWN,
+    TopologicalMap,
+    load_topological_map,
+    parse_hallway_text,
+)
 from rfidnav_sim.world import World, load_world  # noqa: E402
 
 STATUS_ACCEPTED, STATUS_EXECUTING = 1, 2
@@ -156,7 +161,7 @@ def record_metrics(record: RunRecord) -> dict[str, float | int | None]:
         first_arrival = next(((msg.feedback.current_node, msg.feedback.arrival_direction)
                               for _, _, msg in mission_feedback(record) if msg.feedback.current_node), None)
         feedback = record.last_feedback
-        topological_map = load_topological_map(record.run_dir / "map.yaml")
+        topological_map = learned_map(record.run_dir / "map.yaml", feedback)
         metrics.update(topological_metrics(
             record.ground_truth, record.mission_start_s, record.mission_end_s, topological_map,
             str(record.goal.get("goal_node")), record.final_status == "succeeded", first_arrival,
@@ -168,6 +173,19 @@ def record_metrics(record: RunRecord) -> dict[str, float | int | None]:
                                         (float(target.get("x", 0.0)), float(target.get("y", 0.0))), fixes,
                                         searching).as_dict())
     return metrics
+
+
+def learned_map(map_file: Path, feedback: object | None) -> TopologicalMap:
+    """The run's map with the ``?`` hallways the mission executor learned (its last feedback's
+    ``learned_hallways``), as its in-process runner measures the shortest path on the map learned by the end: a
+    goal reached through an explored hallway has a route."""
+    topological_map = load_topological_map(map_file)
+    for text in getattr(feedback, "learned_hallways", None) or ():
+        try:
+            topological_map = topological_map.with_hallway(*parse_hallway_text(text))
+        except (ValueError, KeyError) as error:      # a bag of another map or version: the given map stands
+            print(f"{map_file}: learned hallway '{text}' not applied ({error})", file=sys.stderr)
+    return topological_map
 
 
 def mission_feedback(record: RunRecord, topics: tuple[str, ...] = ()):

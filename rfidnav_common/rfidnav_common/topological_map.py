@@ -36,10 +36,14 @@ Rules (``check_map`` lists every break, ``load_topological_map`` raises the firs
 * every hallway is listed at both ends with opposite sides: ``c.N = d`` requires ``d.S = c``; lengths given at
   both ends agree;
 * where both ends have positions, the far end lies within 45 degrees of the side's compass direction, so a
-  drawing (and a person reading the map) sees the turns the robot will make;
+  drawing (and a person reading the map) sees the turns the robot will make, and a ``length_m`` lies within
+  ``LENGTH_SLACK`` (10 %, at least 0.5 m) of the straight distance between them;
 * every node is reachable from the first through mapped hallways, or it and the first node both lie in parts of
   the map with a ``?`` hallway (the parts may join through unexplored hallways: the mission executor explores
   them).
+
+These are the robot's rules (the scenario loader and the mission executor read maps by them). A map the world
+generator builds a floor from keeps ``rfidnav_common.floor_plan``'s too, which ``./rfidnav map check`` adds.
 
 Hallway length for ``route(..., weight="length")``: ``length_m`` from either end, else the straight distance
 between the two positions, else 1 m (the topology alone then decides, as with ``weight="edges"``).
@@ -48,7 +52,7 @@ between the two positions, else 1 m (the topology alone then decides, as with ``
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any, NamedTuple
 
@@ -70,6 +74,10 @@ _TURNS = ("straight", "right", "back", "left")        # by clockwise quarter tur
 _SIDE_FIELDS = ("node", "tags", "length_m")
 _POSITION_TOLERANCE_DEG = 45.0                        # beyond this a hallway points to another compass side
 _LENGTH_TOLERANCE_M = 1e-6
+# A length_m given with both positions lies within max(metres, fraction of the distance) of the distance between
+# them: positions paced or taken off a plan, a hallway's centre line, never a hallway twice as long.
+LENGTH_SLACK = (0.5, 0.10)
+_HALLWAY_ARROW = " -> "
 
 
 class RouteError(RfidnavError, ValueError):
@@ -162,6 +170,18 @@ class TopologicalMap:
             return math.dist(here, there)
         return None
 
+    def with_hallway(self, node_a: str, side_a: str, node_b: str, side_b: str) -> TopologicalMap:
+        """A copy in which the ``?`` hallway leaving ``node_a`` by ``side_a`` leads to ``node_b``, entered by
+        ``side_b`` (whose ``?`` leads back): a hallway explored (the mission executor learns it)."""
+        nodes = dict(self.nodes)
+        for name, side, other in ((node_a, side_a, node_b), (node_b, side_b, node_a)):
+            hallway = nodes[name].hallways.get(side)
+            if hallway is None or hallway.neighbour != UNKNOWN:
+                raise RouteError(f"map '{self.name}': {name}.{side} is not a '{UNKNOWN}' hallway to learn")
+            nodes[name] = replace(nodes[name], hallways={**nodes[name].hallways,
+                                                         side: replace(hallway, neighbour=other)})
+        return replace(self, nodes=nodes)
+
     def edges(self) -> list[Edge]:
         """Every hallway between two mapped nodes, once."""
         found = []
@@ -210,6 +230,22 @@ class TopologicalMap:
         return graph
 
 
+def hallway_text(node_a: str, side_a: str, node_b: str, side_b: str) -> str:
+    """A hallway as text, ``a.N -> c.S`` (leaving ``a`` by its North side, entering ``c`` by its South side):
+    how the mission executor reports a learned hallway (NavigateToNode feedback)."""
+    return f"{node_a}.{side_a}{_HALLWAY_ARROW}{node_b}.{side_b}"
+
+
+def parse_hallway_text(text: str) -> tuple[str, str, str, str]:
+    """(node_a, side_a, node_b, side_b) of :func:`hallway_text`'s text; ValueError for text of another form."""
+    ends = text.split(_HALLWAY_ARROW)
+    if len(ends) == 2:
+        (node_a, _, side_a), (node_b, _, side_b) = (end.rpartition(".") for end in ends)
+        if node_a and node_b and side_a in _OPPOSITE and side_b in _OPPOSITE:
+            return node_a, side_a, node_b, side_b
+    raise ValueError(f"a hallway reads 'node.side{_HALLWAY_ARROW}node.side' (sides N, E, S, W), got '{text}'")
+
+
 def opposite(direction: str) -> str:
     return _OPPOSITE[_check_direction(direction)]
 
@@ -240,7 +276,7 @@ def next_action(topological_map: TopologicalMap, tag_id: str | int, goal: str,
 
 def load_topological_map(path: Path | str) -> TopologicalMap:
     """Read and check a map file; the first problem is raised as a ConfigError naming file and field."""
-    topological_map, problems = _read(Path(path))
+    topological_map, problems = read_map(Path(path))
     if topological_map is None:                      # None exactly when there are problems
         raise problems[0]
     return topological_map
@@ -248,7 +284,7 @@ def load_topological_map(path: Path | str) -> TopologicalMap:
 
 def check_map(path: Path | str) -> list[str]:
     """Every problem of a map file, one line each (``file: field: problem``); empty for a good map."""
-    return [str(problem) for problem in _read(Path(path))[1]]
+    return [str(problem) for problem in read_map(Path(path))[1]]
 
 
 def _check_weight(weight: str) -> None:
@@ -264,7 +300,8 @@ def _check_direction(direction: str) -> str:
 
 # ---------------------------------------------------------------- reading and checking
 
-def _read(path: Path) -> tuple[TopologicalMap | None, list[ConfigError]]:
+def read_map(path: Path) -> tuple[TopologicalMap | None, list[ConfigError]]:
+    """The map and every problem by the rules above; the map is None exactly when there are problems."""
     try:
         document = Section.from_file(path)
     except ConfigError as error:
@@ -405,10 +442,11 @@ class _Reader:
                         f"{found} (expected '{node.name}': a hallway is listed at both ends, on opposite sides)"))
                     continue
                 if (node.name, side) < (far_end.name, back_side):     # each pair once
-                    self.check_pair(source, where, node, side, hallway, far_end, mirror, north_deg)
+                    self.check_pair(nodes_section, node, side, hallway, far_end, mirror, north_deg)
 
-    def check_pair(self, source: str, where: str, node: Node, side: str, hallway: Hallway, far_end: Node,
+    def check_pair(self, nodes_section: Section, node: Node, side: str, hallway: Hallway, far_end: Node,
                    mirror: Hallway, north_deg: float) -> None:
+        source, where = nodes_section.source, f"{nodes_section.field(node.name)}.{side}.node"
         if (hallway.length_m is not None and mirror.length_m is not None
                 and abs(hallway.length_m - mirror.length_m) > _LENGTH_TOLERANCE_M):
             self.problems.append(ConfigError(
@@ -428,6 +466,18 @@ class _Reader:
             self.problems.append(ConfigError(
                 source, where, f"'{far_end.name}' lies {off:.0f} deg off the {side} of '{node.name}' by their "
                                f"positions (north_deg {north_deg:g}): positions and compass sides disagree"))
+        given = [(f"{nodes_section.field(name)}.{name_side}.length_m", end.length_m)
+                 for name, name_side, end in ((node.name, side, hallway), (far_end.name, _OPPOSITE[side], mirror))
+                 if end.length_m is not None]
+        if given:
+            field_name, length = given[0]
+            distance = math.hypot(dx, dy)
+            slack = max(LENGTH_SLACK[0], LENGTH_SLACK[1] * distance)
+            if abs(length - distance) > slack:
+                self.problems.append(ConfigError(
+                    source, field_name, f"{length:g} m, but '{node.name}' and '{far_end.name}' are {distance:.2f} m "
+                                        f"apart by their positions: a hallway's length lies within "
+                                        f"{LENGTH_SLACK[1]:.0%} (at least {LENGTH_SLACK[0]:g} m) of that distance"))
 
     def check_reachable(self, nodes_section: Section, nodes: dict[str, Node]) -> None:
         if not nodes:

@@ -28,11 +28,18 @@ Beyond the paper (ours):
   if the assumption was wrong, counts a re-plan and plans from where the robot really is. Without an
   expectation (before the first tag, or after being lost) the robot follows on. Nodes on the route with no
   side opening give no junction event, so the expectation is the first node after them that does (or the goal).
+* A dead-end goal whose tag is missed. Its only sign is the end wall, and the wall follower stops for that
+  ``stop_distance_m`` from it: past the node's centre by half a hallway width less that (0.4 m on a 1.6 m
+  hallway, at the edge of the success radius; beyond it on a wider one). So, fed the odometry and where the map
+  knows the hallway's length, the executor takes the robot to be at the dead end once it has driven the map's
+  distance to it and stops there (as ``tag_to_node_m`` stops it on a read tag: a node with no side opening is
+  found by distance); the wall is the sign only when it comes first (a map length longer than the hallway).
 * An opening the map does not have (a door, a gap in a wall) looks like a junction to the wall follower. Fed
   the odometry (:meth:`on_odometry`) and where the map knows the hallways' lengths, the executor takes a
   junction centre (or a dead end's wall) for the expected node only once the robot has come within
   EARLY_MARGIN of the distance to it (from the tag read, or the junction centre, that set the expectation);
-  a junction well before that is an opening not on the map, followed straight on. The margin allows for map
+  a junction well before that is an opening not on the map, followed straight on (after a U-turn at a tag the
+  distance starts ``tag_to_node_m`` along the hallway left by, not before the node). The margin allows for map
   lengths taken between node positions (junction widths, tags a little nearer or farther than
   ``tag_to_node_m``) and for odometry drift, not for a floor's particular doors.
 * Off the route. Every tag plans again from its node, so a tag of an unexpected node (a missed turn, a wrong
@@ -45,11 +52,14 @@ Beyond the paper (ours):
   hallways) with an unexplored ``?`` side and leaves by it. The next tag names the far end: if its arrival
   side is ``?`` too, the hallway is learned at both ends (the executor's own copy of the map; the given map
   is not changed) and routed through from then on. A far end mapped otherwise leaves the hallway unlearned
-  and marked explored, so it is not tried again; a missed tag at the far end leaves the robot lost (it follows
-  until the next tag) and the hallway unexplored, so a later decision may try it again.
+  and marked explored, so it is not tried again; a tag of the node it left, from the ``?`` side, means the
+  hallway was a dead end the robot turned back from: it is recorded as a dead end (``dead_ends``) and marked
+  explored, not learned as a hallway back to the node itself. A missed tag at the far end leaves the robot lost
+  (it follows until the next tag) and the hallway unexplored, so a later decision may try it again.
 
-Tags are read many times while the robot passes; a repeat of the last tag before the next junction centre
-(or after a U-turn next to it) is the same read and changes nothing.
+Tags are read many times while the robot passes; a repeat of the last tag, or another tag of the same node and
+side (a side may carry several), before the next junction centre (or after a U-turn next to it) is the same
+read and changes nothing.
 """
 
 from __future__ import annotations
@@ -58,7 +68,16 @@ import math
 from collections.abc import Iterable
 from dataclasses import dataclass, field, replace
 
-from rfidnav_common.topological_map import DIRECTIONS, UNKNOWN, WEIGHTS, RouteError, TopologicalMap, opposite, turn
+from rfidnav_common.topological_map import (
+    DIRECTIONS,
+    UNKNOWN,
+    WEIGHTS,
+    RouteError,
+    TopologicalMap,
+    hallway_text,
+    opposite,
+    turn,
+)
 
 LEFT, RIGHT, STRAIGHT, BACK, STOP, FOLLOW = "left", "right", "straight", "back", "stop", "follow"
 TURNS = (LEFT, RIGHT, STRAIGHT, BACK)                 # the actions WallFollower.command_turn takes
@@ -96,6 +115,9 @@ class LearnedEdge:
     node_b: str
     side_b: str
 
+    def text(self) -> str:
+        return hallway_text(self.node_a, self.side_a, self.node_b, self.side_b)
+
 
 @dataclass
 class MissionState:
@@ -103,6 +125,7 @@ class MissionState:
     current_node: str | None = None         # where the robot was last localized (by a tag or an assumption)
     arrival_side: str | None = None
     last_tag: str | None = None
+    last_place: tuple[str, str] | None = None   # the (node, arrival side) last_tag announces
     expected_node: str | None = None        # the next node the route leads to, and the side it is entered by
     expected_side: str | None = None
     passing: tuple[tuple[str, str], ...] = ()   # (node, arrival side) passed on the way, without a junction
@@ -112,6 +135,7 @@ class MissionState:
     unknown_tags: int = 0
     replans: int = 0
     learned_edges: tuple[LearnedEdge, ...] = ()
+    dead_ends: tuple[tuple[str, str], ...] = ()     # (node, side) of ? hallways found to be dead ends
     awaiting: str | None = None             # the turn decided by a tag, for the junction just ahead
     exploring: tuple[str, str] | None = None    # the (node, side) of the ? hallway being driven along
     junction_since_tag: bool = True         # False while a repeat of last_tag is still the same read
@@ -134,6 +158,7 @@ class MissionExecutor:
         self.map = topological_map          # replaced by a copy with each learned hallway
         self.weight = weight
         self.learned: tuple[LearnedEdge, ...] = ()
+        self.dead_ends: tuple[tuple[str, str], ...] = ()
         self.explored: set[tuple[str, str]] = set()   # ? sides tried without learning them
         self.state: MissionState | None = None
         self.odometry_m: float | None = None          # distance driven by odometry, once on_odometry is fed
@@ -146,7 +171,7 @@ class MissionExecutor:
         if goal_node not in self.map.nodes:
             raise RouteError(f"map '{self.map.name}': unknown goal node '{goal_node}' "
                              f"(nodes: {', '.join(self.map.nodes)})")
-        self.state = MissionState(goal=goal_node, learned_edges=self.learned)
+        self.state = MissionState(goal=goal_node, learned_edges=self.learned, dead_ends=self.dead_ends)
         return Decision(FOLLOW, message=f"to '{goal_node}': following the wall until a tag is read")
 
     def on_tag(self, tag_id: str | int) -> Decision:
@@ -155,14 +180,14 @@ class MissionExecutor:
         tag = str(tag_id)
         if state.outcome is not None:
             return state.outcome
-        if tag == state.last_tag and not state.junction_since_tag:
-            return self._current()
         located = self.map.locate_tag(tag)
         if located is None:
             state.unknown_tags += 1
             return replace(self._current(), message=f"tag {tag} is not in the map: ignored")
+        if located == state.last_place and not state.junction_since_tag:
+            return self._current()
         node, side = located
-        state.last_tag, state.junction_since_tag = tag, False
+        state.last_tag, state.last_place, state.junction_since_tag = tag, located, False
         if state.exploring is not None:
             self._learn(state.exploring, node, side)
         elif state.expected_node is not None:
@@ -175,11 +200,19 @@ class MissionExecutor:
         state.awaiting = decision.action if decision.action in (LEFT, RIGHT, STRAIGHT) else None
         return decision
 
-    def on_odometry(self, x: float, y: float) -> None:
-        """The odometry position (any fixed frame): the distance driven adds up between calls."""
+    def on_odometry(self, x: float, y: float) -> Decision | None:
+        """The odometry position (any fixed frame): the distance driven adds up between calls. A decision only
+        when the distance says the robot is at a dead-end goal whose tag was missed (see the module docstring)."""
         if self.last_odometry is not None:
             self.odometry_m = (self.odometry_m or 0.0) + math.dist(self.last_odometry, (x, y))
         self.last_odometry = (x, y)
+        state = self.state
+        if (state is None or state.outcome is not None or not self.recover_missed_tags
+                or state.expected_node != state.goal or not self._dead_end_expected()
+                or state.leg_expected_m is None or self.odometry_m is None
+                or self.odometry_m - state.leg_from_m < state.leg_expected_m):
+            return None
+        return self._assume_arrival("missed tag, assumed by the odometry distance to the dead end")
 
     def on_reads(self, tag_ids: Iterable[str | int]) -> list[Decision]:
         """One inventory round's tag ids: a reader reports a tag every round while it is in reach, so only a tag
@@ -265,10 +298,11 @@ class MissionExecutor:
         return (f"after {driven:.1f} m of the {state.leg_expected_m:.1f} m to '{state.expected_node}': an opening "
                 "not on the map, followed on")
 
-    def _leg_length(self, node: str, departure: str, at_centre: bool) -> float | None:
+    def _leg_length(self, node: str, arrival: str, departure: str, at_centre: bool) -> float | None:
         """The map's distance from where the robot is (at ``node``'s centre, or at its tag ``tag_to_node_m``
-        before it) to the expected node, leaving by ``departure`` through the nodes passed; None if a length
-        is not known."""
+        before it on the hallway it arrived by) to the expected node, leaving by ``departure`` through the nodes
+        passed; None if a length is not known. A U-turn at the tag (leaving by the side arrived from) starts
+        ``tag_to_node_m`` along the hallway it leaves by, not before the node."""
         state = self._mission()
         if state.expected_node == UNKNOWN:
             return None
@@ -276,7 +310,8 @@ class MissionExecutor:
         lengths = [self.map.known_length_m(*leg) for leg in legs]
         if any(length is None for length in lengths):
             return None
-        return (0.0 if at_centre else self.map.tag_to_node_m) + sum(length for length in lengths if length is not None)
+        tag_offset = 0.0 if at_centre else self.map.tag_to_node_m * (-1.0 if departure == arrival else 1.0)
+        return tag_offset + sum(length for length in lengths if length is not None)
 
     def _assume_arrival(self, how: str) -> Decision:
         """A tag was missed: the robot is where the route leads next (the nodes passed on the way are visited)."""
@@ -331,7 +366,7 @@ class MissionExecutor:
         else:
             state.expected_node, state.expected_side, state.passing = self._next_sensed(node, departure)
             state.leg_from_m = self.odometry_m or 0.0
-            state.leg_expected_m = self._leg_length(node, departure, at_centre)
+            state.leg_expected_m = self._leg_length(node, side, departure, at_centre)
             goes = f"for '{state.expected_node}'"
         message = f"{how}: at '{node}' from {side}; {action}, leaving {departure} {goes}"
         if action == STRAIGHT and not opening:
@@ -420,16 +455,15 @@ class MissionExecutor:
         """Map the explored ``?`` hallway at both ends if the far end's arrival side is unmapped too."""
         state = self._mission()
         origin, origin_side = exploring
+        if (node, side) == exploring:
+            self.explored.add(exploring)
+            self.dead_ends = state.dead_ends = (*self.dead_ends, exploring)
+            return
         far_end = self.map.nodes[node].hallways.get(side)
         if far_end is None or far_end.neighbour != UNKNOWN:
             self.explored.add(exploring)
             return
-        nodes = dict(self.map.nodes)
-        for name, name_side, other in ((origin, origin_side, node), (node, side, origin)):
-            hallways = dict(nodes[name].hallways)
-            hallways[name_side] = replace(hallways[name_side], neighbour=other)
-            nodes[name] = replace(nodes[name], hallways=hallways)
-        self.map = replace(self.map, nodes=nodes)
+        self.map = self.map.with_hallway(origin, origin_side, node, side)
         self.learned = state.learned_edges = (*self.learned, LearnedEdge(origin, origin_side, node, side))
 
     # --------------------------------------------------------------------------------------- helpers

@@ -3,18 +3,17 @@ tags read on /rfid/reads and the wall follower's events, and commanding the foll
 
 A thin adapter around rfidnav_planning.mission_executor.MissionExecutor, glued to the follower exactly as the
 in-process runner glues the two cores: each inventory round's tag ids go to ``on_reads``, each follower event to
-``on_junction`` (the odometry pose each event and state carries to ``on_odometry``, for the distance driven), each
-decision's ``follower_command`` to the follower; the goal ends with the follower's ``stopped`` (the executor's
-stop, driven on to the node) or at once when the executor gives up. What the executor learns of ``?`` hallways is
-kept for later goals. A goal is refused for a node not in the map, while another goal runs, or while no wall
-follower listens on /wall_follower/command. A follower that says it is idle (/wall_follower/state) while a mission
-runs did not hear its command (it restarted, or its subscription matched after the command went out): it is told
-again to follow, with the turn waiting for the next junction. One goal at a time and cancel:
-rfidnav_common.goal_server. A round not in base_link and reads no reader reports (rfidnav_common.inputs: an
-empty tag id, port 0, numbers beyond physics) are dropped and counted with a throttled warning, as are follower
-events and states not in odom or with a pose beyond any map: a wall tag is taken only from a read that could be
-a reader's.
-"""
+``on_junction`` (the odometry pose each event and state carries to ``on_odometry``, for the distance driven, which may
+find a dead-end goal whose tag was missed), each decision's ``follower_command`` to the follower; the goal ends with
+the follower's ``stopped`` (the executor's stop, driven on to the node) or at once when the executor gives up. What the
+executor learns of ``?`` hallways is kept for later goals, and each feedback lists it (``learned_hallways``: a report
+measures the shortest path on that map). A goal is refused for a node not in the map, while another goal runs, or while
+no wall follower listens on /wall_follower/command. A follower that says it is idle (/wall_follower/state) while a
+mission runs did not hear its command (it restarted, or its subscription matched after the command went out): it is
+told again to follow, with the turn waiting for the next junction. One goal at a time and cancel:
+rfidnav_common.goal_server. A round not in base_link and reads no reader reports (rfidnav_common.inputs: an empty tag
+id, port 0, numbers beyond physics) are dropped and counted with a throttled warning, as are follower events and states
+not in odom or with a pose beyond any map: a wall tag is taken only from a read that could be a reader's."""
 
 from __future__ import annotations
 
@@ -100,9 +99,11 @@ class MissionExecutorNode(SteppedNode):
         except inputs.BadInput as error:
             self.drops.drop(topic, error)
             return False
-        # An idle follower may have no pose yet: it is left out.
+        # An idle follower may have no pose yet: it is left out. The distance may find a dead-end goal.
         if msg.state != IDLE:
-            self.executor_core.on_odometry(x, y)
+            decision = self.executor_core.on_odometry(x, y)
+            if decision is not None and self.goals.running is not None:
+                self.apply(decision)
         return True
 
     def on_event(self, msg: WallFollowerEvent) -> None:
@@ -143,7 +144,8 @@ class MissionExecutorNode(SteppedNode):
         self.goals.publish_feedback(NavigateToNode.Feedback(
             current_node=mission.current_node or "", arrival_direction=mission.arrival_side or "",
             last_tag=mission.last_tag or "", next_action=goal.next_action,
-            tags_missed=mission.tags_missed, replans=mission.replans), always=True)   # one per decision
+            tags_missed=mission.tags_missed, replans=mission.replans,
+            learned_hallways=[edge.text() for edge in mission.learned_edges]), always=True)   # one per decision
 
     def on_follower_state(self, msg: WallFollowerEvent) -> None:
         if not self.follower_report("/wall_follower/state", msg) or self.goals.running is None or msg.state != IDLE:

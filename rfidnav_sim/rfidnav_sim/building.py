@@ -18,7 +18,10 @@ is derived from them rather than drawn by hand: that keeps the world and the rob
   the wall surface and facing into the corridor; several tags of one side are ``TAG_SPACING_M`` apart, the
   first one nearest the junction.
 
-Run ``python -m rfidnav_sim.building MAP WORLD`` to regenerate a world file (``config/worlds/building_*.yaml``).
+The plan (corridor lengths, tag setbacks) and every check of it are ``rfidnav_common.floor_plan``'s, which
+``./rfidnav map check`` runs too: a map it passes is one this module builds. Run
+``python -m rfidnav_sim.building MAP WORLD`` to regenerate a world file (``config/worlds/building_*.yaml``); a map
+it cannot build is refused with ``map check``'s lines and exit 2.
 """
 
 from __future__ import annotations
@@ -26,18 +29,17 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import sys
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from rfidnav_common.topological_map import DIRECTIONS, UNKNOWN, TopologicalMap, load_topological_map
+from rfidnav_common.floor_plan import DEAD_END_M, HALLWAY_WIDTH_M, TAG_SETBACK_M, check_floor_map, plan_floor
+from rfidnav_common.topological_map import DIRECTIONS, TopologicalMap, load_topological_map
 from rfidnav_sim.wall_tag_model import WallTag
 
-DEAD_END_M = 3.0            # corridor length of a "?" hallway beyond its junction square
-TAG_SPACING_M = 0.3         # between the tags of one arrival side, along the wall
-ALIGNMENT_TOLERANCE_M = 1e-6
 DECIMALS = 9                # coordinates are rounded so that files read 8.0, not 8.000000000000002
 
 
@@ -69,24 +71,16 @@ class _Side:
         return np.concatenate([self.point(*from_), self.point(*to)])
 
 
-def building_floor(topological_map: TopologicalMap, hallway_width_m: float = 1.6,
-                   tag_setback_m: float = 1.0) -> Floor:
+def building_floor(topological_map: TopologicalMap, hallway_width_m: float = HALLWAY_WIDTH_M,
+                   tag_setback_m: float = TAG_SETBACK_M) -> Floor:
     """The walls and wall tags of the floor the map describes (see the module docstring).
 
-    Raises ValueError naming the node (or hallway) for a node without a position, a hallway off its compass line,
-    junctions too close for their squares, or tags that do not fit on their corridor's wall."""
-    if not (math.isfinite(hallway_width_m) and hallway_width_m > 0.0):
-        raise ValueError(f"hallway_width_m: {hallway_width_m} is not a finite positive number")
-    if not (math.isfinite(tag_setback_m) and tag_setback_m >= 0.0):
-        raise ValueError(f"tag_setback_m: {tag_setback_m} is not a finite non-negative number")
-    name = topological_map.name
-    positions = {}
-    for node in topological_map.nodes.values():
-        if node.position is None:
-            raise ValueError(f"map '{name}': node '{node.name}' has no position; a building is built from "
-                             f"the positions of all nodes")
-        positions[node.name] = np.array(node.position, dtype=float)
-    edges = {(edge.node_a, edge.side_a) for edge in topological_map.edges()}
+    Raises the first of ``rfidnav_common.floor_plan.plan_floor``'s problems (a ConfigError naming the map and the
+    field: a node without a position, a hallway off its compass line, junctions too close for their squares,
+    parts of the floor overlapping, tags that do not fit on their corridor's wall): ``map check`` lists them all."""
+    plan, problems = plan_floor(topological_map, f"map '{topological_map.name}'", hallway_width_m, tag_setback_m)
+    if plan is None:
+        raise problems[0]
     half = hallway_width_m / 2.0
     walls: list[np.ndarray] = []
     tags: list[WallTag] = []
@@ -94,59 +88,29 @@ def building_floor(topological_map: TopologicalMap, hallway_width_m: float = 1.6
         for direction in DIRECTIONS:
             angle = topological_map.direction_angle_rad(direction)
             along = np.array([math.cos(angle), math.sin(angle)])
-            side = _Side(positions[node.name], along, np.array([-along[1], along[0]]))
-            hallway = node.hallways.get(direction)
-            if hallway is None:
+            side = _Side(np.array(node.position, dtype=float), along, np.array([-along[1], along[0]]))
+            planned = plan.sides[(node.name, direction)]
+            if planned.corridor_m is None:
                 walls.append(side.segment((half, -half), (half, half)))
                 continue
-            if hallway.neighbour == UNKNOWN:
-                corridor_m = DEAD_END_M
+            corridor_m = planned.corridor_m
+            if planned.dead_end:
                 walls.append(side.segment((half + corridor_m, -half), (half + corridor_m, half)))
-            else:
-                corridor_m = _corridor_m(name, node.name, direction, side, positions[hallway.neighbour],
-                                         hallway_width_m)
-            if (hallway.neighbour == UNKNOWN or (node.name, direction) in edges) and corridor_m > 0.0:
+            if planned.draws_corridor and corridor_m > 0.0:
                 walls.extend(side.segment((half, left), (half + corridor_m, left)) for left in (-half, half))
-            tags.extend(_arrival_tags(name, node.name, direction, side, hallway.tags, half, corridor_m,
-                                      tag_setback_m))
+            tags.extend(_arrival_tag(side, tag_id, half, before_m) for tag_id, before_m in planned.tags_before_m)
     wall_array = np.round(np.array(walls, dtype=float).reshape(-1, 4), DECIMALS) + 0.0   # + 0.0: no -0.0
     return Floor(walls=wall_array, wall_tags=tuple(tags))
 
 
-def _corridor_m(map_name: str, node: str, direction: str, side: _Side, far_end: np.ndarray,
-                hallway_width_m: float) -> float:
-    """Length of a mapped hallway's corridor between the two junction squares, after checking the far node
-    lies on the side's compass line far enough away for both squares."""
-    offset = far_end - side.centre
-    out_m, off_line_m = float(offset @ side.along), float(offset @ side.across)
-    where = f"map '{map_name}': node '{node}' side {direction}"
-    if abs(off_line_m) > ALIGNMENT_TOLERANCE_M:
-        raise ValueError(f"{where}: the far node is {off_line_m:+.3f} m off the {direction} line; hallways must "
-                         f"run straight along their compass direction")
-    if out_m < hallway_width_m - ALIGNMENT_TOLERANCE_M:
-        raise ValueError(f"{where}: the far node is {out_m:.3f} m away, closer than the hallway width "
-                         f"{hallway_width_m} m, so the junction squares overlap")
-    return max(out_m - hallway_width_m, 0.0)
-
-
-def _arrival_tags(map_name: str, node: str, direction: str, side: _Side, tag_ids: Sequence[str], half: float,
-                  corridor_m: float, tag_setback_m: float) -> list[WallTag]:
-    """The tags read arriving at ``node`` from ``direction``: on the arriving robot's left wall.
+def _arrival_tag(side: _Side, tag_id: str, half: float, before_square_m: float) -> WallTag:
+    """A tag read arriving at the node from ``side``: on the arriving robot's left wall.
 
     That robot heads along ``-along``, so its left is ``-across``: the wall at ``left = -half``, whose face
     looks into the corridor along ``+across``."""
-    tags = []
-    for index, tag_id in enumerate(tag_ids):
-        before_square_m = tag_setback_m + index * TAG_SPACING_M
-        if before_square_m > corridor_m + ALIGNMENT_TOLERANCE_M:
-            raise ValueError(f"map '{map_name}': node '{node}' side {direction}: tag '{tag_id}' would be "
-                             f"{before_square_m:.2f} m before the junction, beyond the {corridor_m:.2f} m "
-                             f"corridor")
-        position = np.round(side.point(half + before_square_m, -half), DECIMALS) + 0.0
-        normal = np.round(side.across, DECIMALS) + 0.0
-        tags.append(WallTag(tag_id, (float(position[0]), float(position[1])),
-                            (float(normal[0]), float(normal[1]))))
-    return tags
+    position = np.round(side.point(half + before_square_m, -half), DECIMALS) + 0.0
+    normal = np.round(side.across, DECIMALS) + 0.0
+    return WallTag(tag_id, (float(position[0]), float(position[1])), (float(normal[0]), float(normal[1])))
 
 
 def write_world(floor: Floor, name: str, path: Path | str, header: str = "") -> None:
@@ -167,19 +131,25 @@ def _number(value: float) -> str:
     return repr(float(value))
 
 
-def main(argv: Sequence[str] | None = None) -> None:
-    """Regenerate a world file from a map with the default hallway width and tag setback."""
+def main(argv: Sequence[str] | None = None) -> int:
+    """Regenerate a world file from a map with the default hallway width and tag setback; a map the generator
+    cannot build is refused with every problem, one line each (as ``map check`` lists them), and exit 2."""
     parser = argparse.ArgumentParser(prog="python -m rfidnav_sim.building", description=__doc__.splitlines()[0])
     parser.add_argument("map", help="topological map with node positions (config/maps/*.yaml)")
     parser.add_argument("world", help="world file to write (config/worlds/*.yaml)")
     args = parser.parse_args(argv)
+    problems = check_floor_map(args.map)
+    if problems:
+        print("\n".join(problems), file=sys.stderr)
+        return 2
     topological_map = load_topological_map(args.map)
     header = (f"Ground truth of {topological_map.name}: GENERATED by rfidnav_sim.building from the map {args.map}\n"
-              f"(1.6 m-wide hallways, junction squares open where hallways join, '?' hallways {DEAD_END_M:g} m "
-              f"dead ends,\nwall tags on the arriving robot's left wall 1.0 m before the junction). Do not edit: "
-              f"regenerate with\n  python -m rfidnav_sim.building {args.map} {args.world}")
+              f"({HALLWAY_WIDTH_M:g} m-wide hallways, junction squares open where hallways join, '?' hallways "
+              f"{DEAD_END_M:g} m dead ends,\nwall tags on the arriving robot's left wall {TAG_SETBACK_M:.1f} m before "
+              f"the junction). Do not edit: regenerate with\n  python -m rfidnav_sim.building {args.map} {args.world}")
     write_world(building_floor(topological_map), topological_map.name, args.world, header)
+    return 0
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(main())

@@ -4,13 +4,17 @@
   ``ours``, and why; nothing here is fitted).
 * The paper's run (section 5): from before tag 23 to tag 19 with a right turn, a 1.6 m passage, about 8 m.
 * Missions between random (start tag, goal node) pairs at tag read-miss probabilities 0, 10, 20 and 30 % (per
-  tag passage), on two floors kept apart:
+  tag passage), on three floors kept apart:
 
   - ``building_large`` (DEVELOPMENT): the 25-junction floor generated from its own map, on which the stack was
     developed and tuned; seed 7, the missions it was developed on. Reported for continuity, not as the result.
   - ``building_eval`` (EVALUATION): a floor drawn by hand, not generated from its map (corridors 1.4-2.2 m, two
     unmapped doors, an alcove, a missing wall segment, a junction 20 degrees off square, an unmapped dead end);
     its missions are drawn by EVALUATION_SEED, chosen once and never used to tune anything.
+  - ``building_ring`` (NEW, issue 18): a layout of our own unlike the others, generated from its map: a ring of
+    two 24 m hallways and 10 m rungs, an 8 m dead-end spur, three ``?`` dead ends, two sides with two tags each,
+    compass North along the map's +x; missions drawn by NEW_SEED, chosen once. Reported beside the others, with
+    no target of its own.
 
   Every floor, miss rate and method faces the same missions with the same sensor and odometry draws (paired).
   "paper" is the paper's loop on the paper's knowledge: routes by fewest hallways (the paper's robot knows no
@@ -75,14 +79,16 @@ from rfidnav_sim.world import load_world  # noqa: E402
 EXPERIMENT = "topological"
 MISS_RATES = (0.0, 0.1, 0.2, 0.3)
 MISSIONS = 100                          # per method and miss rate on the evaluation floor
-DEVELOPMENT, EVALUATION = "building_large", "building_eval"
+DEVELOPMENT, EVALUATION, NEW = "building_large", "building_eval", "building_ring"
+FLOOR_ORDER = (EVALUATION, DEVELOPMENT, NEW)                  # the order of runs, tables and rows
 # The development floor is reported for continuity at two rates and half the missions (its long missions would
 # otherwise double the command's time).
-RATES = {DEVELOPMENT: (0.0, 0.2), EVALUATION: MISS_RATES}
-FLOOR_ROLES = {DEVELOPMENT: "development", EVALUATION: "evaluation"}
+RATES = {DEVELOPMENT: (0.0, 0.2), EVALUATION: MISS_RATES, NEW: MISS_RATES}
+FLOOR_ROLES = {DEVELOPMENT: "development", EVALUATION: "evaluation", NEW: "new layout"}
 DEVELOPMENT_SEED = 7                    # the missions the stack was developed on
 EVALUATION_SEED = 1001                  # chosen once for the evaluation floor; never used to tune
-SEEDS = {DEVELOPMENT: DEVELOPMENT_SEED, EVALUATION: EVALUATION_SEED}
+NEW_SEED = 1802                         # chosen once for the new layout (issue 18); never used to tune
+SEEDS = {DEVELOPMENT: DEVELOPMENT_SEED, EVALUATION: EVALUATION_SEED, NEW: NEW_SEED}
 CHUNK = 10                              # missions per pool job
 TARGET_RATE, TARGET_SUCCESS_PCT, PATH_TARGET = 0.2, 95.0, 1.15   # ours, on the evaluation floor (issue targets)
 MAX_TIME_S = 900.0                      # run_mission's default: a mission not stopped by then failed
@@ -162,10 +168,10 @@ SOURCES: dict[str, tuple[str, str]] = {
     "wall_follower.max_fit_residual_m": ("ours", "a line fit over each stretch (the paper: two readings)"),
     "wall_follower.sonar_half_angle_rad": ("ours", "the cone's half angle"),
     "world.floors": ("ours", f"{DEVELOPMENT}: generated from its map (development); {EVALUATION}: drawn by hand "
-                             "(evaluation)"),
+                             f"(evaluation); {NEW}: generated, a ring unlike the others (new layout)"),
     "missions.per_rate": ("ours", "the same missions for every rate and method"),
     "missions.seed": ("ours", f"{DEVELOPMENT}: {DEVELOPMENT_SEED} (developed on); {EVALUATION}: "
-                              f"{EVALUATION_SEED} (chosen once)"),
+                              f"{EVALUATION_SEED}, {NEW}: {NEW_SEED} (chosen once)"),
     "missions.start_before_tag_m": ("ours", "put down in the corridor, before a wall tag, at 0.8 m from its wall"),
     "missions.max_time_s": ("ours", "a mission not stopped by then failed"),
     "missions.miss_rates": ("paper", "sec. 5 names read failures; the rates are ours"),
@@ -216,7 +222,7 @@ def missions_chunk(job: tuple[str, str, float, int, int]) -> tuple[str, str, flo
 def run_all(missions: int) -> dict[tuple[str, str, float], list[MissionRun]]:
     """Every mission, by (floor, method, miss rate), in the floor's mission order."""
     jobs = [(floor, method, rate, first, min(CHUNK, missions_on(floor, missions) - first))
-            for floor in (EVALUATION, DEVELOPMENT) for method in METHODS for rate in RATES[floor]
+            for floor in FLOOR_ORDER for method in METHODS for rate in RATES[floor]
             for first in range(0, missions_on(floor, missions), CHUNK)]
     chunks: dict[tuple[str, str, float], list[tuple[int, list[MissionRun]]]] = {}
     for floor, method, rate, first, runs in run_pool(missions_chunk, jobs, "reproduce topological"):
@@ -283,7 +289,7 @@ def report_lines(paper: MissionRun, summaries: list[RateSummary], results, condi
              f"The paper's run (tag 23 -> tag 19, building_fig5, ours): {'success' if paper.success else 'FAILED'} "
              f"({paper.message}); turns: {turns}; driven {paper.path_length_m:.1f} m, shortest "
              f"{paper.shortest_path_m:.1f} m (paper: a right turn, 1.6 m passage, about 8 m)", ""]
-    for floor in (EVALUATION, DEVELOPMENT):
+    for floor in FLOOR_ORDER:
         lines += [*floor_table(floor, summaries, results), ""]
     met = "met" if target_met(summaries) else "NOT met"
     lines.append(f"target (ours, {EVALUATION}, {TARGET_RATE * 100:g} % misses: success >= {TARGET_SUCCESS_PCT:g} %, "
@@ -318,11 +324,11 @@ def json_rows(paper: MissionRun, summaries: list[RateSummary], results,
 # -------------------------------------------------------------------------------------------- plots
 
 def plot_summaries(summaries: list[RateSummary], out_dir: Path) -> Path:
-    """Success and path ratio against the miss rate, both floors, 95 % intervals, n on the legend; the
+    """Success and path ratio against the miss rate, every floor, 95 % intervals, n on the legend; the
     evaluation floor drawn to scale beside its map."""
     figure, axes = plt.subplots(1, 3, figsize=(17, 5), gridspec_kw={"width_ratios": [1, 1, 1.3]})
     labels = {"paper": "paper's loop (edges, no recovery)", "ours": "ours (lengths, recovery)"}
-    styles = {DEVELOPMENT: ":", EVALUATION: "-"}
+    styles = {DEVELOPMENT: ":", EVALUATION: "-", NEW: "--"}
     for floor in FLOORS:
         for method, label in labels.items():
             mine = [s for s in summaries if s.floor == floor and s.method == method]
@@ -378,7 +384,7 @@ def reproduce_topological(missions: int, out_dir: Path, as_json: bool) -> int:
     paper = paper_run(np.random.default_rng(DEVELOPMENT_SEED))
     results = run_all(missions)
     summaries = [summarise(floor, method, rate, results[(floor, method, rate)])
-                 for floor in (EVALUATION, DEVELOPMENT) for method in METHODS for rate in RATES[floor]]
+                 for floor in FLOOR_ORDER for method in METHODS for rate in RATES[floor]]
     rows = json_rows(paper, summaries, results, condition_rows)
     (out_dir / "topological_rows.json").write_text(json.dumps(rows, indent=1) + "\n")
     plot = plot_summaries(summaries, out_dir)

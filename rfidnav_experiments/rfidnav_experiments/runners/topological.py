@@ -59,6 +59,8 @@ LARGE_MAP = CONFIG_DIR / "maps" / "building_large.yaml"
 LARGE_WORLD = CONFIG_DIR / "worlds" / "building_large.yaml"
 EVAL_MAP = CONFIG_DIR / "maps" / "building_eval.yaml"
 EVAL_WORLD = CONFIG_DIR / "worlds" / "building_eval.yaml"
+RING_MAP = CONFIG_DIR / "maps" / "building_ring.yaml"
+RING_WORLD = CONFIG_DIR / "worlds" / "building_ring.yaml"
 FOLLOWER = shipped_parameters(WallFollowerParameters, "wall_follower")   # its sonar topics, offsets, settings
 ROBOT = shipped_parameters(RobotSimParameters, "robot_sim", world_file="-")   # the base: limits, odometry drift
 SONAR = shipped_parameters(SonarParameters, "sonar_sim", world_file="-")     # noise, rays, specular loss
@@ -148,7 +150,9 @@ def run_mission(world: World, topological_map: TopologicalMap, start_pose: tuple
 
     for _ in range(int(round(max_time_s * FOLLOWER.control_rate_hz))):
         truth, odom = base.truth, base.odom
-        executor.on_odometry(odom.x, odom.y)
+        at_dead_end = executor.on_odometry(odom.x, odom.y)
+        if at_dead_end is not None:
+            apply(at_dead_end, False)
         for decision in executor.on_reads(reader.read(truth.x, truth.y, truth.yaw, rng)):
             apply(decision, False)
         command = follower.step(centre_sonar(sonar_model.ranges(truth.x, truth.y, truth.yaw, rng), offsets),
@@ -200,7 +204,8 @@ class Floor:
     world_path: Path
 
 
-FLOORS = {"building_large": Floor(LARGE_MAP, LARGE_WORLD), "building_eval": Floor(EVAL_MAP, EVAL_WORLD)}
+FLOORS = {"building_large": Floor(LARGE_MAP, LARGE_WORLD), "building_eval": Floor(EVAL_MAP, EVAL_WORLD),
+          "building_ring": Floor(RING_MAP, RING_WORLD)}
 
 
 def paper_run(rng: np.random.Generator, miss_probability: float = 0.0, method: Method = METHODS["ours"]) \
