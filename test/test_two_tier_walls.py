@@ -22,14 +22,14 @@ from rfidnav_planning.two_tier_navigation import (
     TwoTierNavigator,
     TwoTierSettings,
 )
-from rfidnav_planning.wall_paths import FloorPlan, WallPlanner, segment_distances
+from rfidnav_planning.wall_paths import WallMap, WallPlanner, segment_distances
 from rfidnav_sim.kinematics import unicycle_step
 from rfidnav_sim.world import load_world
 
 pytestmark = pytest.mark.tier("unit")
 
 HOME_MAP = CONFIG_DIR / "maps" / "two_tier_home.yaml"
-HOME = FloorPlan.of(load_route_map(HOME_MAP))
+HOME = WallMap.of(load_route_map(HOME_MAP))
 CLEARANCE_M = 0.3
 
 
@@ -67,7 +67,7 @@ def test_a_leg_from_the_west_rooms_to_the_east_goes_through_the_door_and_keeps_i
 
 
 def test_a_room_whose_door_is_walled_up_has_no_way_in() -> None:
-    closed = FloorPlan(HOME.walls + ((6.0, 3.0, 6.0, 4.2),), HOME.extent)
+    closed = WallMap(HOME.walls + ((6.0, 3.0, 6.0, 4.2),), HOME.extent)
     assert WallPlanner(closed, CLEARANCE_M).path((3.0, 1.5), (9.0, 3.6)) is None
 
 
@@ -111,7 +111,7 @@ def test_a_spiral_search_ends_before_it_leaves_the_maps_extent() -> None:
     # A landmark 1 m from two edges of an empty 12 x 8 m extent, a start fix so vague (30 cm) that the spiral would
     # reach out 1 m: it ends, unfound, when the estimate comes within 20 cm of an edge, and tier one is asked.
     settings = TwoTierSettings(go_to=SETTINGS.go_to)
-    navigator = TwoTierNavigator(settings, FloorPlan((), (0.0, 0.0, 12.0, 8.0)))
+    navigator = TwoTierNavigator(settings, WallMap((), (0.0, 0.0, 12.0, 8.0)))
     decision = navigator.start((1.0, 1.0), Fix((2.0, 2.0), 0.3, TIER_TAG, "dock"))
     assert decision.request is not None and decision.request.kind == TAG_MAP
     group = TagGroup("G", "cross", (1.0, 1.0), 0.3, 0.0, 0.05)
@@ -166,7 +166,7 @@ def test_legs_planned_round_the_homes_walls_arrive_more_often_than_straight_ones
     # seeds. A leg that stalls backs off either way; the floor plan keeps the legs out of the walls.
     landmarks = {group.group_id: group.centre for group in load_route_map(HOME_MAP).tag_groups}
     arrived = {}
-    for name, floor in (("straight", FloorPlan()), ("planned", HOME)):
+    for name, floor in (("straight", WallMap()), ("planned", HOME)):
         arrived[name] = 0
         for run in range(4):
             rng, pose = np.random.default_rng(100 + run), (1.0, 1.0, 0.3)

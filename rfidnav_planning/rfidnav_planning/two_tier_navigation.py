@@ -42,7 +42,7 @@ from rfidnav_control.go_to import GoToSettings, go_to_command
 from rfidnav_control.spiral import SpiralSearch, separation_for_group
 from rfidnav_localization.dead_reckoning import TIER_TAG, TIER_WIFI, DeadReckoning, DeadReckoningEstimate, Fix
 from rfidnav_localization.tag_fix import TagFix, tag_fix
-from rfidnav_planning.wall_paths import FloorPlan, Point, WallPlanner
+from rfidnav_planning.wall_paths import Point, WallMap, WallPlanner
 
 LOCATING, MAPPING, TO_LANDMARK, SEARCHING, TO_TARGET, BACKING_OFF, DONE = (
     "locating", "mapping", "to_landmark", "searching", "to_target", "backing_off", "done")
@@ -152,7 +152,7 @@ class Progress:
 
 
 class TwoTierNavigator:
-    def __init__(self, settings: TwoTierSettings, floor: FloorPlan = FloorPlan()) -> None:
+    def __init__(self, settings: TwoTierSettings, floor: WallMap = WallMap()) -> None:
         settings.validate()
         self.settings = settings
         self.floor = floor

@@ -42,7 +42,7 @@ from rfidnav_msgs.msg import LocalizationStatus, TagReadArray, WifiScan
 from rfidnav_msgs.srv import GetTagMap, Locate
 from rfidnav_planning.parameters import TwoTierNavigatorParameters
 from rfidnav_planning.two_tier_navigation import LOCATE, Decision, MapTag, Request, TwoTierNavigator
-from rfidnav_planning.wall_paths import FloorPlan
+from rfidnav_planning.wall_paths import WallMap
 
 UNKNOWN_YAW_VARIANCE = 1e6    # [rad^2] on the pose when no heading, or none with a known noise, was read
 
@@ -59,7 +59,7 @@ class TwoTierNavigatorNode(SteppedNode):
         super().__init__("two_tier_navigator", **node_options)
         self.params: TwoTierNavigatorParameters = declare_parameters(self, TwoTierNavigatorParameters)
         map_file = self.params.map_file
-        floor = FloorPlan() if map_file == "unused" else FloorPlan.of(load_route_map(Path(map_file)))
+        floor = WallMap() if map_file == "unused" else WallMap.of(load_route_map(Path(map_file)))
         self.navigator = TwoTierNavigator(self.params.settings(), floor)
         self.call: PendingCall | None = None
         self.drops = inputs.Drops(self.get_logger().warning)

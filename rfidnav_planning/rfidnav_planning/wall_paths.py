@@ -64,14 +64,14 @@ def _properly_crossing(a: np.ndarray, b: np.ndarray, c: np.ndarray, d: np.ndarra
 
 
 @dataclass(frozen=True)
-class FloorPlan:
+class WallMap:
     """What a robot map says of the home's geometry: its walls and the extent the robot may drive in."""
 
     walls: tuple[tuple[float, float, float, float], ...] = ()
     extent: Rectangle | None = None
 
     @classmethod
-    def of(cls, robot_map: RouteMap) -> FloorPlan:
+    def of(cls, robot_map: RouteMap) -> WallMap:
         return cls(robot_map.walls, robot_map.extent)
 
     @property
@@ -83,7 +83,7 @@ class WallPlanner:
     """Shortest paths round a floor plan's walls, within its extent, ``clearance_m`` from the walls (see the
     module's docstring)."""
 
-    def __init__(self, plan: FloorPlan, clearance_m: float) -> None:
+    def __init__(self, plan: WallMap, clearance_m: float) -> None:
         if not (math.isfinite(clearance_m) and clearance_m > 0.0):
             raise ValueError(f"clearance_m: expected a positive distance, got {clearance_m}")
         self.plan = plan

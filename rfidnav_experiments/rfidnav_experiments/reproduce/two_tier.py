@@ -88,7 +88,7 @@ from rfidnav_experiments.runners.two_tier import (  # noqa: E402
     run_two_tier,
 )
 from rfidnav_localization.fingerprint import RadioMap  # noqa: E402
-from rfidnav_planning.wall_paths import FloorPlan  # noqa: E402
+from rfidnav_planning.wall_paths import WallMap  # noqa: E402
 from rfidnav_sim.parameters import CompassParameters, WifiSimParameters  # noqa: E402
 from rfidnav_sim.world import World, load_world  # noqa: E402
 
@@ -404,9 +404,9 @@ class Leg:
 
 
 @functools.cache
-def floor_plan() -> FloorPlan:
+def floor_plan() -> WallMap:
     """The flat's walls and extent as the robot's map gives them (its legs are planned round the walls)."""
-    return FloorPlan.of(load_route_map(MAP_FILE))
+    return WallMap.of(load_route_map(MAP_FILE))
 
 
 def fig12_route(job: tuple[str, int, int]) -> list[Leg]:

@@ -32,7 +32,7 @@ from rfidnav_localization.errors import LocateError
 from rfidnav_localization.fingerprint import Fingerprint, LocateSettings, RadioMap
 from rfidnav_planning.parameters import TwoTierNavigatorParameters
 from rfidnav_planning.two_tier_navigation import LOCATE, MapTag, Request, TwoTierNavigator, TwoTierSettings
-from rfidnav_planning.wall_paths import FloorPlan
+from rfidnav_planning.wall_paths import WallMap
 from rfidnav_sim.compass_model import CompassModel
 from rfidnav_sim.kinematics import moves_into_wall, unicycle_step
 from rfidnav_sim.parameters import CompassParameters, ReaderParameters, RobotSimParameters, WifiSimParameters
@@ -140,7 +140,7 @@ def run_two_tier(site: Site, start: tuple[float, float, float], target: tuple[fl
                  odometry_scale_error: float = ODOMETRY_SCALE_ERROR, compass: CompassModel = COMPASS,
                  locate: LocateSettings = LocateSettings(), max_time_s: float = 1800.0,
                  survey_spacing_m: float | None = None, known_start: Fix | None = None,
-                 floor: FloorPlan = FloorPlan()) -> TwoTierRun:
+                 floor: WallMap = WallMap()) -> TwoTierRun:
     """One navigation from ``start`` (true pose) to ``target``, the compass and WiFi drawn from ``rng``, the floor
     reader's streams seeded from ``reader_seed`` (as the rfid_reader_sim node seeds them from its seed). With
     ``survey_spacing_m`` the robot also surveys (paper 003's automatic radio map construction): a scan every that
@@ -229,7 +229,7 @@ def robot_survey(site: Site, robot_map: RouteMap, seed: int, spacing_m: float = 
     known = Fix(first, HF_READ_RANGE_M, TIER_TAG, f"{robot_map.tag_groups[0].group_id} (dock)")
     for leg, group in enumerate(robot_map.tag_groups[1:]):
         run = run_two_tier(site, pose, group.centre, SETTINGS, rng, derive_seed(seed, f"robot survey:{leg}"),
-                           survey_spacing_m=spacing_m, known_start=known, floor=FloorPlan.of(robot_map))
+                           survey_spacing_m=spacing_m, known_start=known, floor=WallMap.of(robot_map))
         pose = (run.final_position[0], run.final_position[1], 0.0)
         known = None if not run.success else Fix(group.centre, HF_READ_RANGE_M, TIER_TAG, group.group_id)
     return list(site.radio_map.fingerprints)
