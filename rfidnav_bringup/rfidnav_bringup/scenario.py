@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import shlex
 import shutil
+import tempfile
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
@@ -220,9 +221,9 @@ def _with_profile(nodes: dict[str, NodeSpec], profile: str, scenario_file: Path)
 
 def load_scenario(name_or_path: str, swaps: dict[str, str] | None = None,
                   param_files: dict[str, Path] | None = None, goal: dict[str, Any] | None = None,
-                  robot_profile_name: str | None = None) -> Scenario:
+                  robot_profile_name: str | None = None, radio_map_may_be_missing: bool = False) -> Scenario:
     """Load, apply ``--robot``, ``--swap``, ``--params`` and ``--goal``, and validate everything the run will
-    use."""
+    use (but a radio map not surveyed yet, with ``radio_map_may_be_missing``: ``./rfidnav survey`` writes it)."""
     path = scenario_path(name_or_path).resolve()
     section = Section.from_file(path)
     section.reject_unknown(("name", "description", "world", "map", "robot", "nodes", "mission", "metrics"))
@@ -273,7 +274,8 @@ def load_scenario(name_or_path: str, swaps: dict[str, str] | None = None,
         mission=MissionSpec(mission_file.string("action"), mission_file.string("type"), goal,
                             mission_file.number("timeout_s", 600.0, positive=True, maximum=MAX_MISSION_S),
                             mission_file.raw("server", None)),
-        metrics=tuple(metrics), world=load_world(world_file), **_robot_map(map_file))
+        metrics=tuple(metrics), world=load_world(world_file),
+        **_robot_map(map_file, radio_map_may_be_missing))
     if scenario.mission.server is not None and scenario.mission.server not in nodes:
         raise mission_file.error("server", f"no role '{scenario.mission.server}' (roles: {', '.join(nodes)})")
     goal_class = _check_action(scenario, mission_file)
@@ -359,15 +361,28 @@ def _program(command: tuple[str, ...], source: str, field: str) -> tuple[str, ..
     return command
 
 
-def _robot_map(map_file: Path) -> dict[str, Any]:
+def _robot_map(map_file: Path, radio_map_may_be_missing: bool = False) -> dict[str, Any]:
     """The scenario's map: a topological map (paper 004) if it has ``nodes``, else a route map, with the radio map
-    it names read (the location server starts from it)."""
-    if Section.from_file(map_file).has("nodes"):
+    it names read (the location server starts from it). With ``radio_map_may_be_missing`` (``./rfidnav survey``
+    writes that file) a radio map not written yet is left unread, its path kept."""
+    section = Section.from_file(map_file)
+    if section.has("nodes"):
         return {"route_map": None, "topological_map": load_topological_map(map_file)}
-    route_map = load_route_map(map_file)
-    if route_map.radio_map_file is not None:
-        load_radio_map(route_map.radio_map_file)
-    return {"route_map": route_map}
+    named = (map_file.parent / section.string("radio_map")).resolve() if section.has("radio_map") else None
+    if not (radio_map_may_be_missing and named is not None and not named.exists()):
+        route_map = load_route_map(map_file)
+        if route_map.radio_map_file is not None:
+            load_radio_map(route_map.radio_map_file)
+        return {"route_map": route_map}
+    # load_route_map refuses a radio_map that is not there: the map is read from a copy without the key.
+    with tempfile.TemporaryDirectory() as folder:
+        copy = Path(folder) / map_file.name
+        copy.write_text(yaml.safe_dump({key: value for key, value in section.data.items() if key != "radio_map"}))
+        try:
+            route_map = load_route_map(copy)
+        except ConfigError as error:
+            raise ConfigError(str(map_file), error.field, error.problem) from None
+    return {"route_map": replace(route_map, radio_map_file=named)}
 
 
 def _check_action(scenario: Scenario, mission: Section) -> type:
