@@ -5,13 +5,15 @@ The robot is a unicycle stepped at the navigator's control rate with the command
 as round as robot_sim's base: a step into one of the flat's walls is not made (and not counted by the odometry), as
 robot_sim stalls its base there; ``TwoTierRun.bumps`` counts those steps, and ``TwoTierRun.wall_crossings`` the
 walls its true track crossed all the same (the report's metric: a run that crossed one is no success). The
-navigator is the two_tier_navigator
-node's, with its shipped parameters (config/params/two_tier_navigator.yaml). What it sees is simulated as the nodes
-simulate it: wheel odometry whose distance is off by ``odometry_scale_error`` (paper 003: about 1 m per 20 m with a
-load), the e-compass of compass_sim.yaml, the HF floor reader of reader_hf_floor.yaml (the rfid_reader_sim node's
-reader: polled every 500-600 ms, some polls failing; a poll falls on the first step at or after its time) and the
-location server (the WiFi model's scan at the true position matched against a radio map). Only the simulation knows
-the true pose.
+navigator is the two_tier_navigator node's, with its shipped parameters (config/params/two_tier_navigator.yaml).
+What it sees is simulated as the nodes simulate it: wheel odometry whose distance is off by ``odometry_scale_error``
+(paper 003: about 1 m per 20 m with a load), the e-compass of compass_sim.yaml, the HF floor reader of
+reader_hf_floor.yaml (the rfid_reader_sim node's reader: polled every 500-600 ms, some polls failing; a poll falls on
+the first step at or after its time) and the location server (the WiFi model's scan at the true position matched
+against a radio map). Only the simulation knows the true pose.
+
+``./rfidnav survey --grid`` plans its points here (:func:`survey_grid`): the grid over the floor's extent, clear of
+the walls and reachable on foot from the scenario's start.
 """
 
 from __future__ import annotations
@@ -361,7 +363,7 @@ def survey_warnings(grid: SurveyGrid) -> list[str]:
     listed = ", ".join(f"({x:g}, {y:g})" for x, y in grid.enclosed[:MAX_LISTED])
     more = f" and {len(grid.enclosed) - MAX_LISTED} more" if len(grid.enclosed) > MAX_LISTED else ""
     return [f"{len(grid.enclosed)} grid point{'s' if len(grid.enclosed) > 1 else ''} clear of the walls cannot be "
-            f"reached from ({grid.start[0]:g}, {grid.start[1]:g}), walled off (a closet? a door narrower than "
+            f"reached from ({grid.start[0]:g}, {grid.start[1]:g}), walled off (a closet? a door narrower than about "
             f"{2 * WALK_BLOCKED_M + WALK_CELL_M:.2f} m?): {listed}{more}; not surveyed"]
 
 
