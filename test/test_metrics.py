@@ -1,4 +1,5 @@
-"""Tracking metrics of a tag-route run (paper 001 sec. V, eq. 4) on synthetic trajectories with known answers."""
+"""Tracking metrics of a tag-route run (paper 001 sec. V, eq. 4), wall crossings and ground truth's verdict on a run,
+on synthetic trajectories with known answers."""
 
 from __future__ import annotations
 
@@ -9,9 +10,11 @@ import pytest
 
 from rfidnav_bringup.metrics import (
     Trajectory,
+    ground_truth_objection,
     signed_segment_error,
     tracking_error,
     tracking_metrics,
+    wall_crossings,
 )
 
 pytestmark = pytest.mark.tier("unit")
@@ -145,3 +148,61 @@ def test_as_dict_has_the_summary_keys():
     trajectory, arrivals = straight_run(0.03)
     keys = tracking_metrics(trajectory, LINE_TAGS, arrivals, 0.0, arrivals[-1]).as_dict()
     assert {"tracking_rmse_m", "tracking_max_abs_m", "time_to_first_tag_s", "path_length_m"} <= set(keys)
+
+
+# A wall x = 6 from y = 0 to 8 with a door at y 3.0-4.2, drawn as two segments (two_tier_home's middle wall).
+DOOR_WALLS = np.array([[6.0, 0.0, 6.0, 3.0], [6.0, 4.2, 6.0, 8.0]])
+
+
+def track(*corners: tuple[float, float], step_m: float = 0.01) -> np.ndarray:
+    """A polyline through ``corners`` sampled every ``step_m`` or closer, the corners among the samples."""
+    points = [np.asarray(corners[0], dtype=float)]
+    for start, end in zip(corners, corners[1:]):
+        count = max(1, math.ceil(math.dist(start, end) / step_m))
+        points.extend(np.asarray(start) + (np.asarray(end) - np.asarray(start)) * k / count
+                      for k in range(1, count + 1))
+    return np.array(points)
+
+
+def test_a_track_through_a_wall_crosses_it_once_however_it_is_sampled():
+    assert wall_crossings(track((5.0, 1.0), (7.0, 1.0)), DOOR_WALLS) == 1
+    assert wall_crossings(track((5.0, 1.0), (7.0, 1.0), step_m=5.0), DOOR_WALLS) == 1          # one long step
+    assert wall_crossings(track((5.0, 1.0), (6.0, 1.0), (6.0, 1.0), (7.0, 1.0)), DOOR_WALLS) == 1   # stops on it
+    assert wall_crossings(track((7.0, 2.0), (5.0, 1.0)), DOOR_WALLS) == 1                     # either way, slanted
+
+
+def test_a_track_that_touches_or_stalls_at_a_wall_and_turns_back_crosses_nothing():
+    touching = track((5.0, 1.0), (6.0, 1.0), (5.0, 2.0))
+    stalled = np.concatenate((track((5.0, 1.0), (6.0 - 1e-9, 1.0)), np.full((200, 2), (6.0 - 1e-9, 1.0)),
+                              track((6.0 - 1e-9, 1.0), (5.0, 1.0))))
+    against = track((5.0, 1.0), (5.83, 1.0), (5.83, 2.5), (5.0, 2.5))       # a 17 cm base pressed to the wall
+    assert [wall_crossings(t, DOOR_WALLS) for t in (touching, stalled, against)] == [0, 0, 0]
+
+
+def test_a_track_parallel_to_a_wall_or_along_its_line_crosses_nothing():
+    assert wall_crossings(track((5.5, 0.0), (5.5, 8.0)), DOOR_WALLS) == 0
+    assert wall_crossings(track((6.0, -1.0), (6.0, 9.0)), DOOR_WALLS) == 0
+
+
+def test_a_track_through_the_door_gap_or_past_a_walls_end_crosses_nothing():
+    assert wall_crossings(track((5.0, 3.6), (7.0, 3.6)), DOOR_WALLS) == 0
+    assert wall_crossings(track((5.0, 3.01), (7.0, 3.01), step_m=2.0), DOOR_WALLS) == 0   # 1 cm past its end
+    assert wall_crossings(track((5.0, -0.5), (7.0, -0.5)), DOOR_WALLS) == 0                # beyond the wall
+    # Along the wall's line through the door, then out of it: the track left the line in the gap.
+    assert wall_crossings(track((5.0, 3.4), (6.0, 3.4), (6.0, 3.8), (7.0, 3.8)), DOOR_WALLS) == 0
+
+
+def test_a_track_out_through_a_wall_and_back_crosses_twice():
+    assert wall_crossings(track((5.0, 1.0), (7.0, 1.0), (7.0, 6.0), (5.0, 6.0)), DOOR_WALLS) == 2
+    # Out through the wall and back through the door: once.
+    assert wall_crossings(track((5.0, 1.0), (7.0, 1.0), (7.0, 3.6), (5.0, 3.6)), DOOR_WALLS) == 1
+    assert wall_crossings(track((5.0, 1.0), (7.0, 1.0)), np.empty((0, 4))) == 0               # no walls
+
+
+def test_ground_truth_objects_to_a_run_that_crossed_a_wall_or_missed_the_goal():
+    assert ground_truth_objection({"wall_crossings": 0, "success": True}) is None
+    assert ground_truth_objection({"wall_crossings": 0}) is None
+    assert ground_truth_objection({"wall_crossings": 22}) == "made 22 wall crossings (metrics.wall_crossings)"
+    assert ground_truth_objection({"wall_crossings": 1, "success": False, "final_distance_m": 3.25}) == (
+        "did not reach the goal (metrics.success false, 3.25 m from it) and made 1 wall crossing "
+        "(metrics.wall_crossings)")

@@ -171,6 +171,8 @@ def test_fig11_and_fig12_come_out_the_papers_way_and_the_target_is_reported(
     grid, = values(rows, "radio_map", "median_error_m", map="grid")
     survey, = values(rows, "radio_map", "median_error_m", map="survey")
     assert 0.1 < grid < 3.0 and 0.1 < survey < 3.0
+    # The walls stop the robot: no navigation's true track crosses one.
+    assert values(rows, "navigations", "wall_crossings") == [0]
 
 
 def test_theorem1_rows_carry_the_printed_and_the_rayleigh_expectation(

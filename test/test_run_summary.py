@@ -51,3 +51,12 @@ def test_a_summary_that_cannot_be_written_is_said_in_one_line_and_the_outcome_ke
     assert summary.success is True
     assert f"summary.json not written in {orchestrator.run_dir}: No space left on device" in capsys.readouterr().out
     assert not (orchestrator.run_dir / "summary.json").exists()
+
+
+def test_a_success_whose_track_crossed_a_wall_is_reported_as_a_failure_naming_the_count(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    orchestrator = finished_run(tmp_path, monkeypatch, {"success": True, "final_distance_m": 0.1, "wall_crossings": 3})
+    summary = orchestrator.write_summary()
+    assert summary.success is False and orchestrator.exit_code == 1
+    assert summary.document["message"] == ("reached J4, says the mission's node; but ground truth made 3 wall "
+                                           "crossings (metrics.wall_crossings)")

@@ -13,7 +13,7 @@ import pytest
 from rfidnav_bringup.scenario import CONFIG_DIR
 from rfidnav_common.tag_groups import TagGroup
 from rfidnav_control.go_to import GoToSettings, go_to_command
-from rfidnav_experiments.runners.two_tier import SETTINGS, Site, grid_radio_map, run_two_tier
+from rfidnav_experiments.runners.two_tier import SETTINGS, Site, grid_radio_map, run_two_tier, survey_grid
 from rfidnav_localization.dead_reckoning import TIER_TAG, TIER_WIFI, DeadReckoning, Fix
 from rfidnav_localization.tag_fix import tag_fix
 from rfidnav_planning.two_tier_navigation import (
@@ -150,7 +150,7 @@ def test_a_target_without_landmarks_near_the_estimate_fails_with_the_reason() ->
 @pytest.fixture(scope="module")
 def site() -> Site:
     world = load_world(WORLD)
-    return Site.of(world, grid_radio_map(world, 1.0, np.random.default_rng(1)))
+    return Site.of(world, grid_radio_map(world, survey_grid(world, 1.0, (1.0, 1.0)).points, np.random.default_rng(1)))
 
 
 @pytest.mark.tier("slow")

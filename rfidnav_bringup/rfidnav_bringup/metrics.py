@@ -11,11 +11,15 @@ figures of the two agree by construction.
 * RMSE (eq. 4): sqrt(mean e(t)^2) over equally spaced samples; max |e|.
 * Time to come within 1 cm of the first tag's projection, from the mission start.
 * Path length from the mission start to the end.
+
+Every run with ground truth also counts its wall crossings (:func:`wall_crossings`), and ground truth has the last
+word on a run its mission's node called a success (:func:`ground_truth_objection`).
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
@@ -23,6 +27,7 @@ import numpy as np
 from rfidnav_common.topological_map import RouteError, TopologicalMap
 
 FIRST_TAG_RADIUS_M = 0.01
+ON_WALL_M = 1e-6           # a sample this close to a wall's line is on it: touching, neither side
 
 
 @dataclass(frozen=True)
@@ -33,6 +38,52 @@ class Trajectory:
     def between(self, start_s: float, end_s: float) -> Trajectory:
         keep = (self.times_s >= start_s) & (self.times_s <= end_s)
         return Trajectory(self.times_s[keep], self.xy[keep])
+
+
+def wall_crossings(xy: np.ndarray, walls: np.ndarray) -> int:
+    """How many times the track ``xy`` (N x 2, the robot centre's ground truth) crosses one of ``walls`` (W x 4 rows
+    x1, y1, x2, y2): from one side of a wall's line to the other through the wall itself.
+
+    Samples within ON_WALL_M of a wall's line are on it and on neither side, so a track that touches a wall or
+    stalls against it and comes back crosses nothing, and one that stops on the wall and goes on through crosses
+    once. Between two samples on opposite sides the track crossed the line where the step between them meets it,
+    or, with samples on the line between them, at those samples: through the wall if that point lies on the wall
+    segment (its ends included). A track through the point where two walls meet crosses both."""
+    xy = np.asarray(xy, dtype=float).reshape(-1, 2)
+    crossings = 0
+    for x1, y1, x2, y2 in np.asarray(walls, dtype=float).reshape(-1, 4):
+        start, direction = np.array([x1, y1]), np.array([x2 - x1, y2 - y1])
+        length = float(np.hypot(*direction))
+        if length == 0.0 or len(xy) < 2:
+            continue
+        relative = xy - start
+        offset = (direction[0] * relative[:, 1] - direction[1] * relative[:, 0]) / length   # signed distance
+        along = relative @ direction / length ** 2                                          # 0..1 on the wall
+        side = np.where(np.abs(offset) <= ON_WALL_M, 0, np.sign(offset))
+        off_line = np.flatnonzero(side)
+        changes = np.flatnonzero(side[off_line[1:]] != side[off_line[:-1]])
+        on_wall = np.concatenate(([0], np.cumsum((side == 0) & (along >= 0.0) & (along <= 1.0))))
+        for before, after in zip(off_line[changes], off_line[changes + 1]):
+            if after > before + 1:       # on the line between: through the wall if one of those points is on it
+                crossings += int(on_wall[after] - on_wall[before + 1] > 0)
+                continue
+            fraction = offset[before] / (offset[before] - offset[after])
+            crossings += int(0.0 <= along[before] + fraction * (along[after] - along[before]) <= 1.0)
+    return crossings
+
+
+def ground_truth_objection(metrics: Mapping[str, object]) -> str | None:
+    """Why ground truth says a run its mission's node called a success was none (None: it agrees): the metrics
+    say it did not reach the goal (``success`` false), or its track crossed a wall (``wall_crossings`` > 0)."""
+    objections = []
+    if metrics.get("success") is False:
+        distance = metrics.get("final_distance_m")
+        objections.append("did not reach the goal (metrics.success false"
+                          + (f", {distance:.2f} m from it)" if isinstance(distance, float) else ")"))
+    crossings = metrics.get("wall_crossings")
+    if isinstance(crossings, int) and crossings > 0:
+        objections.append(f"made {crossings} wall crossing{'s' if crossings > 1 else ''} (metrics.wall_crossings)")
+    return " and ".join(objections) or None
 
 
 @dataclass(frozen=True)

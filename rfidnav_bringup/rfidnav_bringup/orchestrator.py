@@ -52,6 +52,7 @@ from std_srvs.srv import Trigger
 from rfidnav_bag.errors import BagError
 from rfidnav_bag.recorder_node import recordable_definition
 from rfidnav_bringup.errors import ReadinessError
+from rfidnav_bringup.metrics import ground_truth_objection
 from rfidnav_bringup.processes import DomainLease, NodeProcess, child_environment, reach_text, resolve_executable
 from rfidnav_bringup.scenario import (
     KNOWN_NODES,
@@ -592,19 +593,18 @@ class Orchestrator:
 
         metrics: dict[str, Any] = {}
         bag = self.run_dir / "bag"
-        if (bag / "metadata.yaml").exists() and self.scenario.metrics:
+        if (bag / "metadata.yaml").exists():
             try:
                 metrics = run_metrics(self.run_dir)
             except RfidnavError as error:
                 self.say(f"metrics not computed: {error}", always=True)
-        if self.outcome.success and metrics.get("success") is False:
-            # The mission's node can be fooled (a spoofed tag, a wrong map); ground truth, which it never sees, has
-            # the last word on whether the run succeeded.
+        objection = ground_truth_objection(metrics)
+        if self.outcome.success and objection is not None:
+            # The mission's node can be fooled (a spoofed tag, a wrong map, a leg through a wall); ground truth,
+            # which it never sees, has the last word on whether the run succeeded.
             self.outcome.success = False
             self.outcome.message = (f"{self.outcome.message or 'succeeded'}, says the mission's node; but ground "
-                                    "truth did not reach the goal (metrics.success false"
-                                    + (f", {metrics['final_distance_m']:.2f} m from it)"
-                                       if isinstance(metrics.get("final_distance_m"), float) else ")"))
+                                    f"truth {objection}")
         sim_duration = None
         if self.outcome.started_sim_s is not None and self.outcome.ended_sim_s is not None:
             sim_duration = round(self.outcome.ended_sim_s - self.outcome.started_sim_s, 3)

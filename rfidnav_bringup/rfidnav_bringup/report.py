@@ -6,7 +6,8 @@ needs nothing else. From the bag: ground truth (/sim/ground_truth), the mission 
 action's status topic: accepted, then succeeded/aborted/canceled) and the arrivals at route tags
 (the feedback's target index stepping on). A run on a real robot has no ground truth: its report is the
 odometry (/odom, in the odom frame) and the distance driven by it (``odom_path_length_m``); the metric groups,
-which compare against the truth, are not computed.
+which compare against the truth, are not computed. Every run with ground truth counts ``wall_crossings``: how often
+its whole track crossed one of the world's walls (0 in a world without walls).
 """
 
 from __future__ import annotations
@@ -35,6 +36,7 @@ from rfidnav_bringup.metrics import (  # noqa: E402
     tracking_error,
     tracking_metrics,
     two_tier_metrics,
+    wall_crossings,
 )
 from rfidnav_common.topological_map import (  # noqa: E402
     UNKNOWN,
@@ -143,10 +145,12 @@ def run_metrics(path: Path) -> dict[str, float | int | None]:
 
 
 def record_metrics(record: RunRecord) -> dict[str, float | int | None]:
-    metrics: dict[str, float | int | None] = {}
+    """The scenario's metric groups and, on every run with ground truth, the walls its whole track crossed."""
     if record.trajectory_source == "odom":
         run = record.ground_truth.between(record.mission_start_s, record.mission_end_s)
         return {"odom_path_length_m": float(np.linalg.norm(np.diff(run.xy, axis=0), axis=1).sum())}
+    metrics: dict[str, float | int | None] = {
+        "wall_crossings": wall_crossings(record.ground_truth.xy, record.world.wall_segments())}
     if "tracking" in record.metric_groups:
         metrics.update(tracking_metrics(record.ground_truth, route_points(record.world, record.route),
                                         record.arrival_times_s, record.mission_start_s,

@@ -223,9 +223,9 @@ def _with_profile(nodes: dict[str, NodeSpec], profile: str, scenario_file: Path)
 
 def load_scenario(name_or_path: str, swaps: dict[str, str] | None = None,
                   param_files: dict[str, Path] | None = None, goal: dict[str, Any] | None = None,
-                  robot_profile_name: str | None = None) -> Scenario:
+                  robot_profile_name: str | None = None, radio_map_may_be_missing: bool = False) -> Scenario:
     """Load, apply ``--robot``, ``--swap``, ``--params`` and ``--goal``, and validate everything the run will
-    use."""
+    use (but a radio map not surveyed yet, with ``radio_map_may_be_missing``: ``./rfidnav survey`` writes it)."""
     path = scenario_path(name_or_path).resolve()
     section = Section.from_file(path)
     section.reject_unknown(("name", "description", "world", "map", "robot", "nodes", "mission", "metrics"))
@@ -276,7 +276,8 @@ def load_scenario(name_or_path: str, swaps: dict[str, str] | None = None,
         mission=MissionSpec(mission_file.string("action"), mission_file.string("type"), goal,
                             mission_file.number("timeout_s", 600.0, positive=True, maximum=MAX_MISSION_S),
                             mission_file.raw("server", None)),
-        metrics=tuple(metrics), world=load_world(world_file), **_robot_map(map_file))
+        metrics=tuple(metrics), world=load_world(world_file),
+        **_robot_map(map_file, radio_map_may_be_missing))
     if scenario.mission.server is not None and scenario.mission.server not in nodes:
         raise mission_file.error("server", f"no role '{scenario.mission.server}' (roles: {', '.join(nodes)})")
     goal_class = _check_action(scenario, mission_file)
@@ -362,13 +363,14 @@ def _program(command: tuple[str, ...], source: str, field: str) -> tuple[str, ..
     return command
 
 
-def _robot_map(map_file: Path) -> dict[str, Any]:
+def _robot_map(map_file: Path, radio_map_may_be_missing: bool = False) -> dict[str, Any]:
     """The scenario's map: a topological map (paper 004) if it has ``nodes``, else a route map, with the radio map
-    it names read (the location server starts from it)."""
+    it names read (the location server starts from it). With ``radio_map_may_be_missing`` (``./rfidnav survey``
+    writes that file) a radio map not written yet is left unread, its path kept."""
     if Section.from_file(map_file).has("nodes"):
         return {"route_map": None, "topological_map": load_topological_map(map_file)}
-    route_map = load_route_map(map_file)
-    if route_map.radio_map_file is not None:
+    route_map = load_route_map(map_file, radio_map_may_be_missing=radio_map_may_be_missing)
+    if route_map.radio_map_file is not None and route_map.radio_map_file.exists():
         load_radio_map(route_map.radio_map_file)
     return {"route_map": route_map}
 

@@ -70,7 +70,8 @@ class RouteMap:
         return [tag for tag in route if tag not in self.arrival_tags]
 
 
-def load_route_map(path: Path) -> RouteMap:
+def load_route_map(path: Path, radio_map_may_be_missing: bool = False) -> RouteMap:
+    """A route map; its ``radio_map`` must exist unless ``radio_map_may_be_missing`` (the survey that writes it)."""
     section = Section.from_file(Path(path))
     section.reject_unknown(("name", "description", "arrival_tags", "deployment_area", "tag_groups", "radio_map",
                             "walls", "extent"))
@@ -82,7 +83,7 @@ def load_route_map(path: Path) -> RouteMap:
     radio_map = None
     if section.has("radio_map"):
         radio_map = (Path(path).parent / section.string("radio_map")).resolve()
-        if not radio_map.is_file():
+        if not (radio_map.is_file() or radio_map_may_be_missing and not radio_map.exists()):
             raise section.error("radio_map", f"no such file: {radio_map}")
     if not arrival and area is None and not groups:
         raise section.error("arrival_tags", "a map needs arrival_tags, a deployment_area or tag_groups (none given)")

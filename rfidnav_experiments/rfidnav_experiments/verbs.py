@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 from pathlib import Path
 
 from rfidnav_bringup.cli import (
@@ -172,18 +173,23 @@ def run_reproduce(args: argparse.Namespace) -> int:
 
 
 def run_survey(args: argparse.Namespace) -> int:
+    """The scenario loaded without its radio map if that is not written yet (this writes one), the survey planned
+    (refusals in one line, the grid's unreachable points warned of on stderr), then run."""
     from rfidnav_bringup.scenario import load_scenario
     from rfidnav_common.progress import stage
-    from rfidnav_experiments.runners.two_tier import check_survey, survey
+    from rfidnav_experiments.runners.two_tier import plan_survey, survey, survey_warnings
     from rfidnav_localization.radio_map_file import write_radio_map
 
-    scenario = load_scenario(args.scenario)
+    scenario = load_scenario(args.scenario, radio_map_may_be_missing=True)
     if scenario.route_map is None:
         raise ConfigError(str(scenario.map_file), "", "a survey needs a route map with tag_groups (this is a "
                                                      "topological map)")
-    check_survey(scenario.world, scenario.route_map, scenario.map_file, args.grid)
+    grid = plan_survey(scenario.world, scenario.route_map, scenario.map_file, args.grid, scenario.robot[:2],
+                       f"{scenario.path}: robot")
+    for warning in survey_warnings(grid) if grid is not None else []:
+        print(f"rfidnav survey: warning: {warning}", file=sys.stderr)
     with stage(f"survey {scenario.name}"):
-        fingerprints, description = survey(scenario.world, scenario.route_map, args.grid, args.seed)
+        fingerprints, description = survey(scenario.world, scenario.route_map, grid, args.seed)
     write_radio_map(args.out, fingerprints, description)
     print(f"{len(fingerprints)} fingerprints ({description}) -> {args.out}")
     return 0

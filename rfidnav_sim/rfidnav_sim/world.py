@@ -12,6 +12,8 @@ Schema::
         # optional per tag: phase_offset_rad (tag's own backscatter phase, default 0)
     walls:                             # optional, line segments [x1, y1, x2, y2] in metres
       - [-1.0, -1.0, -1.0, 10.0]
+    extent: [-1.0, -1.0, 12.0, 10.0]   # optional, the floor [x_min, y_min, x_max, y_max] in metres (max > min);
+                                       # default: the walls' bounding box. A grid survey covers it.
     lattices:                          # optional, floor tag deployments of paper 000, described not listed
       - {layout: triangular, read_range_m: 0.2, area: [0.0, 0.0, 5.0, 5.0]}
         # layout: grid | triangular | compressed; area: [x_min, y_min, x_max, y_max] in metres. The tags are
@@ -70,6 +72,8 @@ class World:
     access_points: tuple[AccessPoint, ...] = ()
     wifi: PropagationSettings = PropagationSettings()   # the building's part; a receiver adds noise, sensitivity
     wifi_seed: int = 1
+    extent: tuple[float, float, float, float] | None = None     # declared: x_min, y_min, x_max, y_max
+    source: str = ""                                             # the file it was loaded from, for messages
 
     def tag(self, tag_id: str) -> Tag:
         for tag in self.tags:
@@ -86,8 +90,8 @@ class World:
 
 
 def world_from_section(section: Section) -> World:
-    section.reject_unknown(("name", "frame_id", "tags", "walls", "lattices", "tag_groups", "wall_tags", "access_points",
-                            "wifi", "description"))
+    section.reject_unknown(("name", "frame_id", "tags", "walls", "extent", "lattices", "tag_groups", "wall_tags",
+                            "access_points", "wifi", "description"))
     tags: list[Tag] = []
     seen: dict[str, str] = {}
     for tag_section in section.sections("tags", []):
@@ -126,7 +130,18 @@ def world_from_section(section: Section) -> World:
     wifi, wifi_seed = _wifi(section.section("wifi", {}))
     return World(name=section.string("name"), frame_id=section.string("frame_id", "map"),
                  tags=tuple(tags), walls=tuple(walls), deployments=deployments, tag_groups=groups, wall_tags=wall_tags,
-                 access_points=_access_points(section), wifi=wifi, wifi_seed=wifi_seed)
+                 access_points=_access_points(section), wifi=wifi, wifi_seed=wifi_seed, extent=_extent(section),
+                 source=section.source)
+
+
+def _extent(section: Section) -> tuple[float, float, float, float] | None:
+    if not section.has("extent"):
+        return None
+    x_min, y_min, x_max, y_max = section.numbers("extent", length=4)
+    if x_max <= x_min or y_max <= y_min:
+        raise section.error("extent", f"expected [x_min, y_min, x_max, y_max] with max > min, got "
+                                      f"[{x_min:g}, {y_min:g}, {x_max:g}, {y_max:g}]")
+    return x_min, y_min, x_max, y_max
 
 
 def _wall_tags(section: Section, seen: dict[str, str]) -> tuple[WallTag, ...]:

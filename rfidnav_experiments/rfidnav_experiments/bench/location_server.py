@@ -41,9 +41,9 @@ ANSWER_TIMEOUT_S = 10.0
 def scans(count: int, seed: int) -> list[dict[str, float]]:
     world = load_world(WORLD_FILE)
     wifi = wifi_model(world)
-    width, height = floor_extent(world)
+    x_min, y_min, x_max, y_max = floor_extent(world)
     rng = np.random.default_rng(seed)
-    points = rng.uniform((0.2, 0.2), (width - 0.2, height - 0.2), (count, 2))
+    points = rng.uniform((x_min + 0.2, y_min + 0.2), (x_max - 0.2, y_max - 0.2), (count, 2))
     return [{r.bssid: r.rssi_dbm for r in wifi.scan(float(x), float(y), rng)} for x, y in points]
 
 

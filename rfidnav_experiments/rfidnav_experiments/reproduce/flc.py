@@ -37,7 +37,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-from rfidnav_bringup.metrics import FIRST_TAG_RADIUS_M, tracking_error  # noqa: E402
+from rfidnav_bringup.metrics import FIRST_TAG_RADIUS_M, tracking_error, wall_crossings  # noqa: E402
 from rfidnav_bringup.scenario import CONFIG_DIR, Scenario  # noqa: E402
 from rfidnav_common.errors import ConfigError  # noqa: E402
 from rfidnav_experiments.calibrate.flc import (  # noqa: E402
@@ -120,6 +120,7 @@ class Summary:
     max_abs_mean_m: float | None
     first_tag_times_s: tuple[float, ...]   # runs that came within 1 cm of the first tag
     first_arrival: Interval             # when the follower declared arrival at the first tag [s]
+    wall_crossings: int                 # of the runs' true tracks, in all
 
     @property
     def success_pct(self) -> float:
@@ -253,15 +254,26 @@ def run_all(seeds: list[int]) -> dict[tuple[str, str], list[RouteRun]]:
 
 # ----------------------------------------------------------------------------------------- aggregate
 
+def crossings(run: RouteRun) -> int:
+    """How often the run's true track crossed one of its world's walls (the hallway's; the others have none)."""
+    return wall_crossings(run.trajectory.xy, scenario_named(run.scenario).world.wall_segments())
+
+
+def succeeded(run: RouteRun) -> bool:
+    """The run reached all its tags without crossing a wall (ground truth overrules the follower, as over DDS)."""
+    return run.success and crossings(run) == 0
+
+
 def summarise(params: str, scenario: str, runs: list[RouteRun]) -> Summary:
-    ok = [run for run in runs if run.success and run.metrics.tracking_rmse_m is not None]
+    ok = [run for run in runs if succeeded(run) and run.metrics.tracking_rmse_m is not None]
     return Summary(
-        params=params, scenario=scenario, runs=len(runs), successes=sum(run.success for run in runs),
+        params=params, scenario=scenario, runs=len(runs), successes=sum(succeeded(run) for run in runs),
         rmse=Interval.of([run.metrics.tracking_rmse_m for run in ok]),
         max_abs_mean_m=mean_or_none([run.metrics.tracking_max_abs_m for run in ok]),
         first_tag_times_s=tuple(run.metrics.time_to_first_tag_s for run in runs
                                 if run.metrics.time_to_first_tag_s is not None),
-        first_arrival=Interval.of([run.arrival_times_s[0] for run in runs if run.arrival_times_s]))
+        first_arrival=Interval.of([run.arrival_times_s[0] for run in runs if run.arrival_times_s]),
+        wall_crossings=sum(crossings(run) for run in runs))
 
 
 def paired_difference(results: dict[tuple[str, str], list[RouteRun]], scenario: str,
@@ -269,7 +281,7 @@ def paired_difference(results: dict[tuple[str, str], list[RouteRun]], scenario: 
     """flc_tuned minus flc_paper on the seeds both completed: the tracking RMSE [m] or the first arrival [s]."""
     def value(run: RouteRun) -> float | None:
         if figure == "rmse":
-            return run.metrics.tracking_rmse_m if run.success else None
+            return run.metrics.tracking_rmse_m if succeeded(run) else None
         return run.arrival_times_s[0] if run.arrival_times_s else None
 
     return paired_interval({run.seed: value(run) for run in results[(TUNED, scenario)]},
@@ -289,6 +301,7 @@ def json_rows(summaries: dict[tuple[str, str], Summary], results: dict[tuple[str
                 ("tracking_rmse_ci95_m", s.rmse.half_width, None),
                 ("tracking_max_abs_m", s.max_abs_mean_m, paper.max_abs_m),
                 ("success_pct", s.success_pct, None),
+                ("wall_crossings", s.wall_crossings, None),
             ]
             if scenario == TIME_SCENARIO:
                 figures += [("time_to_first_tag_s", s.time_to_first_tag_mean_s, PAPER_TIME_TO_FIRST_TAG_S),
@@ -374,7 +387,9 @@ def human_report(summaries: dict[tuple[str, str], Summary], results: dict[tuple[
              f"({len(seeds)} per setting; the calibration used seeds "
              f"{', '.join(map(str, CALIBRATION_SEEDS))}); fitted: {', '.join(FITTED_SCENARIOS)}, the rest held out",
              "", *condition_lines(condition_rows, PARAM_SETS), "", *rmse_table(summaries, results), "",
-             *envelope_table(summaries), "", *first_tag_lines(summaries, results)]
+             *envelope_table(summaries), "", *first_tag_lines(summaries, results), "",
+             f"wall crossings (ground truth) in the {sum(s.runs for s in summaries.values())} runs: "
+             f"{sum(s.wall_crossings for s in summaries.values())} (a run that crosses one is no success)"]
     return "\n".join(lines)
 
 
@@ -432,7 +447,7 @@ def write_plots(results: dict[tuple[str, str], list[RouteRun]], out_dir: Path) -
 # --------------------------------------------------------------------------------------------- verb
 
 def all_succeeded(runs: Iterable[RouteRun]) -> bool:
-    return all(run.success for run in runs)
+    return all(succeeded(run) for run in runs)
 
 
 def reproduce_flc(seeds: int, out_dir: Path, as_json: bool) -> int:

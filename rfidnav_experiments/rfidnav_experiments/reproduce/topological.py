@@ -105,6 +105,7 @@ class RateSummary:
     mean_tags_missed: float
     mean_replans: float
     bumps: int                          # bumper presses over all missions
+    wall_crossings: int                 # of the missions' true tracks, over all missions
     arrived: Interval                   # percent: the executor's success wherever the robot stopped
     stop_distance_m: float | None       # median distance from the goal node where the arrived missions stopped
 
@@ -237,7 +238,7 @@ def summarise(floor: str, method: str, rate: float, runs: list[MissionRun]) -> R
                        Interval.of([run.path_length_m / run.shortest_path_m for run in ok]),
                        Interval.of([run.duration_s for run in ok]),
                        float(np.mean([run.tags_missed for run in runs])), float(np.mean([run.replans for run in runs])),
-                       sum(run.bumps for run in runs),
+                       sum(run.bumps for run in runs), sum(run.wall_crossings for run in runs),
                        Interval.of_proportion(sum(run.arrived for run in runs), len(runs)),
                        float(np.median([run.goal_distance_m for run in runs if run.arrived]))
                        if any(run.arrived for run in runs) else None)
@@ -271,14 +272,15 @@ def floor_table(floor: str, summaries: list[RateSummary],
         difference = paired(results, floor, s.miss_rate, "success") if s.method == "ours" else None
         rows.append([s.method, f"{s.miss_rate * 100:g} %", s.success.text(1.0, 0),
                      s.path_ratio.text(1.0, 3), s.duration_s.text(1.0, 0), f"{s.mean_tags_missed:.2f}",
-                     f"{s.mean_replans:.2f}", str(s.bumps), "-" if difference is None else difference.text(1.0, 1),
+                     f"{s.mean_replans:.2f}", str(s.bumps), str(s.wall_crossings),
+                     "-" if difference is None else difference.text(1.0, 1),
                      s.arrived.text(1.0, 0), "-" if s.stop_distance_m is None else f"{s.stop_distance_m:.2f}"])
     return [f"{floor} ({FLOOR_ROLES[floor]}, seed {SEEDS[floor]}): success % [95 % Wilson interval] (stopped within "
             f"{GOAL_RADIUS_M} m of the goal node), path / shortest and time over the successful missions (± 95 %); "
             "ours minus paper, paired by mission; arrived: the executor's success wherever it stopped, and the "
             "median distance from the node where those stopped",
             *table(["method", "tag misses", "success %", "path / shortest", "time s", "tags missed", "replans",
-                    "bumps", "success: ours - paper", "arrived %", "stop m"], rows)]
+                    "bumps", "wall crossings", "success: ours - paper", "arrived %", "stop m"], rows)]
 
 
 def report_lines(paper: MissionRun, summaries: list[RateSummary], results, condition_rows: list[Condition]) \
@@ -309,7 +311,8 @@ def json_rows(paper: MissionRun, summaries: list[RateSummary], results,
         figures: list[tuple[str, Any]] = [
             ("success_pct", s.success.mean), ("success_ci95_pct", list(s.success.bounds or ())),
             ("path_over_shortest", s.path_ratio.mean), ("path_over_shortest_ci95", s.path_ratio.half_width),
-            ("mean_duration_s", s.duration_s.mean), ("bumps", s.bumps), ("arrived_pct", s.arrived.mean),
+            ("mean_duration_s", s.duration_s.mean), ("bumps", s.bumps), ("wall_crossings", s.wall_crossings),
+            ("arrived_pct", s.arrived.mean),
             ("median_stop_distance_m", s.stop_distance_m)]
         if s.method == "ours":
             for figure in ("success", "time"):

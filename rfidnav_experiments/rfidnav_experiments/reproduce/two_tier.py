@@ -86,6 +86,7 @@ from rfidnav_experiments.runners.two_tier import (  # noqa: E402
     grid_radio_map,
     robot_survey,
     run_two_tier,
+    survey_grid,
 )
 from rfidnav_localization.fingerprint import RadioMap  # noqa: E402
 from rfidnav_planning.wall_paths import WallMap  # noqa: E402
@@ -387,7 +388,8 @@ def theorem1(runs: int, seed: int) -> list[tuple[float, float, float, float]]:
 def grid_site(seed: int) -> Site:
     """The flat with the grid survey's radio map, built once per process (the pool's workers too)."""
     world = load_world(WORLD_FILE)
-    return Site.of(world, grid_radio_map(world, GRID_SPACING_M, rng_for(seed, "grid survey"), GRID_SCANS_PER_POINT))
+    grid = survey_grid(world, GRID_SPACING_M, ROUTES["route 1"][0][:2])
+    return Site.of(world, grid_radio_map(world, grid.points, rng_for(seed, "grid survey"), GRID_SCANS_PER_POINT))
 
 
 @dataclass(frozen=True)
@@ -401,6 +403,7 @@ class Leg:
     tag_position_m: float | None          # the same poll taken the paper's way
     all_fixes_m: tuple[float, ...]        # every tag fix of the leg, ours
     all_tag_positions_m: tuple[float, ...]
+    wall_crossings: int                   # of the leg's true track (a leg that crossed a wall did not arrive)
 
 
 @functools.cache
@@ -427,7 +430,7 @@ def fig12_route(job: tuple[str, int, int]) -> list[Leg]:
         arrived = result.success and bool(result.fix_errors_m)
         legs.append(Leg(name, run, point, fingerprint, result.fix_errors_m[-1] if arrived else None,
                         result.tag_position_errors_m[-1] if arrived else None, result.fix_errors_m,
-                        result.tag_position_errors_m))
+                        result.tag_position_errors_m, result.wall_crossings))
         heading = math.atan2(centre[1] - pose[1], centre[0] - pose[0])
         pose = (result.final_position[0], result.final_position[1], heading)
     return legs
@@ -439,38 +442,46 @@ def fig12(runs: int, seed: int) -> list[Leg]:
     return sorted((leg for legs in results for leg in legs), key=lambda leg: (leg.route, leg.run))
 
 
-def fig11_run(job: tuple[str, int, int]) -> tuple[str, int, float | None]:
-    """Direct or indirect moving along LONG_ROUTE: the final position error [m], None if the run failed. Both
-    kinds of run ``run`` draw the same compass, WiFi and reader streams."""
+def fig11_run(job: tuple[str, int, int]) -> tuple[str, int, float | None, int]:
+    """Direct or indirect moving along LONG_ROUTE: the final position error [m], None if the run failed, and its
+    wall crossings. Both kinds of run ``run`` draw the same compass, WiFi and reader streams."""
     kind, run, seed = job
     start, target = LONG_ROUTE
     settings = dataclasses.replace(SETTINGS, landmark_spacing_m=FIG11_SPACINGS_M[kind], calibration_distance_m=1000.0)
     result = run_two_tier(grid_site(seed), start, target, settings, rng_for(seed, f"fig11:{run}"),
                           derive_seed(seed, f"fig11:{run}:reader"), floor=floor_plan())
-    return kind, run, result.final_error_m if result.success else None
+    return kind, run, result.final_error_m if result.success else None, result.wall_crossings
 
 
-def fig11(runs: int, seed: int) -> dict[str, dict[int, float | None]]:
+def fig11(runs: int, seed: int) -> tuple[dict[str, dict[int, float | None]], int]:
+    """Per kind of moving, each run's final error (None: it failed); and the runs' wall crossings in all."""
     results = run_pool(fig11_run, [(kind, run, seed) for run in range(runs) for kind in FIG11_SPACINGS_M],
                        "reproduce two_tier: Fig. 11")
     errors: dict[str, dict[int, float | None]] = {kind: {} for kind in FIG11_SPACINGS_M}
-    for kind, run, error in sorted(results, key=lambda result: result[1]):
+    for kind, run, error, _ in sorted(results, key=lambda result: result[1]):
         errors[kind][run] = error
-    return errors
+    return errors, sum(result[3] for result in results)
 
 
 def tier_one_errors(site: Site, radio_map: RadioMap, seed: int) -> list[float]:
     rng = rng_for(seed, "test points")
-    width, height = floor_extent(site.world)
+    x_min, y_min, x_max, y_max = floor_extent(site.world)
     errors = []
     for _ in range(TEST_POINTS):
-        point = (float(rng.uniform(0.2, width - 0.2)), float(rng.uniform(0.2, height - 0.2)))
+        point = (float(rng.uniform(x_min + 0.2, x_max - 0.2)), float(rng.uniform(y_min + 0.2, y_max - 0.2)))
         scan = {r.bssid: r.rssi_dbm for r in site.wifi.scan(*point, rng)}
         errors.append(math.dist(radio_map.locate(scan).position, point))
     return errors
 
 
 # ---------------------------------------------------------------------------------------- aggregate
+
+@dataclass(frozen=True)
+class Crossings:
+    """The wall crossings of the navigations' true tracks (rfidnav_bringup.metrics.wall_crossings), in all."""
+    navigations: int
+    count: int
+
 
 @dataclass(frozen=True)
 class Median:
@@ -592,7 +603,8 @@ def fix_lines(legs: list[Leg], fixes: FixFigures) -> list[str]:
 
 
 def report_lines(condition_rows: list[Condition], spiral, theorem, moving, legs: list[Leg], fixes: FixFigures,
-                 radio, grid_count: int, survey_count: int, runs: int, fig10_runs: int, seed: int) -> list[str]:
+                 radio, crossings: Crossings, grid_count: int, survey_count: int, runs: int, fig10_runs: int,
+                 seed: int) -> list[str]:
     role = "evaluation" if seed == EVALUATION_SEED else "development" if seed == DEVELOPMENT_SEED else "other"
     lines = [f"reproduce two_tier: paper 003 section 4.2, in-process; seed {seed} ({role}: the settings were chosen "
              f"on seed {DEVELOPMENT_SEED}, the evaluation seed is {EVALUATION_SEED}); {runs} runs per route",
@@ -612,6 +624,8 @@ def report_lines(condition_rows: list[Condition], spiral, theorem, moving, legs:
     difference = paired_interval(moving["indirect"], moving["direct"])
     lines += [f"indirect minus direct, paired (same streams): {difference.text(100.0, 1)} cm", ""]
     lines += fix_lines(legs, fixes)
+    lines += [f"wall crossings (ground truth) in the {crossings.navigations} navigations of Figs. 11 and 12: "
+              f"{crossings.count}"]
     lines += ["", f"radio map: tier-one error [cm] at {TEST_POINTS} random points"]
     lines += table(["radio map", "fingerprints", "median", "mean", "p90"],
                    [[kind, str(count), Median.of(v).text(100.0, 0), f"{statistics.fmean(v) * 100:.0f}",
@@ -631,7 +645,7 @@ def row(experiment: str, setting: dict[str, Any], metric: str, ours: Any, paper:
 
 
 def json_rows(condition_rows: list[Condition], spiral, theorem, moving, legs: list[Leg], fixes: FixFigures,
-              radio, seed: int) -> list[dict[str, Any]]:
+              radio, crossings: Crossings, seed: int) -> list[dict[str, Any]]:
     rows = condition_json_rows(EXPERIMENT, condition_rows)
     for method in METHODS:
         for distance in FIG10_DISTANCES_M:
@@ -680,6 +694,8 @@ def json_rows(condition_rows: list[Condition], spiral, theorem, moving, legs: li
     for kind, errors in radio.items():
         rows.append(row("radio_map", {"map": kind, "seed": seed, "n": len(errors)}, "median_error_m",
                         statistics.median(errors)))
+    rows.append(row("navigations", {"figures": "11, 12", "seed": seed, "n": crossings.navigations}, "wall_crossings",
+                    crossings.count))
     return rows
 
 
@@ -775,12 +791,13 @@ def reproduce_two_tier(runs: int, out_dir: Path, as_json: bool, seed: int = EVAL
     site = grid_site(seed)
     spiral = fig10(fig10_runs, seed)
     theorem = theorem1(fig10_runs, seed)
-    moving = fig11(runs, seed)
+    moving, moving_crossings = fig11(runs, seed)
     legs = fig12(runs, seed)
     fixes = fix_figures(legs)
+    crossings = Crossings(2 * runs + len(legs), moving_crossings + sum(leg.wall_crossings for leg in legs))
     survey_map = RadioMap(robot_survey(Site.of(world, RadioMap()), load_route_map(MAP_FILE), seed))
     radio = {"grid": tier_one_errors(site, site.radio_map, seed), "survey": tier_one_errors(site, survey_map, seed)}
-    rows = json_rows(condition_rows, spiral, theorem, moving, legs, fixes, radio, seed)
+    rows = json_rows(condition_rows, spiral, theorem, moving, legs, fixes, radio, crossings, seed)
     (out_dir / "two_tier_rows.json").write_text(json.dumps(rows, indent=1) + "\n")
     plot = plot_figures(spiral, moving, legs, fig10_runs, out_dir)
     # Only the JSON goes to stdout with --json, so a program can parse it whole.
@@ -788,7 +805,7 @@ def reproduce_two_tier(runs: int, out_dir: Path, as_json: bool, seed: int = EVAL
     if as_json:
         print(json.dumps(rows, indent=1))
     else:
-        print("\n".join(report_lines(condition_rows, spiral, theorem, moving, legs, fixes, radio,
+        print("\n".join(report_lines(condition_rows, spiral, theorem, moving, legs, fixes, radio, crossings,
                                       len(site.radio_map), len(survey_map), runs, fig10_runs, seed)))
     print(f"plot: {plot}; rows: {out_dir / 'two_tier_rows.json'}", file=notes)
     return 0 if fixes.target_met else 1

@@ -14,7 +14,9 @@ and drawn anew once it has left reach (per inventory round a tag in reach for ~4
 be missed). Each round's reads go to ``MissionExecutor.on_reads``, the follower's events to ``on_junction``, and the
 decisions' ``follower_command`` to the follower (``command_turn``, ``command_stop``); the mission ends with the
 follower's ``stopped``. The mission_executor and wall_follower nodes do the same over DDS. A robot that drives
-into a wall stalls there with its bumper pressed (counted in ``MissionRun.bumps``) until it turns free.
+into a wall stalls there with its bumper pressed (counted in ``MissionRun.bumps``) until it turns free; the walls
+its true track crossed all the same (``MissionRun.wall_crossings``, sampled every control step) make the mission no
+success.
 
 Missions start where a robot would be put down: ``before_m`` before one of the floor's wall tags, at the
 follower's set distance from the wall the tag is on, heading along it — taken from the world (the simulator's
@@ -31,7 +33,7 @@ from pathlib import Path
 
 import numpy as np
 
-from rfidnav_bringup.metrics import GOAL_RADIUS_M, topological_shortest_m
+from rfidnav_bringup.metrics import GOAL_RADIUS_M, ground_truth_objection, topological_shortest_m, wall_crossings
 from rfidnav_bringup.scenario import CONFIG_DIR
 from rfidnav_common.topological_map import UNKNOWN, TopologicalMap, load_topological_map
 from rfidnav_control.parameters import SONAR_FIELDS, WallFollowerParameters
@@ -83,6 +85,7 @@ class MissionRun:
     bumps: int = 0                         # times the base's bumper was pressed against a wall
     arrived: bool = False                  # the executor's success, wherever the robot stopped
     goal_distance_m: float = math.nan      # from where it stopped to the goal node's position
+    wall_crossings: int = 0                # rfidnav_bringup.metrics.wall_crossings of the true track
 
 
 def follower_offsets(parameters: WallFollowerParameters = FOLLOWER) -> dict[str, float]:
@@ -148,8 +151,10 @@ def run_mission(world: World, topological_map: TopologicalMap, start_pose: tuple
         else:
             follower.command_turn(command.action)
 
+    track = []
     for _ in range(int(round(max_time_s * FOLLOWER.control_rate_hz))):
         truth, odom = base.truth, base.odom
+        track.append((truth.x, truth.y))
         at_dead_end = executor.on_odometry(odom.x, odom.y)
         if at_dead_end is not None:
             apply(at_dead_end, False)
@@ -173,18 +178,22 @@ def run_mission(world: World, topological_map: TopologicalMap, start_pose: tuple
     first_node = state.nodes_visited[0] if state.nodes_visited else None
     goal_xy = topological_map.nodes[goal_node].position
     near = goal_xy is not None and math.dist((x, y), goal_xy) <= GOAL_RADIUS_M
-    success = bool(outcome is not None and outcome.success and near)
+    track.append((x, y))
+    crossings = wall_crossings(np.array(track), walls)
+    success = bool(outcome is not None and outcome.success and near and crossings == 0)
     if not finished:
         message = f"no stop within {max_time_s:.0f} s (last: {message})"
     elif outcome is not None and outcome.success and not near:
         message += f"; but stopped {math.dist((x, y), goal_xy):.2f} m from the goal node"
+    if crossings:
+        message += f"; but it {ground_truth_objection({'wall_crossings': crossings})}"
     # On the map as learned by the end: a goal reached through an explored "?" hallway has a route.
     shortest = (topological_shortest_m(executor.map, start_pose[:2], *state.first_arrival, goal_node)
                 if state.first_arrival is not None else math.nan)
     arrived = bool(outcome is not None and outcome.success)
     return MissionRun(success, message, base.distance_travelled_m, shortest, state.tags_missed, state.replans,
                       tuple(state.nodes_visited), t, (x, y), tuple(turns), first_node, base.bumps, arrived,
-                      math.dist((x, y), goal_xy) if goal_xy is not None else math.nan)
+                      math.dist((x, y), goal_xy) if goal_xy is not None else math.nan, crossings)
 
 
 @dataclass(frozen=True)

@@ -3,26 +3,34 @@ simulated flat, for the paper's statistics.
 
 The robot is a unicycle stepped at the navigator's control rate with the commanded velocities (no motor dynamics),
 as round as robot_sim's base: a step into one of the flat's walls is not made (and not counted by the odometry), as
-robot_sim stalls its base there; ``TwoTierRun.bumps`` counts those steps. The navigator is the two_tier_navigator
-node's, with its shipped parameters (config/params/two_tier_navigator.yaml). What it sees is simulated as the nodes
-simulate it: wheel odometry whose distance is off by ``odometry_scale_error`` (paper 003: about 1 m per 20 m with a
-load), the e-compass of compass_sim.yaml, the HF floor reader of reader_hf_floor.yaml (the rfid_reader_sim node's
-reader: polled every 500-600 ms, some polls failing; a poll falls on the first step at or after its time) and the
-location server (the WiFi model's scan at the true position matched against a radio map). Only the simulation knows
-the true pose.
+robot_sim stalls its base there; ``TwoTierRun.bumps`` counts those steps, and ``TwoTierRun.wall_crossings`` the
+walls its true track crossed all the same (the report's metric: a run that crossed one is no success). The
+navigator is the two_tier_navigator node's, with its shipped parameters (config/params/two_tier_navigator.yaml).
+What it sees is simulated as the nodes simulate it: wheel odometry whose distance is off by ``odometry_scale_error``
+(paper 003: about 1 m per 20 m with a load), the e-compass of compass_sim.yaml, the HF floor reader of
+reader_hf_floor.yaml (the rfid_reader_sim node's reader: polled every 500-600 ms, some polls failing; a poll falls on
+the first step at or after its time) and the location server (the WiFi model's scan at the true position matched
+against a radio map). Only the simulation knows the true pose.
+
+``./rfidnav survey --grid`` plans its points here (:func:`survey_grid`): the grid over the floor's extent, clear of
+the walls and reachable on foot from the scenario's start.
 """
 
 from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+from scipy import ndimage
 
+from rfidnav_bringup.metrics import ground_truth_objection, wall_crossings
 from rfidnav_bringup.scenario import CONFIG_DIR
 from rfidnav_common.errors import ConfigError
+from rfidnav_common.geometry import point_segment_distance
 from rfidnav_common.robot_map import RouteMap
 from rfidnav_common.seeding import derive_seed, rng_for
 from rfidnav_common.tag_groups import HF_READ_RANGE_M
@@ -79,38 +87,131 @@ def wifi_model(world: World) -> WifiModel:
 
 
 MAX_GRID_POINTS = 100_000     # a grid survey's points at most (~0.5 ms each)
+SURVEY_CLEARANCE_M = 0.2      # a grid point closer to a wall is not surveyed: the surveyor stands in the room
+WALK_CELL_M = 0.1             # the raster the surveyor's walk from the start is flood-filled on
+MAX_WALK_CELLS = 4_000_000    # ... over at most 40,000 m^2 of floor
+# A raster cell is blocked when its centre is this close to a wall: every grid point clear of the walls then lies in
+# a free cell (its cell's centre is within half a diagonal), and no step between two free cells crosses a wall
+# (such a step has an end within half a cell of the wall).
+WALK_BLOCKED_M = SURVEY_CLEARANCE_M - WALK_CELL_M / math.sqrt(2.0)
+assert WALK_BLOCKED_M >= WALK_CELL_M / 2.0
 
 
-def grid_points(world: World, spacing_m: float) -> float:
-    """How many points a survey on a ``spacing_m`` grid visits (a float: it may be far beyond any integer loop)."""
-    width, height = floor_extent(world)
-    return max(0.0, math.ceil(width / spacing_m - 0.5)) * max(0.0, math.ceil(height / spacing_m - 0.5))
+@dataclass(frozen=True)
+class SurveyGrid:
+    """Where a grid survey scans: the points of a ``spacing_m`` grid over the floor's extent that are clear of the
+    walls (by SURVEY_CLEARANCE_M) and that a surveyor walking from ``start`` reaches; the other free points are
+    ``enclosed`` (walled off, not open to the extent's edge: a closet, a room without a door) or ``outside`` (cut
+    off from the start but open to the extent's edge: beyond the walls, e.g. round an L-shaped flat)."""
+    extent: tuple[float, float, float, float]
+    spacing_m: float
+    start: tuple[float, float]
+    points: tuple[tuple[float, float], ...]
+    enclosed: tuple[tuple[float, float], ...] = ()
+    outside: int = 0
+    near_wall: int = 0
 
 
-def grid_radio_map(world: World, spacing_m: float, rng: np.random.Generator, scans_per_point: int = 3) -> RadioMap:
-    """A site survey on a regular grid at known positions (the usual manual way): each fingerprint is the mean
-    of a few scans, as surveyors average."""
-    wifi = wifi_model(world)
-    xs = np.arange(spacing_m / 2.0, floor_extent(world)[0], spacing_m)
-    ys = np.arange(spacing_m / 2.0, floor_extent(world)[1], spacing_m)
-    fingerprints = []
-    for x in xs:
-        for y in ys:
-            scans = [wifi.scan(float(x), float(y), rng) for _ in range(scans_per_point)]
-            heard: dict[str, list[float]] = {}
-            for scan in scans:
-                for reading in scan:
-                    heard.setdefault(reading.bssid, []).append(reading.rssi_dbm)
-            if heard:
-                fingerprints.append(Fingerprint((float(x), float(y)), {b: float(np.mean(v)) for b, v in heard.items()},
-                                                "grid"))
-    return RadioMap(fingerprints)
-
-
-def floor_extent(world: World) -> tuple[float, float]:
-    """(width, height) of a floor whose walls start at the origin: its walls' largest x and y."""
+def floor_extent(world: World) -> tuple[float, float, float, float]:
+    """The floor a grid survey covers, (x_min, y_min, x_max, y_max): the world's declared ``extent``, else its walls'
+    bounding box, wherever the map's origin lies. A ConfigError naming the world file if it has neither."""
+    if world.extent is not None:
+        return world.extent
     walls = world.wall_segments()
-    return float(max(walls[:, 0].max(), walls[:, 2].max())), float(max(walls[:, 1].max(), walls[:, 3].max()))
+    if not len(walls):
+        raise ConfigError(world.source, "walls", "a grid survey covers the floor within the walls or the extent: "
+                                                 "this world has neither (add extent: [x_min, y_min, x_max, y_max])")
+    xs, ys = walls[:, 0::2], walls[:, 1::2]
+    return float(xs.min()), float(ys.min()), float(xs.max()), float(ys.max())
+
+
+def grid_counts(extent: tuple[float, float, float, float], spacing_m: float) -> tuple[float, float]:
+    """How many columns and rows a ``spacing_m`` grid over ``extent`` has (floats: they may be far beyond any
+    integer loop)."""
+    x_min, y_min, x_max, y_max = extent
+    return (max(0.0, float(np.ceil((x_max - x_min) / spacing_m - 0.5))),
+            max(0.0, float(np.ceil((y_max - y_min) / spacing_m - 0.5))))
+
+
+def wall_distance(points: np.ndarray, walls: np.ndarray) -> np.ndarray:
+    """Each point's (N x 2) distance from the nearest wall (inf without walls)."""
+    distance = np.full(len(points), np.inf)
+    for wall in walls:
+        np.minimum(distance, point_segment_distance(points, wall[:2], wall[2:]), out=distance)
+    return distance
+
+
+def lattice(extent: tuple[float, float, float, float], step_m: float, counts: tuple[int, int]) -> np.ndarray:
+    """``counts`` columns by rows of points ``step_m`` apart from half a step inside ``extent``'s low corner, x-major
+    (N x 2: x, then y)."""
+    xs = extent[0] + step_m * (np.arange(counts[0]) + 0.5)
+    ys = extent[1] + step_m * (np.arange(counts[1]) + 0.5)
+    return np.stack(np.meshgrid(xs, ys, indexing="ij"), axis=-1).reshape(-1, 2)
+
+
+def survey_grid(world: World, spacing_m: float, start: tuple[float, float], start_source: str = "start") -> SurveyGrid:
+    """The grid survey's points (:class:`SurveyGrid`), checked before anything is scanned: at least one and at most
+    MAX_GRID_POINTS grid points, a floor of at most MAX_WALK_CELLS raster cells, the start on the floor and clear
+    of the walls; every refusal a ConfigError (``start_source`` names where the start comes from)."""
+    extent = floor_extent(world)
+    x_min, y_min, x_max, y_max = extent
+    size = f"{world.name}'s {x_max - x_min:g} x {y_max - y_min:g} m floor"
+    columns, rows = grid_counts(extent, spacing_m)
+    if columns * rows > MAX_GRID_POINTS:
+        raise ConfigError("--grid", "", f"a {spacing_m:g} m grid over {size} has {columns * rows:.3g} points, more "
+                                        f"than {MAX_GRID_POINTS:,} (about a minute of surveying): take a wider spacing")
+    if columns * rows < 1:
+        raise ConfigError("--grid", "", f"a {spacing_m:g} m grid has no point on {size}")
+    cells = (math.ceil((x_max - x_min) / WALK_CELL_M), math.ceil((y_max - y_min) / WALK_CELL_M))
+    if math.prod(cells) > MAX_WALK_CELLS:
+        raise ConfigError(world.source, "extent", f"{size} is more than the {MAX_WALK_CELLS * WALK_CELL_M ** 2:,.0f} "
+                                                  "m^2 a grid survey walks")
+    if not (x_min <= start[0] <= x_max and y_min <= start[1] <= y_max):
+        raise ConfigError(start_source, "", f"the survey starts at ({start[0]:g}, {start[1]:g}), off {size} "
+                                            f"[{x_min:g}, {y_min:g}, {x_max:g}, {y_max:g}]")
+    walls = world.wall_segments()
+    free = wall_distance(lattice(extent, WALK_CELL_M, cells), walls).reshape(cells) >= WALK_BLOCKED_M
+    regions, _ = ndimage.label(free)         # 4-connected: the surveyor steps from cell to cell
+
+    def region(x: float, y: float) -> int:
+        column, row = int((x - x_min) / WALK_CELL_M), int((y - y_min) / WALK_CELL_M)
+        return int(regions[min(column, cells[0] - 1), min(row, cells[1] - 1)])
+
+    home = region(*start)
+    if home == 0:
+        raise ConfigError(start_source, "", f"the survey starts at ({start[0]:g}, {start[1]:g}), within "
+                                            f"{WALK_BLOCKED_M:.2f} m of a wall of {world.name}")
+    open_to_edge = set(np.concatenate((regions[0], regions[-1], regions[:, 0], regions[:, -1])).tolist())
+    grid = lattice(extent, spacing_m, (int(columns), int(rows)))
+    clear = wall_distance(grid, walls) >= SURVEY_CLEARANCE_M
+    points, enclosed, outside = [], [], 0
+    for (x, y) in grid[clear].tolist():
+        label = region(x, y)
+        if label == home:
+            points.append((x, y))
+        elif label in open_to_edge:
+            outside += 1
+        else:
+            enclosed.append((x, y))
+    return SurveyGrid(extent, spacing_m, start, tuple(points), tuple(enclosed), outside,
+                      int(np.count_nonzero(~clear)))
+
+
+def grid_radio_map(world: World, points: Sequence[tuple[float, float]], rng: np.random.Generator,
+                   scans_per_point: int = 3) -> RadioMap:
+    """A site survey at known positions (the usual manual way), e.g. :func:`survey_grid`'s points: each fingerprint
+    is the mean of a few scans, as surveyors average."""
+    wifi = wifi_model(world)
+    fingerprints = []
+    for x, y in points:
+        scans = [wifi.scan(x, y, rng) for _ in range(scans_per_point)]
+        heard: dict[str, list[float]] = {}
+        for scan in scans:
+            for reading in scan:
+                heard.setdefault(reading.bssid, []).append(reading.rssi_dbm)
+        if heard:
+            fingerprints.append(Fingerprint((x, y), {b: float(np.mean(v)) for b, v in heard.items()}, "grid"))
+    return RadioMap(fingerprints)
 
 
 @dataclass(frozen=True)
@@ -129,6 +230,7 @@ class TwoTierRun:
     duration_s: float
     survey: tuple[tuple[tuple[float, float], dict[str, float]], ...] = ()   # (estimated position, scan)
     bumps: int = 0                         # steps refused because they drove into a wall
+    wall_crossings: int = 0                # rfidnav_bringup.metrics.wall_crossings of the true track
 
     @property
     def final_error_m(self) -> float:
@@ -162,6 +264,7 @@ def run_two_tier(site: Site, start: tuple[float, float, float], target: tuple[fl
     fixes_seen = len(navigator.progress.fixes)      # a known start is no fix of the reader's
     time_s = path_m = 0.0
     walls, bumps = site.world.wall_segments(), 0
+    track = [(x, y)]
     while not decision.finished and time_s < max_time_s:
         if decision.request is not None:
             decision = answer(site, navigator, decision.request, (x, y), rng, locate, tier_one_errors)
@@ -172,6 +275,7 @@ def run_two_tier(site: Site, start: tuple[float, float, float], target: tuple[fl
             bumps += 1
             linear = dx = dy = 0.0                      # stalled against the wall: it only turns
         x, y, yaw = x + dx, y + dy, yaw + dyaw
+        track.append((x, y))
         # Odometry: the same motion with the distance off by the scale error.
         dx, dy, dyaw = unicycle_step(odom[2], linear * (1.0 + odometry_scale_error), angular, STEP_S)
         odom = (odom[0] + dx, odom[1] + dy, odom[2] + dyaw)
@@ -199,10 +303,13 @@ def run_two_tier(site: Site, start: tuple[float, float, float], target: tuple[fl
     if not decision.finished:
         decision = navigator.finish(False, f"timed out after {max_time_s:g} s")
     progress = navigator.progress
-    return TwoTierRun(decision.success, decision.message, (x, y), target, path_m, tuple(fix_errors),
-                      tuple(tag_position_errors), tuple(tier_one_errors), progress.searches,
-                      progress.search_length_m, tuple(progress.visited),
-                      time_s, tuple(survey), bumps)
+    crossings = wall_crossings(np.array(track), walls)
+    objection = ground_truth_objection({"wall_crossings": crossings})
+    return TwoTierRun(decision.success and objection is None,
+                      decision.message if objection is None else f"{decision.message}; but it {objection}",
+                      (x, y), target, path_m, tuple(fix_errors), tuple(tag_position_errors), tuple(tier_one_errors),
+                      progress.searches, progress.search_length_m, tuple(progress.visited), time_s, tuple(survey),
+                      bumps, crossings)
 
 
 def answer(site: Site, navigator: TwoTierNavigator, request: Request, true_position: tuple[float, float],
@@ -235,33 +342,45 @@ def robot_survey(site: Site, robot_map: RouteMap, seed: int, spacing_m: float = 
     return list(site.radio_map.fingerprints)
 
 
-def check_survey(world: World, robot_map: RouteMap, map_file: Path, grid_spacing_m: float | None) -> None:
-    """What ``./rfidnav survey`` is asked can be done, before anything runs: a grid of at least one and at most
-    MAX_GRID_POINTS points over the world's walled floor, or a map with landmarks for the robot's own survey."""
-    if grid_spacing_m is None:
-        if not robot_map.tag_groups:
-            raise ConfigError(str(map_file), "tag_groups", "the robot's survey visits the map's landmarks: none")
-        return
-    if not world.walls:
-        raise ConfigError("--grid", "", f"the world {world.name} has no walls: a grid survey covers the floor they "
-                                        "enclose")
-    points, (width, height) = grid_points(world, grid_spacing_m), floor_extent(world)
-    if points > MAX_GRID_POINTS:
-        raise ConfigError("--grid", "", f"a {grid_spacing_m:g} m grid over {world.name}'s {width:g} x {height:g} m "
-                                        f"floor has {points:.3g} points, more than {MAX_GRID_POINTS:,} (about a minute "
-                                        "of surveying): take a wider spacing")
-    if points < 1:
-        raise ConfigError("--grid", "", f"a {grid_spacing_m:g} m grid has no point on {world.name}'s {width:g} x "
-                                        f"{height:g} m floor")
+def plan_survey(world: World, robot_map: RouteMap, map_file: Path, grid_spacing_m: float | None,
+                start: tuple[float, float], start_source: str) -> SurveyGrid | None:
+    """What ``./rfidnav survey`` is asked can be done, before anything runs: a grid survey's points walked from
+    ``start`` (:func:`survey_grid`), or None for the robot's own survey (grid_spacing_m None) of a map with
+    landmarks; either scans the world's access points."""
+    grid = survey_grid(world, grid_spacing_m, start, start_source) if grid_spacing_m is not None else None
+    if grid is None and not robot_map.tag_groups:
+        raise ConfigError(str(map_file), "tag_groups", "the robot's survey visits the map's landmarks: none")
+    if not world.access_points:
+        raise ConfigError(world.source, "access_points", "a survey records the WiFi heard: this world has none")
+    return grid
 
 
-def survey(world: World, robot_map: RouteMap, grid_spacing_m: float | None,
-           seed: int) -> tuple[list[Fingerprint], str]:
-    """``./rfidnav survey`` (checked by :func:`check_survey`): a grid site survey at known positions, or the robot's
-    own survey of the map's landmarks (grid_spacing_m None). Returns the fingerprints and a one-line description."""
-    if grid_spacing_m is not None:
-        fingerprints = list(grid_radio_map(world, grid_spacing_m, rng_for(seed, "grid survey")).fingerprints)
-        return fingerprints, f"site survey of {world.name} on a {grid_spacing_m:g} m grid, seed {seed}"
+MAX_LISTED = 8        # unreachable points named in the warning, the rest counted
+
+
+def survey_warnings(grid: SurveyGrid) -> list[str]:
+    """One line naming the free grid points the surveyor cannot walk to from the start (none: no line)."""
+    if not grid.enclosed:
+        return []
+    listed = ", ".join(f"({x:g}, {y:g})" for x, y in grid.enclosed[:MAX_LISTED])
+    more = f" and {len(grid.enclosed) - MAX_LISTED} more" if len(grid.enclosed) > MAX_LISTED else ""
+    return [f"{len(grid.enclosed)} grid point{'s' if len(grid.enclosed) > 1 else ''} clear of the walls cannot be "
+            f"reached from ({grid.start[0]:g}, {grid.start[1]:g}), walled off (a closet? a door narrower than about "
+            f"{2 * WALK_BLOCKED_M + WALK_CELL_M:.2f} m?): {listed}{more}; not surveyed"]
+
+
+def survey(world: World, robot_map: RouteMap, grid: SurveyGrid | None, seed: int) -> tuple[list[Fingerprint], str]:
+    """``./rfidnav survey`` (planned by :func:`plan_survey`): a grid site survey at known positions, or the robot's
+    own survey of the map's landmarks (grid None). Returns the fingerprints and a one-line description."""
+    if grid is not None:
+        fingerprints = list(grid_radio_map(world, grid.points, rng_for(seed, "grid survey")).fingerprints)
+        left_out = [f"{count} {what}" for count, what in (
+            (grid.near_wall, f"within {SURVEY_CLEARANCE_M:g} m of a wall"), (grid.outside, "outside the walls"),
+            (len(grid.enclosed), "walled off")) if count]
+        x_min, y_min, x_max, y_max = grid.extent
+        return fingerprints, (f"site survey of {world.name} on a {grid.spacing_m:g} m grid over [{x_min:g}, {y_min:g}, "
+                              f"{x_max:g}, {y_max:g}] walked from ({grid.start[0]:g}, {grid.start[1]:g}), seed {seed}"
+                              + (f"; grid points left out: {', '.join(left_out)}" if left_out else ""))
     fingerprints = robot_survey(Site.of(world, RadioMap()), robot_map, seed)
     return fingerprints, (f"the robot's own survey of {world.name} through {len(robot_map.tag_groups)} landmarks, "
                           f"seed {seed}")
