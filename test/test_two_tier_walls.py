@@ -13,6 +13,8 @@ from rfidnav_common.robot_map import load_route_map
 from rfidnav_common.tag_groups import TagGroup
 from rfidnav_experiments.runners.two_tier import SETTINGS, Site, grid_radio_map, run_two_tier
 from rfidnav_localization.dead_reckoning import TIER_TAG, Fix
+from rfidnav_localization.fingerprint import RadioMap
+from rfidnav_localization.radio_map_file import load_radio_map
 from rfidnav_planning.two_tier_navigation import (
     BACKING_OFF,
     LOCATE,
@@ -177,3 +179,17 @@ def test_legs_planned_round_the_homes_walls_arrive_more_often_than_straight_ones
                 pose = (*result.final_position, 0.0)
     assert arrived["planned"] >= 17, arrived             # of 20 legs
     assert arrived["planned"] >= arrived["straight"]
+
+
+@pytest.mark.tier("slow")
+def test_the_flat_with_its_origin_at_its_centre_is_crossed_round_its_walls_from_the_scenarios_start() -> None:
+    # two_tier_flat (ours): from the west end of the hallway to N2 in the north-east room, five seeds, the shipped
+    # radio map (its first survey) and floor plan; the walls stop the base.
+    robot_map = load_route_map(CONFIG_DIR / "maps" / "two_tier_flat.yaml")
+    world = load_world(CONFIG_DIR / "worlds" / "two_tier_flat.yaml")
+    site = Site.of(world, RadioMap(load_radio_map(robot_map.radio_map_file)))
+    runs = [run_two_tier(site, (-6.2, 0.0, 0.0), (5.0, 2.8), SETTINGS, np.random.default_rng(seed), seed,
+                         floor=WallMap.of(robot_map), max_time_s=900.0) for seed in range(5)]
+    assert sum(run.success for run in runs) >= 4, [run.message for run in runs]
+    assert all(run.wall_crossings == 0 for run in runs)
+    assert all(run.final_error_m < 0.1 for run in runs if run.success)
