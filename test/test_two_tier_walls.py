@@ -11,7 +11,7 @@ import pytest
 from rfidnav_bringup.scenario import CONFIG_DIR
 from rfidnav_common.robot_map import load_route_map
 from rfidnav_common.tag_groups import TagGroup
-from rfidnav_experiments.runners.two_tier import SETTINGS, Site, grid_radio_map, run_two_tier
+from rfidnav_experiments.runners.two_tier import SETTINGS, Site, run_two_tier
 from rfidnav_localization.dead_reckoning import TIER_TAG, Fix
 from rfidnav_localization.fingerprint import RadioMap
 from rfidnav_localization.radio_map_file import load_radio_map
@@ -155,18 +155,19 @@ def test_wheels_stalled_at_a_wall_back_the_robot_off_and_ask_tier_one_then_give_
     assert "stalled at a wall 2 times" in decision.message
 
 
-@pytest.fixture(scope="module")
-def site() -> Site:
-    world = load_world(CONFIG_DIR / "worlds" / "two_tier_home.yaml")
-    return Site.of(world, grid_radio_map(world, 1.0, np.random.default_rng(1)))
+def shipped_site(name: str) -> Site:
+    """The world of ``name`` with the radio map its robot map names (as the location server starts)."""
+    robot_map = load_route_map(CONFIG_DIR / "maps" / f"{name}.yaml")
+    world = load_world(CONFIG_DIR / "worlds" / f"{name}.yaml")
+    return Site.of(world, RadioMap(load_radio_map(robot_map.radio_map_file)))
 
 
 @pytest.mark.tier("slow")
-def test_legs_planned_round_the_homes_walls_arrive_more_often_than_straight_ones_on_the_same_streams(
-        site: Site) -> None:
+def test_legs_planned_round_the_homes_walls_arrive_more_often_than_straight_ones_on_the_same_streams() -> None:
     # Route 1 of Fig. 12 (T1 -> T2 -> T3 -> T4 -> T5 from the south-west corner), four runs, both ways on the same
     # seeds. A leg that stalls backs off either way; the floor plan keeps the legs out of the walls.
     landmarks = {group.group_id: group.centre for group in load_route_map(HOME_MAP).tag_groups}
+    site = shipped_site("two_tier_home")
     arrived = {}
     for name, floor in (("straight", WallMap()), ("planned", HOME)):
         arrived[name] = 0
@@ -185,9 +186,7 @@ def test_legs_planned_round_the_homes_walls_arrive_more_often_than_straight_ones
 def test_the_flat_with_its_origin_at_its_centre_is_crossed_round_its_walls_from_the_scenarios_start() -> None:
     # two_tier_flat (ours): from the west end of the hallway to N2 in the north-east room, five seeds, the shipped
     # radio map (its first survey) and floor plan; the walls stop the base.
-    robot_map = load_route_map(CONFIG_DIR / "maps" / "two_tier_flat.yaml")
-    world = load_world(CONFIG_DIR / "worlds" / "two_tier_flat.yaml")
-    site = Site.of(world, RadioMap(load_radio_map(robot_map.radio_map_file)))
+    robot_map, site = load_route_map(CONFIG_DIR / "maps" / "two_tier_flat.yaml"), shipped_site("two_tier_flat")
     runs = [run_two_tier(site, (-6.2, 0.0, 0.0), (5.0, 2.8), SETTINGS, np.random.default_rng(seed), seed,
                          floor=WallMap.of(robot_map), max_time_s=900.0) for seed in range(5)]
     assert sum(run.success for run in runs) >= 4, [run.message for run in runs]

@@ -97,7 +97,8 @@ def rectangle_of(section: Section, key: str) -> Rectangle | None:
         return None
     x_min, y_min, x_max, y_max = section.numbers(key, length=4)
     if not (x_max > x_min and y_max > y_min):
-        raise section.error(key, "expected [x_min, y_min, x_max, y_max] with max > min")
+        raise section.error(key, f"expected [x_min, y_min, x_max, y_max] with max > min, got "
+                                 f"[{x_min:g}, {y_min:g}, {x_max:g}, {y_max:g}]")
     return x_min, y_min, x_max, y_max
 
 

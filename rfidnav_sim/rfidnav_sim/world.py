@@ -41,9 +41,9 @@ from pathlib import Path
 
 import numpy as np
 
-from rfidnav_common.config import DBM, Section, check_number
+from rfidnav_common.config import DBM, Section
 from rfidnav_common.errors import ConfigError, ParameterError
-from rfidnav_common.robot_map import tag_groups_of
+from rfidnav_common.robot_map import rectangle_of, tag_groups_of, walls_of
 from rfidnav_common.tag_groups import TagGroup
 from rfidnav_common.tag_lattice import Deployment, DeploymentError, make_deployment
 from rfidnav_sim.wall_tag_model import WallTag
@@ -104,17 +104,7 @@ def world_from_section(section: Section) -> World:
         tags.append(Tag(tag_id=tag_id, position=(position[0], position[1], position[2]),
                         kind=tag_section.string("kind", "ceiling", choices=TAG_KINDS),
                         phase_offset_rad=tag_section.number("phase_offset_rad", 0.0)))
-    walls = []
-    walls_field = section.field("walls")
-    raw_walls = section.raw("walls", [])
-    if not isinstance(raw_walls, list):
-        raise section.error("walls", "expected a list of [x1, y1, x2, y2]")
-    for index, wall in enumerate(raw_walls):
-        field = f"{walls_field}[{index}]"
-        if not isinstance(wall, list) or len(wall) != 4:
-            raise ConfigError(section.source, field, "expected [x1, y1, x2, y2]")
-        x1, y1, x2, y2 = (check_number(value, section.source, f"{field}[{i}]") for i, value in enumerate(wall))
-        walls.append((x1, y1, x2, y2))
+    walls = walls_of(section)
     deployments = tuple(_deployment(entry) for entry in section.sections("lattices", []))
     groups = tag_groups_of(section)
     for group in groups:
@@ -130,18 +120,8 @@ def world_from_section(section: Section) -> World:
     wifi, wifi_seed = _wifi(section.section("wifi", {}))
     return World(name=section.string("name"), frame_id=section.string("frame_id", "map"),
                  tags=tuple(tags), walls=tuple(walls), deployments=deployments, tag_groups=groups, wall_tags=wall_tags,
-                 access_points=_access_points(section), wifi=wifi, wifi_seed=wifi_seed, extent=_extent(section),
-                 source=section.source)
-
-
-def _extent(section: Section) -> tuple[float, float, float, float] | None:
-    if not section.has("extent"):
-        return None
-    x_min, y_min, x_max, y_max = section.numbers("extent", length=4)
-    if x_max <= x_min or y_max <= y_min:
-        raise section.error("extent", f"expected [x_min, y_min, x_max, y_max] with max > min, got "
-                                      f"[{x_min:g}, {y_min:g}, {x_max:g}, {y_max:g}]")
-    return x_min, y_min, x_max, y_max
+                 access_points=_access_points(section), wifi=wifi, wifi_seed=wifi_seed,
+                 extent=rectangle_of(section, "extent"), source=section.source)
 
 
 def _wall_tags(section: Section, seen: dict[str, str]) -> tuple[WallTag, ...]:
