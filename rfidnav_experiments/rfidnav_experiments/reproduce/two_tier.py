@@ -22,6 +22,10 @@ robot passes between two polls is never read and a fix is known only when a poll
   points at most 3 cm with the reader's delay and failures, reported met or not met, never tuned to.
 * The radio map: a site survey on a 1 m grid against the robot's own survey (fingerprints at its tier-two
   fixes, paper 003's automatic radio map construction): the tier-one error at random points.
+* Homes (ours): each two-tier scenario of HOMES (the in-tree flat and a corridor flat of ours whose origin is at
+  its centre) run in-process from its start to its goal, with the radio map its map names (the location server's
+  over DDS), its legs straight as the paper drives them or planned round the map's walls, on the same streams:
+  how many arrive, the final error, the path length and the steps the walls stopped (bumps).
 
 Development and evaluation apart: every random draw comes from ``rng_for(seed, stream)``. The code was developed
 and its settings chosen on DEVELOPMENT_SEED; the command reports EVALUATION_SEED (EVALUATION_SEED_BASE + 1),
@@ -52,7 +56,7 @@ import numpy as np  # noqa: E402
 from matplotlib.ticker import FixedLocator, NullLocator  # noqa: E402
 from scipy import stats  # noqa: E402
 
-from rfidnav_bringup.scenario import CONFIG_DIR  # noqa: E402
+from rfidnav_bringup.scenario import CONFIG_DIR, Scenario, load_scenario  # noqa: E402
 from rfidnav_common.errors import ConfigError  # noqa: E402
 from rfidnav_common.polling import PollClock  # noqa: E402
 from rfidnav_common.robot_map import load_route_map  # noqa: E402
@@ -89,6 +93,7 @@ from rfidnav_experiments.runners.two_tier import (  # noqa: E402
     survey_grid,
 )
 from rfidnav_localization.fingerprint import RadioMap  # noqa: E402
+from rfidnav_localization.radio_map_file import load_radio_map  # noqa: E402
 from rfidnav_planning.wall_paths import WallMap  # noqa: E402
 from rfidnav_sim.parameters import CompassParameters, WifiSimParameters  # noqa: E402
 from rfidnav_sim.world import World, load_world  # noqa: E402
@@ -120,6 +125,8 @@ GRID_SPACING_M = 1.0
 GRID_SCANS_PER_POINT = 3
 TEST_POINTS = 300
 TARGET_FIX_ERROR_M = 0.03               # ours: median tag-fix error at the turning points
+HOMES = ("two_tier_home", "two_tier_flat", "two_tier_corridor")    # scenarios: start, goal, world, map, radio map
+LEGS = {"straight": "the paper's: straight to each landmark", "planned": "ours: round the map's walls"}
 
 
 def floor_range_m() -> float:
@@ -463,6 +470,77 @@ def fig11(runs: int, seed: int) -> tuple[dict[str, dict[int, float | None]], int
     return errors, sum(result[3] for result in results)
 
 
+# -------------------------------------------------------------------------------------------- homes
+
+@dataclass(frozen=True)
+class Home:
+    scenario: Scenario
+    floor: WallMap                        # its map's walls and extent
+    site: Site                            # its world with the radio map its map names (the location server's)
+
+
+@functools.cache
+def home(name: str) -> Home:
+    scenario = load_scenario(name)
+    robot_map = scenario.route_map
+    if robot_map is None or robot_map.radio_map_file is None:
+        raise ConfigError(str(scenario.map_file), "radio_map", "a two-tier home's map names its radio map")
+    site = Site.of(scenario.world, RadioMap(load_radio_map(robot_map.radio_map_file)))
+    return Home(scenario, WallMap.of(robot_map), site)
+
+
+@dataclass(frozen=True)
+class HomeRun:
+    home: str
+    legs: str                             # a key of LEGS
+    run: int
+    success: bool
+    final_error_m: float
+    path_length_m: float
+    bumps: int
+    wall_crossings: int
+
+
+def home_run(job: tuple[str, str, int, int]) -> HomeRun:
+    """One navigation of a home's scenario, from its start to its goal within its timeout; both kinds of legs of
+    run ``run`` draw the same compass, WiFi and reader streams."""
+    name, legs, run, seed = job
+    place = home(name)
+    x, y, yaw_deg = place.scenario.robot
+    target = place.scenario.mission.goal["target"]
+    result = run_two_tier(place.site, (x, y, math.radians(yaw_deg)), (target["x"], target["y"]), SETTINGS,
+                          rng_for(seed, f"homes:{name}:{run}"), derive_seed(seed, f"homes:{name}:{run}:reader"),
+                          max_time_s=place.scenario.mission.timeout_s,
+                          floor=place.floor if legs == "planned" else WallMap())
+    return HomeRun(name, legs, run, result.success, result.final_error_m, result.path_length_m, result.bumps,
+                   result.wall_crossings)
+
+
+def homes(runs: int, seed: int) -> list[HomeRun]:
+    results = run_pool(home_run, [(name, legs, run, seed) for name in HOMES for legs in LEGS for run in range(runs)],
+                       "reproduce two_tier: homes")
+    return sorted(results, key=lambda result: (HOMES.index(result.home), list(LEGS).index(result.legs), result.run))
+
+
+@dataclass(frozen=True)
+class HomeFigures:
+    arrived: Interval                     # percent of the runs
+    final_error: Median                   # [m] of the runs that arrived
+    path_length: Median                   # [m] of every run
+    bumps: int                            # in all the runs
+    runs_without_bumps: int
+    wall_crossings: int                   # in all the runs (ground truth)
+
+
+def home_figures(results: list[HomeRun], home: str, legs: str) -> HomeFigures:
+    here = [result for result in results if result.home == home and result.legs == legs]
+    arrived = [result for result in here if result.success]
+    return HomeFigures(Interval.of_proportion(len(arrived), len(here)),
+                       Median.of([result.final_error_m for result in arrived]),
+                       Median.of([result.path_length_m for result in here]), sum(result.bumps for result in here),
+                       sum(result.bumps == 0 for result in here), sum(result.wall_crossings for result in here))
+
+
 def tier_one_errors(site: Site, radio_map: RadioMap, seed: int) -> list[float]:
     rng = rng_for(seed, "test points")
     x_min, y_min, x_max, y_max = floor_extent(site.world)
@@ -634,6 +712,37 @@ def report_lines(condition_rows: list[Condition], spiral, theorem, moving, legs:
     return lines
 
 
+def home_lines(results: list[HomeRun], runs: int) -> list[str]:
+    lines = [f"homes (ours): each scenario from its start to its goal in-process, {runs} runs each, the same streams "
+             "for both kinds of legs; arrived [Wilson 95 %], the final error of those that arrived and the path of "
+             "all: median [95 % interval] (n); bumps: steps the walls stopped, in all (runs with none); wall "
+             "crossings of the true tracks, in all"]
+    rows = []
+    for home in HOMES:
+        for legs, note in LEGS.items():
+            figures = home_figures(results, home, legs)
+            rows.append([home, note, figures.arrived.text(1.0, 0), figures.final_error.text(),
+                         figures.path_length.text(1.0, 1), f"{figures.bumps} ({figures.runs_without_bumps})",
+                         str(figures.wall_crossings)])
+    return lines + table(["home", "legs", "arrived %", "final error cm", "path m", "bumps", "crossings"], rows)
+
+
+def home_json_rows(results: list[HomeRun], seed: int) -> list[dict[str, Any]]:
+    rows = []
+    for home in HOMES:
+        for legs in LEGS:
+            figures = home_figures(results, home, legs)
+            setting = {"home": home, "legs": legs, "seed": seed, "runs": figures.arrived.n}
+            rows += [row("homes", setting, "arrived_pct", figures.arrived.mean),
+                     row("homes", {**setting, "n": figures.final_error.n}, "final_error_median_m",
+                         figures.final_error.value),
+                     row("homes", setting, "path_length_median_m", figures.path_length.value),
+                     row("homes", setting, "bumps", figures.bumps),
+                     row("homes", setting, "runs_without_bumps", figures.runs_without_bumps),
+                     row("homes", setting, "wall_crossings", figures.wall_crossings)]
+    return rows
+
+
 def done(errors: dict[int, float | None]) -> list[float]:
     return [error for error in errors.values() if error is not None]
 
@@ -797,7 +906,9 @@ def reproduce_two_tier(runs: int, out_dir: Path, as_json: bool, seed: int = EVAL
     crossings = Crossings(2 * runs + len(legs), moving_crossings + sum(leg.wall_crossings for leg in legs))
     survey_map = RadioMap(robot_survey(Site.of(world, RadioMap()), load_route_map(MAP_FILE), seed))
     radio = {"grid": tier_one_errors(site, site.radio_map, seed), "survey": tier_one_errors(site, survey_map, seed)}
-    rows = json_rows(condition_rows, spiral, theorem, moving, legs, fixes, radio, crossings, seed)
+    home_runs = homes(runs, seed)
+    rows = [*json_rows(condition_rows, spiral, theorem, moving, legs, fixes, radio, crossings, seed),
+            *home_json_rows(home_runs, seed)]
     (out_dir / "two_tier_rows.json").write_text(json.dumps(rows, indent=1) + "\n")
     plot = plot_figures(spiral, moving, legs, fig10_runs, out_dir)
     # Only the JSON goes to stdout with --json, so a program can parse it whole.
@@ -805,7 +916,8 @@ def reproduce_two_tier(runs: int, out_dir: Path, as_json: bool, seed: int = EVAL
     if as_json:
         print(json.dumps(rows, indent=1))
     else:
-        print("\n".join(report_lines(condition_rows, spiral, theorem, moving, legs, fixes, radio, crossings,
-                                      len(site.radio_map), len(survey_map), runs, fig10_runs, seed)))
+        print("\n".join([*report_lines(condition_rows, spiral, theorem, moving, legs, fixes, radio, crossings,
+                                        len(site.radio_map), len(survey_map), runs, fig10_runs, seed),
+                         "", *home_lines(home_runs, runs)]))
     print(f"plot: {plot}; rows: {out_dir / 'two_tier_rows.json'}", file=notes)
     return 0 if fixes.target_met else 1
