@@ -27,6 +27,8 @@ from rfidnav_experiments.reproduce.two_tier import (
     EVALUATION_SEED,
     EXPERIMENT,
     FIG10_DISTANCES_M,
+    HOMES,
+    LEGS,
     METHODS,
     PAPER_FIG10_M,
     SOURCES,
@@ -173,6 +175,19 @@ def test_fig11_and_fig12_come_out_the_papers_way_and_the_target_is_reported(
     assert 0.1 < grid < 3.0 and 0.1 < survey < 3.0
     # The walls stop the robot: no navigation's true track crosses one.
     assert values(rows, "navigations", "wall_crossings") == [0]
+
+
+def test_every_home_is_reported_with_both_kinds_of_legs_and_no_run_crosses_a_wall(
+        reproduction: tuple[str, list[dict], int]) -> None:
+    printed, rows, _ = reproduction
+    assert "homes (ours)" in printed
+    for home in HOMES:
+        for legs in LEGS:
+            assert values(rows, "homes", "wall_crossings", home=home, legs=legs) == [0]
+            arrived, = values(rows, "homes", "arrived_pct", home=home, legs=legs, runs=2)
+            bumps, = values(rows, "homes", "bumps", home=home, legs=legs)
+            assert arrived in (0.0, 50.0, 100.0) and bumps >= 0
+            assert values(rows, "homes", "path_length_median_m", home=home, legs=legs)[0] > 1.0
 
 
 def test_theorem1_rows_carry_the_printed_and_the_rayleigh_expectation(

@@ -22,8 +22,8 @@ robot passes between two polls is never read and a fix is known only when a poll
   points at most 3 cm with the reader's delay and failures, reported met or not met, never tuned to.
 * The radio map: a site survey on a 1 m grid against the robot's own survey (fingerprints at its tier-two
   fixes, paper 003's automatic radio map construction): the tier-one error at random points.
-* Homes (ours): each two-tier scenario of HOMES (the in-tree flat and a corridor flat of ours whose origin is at
-  its centre) run in-process from its start to its goal, with the radio map its map names (the location server's
+* Homes (ours): each two-tier scenario of HOMES (the in-tree flat and two flats of ours whose origin is at their
+  centre) run in-process from its start to its goal, with the radio map its map names (the location server's
   over DDS), its legs straight as the paper drives them or planned round the map's walls, on the same streams:
   how many arrive, the final error, the path length and the steps the walls stopped (bumps).
 
