@@ -204,3 +204,32 @@ def test_a_beam_keeps_the_echo_of_its_rays_near_the_normal_and_loses_a_wall_seen
     assert lost.ranges(0.0, 0.0, 0.0, RNG)["left_45"] == math.inf
     with pytest.raises(ValueError, match="specular_angle_rad"):
         SonarModel([left_45], np.array(wall_to_the_left), specular_angle_rad=0.0)
+
+
+# ---------------------------------------------------------------------------------------------- the wall grid
+
+@pytest.mark.parametrize("floor", ["building_large", "building_fig5", "building_eval"])
+def test_readings_cast_against_the_grids_nearby_walls_equal_those_cast_against_every_wall(floor: str) -> None:
+    # The reference is the model before the grid: every wall cast against (a grid whose look-up returns them
+    # all). Poses all over the floor and beyond it, the same noise streams; equal to the last bit.
+    from rfidnav_bringup.scenario import CONFIG_DIR
+    from rfidnav_sim.world import load_world
+
+    walls = load_world(CONFIG_DIR / "worlds" / f"{floor}.yaml").wall_segments()
+    gridded = SonarModel(PAPER_LAYOUT, walls, specular_angle_rad=math.radians(40.0))
+    every = SonarModel(PAPER_LAYOUT, walls, specular_angle_rad=math.radians(40.0))
+    every.nearby.near = lambda x, y: walls
+    rng = np.random.default_rng(7)
+    low, high = walls[:, :2].min(axis=0) - 3.0, walls[:, :2].max(axis=0) + 3.0
+    for _ in range(1000):
+        x, y, yaw = rng.uniform(low[0], high[0]), rng.uniform(low[1], high[1]), rng.uniform(-math.pi, math.pi)
+        seed = int(rng.integers(2**31))
+        assert gridded.ranges(x, y, yaw, np.random.default_rng(seed)) == every.ranges(x, y, yaw,
+                                                                                   np.random.default_rng(seed))
+    assert max(len(cell) for cell in gridded.nearby.cells) < len(walls)      # the grid does leave walls out
+
+
+def test_a_grid_over_no_walls_gives_no_walls_anywhere() -> None:
+    model = SonarModel(PAPER_LAYOUT, np.empty((0, 4)))
+    assert model.nearby.near(3.0, -2.0).shape == (0, 4)
+    assert all(math.isinf(value) for value in model.ranges(0.0, 0.0, 0.0, np.random.default_rng(1)).values())
