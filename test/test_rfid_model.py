@@ -22,7 +22,7 @@ from rfidnav_common.rf import (
     wavelength_m,
 )
 from rfidnav_sim.parameters import ReaderParameters
-from rfidnav_sim.rfid_model import Antenna, ReaderModel, ReaderSimulator, budget_range_m, reach_m
+from rfidnav_sim.rfid_model import Antenna, ReaderModel, ReaderSimulator, budget_range_m, link_rssi_dbm, reach_m
 
 pytestmark = pytest.mark.tier("unit")
 
@@ -429,3 +429,53 @@ def test_a_reader_file_cannot_claim_a_range_beyond_the_link_budget() -> None:
                                                "antenna_facing": ["left"], "antenna_max_range_m": [30.0],
                                                "antenna_half_angle_deg": [85.0], "antenna_phase_offset_rad": [0.0]},
                             source, prefix)
+
+
+# ------------------------------------------------------------------------------------ listed tags by k-d tree
+
+def reads_of_every_tag(sim: ReaderSimulator, antenna_world: np.ndarray, frequency: float) -> list:
+    """The listed-tag round before the k-d tree, as the reference: every antenna against every tag."""
+    model = sim.model
+    offsets = sim.tag_positions[None, :, :] - antenna_world[:, None, :]
+    distance = np.maximum(np.linalg.norm(offsets, axis=2), 1e-3)
+    facing = np.array([1.0 if a.facing_up else -1.0 for a in model.antennas])[:, None]
+    cos_off_axis = facing * offsets[:, :, 2] / distance
+    max_range = np.array([a.max_range_m for a in model.antennas])[:, None]
+    min_cos = np.cos(np.array([a.half_angle_rad for a in model.antennas]))[:, None]
+    rssi = link_rssi_dbm(model, distance, cos_off_axis)
+    listing = np.array([a.side_bearing_rad is None for a in model.antennas])[:, None]
+    readable = listing & (distance <= max_range) & (cos_off_axis >= min_cos) & (rssi >= model.sensitivity_dbm)
+    antenna_index, tag_index = np.nonzero(readable)
+    if antenna_index.size == 0:
+        return []
+    phase_offsets = (sim.tag_phase_offsets[tag_index]
+                     + np.array([model.antennas[a].phase_offset_rad for a in antenna_index]))
+    return sim.reads_of([sim.tag_ids[t] for t in tag_index], antenna_index, distance[antenna_index, tag_index],
+                        phase_offsets, rssi[antenna_index, tag_index], frequency)
+
+
+@pytest.mark.parametrize(("count", "half_side_m"), [(50, 0.5), (2000, 20.0)])   # every tag taken; in the tree
+@pytest.mark.parametrize("params", ["reader_uhf_2ant", "reader_hf_floor", "reader_floor_lattice"])
+def test_a_round_over_the_tags_the_tree_finds_equals_the_round_over_every_tag(params: str, count: int,
+                                                                              half_side_m: float) -> None:
+    # Ceiling and floor tags over a square, random poses on it and off it; the same noise streams.
+    from rfidnav_bringup.scenario import CONFIG_DIR
+    from rfidnav_experiments.runners.shipped import file_parameters
+
+    model = file_parameters(ReaderParameters, CONFIG_DIR / "params" / f"{params}.yaml", "rfid_reader_sim",
+                            world_file="w.yaml").reader_model()
+    layout = np.random.default_rng(3)
+    positions = np.column_stack((layout.uniform(-half_side_m, half_side_m, (count, 2)),
+                                 layout.choice([0.0, 2.5, 3.0], count)))
+    offsets = layout.uniform(-math.pi, math.pi, count)
+    ids = [f"T{index}" for index in range(count)]
+    edge = 1.25 * half_side_m
+    poses = layout.uniform((-edge, -edge, -math.pi), (edge, edge, math.pi), (300, 3))
+    tree, every = (ReaderSimulator(model, ids, positions, offsets, np.random.default_rng(9)) for _ in range(2))
+    heard = 0
+    for x, y, yaw in poses:
+        antennas = tree.antenna_positions(x, y, yaw)
+        reads = tree.listed_tag_reads(antennas, 915.25e6)
+        assert reads == reads_of_every_tag(every, antennas, 915.25e6)
+        heard += len(reads)
+    assert heard > 0

@@ -148,6 +148,8 @@ def add_bench(verbs: argparse._SubParsersAction) -> Handler:
     routes = names.add_parser("routes", parents=[common], help="paper 001's routes and long_legs in-process with "
                                                                "the shipped files, both controllers")
     routes.add_argument("--seeds", type=runs_value, default=3, help="runs per (route, controller): seeds 1..N")
+    names.add_parser("reader", parents=[common], help="the reader simulator's round among 1k, 10k and 100k listed "
+                                                      "ceiling tags")
     names.add_parser("location_server", parents=[common], help="paper 003's tier-one locate over DDS")
     names.add_parser("llrp", parents=[common], help="the llrp_reader driver against llrpkit's LLRP emulator "
                                                     "(latency, lossless rate)")
@@ -227,6 +229,15 @@ def timed_bench(args: argparse.Namespace) -> int:
         return bench_llrp(as_json=args.json)
     if args.name == "planner":
         return bench_partitions(args)
+    if args.name == "reader":
+        from rfidnav_experiments.bench.reader import TAG_COUNTS, listed_tags_benchmark
+
+        figures = listed_tags_benchmark()
+        print(json.dumps(figures) if args.json else
+              "reader simulator round (reader_uhf_2ant, 2 m between ceiling tags): " + ", ".join(
+                  f"{figures[f'round_us_{count}']:.0f} us at {count:,} tags ({figures[f'reads_per_round_{count}']:.0f}"
+                  f" reads)" for count in TAG_COUNTS))
+        return 0
     from rfidnav_experiments.bench.fuzzy import benchmark
 
     figures = benchmark(evaluations=args.evaluations)

@@ -29,12 +29,15 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 from rfidnav_common.polling import PollClock
 from rfidnav_common.rf import round_trip_phase
 from rfidnav_common.tag_lattice import Deployment
 from rfidnav_sim.wall_tag_model import InductionArea, WallTag, WallTagReader
 from rfidnav_sim.world import World
+
+TREE_FROM_TAGS = 256       # listed tags beyond which a round looks them up in a k-d tree
 
 
 @dataclass(frozen=True)
@@ -141,6 +144,15 @@ class ReaderSimulator:
         self.tag_phase_offsets = np.asarray(tag_phase_offsets, dtype=float)
         self.rng = rng
         self.antenna_offsets = np.array([a.position for a in model.antennas], dtype=float).reshape(-1, 3)
+        self.antenna_facing = np.array([1.0 if a.facing_up else -1.0 for a in model.antennas])
+        self.antenna_max_range = np.array([a.max_range_m for a in model.antennas])
+        self.antenna_min_cos = np.cos(np.array([a.half_angle_rad for a in model.antennas]))
+        self.antenna_phase_offsets = np.array([a.phase_offset_rad for a in model.antennas])
+        # Side antennas read wall tags only (their induction areas); the others the listed tags, by a k-d tree.
+        self.listing_antennas = [index for index, antenna in enumerate(model.antennas)
+                                 if antenna.side_bearing_rad is None]
+        # A few tags are faster taken all than looked up in a tree.
+        self.tag_tree = cKDTree(self.tag_positions) if len(self.tag_positions) > TREE_FROM_TAGS else None
 
     def channel_at(self, time_s: float) -> float:
         channels = self.model.channels_hz
@@ -213,27 +225,48 @@ class ReaderSimulator:
                 for tag_id, a, r, p, amp in zip(tag_ids, antenna_indices, rssi, phase, amplitude)]
 
     def listed_tag_reads(self, antenna_world: np.ndarray, frequency: float) -> list[Read]:
-        """Reads of the tags listed in the world: within each antenna's range, beam cone and sensitivity."""
+        """Reads of the tags listed in the world: within each antenna's range, beam cone and sensitivity.
+
+        Only the tags the k-d tree finds within an antenna's range are looked at, so a round costs what the tags
+        near the robot cost, not every tag of a building. The reads come in the order they would from the whole
+        antennas x tags matrix (antenna by antenna, then the world's tag order); with ``miss_probability`` a miss
+        is drawn for each tag within range, not for every tag of the world."""
         model = self.model
-        offsets = self.tag_positions[None, :, :] - antenna_world[:, None, :]      # antennas x tags x 3
-        distance = np.maximum(np.linalg.norm(offsets, axis=2), 1e-3)
-        facing = np.array([1.0 if a.facing_up else -1.0 for a in model.antennas])[:, None]
-        cos_off_axis = facing * offsets[:, :, 2] / distance
-        max_range = np.array([a.max_range_m for a in model.antennas])[:, None]
-        min_cos = np.cos(np.array([a.half_angle_rad for a in model.antennas]))[:, None]
+        antenna_index, tag_index = self.tags_in_range(antenna_world)
+        if tag_index.size == 0:
+            return []
+        offsets = self.tag_positions[tag_index] - antenna_world[antenna_index]
+        distance = np.maximum(np.linalg.norm(offsets, axis=1), 1e-3)
+        cos_off_axis = self.antenna_facing[antenna_index] * offsets[:, 2] / distance
         rssi = link_rssi_dbm(model, distance, cos_off_axis)
-        listing = np.array([a.side_bearing_rad is None for a in model.antennas])[:, None]   # side: wall tags only
-        readable = listing & (distance <= max_range) & (cos_off_axis >= min_cos) & (rssi >= model.sensitivity_dbm)
+        readable = ((distance <= self.antenna_max_range[antenna_index])
+                    & (cos_off_axis >= self.antenna_min_cos[antenna_index]) & (rssi >= model.sensitivity_dbm))
         if model.miss_probability > 0.0:
             readable &= self.rng.random(readable.shape) >= model.miss_probability
-        antenna_index, tag_index = np.nonzero(readable)
-        if antenna_index.size == 0:
+        antenna_index, tag_index, distance, rssi = (antenna_index[readable], tag_index[readable], distance[readable],
+                                                    rssi[readable])
+        if tag_index.size == 0:
             return []
-        d = distance[antenna_index, tag_index]
-        phase_offsets = (self.tag_phase_offsets[tag_index]
-                         + np.array([model.antennas[a].phase_offset_rad for a in antenna_index]))
-        return self.reads_of([self.tag_ids[t] for t in tag_index], antenna_index, d, phase_offsets,
-                             rssi[antenna_index, tag_index], frequency)
+        phase_offsets = self.tag_phase_offsets[tag_index] + self.antenna_phase_offsets[antenna_index]
+        return self.reads_of([self.tag_ids[t] for t in tag_index], antenna_index, distance, phase_offsets, rssi,
+                             frequency)
+
+    def tags_in_range(self, antenna_world: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(antenna, tag) index pairs of the listed tags within each listing antenna's range (every tag, for a world
+        of at most TREE_FROM_TAGS), antenna by antenna, tags in the world's order. The tree's radius is a hair wider
+        than the range; the exact test follows."""
+        tree = self.tag_tree
+        if not self.listing_antennas:
+            return np.zeros(0, dtype=np.intp), np.zeros(0, dtype=np.intp)
+        if tree is None:
+            every = np.arange(len(self.tag_positions), dtype=np.intp)
+            return (np.repeat(np.array(self.listing_antennas, dtype=np.intp), len(every)),
+                    np.tile(every, len(self.listing_antennas)))
+        radius = self.antenna_max_range * (1.0 + 1e-9) + 1e-9
+        pairs = [(a, np.sort(np.asarray(tree.query_ball_point(antenna_world[a], radius[a]), dtype=np.intp)))
+                 for a in self.listing_antennas]
+        return (np.concatenate([np.full(len(tags), a, dtype=np.intp) for a, tags in pairs]),
+                np.concatenate([tags for _, tags in pairs]))
 
 
 class PolledReader:
