@@ -30,7 +30,7 @@ from rfidnav_common.config import (
     typed_values,
 )
 from rfidnav_common.errors import ConfigError
-from rfidnav_common.robot_map import RouteMap, load_route_map
+from rfidnav_common.robot_map import RouteMap, contains, load_route_map
 from rfidnav_common.topological_map import TopologicalMap, load_topological_map
 from rfidnav_control.parameters import HeadingControllerParameters, WallFollowerParameters
 from rfidnav_drivers.parameters import CreateBaseParameters, LlrpReaderParameters, WifiScannerParameters
@@ -522,9 +522,9 @@ def _check_goal_area(scenario: Scenario, mission: Section) -> None:
     if not isinstance(target, dict) or route_map is None or area is None:
         return
     x, y = target.get("x"), target.get("y")
-    if not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in (x, y)):
+    if not (isinstance(x, (int, float)) and isinstance(y, (int, float))) or isinstance(x, bool) or isinstance(y, bool):
         raise mission.error("goal", "target: expected numbers x and y")
-    if not (area[0] <= x <= area[2] and area[1] <= y <= area[3]):
+    if not contains(area, x, y):
         what = "deployment_area" if area == route_map.deployment_area else "extent"
         raise mission.error("goal", f"target ({x}, {y}) is outside the map's {what} {list(area)}")
 

@@ -42,14 +42,20 @@ def point_segment_distance(points: np.ndarray, start: np.ndarray, end: np.ndarra
     return np.linalg.norm(points - (start + t[:, None] * direction), axis=1)
 
 
-def nearest_on_segments(point: tuple[float, float], segments: np.ndarray) -> tuple[float, np.ndarray]:
-    """The distance from ``point`` to the nearest of ``segments`` (N x 4 rows x1, y1, x2, y2; N >= 1) and the
-    nearest point on it."""
+def closest_on_segments(point: tuple[float, float] | np.ndarray, segments: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The distance from ``point`` to each of ``segments`` (N x 4 rows x1, y1, x2, y2) and the closest point on
+    each (N x 2)."""
     start, direction = segments[:, 0:2], segments[:, 2:4] - segments[:, 0:2]
     length_sq = np.einsum("ij,ij->i", direction, direction)
     offset = np.asarray(point, dtype=float) - start
     t = np.clip(np.einsum("ij,ij->i", offset, direction) / np.where(length_sq > 0.0, length_sq, 1.0), 0.0, 1.0)
     closest = start + t[:, None] * direction
-    distances = np.linalg.norm(closest - np.asarray(point, dtype=float), axis=1)
+    return np.linalg.norm(closest - np.asarray(point, dtype=float), axis=1), closest
+
+
+def nearest_on_segments(point: tuple[float, float], segments: np.ndarray) -> tuple[float, np.ndarray]:
+    """The distance from ``point`` to the nearest of ``segments`` (N x 4 rows x1, y1, x2, y2; N >= 1) and the
+    nearest point on it."""
+    distances, closest = closest_on_segments(point, segments)
     nearest = int(np.argmin(distances))
     return float(distances[nearest]), closest[nearest]

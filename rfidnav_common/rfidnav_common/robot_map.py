@@ -34,6 +34,7 @@ Schema::
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -60,11 +61,7 @@ class RouteMap:
         """Where the robot may be: the declared extent, else the walls' bounding box, else the deployment area."""
         if self.declared_extent is not None:
             return self.declared_extent
-        if self.walls:
-            xs = [x for wall in self.walls for x in (wall[0], wall[2])]
-            ys = [y for wall in self.walls for y in (wall[1], wall[3])]
-            return min(xs), min(ys), max(xs), max(ys)
-        return self.deployment_area
+        return bounding_box(self.walls) if self.walls else self.deployment_area
 
     def unknown_tags(self, route: list[str]) -> list[str]:
         return [tag for tag in route if tag not in self.arrival_tags]
@@ -89,6 +86,18 @@ def load_route_map(path: Path, radio_map_may_be_missing: bool = False) -> RouteM
         raise section.error("arrival_tags", "a map needs arrival_tags, a deployment_area or tag_groups (none given)")
     return RouteMap(name=section.string("name"), arrival_tags=arrival, deployment_area=area, tag_groups=groups,
                     radio_map_file=radio_map, walls=walls, declared_extent=extent)
+
+
+def bounding_box(walls: Sequence[Wall]) -> Rectangle:
+    """The smallest rectangle holding every wall (at least one)."""
+    xs = [x for wall in walls for x in (wall[0], wall[2])]
+    ys = [y for wall in walls for y in (wall[1], wall[3])]
+    return min(xs), min(ys), max(xs), max(ys)
+
+
+def contains(rectangle: Rectangle, x: float, y: float) -> bool:
+    """(x, y) lies in the rectangle, its edges included."""
+    return rectangle[0] <= x <= rectangle[2] and rectangle[1] <= y <= rectangle[3]
 
 
 def rectangle_of(section: Section, key: str) -> Rectangle | None:

@@ -38,6 +38,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from rfidnav_common.errors import ParameterError
+from rfidnav_common.robot_map import contains
 from rfidnav_control.go_to import GoToSettings, go_to_command
 from rfidnav_control.spiral import SpiralSearch, separation_for_group
 from rfidnav_localization.dead_reckoning import TIER_TAG, TIER_WIFI, DeadReckoning, DeadReckoningEstimate, Fix
@@ -198,7 +199,7 @@ class TwoTierNavigator:
         if not all(math.isfinite(v) for v in target):
             return f"target ({target[0]}, {target[1]}) is not a finite point"
         extent = self.floor.extent
-        if extent is not None and not (extent[0] <= target[0] <= extent[2] and extent[1] <= target[1] <= extent[3]):
+        if extent is not None and not contains(extent, target[0], target[1]):
             return (f"target ({target[0]:g}, {target[1]:g}) is outside the map's extent [x_min, y_min, x_max, y_max] "
                     f"= {list(extent)}")
         return None
@@ -415,8 +416,8 @@ class TwoTierNavigator:
         candidates = [landmark for landmark in self.landmarks.values()
                       if self.to_target_m[landmark.group_id] < remaining - self.settings.read_range_m
                       and landmark.group_id not in self.progress.visited[-1:]
-                      and math.dist(here, landmark.centre) <= spacing
-                      and self.distance_m(here, landmark.centre) <= spacing]
+                      and math.dist(here, landmark.centre) <= spacing     # a path is no shorter: planned only
+                      and self.distance_m(here, landmark.centre) <= spacing]   # for the landmarks this leaves
         target_landmark = next((mark for mark in self.landmarks.values() if self.target_is(mark)), None)
         if remaining <= spacing or not candidates:
             if target_landmark is not None:

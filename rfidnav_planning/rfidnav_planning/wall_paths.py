@@ -23,10 +23,10 @@ from dataclasses import dataclass
 import networkx as nx
 import numpy as np
 
-from rfidnav_common.robot_map import RouteMap
+from rfidnav_common.geometry import closest_on_segments, point_segment_distance
+from rfidnav_common.robot_map import Rectangle, RouteMap, Wall, contains
 
 Point = tuple[float, float]
-Rectangle = tuple[float, float, float, float]
 NODE_OFFSET = 1.05            # wall-end nodes sit this much beyond the clearance: their own edges are clear of it
 
 
@@ -36,21 +36,9 @@ def segment_distances(a: np.ndarray, b: np.ndarray, walls: np.ndarray) -> np.nda
         return np.zeros(0)
     c, d = walls[:, :2], walls[:, 2:]
     crossing = _properly_crossing(a, b, c, d)
-    distances = np.minimum.reduce([_point_segment_distances(a[None, :], c, d),
-                                   _point_segment_distances(b[None, :], c, d),
-                                   _point_segment_distances(c, a[None, :], b[None, :]),
-                                   _point_segment_distances(d, a[None, :], b[None, :])])
+    distances = np.minimum.reduce([closest_on_segments(a, walls)[0], closest_on_segments(b, walls)[0],
+                                   point_segment_distance(c, a, b), point_segment_distance(d, a, b)])
     return np.where(crossing, 0.0, distances)
-
-
-def _point_segment_distances(points: np.ndarray, starts: np.ndarray, ends: np.ndarray) -> np.ndarray:
-    """Distance of each point from each segment, rows broadcast (one point to N segments or N points to one)."""
-    direction = ends - starts
-    relative = points - starts
-    direction = np.broadcast_to(direction, relative.shape)
-    t = np.clip(np.einsum("ij,ij->i", relative, direction)
-                / np.maximum(np.einsum("ij,ij->i", direction, direction), 1e-18), 0.0, 1.0)
-    return np.linalg.norm(relative - t[:, None] * direction, axis=1)
 
 
 def _cross(o: np.ndarray, p: np.ndarray, q: np.ndarray) -> np.ndarray:
@@ -67,7 +55,7 @@ def _properly_crossing(a: np.ndarray, b: np.ndarray, c: np.ndarray, d: np.ndarra
 class WallMap:
     """What a robot map says of the home's geometry: its walls and the extent the robot may drive in."""
 
-    walls: tuple[tuple[float, float, float, float], ...] = ()
+    walls: tuple[Wall, ...] = ()
     extent: Rectangle | None = None
 
     @classmethod
@@ -117,8 +105,7 @@ class WallPlanner:
 
     def inside(self, point: Sequence[float]) -> bool:
         """Within the extent (everywhere when the plan has none)."""
-        extent = self.plan.extent
-        return extent is None or (extent[0] <= point[0] <= extent[2] and extent[1] <= point[1] <= extent[3])
+        return self.plan.extent is None or contains(self.plan.extent, point[0], point[1])
 
     def clamped(self, point: Point) -> Point:
         """The point moved into the extent (dead reckoning may put the robot a little outside it)."""
@@ -129,12 +116,11 @@ class WallPlanner:
 
     def clearance(self, point: Sequence[float]) -> float:
         """Distance to the nearest wall, and to the extent's edge (negative outside it)."""
-        p = np.asarray(point, dtype=float)
-        distance = float(_point_segment_distances(p[None, :], self.walls[:, :2], self.walls[:, 2:]).min()) \
-            if len(self.walls) else math.inf
+        x, y = float(point[0]), float(point[1])
+        distance = float(closest_on_segments((x, y), self.walls)[0].min()) if len(self.walls) else math.inf
         extent = self.plan.extent
         if extent is not None:
-            distance = min(distance, p[0] - extent[0], extent[2] - p[0], p[1] - extent[1], extent[3] - p[1])
+            distance = min(distance, x - extent[0], extent[2] - x, y - extent[1], extent[3] - y)
         return distance
 
     def segment_clear(self, a: Sequence[float], b: Sequence[float], clearance_m: float | None = None) -> bool:

@@ -24,6 +24,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from rfidnav_common.geometry import point_segment_distance
+
 ON_WALL_TOLERANCE_M = 1e-9      # a ray origin this far "behind" a wall is on it (rotated mounting points round off)
 NAME_PATTERN = re.compile(r"[A-Za-z][A-Za-z0-9_]*")      # a valid last token of a ROS topic name
 ROBOT_HALF_SIZE_M = 0.175       # paper 004: the platform is approx. 35 cm square; base_link at its centre
@@ -137,12 +139,8 @@ class WallGrid:
         self.shape = (int(columns), int(rows))
         ix, iy = np.meshgrid(np.arange(self.shape[0]), np.arange(self.shape[1]), indexing="ij")
         centres = low + (np.column_stack((ix.ravel(), iy.ravel())) + 0.5) * cell_m
-        start, direction = self.walls[:, :2], self.walls[:, 2:] - self.walls[:, :2]          # N x 2
-        length_sq = np.maximum(np.einsum("ij,ij->i", direction, direction), 1e-18)
-        offsets = centres[:, None, :] - start[None, :, :]                                  # C x N x 2
-        t = np.clip(np.einsum("cnj,nj->cn", offsets, direction) / length_sq, 0.0, 1.0)
-        distances = np.linalg.norm(offsets - t[:, :, None] * direction[None, :, :], axis=2)
-        within = distances <= reach_m + cell_m / math.sqrt(2.0)
+        distances = np.column_stack([point_segment_distance(centres, wall[:2], wall[2:]) for wall in self.walls])
+        within = distances <= reach_m + cell_m / math.sqrt(2.0)                          # cells x walls
         self.cells = [self.walls[row] for row in within]
 
     def near(self, x: float, y: float) -> np.ndarray:

@@ -31,7 +31,7 @@ from rfidnav_bringup.metrics import ground_truth_objection, wall_crossings
 from rfidnav_bringup.scenario import CONFIG_DIR
 from rfidnav_common.errors import ConfigError
 from rfidnav_common.geometry import point_segment_distance
-from rfidnav_common.robot_map import RouteMap
+from rfidnav_common.robot_map import RouteMap, bounding_box
 from rfidnav_common.seeding import derive_seed, rng_for
 from rfidnav_common.tag_groups import HF_READ_RANGE_M
 from rfidnav_experiments.runners.shipped import file_parameters, shipped_parameters
@@ -117,12 +117,10 @@ def floor_extent(world: World) -> tuple[float, float, float, float]:
     bounding box, wherever the map's origin lies. A ConfigError naming the world file if it has neither."""
     if world.extent is not None:
         return world.extent
-    walls = world.wall_segments()
-    if not len(walls):
+    if not world.walls:
         raise ConfigError(world.source, "walls", "a grid survey covers the floor within the walls or the extent: "
                                                  "this world has neither (add extent: [x_min, y_min, x_max, y_max])")
-    xs, ys = walls[:, 0::2], walls[:, 1::2]
-    return float(xs.min()), float(ys.min()), float(xs.max()), float(ys.max())
+    return bounding_box(world.walls)
 
 
 def grid_counts(extent: tuple[float, float, float, float], spacing_m: float) -> tuple[float, float]:
