@@ -58,6 +58,7 @@ PYTHON_KEYS = {
     "mcap-ros2-support": "python3-mcap-ros2-support-pip", "llrpkit": "python3-llrpkit-pip",
     # not confirmed in rosdistro here (no network to check): pip keys of our own, so they resolve anyway
     "foxglove-sdk": "python3-foxglove-sdk-pip", "rich": "python3-rich-pip", "websockets": "python3-websockets-pip",
+    "distributed": "python3-distributed-pip",
 }
 TEST_TAGS_ALL = ("depend", "exec_depend", "test_depend")
 

@@ -777,6 +777,15 @@ OPTION_CASES: dict[str, tuple[tuple[str, ...], str, tuple[str, ...]]] = {
     "bench planner --plans 0": (("bench", "planner", "--plans", "0"), "--plans", ("1-100000",)),
     "bench partitions --runs 0": (("bench", "partitions", "--runs", "0"), "--runs", ("1-100000",)),
     "bench flc --evaluations 0": (("bench", "flc", "--evaluations", "0"), "--evaluations", ("1-100000",)),
+    "reproduce --workers 0": (("reproduce", "partitions", "--workers", "0"), "--workers", ("1-256",)),
+    "bench partitions --workers many": (("bench", "partitions", "--workers", "many"), "--workers",
+                                        ("whole number",)),
+    "reproduce --scheduler without a port": (("reproduce", "flc", "--scheduler", "tcp://head"), "--scheduler",
+                                             ("tcp://10.0.0.5:8786",)),
+    "calibrate flc --scheduler port 0": (("calibrate", "flc", "--scheduler", "head:0"), "--scheduler",
+                                         ("tcp://10.0.0.5:8786",)),
+    "reproduce --workers beside --scheduler": (("reproduce", "two_tier", "--workers", "2", "--scheduler",
+                                                "tcp://head:8786"), "--scheduler", ("not allowed with",)),
     "unknown verb": (("fly",), "fly", ("invalid choice",)),
 }
 
@@ -788,7 +797,8 @@ TRIPWIRES = ("rfidnav_bringup.orchestrator.Orchestrator", "subprocess.Popen", "r
              "rfidnav_experiments.reproduce.partitions.reproduce_partitions",
              "rfidnav_experiments.reproduce.topological.reproduce_topological",
              "rfidnav_experiments.reproduce.flc.reproduce_flc", "rfidnav_experiments.bench.rtf.sweep",
-             "rfidnav_bringup.report.draw_map", "rfidnav_bag.bag_view.serve_bag", "rfidnav_bringup.echo.echo")
+             "rfidnav_bringup.report.draw_map", "rfidnav_bag.bag_view.serve_bag", "rfidnav_bringup.echo.echo",
+             "rfidnav_experiments.engine.engine_for")
 
 
 @pytest.fixture

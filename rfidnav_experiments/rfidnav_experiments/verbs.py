@@ -7,6 +7,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from collections.abc import Callable
 from pathlib import Path
 
 from rfidnav_bringup.cli import (
@@ -36,7 +37,40 @@ def rtf_list(text: str) -> list[float]:
 runs_value = count_value(MAX_RUNS)
 hogs_value = checked_number(int, "a whole number", lambda hogs: 0 <= hogs <= MAX_HOGS,
                             lambda text: f"expected 0-{MAX_HOGS} busy loops, got {text}")
+MAX_WORKERS = 256
+workers_value = checked_number(int, "a whole number", lambda workers: 1 <= workers <= MAX_WORKERS,
+                               lambda text: f"expected 1-{MAX_WORKERS} workers, got {text}")
+
+
+def scheduler_value(text: str) -> str:
+    """``--scheduler``: a Dask scheduler's address, [tcp:// | tls://]host:port."""
+    address = text.strip()
+    _, _, rest = address.rpartition("://")
+    host, _, port = rest.rpartition(":")
+    if not host or not port.isdigit() or not 0 < int(port) < 65536 or any(c.isspace() for c in address):
+        raise argparse.ArgumentTypeError(f"expected a scheduler address such as tcp://10.0.0.5:8786, got {text!r}")
+    return address
 MAX_MIN_PAIRS = 1_000_000
+
+
+def add_engine_options(parser: argparse.ArgumentParser) -> None:
+    """Where an experiment's tasks run (rfidnav_experiments.engine): a local Dask cluster, or an existing one."""
+    where = parser.add_mutually_exclusive_group()
+    where.add_argument("--workers", type=workers_value, default=None,
+                       help="worker processes of the local cluster (default: this machine's cores)")
+    where.add_argument("--scheduler", type=scheduler_value, default=None, metavar="ADDRESS",
+                       help="run the tasks on an existing Dask cluster, e.g. tcp://10.0.0.5:8786 (README, "
+                            "\"Experiments on a cluster\")")
+
+
+def engine(args: argparse.Namespace, experiment: str = "", arguments: dict | None = None,
+           tasks_file: Path | None = None):
+    """The command's engine from its options; a reproduction's streams its results to ``tasks_file``."""
+    from rfidnav_experiments.engine import EngineOptions, engine_for
+
+    return engine_for(EngineOptions(workers=args.workers, scheduler=args.scheduler, tasks_file=tasks_file,
+                                    resume=getattr(args, "resume", False), experiment=experiment,
+                                    arguments=arguments or {}))
 
 
 def add_reproduce(verbs: argparse._SubParsersAction) -> Handler:
@@ -46,6 +80,10 @@ def add_reproduce(verbs: argparse._SubParsersAction) -> Handler:
     common.add_argument("--out", type=output_folder, default=RUNS_DIR / "reproduce",
                         help="folder for the rows, tables and plots")
     common.add_argument("--json", action="store_true", help="print the rows as JSON on stdout")
+    add_engine_options(common)
+    common.add_argument("--resume", action="store_true",
+                        help="take the finished tasks from --out's tasks file (EXPERIMENT_tasks.jsonl) of an "
+                             "interrupted run of the same experiment, arguments and code, and run only the rest")
     flc = names.add_parser("flc", parents=[common], help="paper 001 sec. V: the fuzzy heading controller's "
                                                          "line and route experiments")
     flc.add_argument("--seeds", type=runs_value, default=10, help="seeds per setting")
@@ -70,6 +108,7 @@ def add_calibrate(verbs: argparse._SubParsersAction) -> Handler:
     flc.add_argument("--out", type=output_file, help="the parameter file to write (default: the shipped one, "
                                               "config/params/flc_paper_calibrated.yaml)")
     flc.add_argument("--json", action="store_true")
+    add_engine_options(flc)
     offset = names.add_parser("phase-offset", help="heading_controller's phase_difference_offset_rad from "
                                                    "/rfid/reads, the robot standing still under (or squarely in "
                                                    "front of) a tag")
@@ -101,7 +140,8 @@ def run_calibrate(args: argparse.Namespace) -> int:
                                       args.json)
     from rfidnav_experiments.calibrate.flc import CALIBRATED_FILE, calibrate_flc
 
-    return calibrate_flc(out=args.out or CALIBRATED_FILE, as_json=args.json)
+    with engine(args):
+        return calibrate_flc(out=args.out or CALIBRATED_FILE, as_json=args.json)
 
 
 def add_survey(verbs: argparse._SubParsersAction) -> Handler:
@@ -145,9 +185,11 @@ def add_bench(verbs: argparse._SubParsersAction) -> Handler:
     partitions.add_argument("--runs", type=runs_value, default=250, help="runs per (read range, level)")
     partitions.add_argument("--method", choices=["paper", "filter", "filter_boom_spin"], default="paper",
                             help="the configuration (reproduce partitions' METHOD_FILES)")
+    add_engine_options(partitions)
     routes = names.add_parser("routes", parents=[common], help="paper 001's routes and long_legs in-process with "
                                                                "the shipped files, both controllers")
     routes.add_argument("--seeds", type=runs_value, default=3, help="runs per (route, controller): seeds 1..N")
+    add_engine_options(routes)
     names.add_parser("reader", parents=[common], help="the reader simulator's round among 1k, 10k and 100k listed "
                                                       "ceiling tags")
     names.add_parser("location_server", parents=[common], help="paper 003's tier-one locate over DDS")
@@ -157,21 +199,26 @@ def add_bench(verbs: argparse._SubParsersAction) -> Handler:
 
 
 def run_reproduce(args: argparse.Namespace) -> int:
+    """The reproduction on the command's engine, its tasks streamed to ``--out``/EXPERIMENT_tasks.jsonl."""
+    reproduce: Callable[..., int]
     if args.name == "partitions":
         from rfidnav_experiments.reproduce.partitions import RUNS_PER_CURVE, reproduce_partitions
 
-        return reproduce_partitions(runs=args.runs or RUNS_PER_CURVE, out_dir=args.out, as_json=args.json)
-    if args.name == "topological":
+        reproduce, arguments = reproduce_partitions, {"runs": args.runs or RUNS_PER_CURVE}
+    elif args.name == "topological":
         from rfidnav_experiments.reproduce.topological import MISSIONS, reproduce_topological
 
-        return reproduce_topological(missions=args.runs or MISSIONS, out_dir=args.out, as_json=args.json)
-    if args.name == "two_tier":
+        reproduce, arguments = reproduce_topological, {"missions": args.runs or MISSIONS}
+    elif args.name == "two_tier":
         from rfidnav_experiments.reproduce.two_tier import RUNS, reproduce_two_tier
 
-        return reproduce_two_tier(runs=args.runs or RUNS, out_dir=args.out, as_json=args.json)
-    from rfidnav_experiments.reproduce.flc import reproduce_flc
+        reproduce, arguments = reproduce_two_tier, {"runs": args.runs or RUNS}
+    else:
+        from rfidnav_experiments.reproduce.flc import reproduce_flc
 
-    return reproduce_flc(seeds=args.seeds, out_dir=args.out, as_json=args.json)
+        reproduce, arguments = reproduce_flc, {"seeds": args.seeds}
+    with engine(args, f"reproduce {args.name}", arguments, args.out / f"{args.name}_tasks.jsonl"):
+        return reproduce(**arguments, out_dir=args.out, as_json=args.json)
 
 
 def run_survey(args: argparse.Namespace) -> int:
@@ -204,11 +251,13 @@ def run_bench(args: argparse.Namespace) -> int:
     if args.name == "rtf":
         return bench_rtf(args)
     if args.name == "partitions":
-        return bench_partitions(args)
+        with engine(args):
+            return bench_partitions(args)
     if args.name == "routes":
         from rfidnav_experiments.bench.routes import bench_routes
 
-        return bench_routes(args.seeds, args.json)
+        with engine(args):
+            return bench_routes(args.seeds, args.json)
     with stage(f"bench {args.name}"):
         return timed_bench(args)
 

@@ -16,7 +16,8 @@ from typing import Any
 
 from rfidnav_bringup.scenario import CONFIG_DIR
 from rfidnav_experiments.calibrate.flc import scenario_named
-from rfidnav_experiments.reproduce.tables import run_pool, table
+from rfidnav_experiments.engine import run_tasks
+from rfidnav_experiments.reproduce.tables import table
 from rfidnav_experiments.runners.tag_route import RouteRun, controller_parameters, run_tag_route
 
 ROUTES = ("line_follow_90", "line_follow_0", "acute_path", "hallway", "long_legs")
@@ -70,6 +71,6 @@ def human_report(rows: list[dict[str, Any]]) -> str:
 def bench_routes(seeds: int, as_json: bool) -> int:
     chosen = list(range(1, seeds + 1))
     jobs = [(params, name, seed) for name in reversed(ROUTES) for params in PARAM_SETS for seed in chosen]
-    rows = summary_rows(run_pool(run_one, jobs, "bench routes"), chosen)
+    rows = summary_rows(run_tasks(run_one, jobs, "bench routes"), chosen)
     print(json.dumps(rows, indent=1) if as_json else human_report(rows))
     return 0 if all(row["successes"] == row["runs"] for row in rows) else 1

@@ -34,7 +34,8 @@ import yaml
 from rfidnav_bringup.scenario import CONFIG_DIR, Scenario, load_scenario
 from rfidnav_common.config import node_parameter_values, parameters_from_mapping
 from rfidnav_control.parameters import HeadingControllerParameters
-from rfidnav_experiments.reproduce.tables import mean_or_none, run_pool, table
+from rfidnav_experiments.engine import run_tasks
+from rfidnav_experiments.reproduce.tables import mean_or_none, table
 from rfidnav_experiments.runners.tag_route import RouteRun, controller_parameters, role_parameters, run_tag_route
 from rfidnav_sim.parameters import ReaderParameters
 
@@ -126,7 +127,7 @@ def calibrate(seeds: tuple[int, ...] = CALIBRATION_SEEDS, noise_grid: tuple[floa
               scale_grid: tuple[float, ...] = OUTPUT_SCALE_GRID) -> tuple[Point, list[Point]]:
     """Every grid point's figures and the best one (the smallest objective)."""
     jobs = list(itertools.product(noise_grid, scale_grid, FITTED_SCENARIOS, seeds))
-    points = points_of(run_pool(run_point, jobs, "calibrate flc"))
+    points = points_of(run_tasks(run_point, jobs, "calibrate flc"))
     best = min(points, key=lambda point: point.objective)
     if not math.isfinite(best.objective):
         raise RuntimeError("calibrate flc: every grid point had a failed run; nothing to fit")

@@ -49,6 +49,7 @@ from rfidnav_experiments.calibrate.flc import (  # noqa: E402
     scenario_named,
     timeout_s,
 )
+from rfidnav_experiments.engine import run_tasks  # noqa: E402
 from rfidnav_experiments.reproduce.tables import (  # noqa: E402
     Condition,
     Interval,
@@ -56,7 +57,6 @@ from rfidnav_experiments.reproduce.tables import (  # noqa: E402
     condition_lines,
     mean_or_none,
     paired_interval,
-    run_pool,
     save,
     table,
 )
@@ -247,7 +247,7 @@ def jobs(seeds: list[int]) -> list[tuple[str, str, int]]:
 def run_all(seeds: list[int]) -> dict[tuple[str, str], list[RouteRun]]:
     """Every run, grouped by (parameter set, scenario) and sorted by seed, with a progress line."""
     results: dict[tuple[str, str], list[RouteRun]] = {}
-    for params, run in run_pool(run_one, jobs(seeds), "reproduce flc"):
+    for params, run in run_tasks(run_one, jobs(seeds), "reproduce flc"):
         results.setdefault((params, run.scenario), []).append(run)
     return {key: sorted(runs, key=lambda run: run.seed) for key, runs in results.items()}
 

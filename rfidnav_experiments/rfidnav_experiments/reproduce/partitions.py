@@ -59,15 +59,14 @@ from rfidnav_common.errors import ConfigError  # noqa: E402
 from rfidnav_common.geometry import wrap_angle  # noqa: E402
 from rfidnav_common.seeding import rng_for  # noqa: E402
 from rfidnav_common.tag_lattice import LAYOUTS, Deployment, make_deployment, partitions_along_segment  # noqa: E402
+from rfidnav_experiments.engine import engine_workers, run_tasks  # noqa: E402
 from rfidnav_experiments.reproduce.tables import (  # noqa: E402
-    WORKERS,
     Condition,
     Interval,
     condition_json_rows,
     condition_lines,
     mean_or_none,
     paired_interval,
-    run_pool,
     save,
     table,
 )
@@ -932,7 +931,7 @@ def reproduce_partitions(runs: int, out_dir: Path, as_json: bool) -> int:
     counts = tag_counts()
     accuracy = accuracy_table_data(ACCURACY_SAMPLES, EVALUATION_SEED)
     fig11 = fig11_orientation(FIG11_RUNS, EVALUATION_SEED)
-    results = run_pool(run_navigation_job, evaluation_jobs(runs), "reproduce partitions: navigations")
+    results = run_tasks(run_navigation_job, evaluation_jobs(runs), "reproduce partitions: navigations")
     groups = group(results)
     summaries = {key: summarise(key, group_runs) for key, group_runs in groups.items()}
     plots = [plot_headline(summaries, groups, out_dir), plot_fig11(fig11, out_dir),
@@ -954,11 +953,12 @@ def reproduce_partitions(runs: int, out_dir: Path, as_json: bool) -> int:
 
 
 def benchmark(runs: int = RUNS_PER_CURVE, method: str = PAPER) -> dict[str, float]:
-    """The whole grid of Figs. 12-14 for one method (3 ranges x 8 levels x ``runs``) on both cores."""
+    """The whole grid of Figs. 12-14 for one method (3 ranges x 8 levels x ``runs``) on the command's engine
+    (its cluster started before the clock starts)."""
     jobs = navigation_jobs(runs, methods=(method,), levels=LEVELS)
     started = time.perf_counter()
-    results = run_pool(run_navigation_job, jobs, f"bench partitions {method}")
+    results = run_tasks(run_navigation_job, jobs, f"bench partitions {method}")
     wall = time.perf_counter() - started
-    return {"navigations": len(jobs), "workers": WORKERS, "wall_s": round(wall, 2),
+    return {"navigations": len(jobs), "workers": engine_workers(), "wall_s": round(wall, 2),
             "navigations_per_s": round(len(jobs) / wall, 1),
             "success_pct": round(100.0 * sum(r.success for r in results) / len(results), 2)}

@@ -1,13 +1,12 @@
-"""What every reproduction shares: a pool with progress on stderr, figures saved alike, plain-text tables, means of
-maybe nothing, 95 % intervals (paired where two methods ran on the same seeds), and the conditions table: every
-physical setting of a reproduction with where it comes from."""
+"""What every reproduction shares: figures saved alike, plain-text tables, means of maybe nothing, 95 % intervals
+(paired where two methods ran on the same seeds), and the conditions table: every physical setting of a reproduction
+with where it comes from. The runs themselves go through :mod:`rfidnav_experiments.engine`."""
 
 from __future__ import annotations
 
 import math
-import multiprocessing
 import statistics
-from collections.abc import Callable, Hashable, Iterable, Mapping, Sequence
+from collections.abc import Hashable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, TypeVar
@@ -18,10 +17,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 from scipy import stats  # noqa: E402
 
-from rfidnav_common.progress import progress  # noqa: E402
-
 Key = TypeVar("Key", bound=Hashable)   # what pairs two methods' values: a seed, a placement, a mission
-WORKERS = 2                             # the target machine has two cores
 
 
 def save(figure: plt.Figure, path: Path, dpi: int) -> Path:
@@ -40,22 +36,6 @@ def table(header: list[str], rows: list[list[str]]) -> list[str]:
     widths = [max(len(cell) for cell in column) for column in zip(header, *rows)]
     line = lambda cells: "  ".join(cell.ljust(width) for cell, width in zip(cells, widths)).rstrip()  # noqa: E731
     return [line(header), line(["-" * width for width in widths]), *(line(row) for row in rows)]
-
-
-def run_pool(function: Callable[[Any], Any], jobs: Iterable[Any], label: str) -> list[Any]:
-    """``function`` over ``jobs`` on both cores, in completion order, with a progress line headed ``label``.
-
-    forkserver, not fork: the caller may hold DDS threads (the test suite's own rclpy contexts), and a forked
-    copy of those can hang; the server imports the function's module once and forks the workers from it."""
-    jobs = list(jobs)
-    results = []
-    context = multiprocessing.get_context("forkserver")
-    context.set_forkserver_preload([function.__module__])
-    with context.Pool(WORKERS) as pool, progress(label, len(jobs)) as advance:
-        for result in pool.imap_unordered(function, jobs, chunksize=4):
-            results.append(result)
-            advance(1)
-    return results
 
 
 @dataclass(frozen=True)

@@ -49,13 +49,13 @@ import numpy as np  # noqa: E402
 from rfidnav_bringup.metrics import GOAL_RADIUS_M  # noqa: E402
 from rfidnav_common.errors import ConfigError  # noqa: E402
 from rfidnav_common.topological_map import load_topological_map  # noqa: E402
+from rfidnav_experiments.engine import run_tasks  # noqa: E402
 from rfidnav_experiments.reproduce.tables import (  # noqa: E402
     Condition,
     Interval,
     condition_json_rows,
     condition_lines,
     paired_interval,
-    run_pool,
     save,
     table,
 )
@@ -226,7 +226,7 @@ def run_all(missions: int) -> dict[tuple[str, str, float], list[MissionRun]]:
             for floor in FLOOR_ORDER for method in METHODS for rate in RATES[floor]
             for first in range(0, missions_on(floor, missions), CHUNK)]
     chunks: dict[tuple[str, str, float], list[tuple[int, list[MissionRun]]]] = {}
-    for floor, method, rate, first, runs in run_pool(missions_chunk, jobs, "reproduce topological"):
+    for floor, method, rate, first, runs in run_tasks(missions_chunk, jobs, "reproduce topological"):
         chunks.setdefault((floor, method, rate), []).append((first, runs))
     return {key: [run for _, runs in sorted(parts, key=lambda part: part[0]) for run in runs]
             for key, parts in chunks.items()}

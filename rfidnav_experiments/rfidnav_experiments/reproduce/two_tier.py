@@ -68,13 +68,13 @@ from rfidnav_control.spiral import (  # noqa: E402
     separation_for_group,
     simulate_search,
 )
+from rfidnav_experiments.engine import run_tasks  # noqa: E402
 from rfidnav_experiments.reproduce.tables import (  # noqa: E402
     Condition,
     Interval,
     condition_json_rows,
     condition_lines,
     paired_interval,
-    run_pool,
     save,
     table,
 )
@@ -348,7 +348,7 @@ class SpiralPoint:
 def fig10(runs: int, seed: int) -> dict[str, dict[float, list[Search]]]:
     """Every search, by method and distance, sorted by placement index."""
     placements = [fig10_placement(seed, distance, index) for distance in FIG10_DISTANCES_M for index in range(runs)]
-    searches = run_pool(fig10_search, [(method, placement) for placement in placements for method in METHODS],
+    searches = run_tasks(fig10_search, [(method, placement) for placement in placements for method in METHODS],
                         "reproduce two_tier: Fig. 10")
     by_method: dict[str, dict[float, list[Search]]] = {method: {d: [] for d in FIG10_DISTANCES_M} for method in METHODS}
     for search in sorted(searches, key=lambda s: s.placement.index):
@@ -444,7 +444,7 @@ def fig12_route(job: tuple[str, int, int]) -> list[Leg]:
 
 
 def fig12(runs: int, seed: int) -> list[Leg]:
-    results = run_pool(fig12_route, [(name, run, seed) for name in ROUTES for run in range(runs)],
+    results = run_tasks(fig12_route, [(name, run, seed) for name in ROUTES for run in range(runs)],
                        "reproduce two_tier: Fig. 12")
     return sorted((leg for legs in results for leg in legs), key=lambda leg: (leg.route, leg.run))
 
@@ -462,7 +462,7 @@ def fig11_run(job: tuple[str, int, int]) -> tuple[str, int, float | None, int]:
 
 def fig11(runs: int, seed: int) -> tuple[dict[str, dict[int, float | None]], int]:
     """Per kind of moving, each run's final error (None: it failed); and the runs' wall crossings in all."""
-    results = run_pool(fig11_run, [(kind, run, seed) for run in range(runs) for kind in FIG11_SPACINGS_M],
+    results = run_tasks(fig11_run, [(kind, run, seed) for run in range(runs) for kind in FIG11_SPACINGS_M],
                        "reproduce two_tier: Fig. 11")
     errors: dict[str, dict[int, float | None]] = {kind: {} for kind in FIG11_SPACINGS_M}
     for kind, run, error, _ in sorted(results, key=lambda result: result[1]):
@@ -517,7 +517,7 @@ def home_run(job: tuple[str, str, int, int]) -> HomeRun:
 
 
 def homes(runs: int, seed: int) -> list[HomeRun]:
-    results = run_pool(home_run, [(name, legs, run, seed) for name in HOMES for legs in LEGS for run in range(runs)],
+    results = run_tasks(home_run, [(name, legs, run, seed) for name in HOMES for legs in LEGS for run in range(runs)],
                        "reproduce two_tier: homes")
     return sorted(results, key=lambda result: (HOMES.index(result.home), list(LEGS).index(result.legs), result.run))
 

@@ -245,15 +245,16 @@ class PartitionGeometry:
     def orientation_bounds(self, partitions: Sequence[frozenset[Coordinate]]) -> tuple[float, float] | None:
         """See the module function :func:`orientation_bounds` (at least 2 partitions)."""
         # Only the first two and the last two partitions matter, and directions do not change when they are
-        # all shifted together: cache by their shapes relative to the first partition's anchor.
+        # all shifted together: cache by their shapes relative to the first partition's anchor, and compute them
+        # there too, so that the bounds are the same to the bit whichever traversal of that shape came first (a
+        # worker's earlier tasks must not change a later task's result).
         relevant = (*partitions[:2], *partitions[-2:]) if len(partitions) >= 3 else tuple(partitions)
         anchor = min(partitions[0])
         key = tuple(frozenset((i - anchor[0], j - anchor[1]) for i, j in p) for p in relevant)
         if key not in self._bounds:
             if len(self._bounds) >= BOUNDS_CACHE_LIMIT:
                 self._bounds.clear()
-            self._bounds[key] = self._make_bounds(partitions[0], partitions[1], partitions[-2], partitions[-1],
-                                                  len(partitions))
+            self._bounds[key] = self._make_bounds(key[0], key[1], key[-2], key[-1], len(partitions))
         return self._bounds[key]
 
     def _make_bounds(self, first: frozenset[Coordinate], second: frozenset[Coordinate],
