@@ -99,16 +99,23 @@ def task_key(batch: str, job: Any) -> str:
     return f"{slug}-{hashlib.sha256(canonical(job).encode()).hexdigest()[:20]}"
 
 
+def package_folder(package: str) -> Path:
+    """The folder of ``package``'s own ``__init__.py``. Not the package's ``__path__``: run from the source tree's
+    root (``python -m``, pytest) the name first finds the outer folder of the same name, a namespace package that
+    the editable install's finder then completes."""
+    spec = importlib.util.find_spec(f"{package}.__init__")
+    if spec is None or spec.origin is None:
+        raise ModuleNotFoundError(f"{package} is not installed")
+    return Path(spec.origin).parent
+
+
 def code_fingerprint() -> str:
     """A digest of every Python file of the packages that make the results and of the configuration they read
     (worlds, maps, parameter files): equal on two machines only if both run the same experiments."""
     from rfidnav_bringup.scenario import CONFIG_DIR
 
     digest = hashlib.sha256()
-    roots = []
-    for package in RESULT_PACKAGES:
-        spec = importlib.util.find_spec(package)
-        roots += [(package, Path(location)) for location in (spec.submodule_search_locations or [])] if spec else []
+    roots = [(package, package_folder(package)) for package in RESULT_PACKAGES]
     roots.append(("config", CONFIG_DIR))
     for name, root in roots:
         for path in sorted(path for path in root.rglob("*") if path.is_file() and path.suffix in (".py", ".yaml")

@@ -9,6 +9,7 @@ import json
 import sys
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 from rfidnav_bringup.cli import (
     RUNS_DIR,
@@ -40,6 +41,21 @@ hogs_value = checked_number(int, "a whole number", lambda hogs: 0 <= hogs <= MAX
 MAX_WORKERS = 256
 workers_value = checked_number(int, "a whole number", lambda workers: 1 <= workers <= MAX_WORKERS,
                                lambda text: f"expected 1-{MAX_WORKERS} workers, got {text}")
+
+
+PARTITION_METHODS = ("paper", "filter", "filter_boom_spin")
+
+
+def partition_methods(text: str) -> list[str]:
+    methods = [part.strip() for part in text.split(",")]
+    unknown = [method for method in methods if method not in PARTITION_METHODS]
+    if unknown or not methods:
+        raise argparse.ArgumentTypeError(f"expected some of {', '.join(PARTITION_METHODS)}, got {text!r}")
+    return list(dict.fromkeys(methods))
+
+
+def worker_list(text: str) -> list[int]:
+    return sorted({workers_value(part) for part in text.split(",")})
 
 
 def scheduler_value(text: str) -> str:
@@ -183,9 +199,22 @@ def add_bench(verbs: argparse._SubParsersAction) -> Handler:
     partitions = names.add_parser("partitions", parents=[common], help="the navigations of paper 000 Figs. 12-14 "
                                                                        "in-process")
     partitions.add_argument("--runs", type=runs_value, default=250, help="runs per (read range, level)")
-    partitions.add_argument("--method", choices=["paper", "filter", "filter_boom_spin"], default="paper",
-                            help="the configuration (reproduce partitions' METHOD_FILES)")
+    partitions.add_argument("--methods", "--method", dest="methods", type=partition_methods,
+                            default=["paper", "filter"],
+                            help="comma-separated configurations (reproduce partitions' METHOD_FILES: paper, filter, "
+                                 "filter_boom_spin), each over the whole grid; default paper,filter")
     add_engine_options(partitions)
+    topological = names.add_parser("topological", parents=[common], help="paper 004: missions on the evaluation "
+                                                                         "floor at 0/10/20/30 % misses, both loops")
+    topological.add_argument("--runs", type=runs_value, default=100, help="missions per (loop, miss rate)")
+    add_engine_options(topological)
+    scaling = names.add_parser("scaling", parents=[common], help="the same slice of a reproduction on local "
+                                                                 "clusters of 1, 2, ... workers")
+    scaling.add_argument("--experiment", choices=["partitions", "topological"], default="partitions")
+    scaling.add_argument("--workers", type=worker_list, default=None,
+                         help="comma-separated worker counts (default: 1, 2 and this machine's cores)")
+    scaling.add_argument("--runs", type=runs_value, default=5,
+                         help="runs per (read range, level, method) or missions per (loop, miss rate)")
     routes = names.add_parser("routes", parents=[common], help="paper 001's routes and long_legs in-process with "
                                                                "the shipped files, both controllers")
     routes.add_argument("--seeds", type=runs_value, default=3, help="runs per (route, controller): seeds 1..N")
@@ -253,6 +282,21 @@ def run_bench(args: argparse.Namespace) -> int:
     if args.name == "partitions":
         with engine(args):
             return bench_partitions(args)
+    if args.name == "topological":
+        from rfidnav_experiments.bench.experiments import topological_benchmark
+
+        with engine(args):
+            figures = topological_benchmark(args.runs)
+        print(json.dumps(figures) if args.json else
+              f"{figures['missions']} missions on {figures['floor']} ({figures['runs']} per loop and miss rate) in "
+              f"{figures['wall_s']:.0f} s on {figures['workers']} workers: {figures['missions_per_s']:.2f} per second")
+        return 0
+    if args.name == "scaling":
+        from rfidnav_experiments.bench.experiments import scaling_benchmark, scaling_lines
+
+        rows = scaling_benchmark(args.experiment, args.workers, args.runs)
+        print(json.dumps(rows) if args.json else "\n".join(scaling_lines(rows)))
+        return 0 if all(row["identical"] for row in rows) else 1
     if args.name == "routes":
         from rfidnav_experiments.bench.routes import bench_routes
 
@@ -302,7 +346,7 @@ def bench_partitions(args: argparse.Namespace) -> int:
     if args.name == "planner":
         from rfidnav_experiments.bench.planner import planning_benchmark, reader_round_benchmark
 
-        figures = {**planning_benchmark(plans=args.plans), **reader_round_benchmark()}
+        figures: dict[str, Any] = {**planning_benchmark(plans=args.plans), **reader_round_benchmark()}
         summary = (f"Algorithm 1, {figures['field_m']:g} x {figures['field_m']:g} m at r = "
                    f"{figures['read_range_m'] * 100:g} cm ({figures['tags']} tags): {figures['mean_ms']:.1f} ms "
                    f"per plan on average, p99 {figures['p99_ms']:.1f} ms, {figures['mean_partitions']:.0f} partitions "
@@ -311,10 +355,14 @@ def bench_partitions(args: argparse.Namespace) -> int:
     else:
         from rfidnav_experiments.reproduce.partitions import benchmark
 
-        figures = benchmark(runs=args.runs, method=args.method)
-        summary = (f"{figures['navigations']} navigations ({args.method}) in {figures['wall_s']:.0f} s on "
-                   f"{figures['workers']} workers: {figures['navigations_per_s']:.1f} per second, "
-                   f"{figures['success_pct']:.1f} % reached the goal's partition")
+        per_method = {method: benchmark(runs=args.runs, method=method) for method in args.methods}
+        figures = {"methods": per_method, "wall_s": round(sum(f["wall_s"] for f in per_method.values()), 2),
+                   "navigations": sum(f["navigations"] for f in per_method.values())}
+        summary = "\n".join(
+            [f"{f['navigations']} navigations ({method}) in {f['wall_s']:.0f} s on {f['workers']} workers: "
+             f"{f['navigations_per_s']:.1f} per second, {f['success_pct']:.1f} % reached the goal's partition"
+             for method, f in per_method.items()]
+            + [f"all: {figures['navigations']} navigations in {figures['wall_s']:.0f} s"])
     print(json.dumps(figures) if args.json else summary)
     return 0
 

@@ -25,7 +25,7 @@ PARAM_SETS = ("flc_paper", "flc_tuned")
 
 
 def run_one(job: tuple[str, str, int]) -> tuple[str, RouteRun]:
-    """One (parameter set, route, seed) run; module-level for the pool."""
+    """One (parameter set, route, seed) run (an engine task)."""
     params, name, seed = job
     scenario = scenario_named(name)
     controller = controller_parameters(scenario, CONFIG_DIR / "params" / f"{params}.yaml", seed)

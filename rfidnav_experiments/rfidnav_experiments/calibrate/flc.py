@@ -97,7 +97,7 @@ def scenario_named(name: str) -> Scenario:
 
 
 def run_point(job: tuple[float, float, str, int]) -> tuple[float, float, str, RouteRun]:
-    """One run of flc_paper at (noise, output scale) on a fitted scenario; module-level for the pool."""
+    """One run of flc_paper at (noise, output scale) on a fitted scenario (an engine task)."""
     noise, scale, name, seed = job
     scenario = scenario_named(name)
     controller = scaled_controller(controller_parameters(scenario, PAPER_FILE, seed), scale)

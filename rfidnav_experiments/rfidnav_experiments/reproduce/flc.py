@@ -230,7 +230,7 @@ def params_file(params: str) -> Path:
 
 
 def run_one(job: tuple[str, str, int]) -> tuple[str, RouteRun]:
-    """One (parameter set, scenario, seed) run in the calibrated conditions; module-level for the pool."""
+    """One (parameter set, scenario, seed) run in the calibrated conditions (an engine task)."""
     params, scenario_name, seed = job
     scenario = scenario_named(scenario_name)
     controller = controller_parameters(scenario, params_file(params), seed)

@@ -353,7 +353,7 @@ def navigate(job: NavigationJob) -> NavigationRun:
 
 
 def run_navigation_job(job: NavigationJob) -> NavigationResult:
-    """One navigation; module-level so a worker pool can pickle it."""
+    """One navigation (an engine task)."""
     return NavigationResult.of(job, navigate(job))
 
 

@@ -89,7 +89,7 @@ DEVELOPMENT_SEED = 7                    # the missions the stack was developed o
 EVALUATION_SEED = 1001                  # chosen once for the evaluation floor; never used to tune
 NEW_SEED = 1802                         # chosen once for the new layout (issue 18); never used to tune
 SEEDS = {DEVELOPMENT: DEVELOPMENT_SEED, EVALUATION: EVALUATION_SEED, NEW: NEW_SEED}
-CHUNK = 10                              # missions per pool job
+CHUNK = 10                              # missions per task
 TARGET_RATE, TARGET_SUCCESS_PCT, PATH_TARGET = 0.2, 95.0, 1.15   # ours, on the evaluation floor (issue targets)
 MAX_TIME_S = 900.0                      # run_mission's default: a mission not stopped by then failed
 
@@ -214,19 +214,24 @@ def missions_on(floor: str, missions: int) -> int:
 
 
 def missions_chunk(job: tuple[str, str, float, int, int]) -> tuple[str, str, float, int, list[MissionRun]]:
-    """One pool job: ``count`` missions of a floor's list from ``first``; module-level for the pool."""
+    """One task: ``count`` missions of a floor's list from ``first``."""
     floor, method, rate, first, count = job
     return floor, method, rate, first, random_missions(count, rate, SEEDS[floor], FLOORS[floor], METHODS[method],
                                                        first=first)
 
 
-def run_all(missions: int) -> dict[tuple[str, str, float], list[MissionRun]]:
-    """Every mission, by (floor, method, miss rate), in the floor's mission order."""
-    jobs = [(floor, method, rate, first, min(CHUNK, missions_on(floor, missions) - first))
-            for floor in FLOOR_ORDER for method in METHODS for rate in RATES[floor]
+def mission_jobs(missions: int, floors: tuple[str, ...] = FLOOR_ORDER) -> list[tuple[str, str, float, int, int]]:
+    """The tasks of ``missions`` per (floor, method, miss rate): chunks of CHUNK missions of each floor's list."""
+    return [(floor, method, rate, first, min(CHUNK, missions_on(floor, missions) - first))
+            for floor in floors for method in METHODS for rate in RATES[floor]
             for first in range(0, missions_on(floor, missions), CHUNK)]
+
+
+def run_all(missions: int, floors: tuple[str, ...] = FLOOR_ORDER,
+            label: str = "reproduce topological") -> dict[tuple[str, str, float], list[MissionRun]]:
+    """Every mission, by (floor, method, miss rate), in the floor's mission order."""
     chunks: dict[tuple[str, str, float], list[tuple[int, list[MissionRun]]]] = {}
-    for floor, method, rate, first, runs in run_tasks(missions_chunk, jobs, "reproduce topological"):
+    for floor, method, rate, first, runs in run_tasks(missions_chunk, mission_jobs(missions, floors), label):
         chunks.setdefault((floor, method, rate), []).append((first, runs))
     return {key: [run for _, runs in sorted(parts, key=lambda part: part[0]) for run in runs]
             for key, parts in chunks.items()}

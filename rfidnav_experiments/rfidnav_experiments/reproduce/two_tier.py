@@ -329,7 +329,7 @@ class Search:
 
 
 def fig10_search(job: tuple[str, Placement]) -> Search:
-    """One search of Fig. 10 with the floor reader's polls and failures (module-level for the pool)."""
+    """One search of Fig. 10 with the floor reader's polls and failures (a task of the engine)."""
     method, placement = job
     spiral = spiral_methods()[method]
     polls = SearchPolls(spiral.speed_mps, PollClock(FLOOR_READER.polling(), rng_for(placement.reader_seed, "polls")))
