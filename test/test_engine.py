@@ -85,6 +85,7 @@ def test_resume_runs_only_the_tasks_the_file_does_not_hold_and_gives_the_rows_of
     assert len(tasks.read_text().splitlines()) == 1 + 10
 
 
+@pytest.mark.tier("unit")
 def test_a_task_row_cut_short_by_the_interruption_is_dropped_and_its_task_run_again(tmp_path: Path) -> None:
     tasks = tmp_path / "t.jsonl"
     header = Header("squares", {"n": 3}, "code")
@@ -101,6 +102,7 @@ def test_a_task_row_cut_short_by_the_interruption_is_dropped_and_its_task_run_ag
     assert dict(TaskRows(tasks, header, resume=True).finished_in("squares")) == {"k1": 1, "k2": 4}
 
 
+@pytest.mark.tier("unit")
 def test_resume_refuses_the_tasks_file_of_other_arguments_or_other_code_naming_what_differs(tmp_path: Path) -> None:
     tasks = tmp_path / "t.jsonl"
     TaskRows(tasks, Header("reproduce partitions", {"runs": 250}, "abc"), resume=False).close()
@@ -114,6 +116,7 @@ def test_resume_refuses_the_tasks_file_of_other_arguments_or_other_code_naming_w
         TaskRows(tasks, Header("reproduce partitions", {"runs": 250}, "abc"), resume=True)
 
 
+@pytest.mark.tier("unit")
 def test_the_codec_gives_back_dataclasses_tuples_arrays_odd_keys_and_every_float_to_the_bit() -> None:
     run = MissionRun(True, "arrived", 12.25, 10.0, 1, 2, ("a", "b"), 31.5, (1.0, -2.0), (("a", "left"),),
                      goal_distance_m=math.nan)
@@ -129,6 +132,7 @@ def test_the_codec_gives_back_dataclasses_tuples_arrays_odd_keys_and_every_float
         encode(object())
 
 
+@pytest.mark.tier("unit")
 def test_a_tasks_identity_is_its_batch_and_job_and_nothing_else() -> None:
     job = NAVIGATIONS[0]
     assert task_key("reproduce partitions: navigations", job) == task_key("reproduce partitions: navigations", job)
@@ -137,6 +141,7 @@ def test_a_tasks_identity_is_its_batch_and_job_and_nothing_else() -> None:
     assert task_key("a", job) != task_key("a", NAVIGATIONS[1])
 
 
+@pytest.mark.tier("graph")
 def test_the_same_rows_come_from_a_cluster_started_by_the_documented_dask_scheduler_and_worker_commands(
         tmp_path: Path) -> None:
     dask = Path(sys.executable).parent / "dask"
@@ -188,3 +193,32 @@ def test_an_address_where_no_scheduler_listens_is_one_error_naming_it(monkeypatc
         port = unused.getsockname()[1]
     with pytest.raises(EngineError, match=rf"--scheduler tcp://127.0.0.1:{port}: no scheduler answered within 3 s"):
         Engine(EngineOptions(scheduler=f"tcp://127.0.0.1:{port}")).__enter__()
+
+
+@pytest.mark.tier("graph")
+def test_a_reproduction_stopped_by_sigterm_resumes_and_prints_what_an_uninterrupted_run_prints(
+        tmp_path: Path) -> None:
+    import signal
+    import time
+
+    interrupted, fresh = tmp_path / "interrupted", tmp_path / "fresh"
+    tasks = interrupted / "partitions_tasks.jsonl"
+    command = [sys.executable, "-m", "rfidnav_bringup.cli", "reproduce", "partitions", "--runs", "5", "--json"]
+    stopped = subprocess.Popen([*command, "--workers", "2", "--out", str(interrupted)], cwd=WORKSPACE,
+                               stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    # Stopped once a fifth of its tasks have their rows (a wait on the file, bounded by the command ending).
+    while stopped.poll() is None and (not tasks.exists() or len(tasks.read_text().splitlines()) < 1 + 40):
+        time.sleep(0.1)
+    stopped.send_signal(signal.SIGTERM)
+    _, err = stopped.communicate(timeout=120)
+    assert stopped.returncode == 128 + signal.SIGTERM, err
+    held = len(tasks.read_text().splitlines()) - 1
+    assert 40 <= held < 195
+    resumed = subprocess.run([*command, "--workers", "1", "--out", str(interrupted), "--resume"], cwd=WORKSPACE,
+                             capture_output=True, text=True, timeout=900)
+    assert resumed.returncode == 0, resumed.stderr
+    assert f"{held} of 195 tasks taken from {tasks}" in resumed.stderr
+    uninterrupted = subprocess.run([*command, "--workers", "2", "--out", str(fresh)], cwd=WORKSPACE,
+                                   capture_output=True, text=True, timeout=900)
+    assert uninterrupted.returncode == 0, uninterrupted.stderr
+    assert resumed.stdout == uninterrupted.stdout

@@ -205,7 +205,7 @@ def add_bench(verbs: argparse._SubParsersAction) -> Handler:
                                  "filter_boom_spin), each over the whole grid; default paper,filter")
     add_engine_options(partitions)
     topological = names.add_parser("topological", parents=[common], help="paper 004: missions on the evaluation "
-                                                                         "floor at 0/10/20/30 % misses, both loops")
+                                                                         "floor at 0/10/20/30 %% misses, both loops")
     topological.add_argument("--runs", type=runs_value, default=100, help="missions per (loop, miss rate)")
     add_engine_options(topological)
     scaling = names.add_parser("scaling", parents=[common], help="the same slice of a reproduction on local "
