@@ -85,29 +85,35 @@ def cast_rays(origins: np.ndarray, directions: np.ndarray, walls: np.ndarray,
     ``specular_angle_rad`` from the wall's normal; see :meth:`Walls.cast`."""
     origins = np.asarray(origins, dtype=float).reshape(-1, 2)
     directions = np.asarray(directions, dtype=float).reshape(-1, 2)
-    return Walls(walls).cast(origins[:, 0:1], origins[:, 1:2], directions[:, 0:1], directions[:, 1:2],
-                             specular_angle_rad)
+    rays = np.concatenate((origins[:, 0], origins[:, 1], directions[:, 0], directions[:, 1]))
+    return Walls(walls, len(origins)).cast(rays, specular_angle_rad)
 
 
 class Walls:
-    """Walls (N x 4 rows x1, y1, x2, y2) as rays are cast against them: each one's start a, direction w = b - a
-    and length, worked out once (a sonar casts against the same few walls thousands of times)."""
+    """Walls (N x 4 rows x1, y1, x2, y2) as ``rays`` rays at a time are cast against them: each wall's start a,
+    direction w = b - a and length, worked out once (a sonar casts at the same few walls thousands of times),
+    and laid out ray by ray (K x N, flat): numpy's elementwise ops over whole arrays of a few hundred numbers take
+    about a third of the time of the same ops broadcast from K x 1 and N."""
 
-    def __init__(self, walls: np.ndarray) -> None:
+    def __init__(self, walls: np.ndarray, rays: int) -> None:
         self.segments = np.asarray(walls, dtype=float).reshape(-1, 4)
-        self.ax, self.ay = self.segments[:, 0], self.segments[:, 1]                        # N
-        self.wx, self.wy = self.segments[:, 2] - self.ax, self.segments[:, 3] - self.ay    # N
-        self.length = np.hypot(self.wx, self.wy)
+        self.rays = rays
+        count = len(self.segments)
+        ax, ay = self.segments[:, 0], self.segments[:, 1]
+        wx, wy = self.segments[:, 2] - ax, self.segments[:, 3] - ay
+        self.ax, self.ay, self.wx, self.wy = (np.tile(values, rays) for values in (ax, ay, wx, wy))   # K x N
+        self.length = np.hypot(wx, wy)                                                               # N
+        self.spread = np.repeat(np.arange(4 * rays), count)   # a ray's ox, oy, dx, dy beside each of the walls
+        self.firsts = np.arange(rays) * count                 # where each ray's walls start in K x N
 
     def __len__(self) -> int:
         return len(self.segments)
 
-    def cast(self, ox: np.ndarray, oy: np.ndarray, dx: np.ndarray, dy: np.ndarray,
-             specular_angle_rad: float = math.pi / 2.0) -> np.ndarray:
-        """Distance along each ray (origins ``ox``, ``oy`` and unit directions ``dx``, ``dy``, K x 1 each) to the
-        nearest wall it hits, inf where it hits none, or where it meets that wall more than ``specular_angle_rad``
-        from the wall's normal (the unit direction's |d x w| / |w| is the cosine of that angle); distances are
-        in multiples of the directions' lengths.
+    def cast(self, rays: np.ndarray, specular_angle_rad: float = math.pi / 2.0) -> np.ndarray:
+        """Distance along each ray (``rays``: the K origins' x, then their y, then the K unit directions' x, then
+        their y) to the nearest wall it hits, inf where it hits none, or where it meets that wall more than
+        ``specular_angle_rad`` from the wall's normal (the unit direction's |d x w| / |w| is the cosine of that
+        angle); distances are in multiples of the directions' lengths.
 
         Ray o + t d meets wall a + s w where t = ((a - o) x w) / (d x w) and s = ((a - o) x d) / (d x w); a hit
         needs t >= 0 and 0 <= s <= 1 (a wall's ends belong to it, so a ray through the joint of two walls hits).
@@ -117,21 +123,23 @@ class Walls:
         reported as 0): a transducer against a wall, or a robot overlapping one, reads the minimum range rather
         than seeing through it.
         """
-        if len(self.segments) == 0:
-            return np.full(len(ox), np.inf)
-        relative_x, relative_y = ox - self.ax, oy - self.ay                     # K x N: o - a
-        denominator = dx * self.wy - dy * self.wx                               # K x N: d x w
+        count = len(self.segments)
+        if count == 0:
+            return np.full(self.rays, np.inf)
+        ox, oy, dx, dy = rays.take(self.spread).reshape(4, -1)                # K x N each
+        relative_x, relative_y = ox - self.ax, oy - self.ay                     # o - a
+        denominator = dx * self.wy - dy * self.wx                               # d x w
         safe = np.where(denominator == 0.0, np.nan, denominator)
         t = (self.wx * relative_y - self.wy * relative_x) / safe                # (a - o) x w / (d x w)
         s = (dx * relative_y - dy * relative_x) / safe                          # (a - o) x d / (d x w)
         hit = (t >= -ON_WALL_TOLERANCE_M) & (s >= 0.0) & (s <= 1.0)
         distances = np.where(hit, np.maximum(t, 0.0), np.inf)
         if specular_angle_rad >= math.pi / 2.0:
-            return distances.min(axis=1)
-        nearest = distances.argmin(axis=1)
-        rows = np.arange(len(nearest))
-        cos_incidence = np.abs(denominator[rows, nearest]) / self.length[nearest]
-        return np.where(cos_incidence >= math.cos(specular_angle_rad), distances[rows, nearest], np.inf)
+            return distances.reshape(self.rays, count).min(axis=1)
+        nearest = distances.reshape(self.rays, count).argmin(axis=1)
+        flat = self.firsts + nearest
+        cos_incidence = np.abs(denominator.take(flat)) / self.length.take(nearest)
+        return np.where(cos_incidence >= math.cos(specular_angle_rad), distances.take(flat), np.inf)
 
 
 class SonarModel:
@@ -161,14 +169,13 @@ class SonarModel:
         self.noise_fraction = noise_fraction
         self.rays_per_beam = rays_per_beam
         self.specular_angle_rad = specular_angle_rad
-        # Every ray of every beam, beam-major (K = beams x rays_per_beam): base_link origin (K x 1 columns, as the
-        # cast takes them) and bearing.
+        # Every ray of every beam, beam-major (K = beams x rays_per_beam): base_link origin and bearing.
         spread = np.linspace(-1.0, 1.0, rays_per_beam) if rays_per_beam > 1 else np.zeros(1)
         origins = np.repeat(np.array([r.position for r in self.rangefinders], dtype=float).reshape(-1, 2),
                             rays_per_beam, axis=0)
-        self.ray_x, self.ray_y = origins[:, 0:1], origins[:, 1:2]
+        self.ray_x, self.ray_y = origins[:, 0], origins[:, 1]
         self.ray_bearings = np.concatenate([r.bearing_rad + r.beam_half_angle_rad * spread
-                                            for r in self.rangefinders] or [np.empty(0)]).reshape(-1, 1)
+                                            for r in self.rangefinders] or [np.empty(0)])
         self.min_range_m = [r.min_range_m for r in self.rangefinders]
         self.max_range_m = [r.max_range_m for r in self.rangefinders]
         # No echo from farther than this from the robot's centre is in range: only the walls within it are cast
@@ -177,17 +184,18 @@ class SonarModel:
         # cell lists, and the nearest of the walls left out would read as no echo too, specular or not.
         self.reach_m = (max(self.max_range_m, default=0.0)
                         + float(np.hypot(origins[:, 0], origins[:, 1]).max(initial=0.0)))
-        self.nearby = NearbyGrid(walls, self.reach_m, lambda indices: Walls(walls[indices]))
+        self.nearby = NearbyGrid(walls, self.reach_m, lambda indices: Walls(walls[indices], len(origins)))
 
-    def echo_distances(self, x: float, y: float, yaw: float) -> np.ndarray:
+    def echo_distances(self, x: float, y: float, yaw: float) -> list[float]:
         """Noise-free distance of the first echo of each beam (nearest wall in its cone), in order; inf for none,
         and for one from a wall farther than ``reach_m`` from the robot (beyond every beam's range)."""
         c, s = math.cos(yaw), math.sin(yaw)
         bearings = yaw + self.ray_bearings
-        origin_x, origin_y = x + c * self.ray_x - s * self.ray_y, y + s * self.ray_x + c * self.ray_y
-        distances = self.nearby.near(x, y).cast(origin_x, origin_y, np.cos(bearings), np.sin(bearings),
-                                                self.specular_angle_rad)
-        return distances.reshape(len(self.rangefinders), self.rays_per_beam).min(axis=1)
+        rays = np.concatenate((x + c * self.ray_x - s * self.ray_y, y + s * self.ray_x + c * self.ray_y,
+                               np.cos(bearings), np.sin(bearings)))
+        distances = self.nearby.near(x, y).cast(rays, self.specular_angle_rad).tolist()
+        per_beam = self.rays_per_beam
+        return [min(distances[first:first + per_beam]) for first in range(0, len(distances), per_beam)]
 
     def readings(self, x: float, y: float, yaw: float, rng: np.random.Generator) -> list[float]:
         """One reading per rangefinder, in order, with the robot at (x, y, yaw): metres in [min, max], or +inf.
@@ -195,8 +203,7 @@ class SonarModel:
         # Noise is drawn for every beam, echo or not, so the stream consumed does not depend on the pose.
         noise = rng.standard_normal(len(self.rangefinders)).tolist()
         readings = []
-        for echo, low, high, z in zip(self.echo_distances(x, y, yaw).tolist(), self.min_range_m, self.max_range_m,
-                                      noise):
+        for echo, low, high, z in zip(self.echo_distances(x, y, yaw), self.min_range_m, self.max_range_m, noise):
             if echo > high:
                 readings.append(math.inf)
                 continue
