@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -95,12 +96,17 @@ def follower_offsets(parameters: WallFollowerParameters = FOLLOWER) -> dict[str,
                                                                      parameters.sonar_offsets_m)}
 
 
-def centre_sonar(ranges: dict[str, float], offsets: dict[str, float],
-                 parameters: WallFollowerParameters = FOLLOWER) -> Sonar:
-    """The follower's Sonar (distances from the robot's centre) from the rangefinders' readings (inf stays inf),
-    fed as the wall_follower node feeds it: field by field from ``parameters.sonar_topics``."""
-    names = [topic.rsplit("/", 1)[-1] for topic in parameters.sonar_topics]
-    return Sonar(**{field: ranges[name] + offsets[name] for field, name in zip(SONAR_FIELDS, names)})
+def sonar_feeds(names: Sequence[str], offsets: dict[str, float],
+                parameters: WallFollowerParameters = FOLLOWER) -> list[tuple[str, int, float]]:
+    """Per field of the follower's Sonar, as the wall_follower node feeds it from ``parameters.sonar_topics``: the
+    position in a reading of the rangefinders ``names`` of the one that feeds it, and the offset added."""
+    feeding = [topic.rsplit("/", 1)[-1] for topic in parameters.sonar_topics]
+    return [(field, names.index(name), offsets[name]) for field, name in zip(SONAR_FIELDS, feeding)]
+
+
+def centre_sonar(readings: Sequence[float], feeds: list[tuple[str, int, float]]) -> Sonar:
+    """The follower's Sonar (distances from the robot's centre) from the rangefinders' readings (inf stays inf)."""
+    return Sonar(**{field: readings[index] + offset for field, index, offset in feeds})
 
 
 def start_pose_before_tag(world: World, tag_id: str, before_m: float = START_BEFORE_TAG_M,
@@ -123,7 +129,7 @@ def run_mission(world: World, topological_map: TopologicalMap, start_pose: tuple
                 sonar: SonarParameters = SONAR) -> MissionRun:
     walls = world.wall_segments()
     sonar_model = sonar.model(walls)
-    offsets = follower_offsets()
+    feeds = sonar_feeds([r.name for r in sonar_model.rangefinders], follower_offsets())
     reader = WallTagReader(InductionArea(), world.wall_tags, passage_miss_probability=miss_probability)
     follower = WallFollower(settings)
     executor = MissionExecutor(topological_map, weight, recover_missed_tags)
@@ -160,7 +166,7 @@ def run_mission(world: World, topological_map: TopologicalMap, start_pose: tuple
             apply(at_dead_end, False)
         for decision in executor.on_reads(reader.read(truth.x, truth.y, truth.yaw, rng)):
             apply(decision, False)
-        command = follower.step(centre_sonar(sonar_model.ranges(truth.x, truth.y, truth.yaw, rng), offsets),
+        command = follower.step(centre_sonar(sonar_model.readings(truth.x, truth.y, truth.yaw, rng), feeds),
                                 OdomPose(odom.x, odom.y, odom.yaw))
         if command.event == STOPPED:
             finished = True
