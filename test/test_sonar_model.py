@@ -227,7 +227,7 @@ def test_readings_equal_those_of_the_model_before_the_grid_cast_at_every_wall(fl
         seed = int(rng.integers(2**31))
         assert model.ranges(x, y, yaw, np.random.default_rng(seed)) == sonar_ranges(model, x, y, yaw,
                                                                                    np.random.default_rng(seed))
-    assert max(len(cell) for cell in model.nearby.cells) < len(walls)      # the grid does leave walls out
+    assert max(len(cell) for cell in model.nearby.sets) < len(walls)       # the grid does leave walls out
 
 
 def test_rays_cast_along_a_floors_walls_and_through_their_ends_equal_the_reference_cast() -> None:

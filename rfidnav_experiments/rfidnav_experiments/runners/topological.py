@@ -27,6 +27,7 @@ robot in its corridor all the same.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -52,6 +53,7 @@ from rfidnav_control.wall_following import (
 from rfidnav_experiments.runners.shipped import shipped_parameters
 from rfidnav_planning.mission_executor import STOP, TURNS, Decision, MissionExecutor
 from rfidnav_sim.parameters import RobotSimParameters, SonarParameters
+from rfidnav_sim.sonar_model import SonarModel
 from rfidnav_sim.wall_tag_model import InductionArea, WallTagReader
 from rfidnav_sim.world import World, load_world
 
@@ -109,6 +111,13 @@ def centre_sonar(readings: Sequence[float], feeds: list[tuple[str, int, float]])
     return Sonar(**{field: readings[index] + offset for field, index, offset in feeds})
 
 
+@functools.lru_cache(maxsize=8)
+def sonar_model_among(sonar: SonarParameters, walls: bytes) -> SonarModel:
+    """The sonar model among ``walls`` (an N x 4 float array's bytes), made once for a floor's missions: its
+    readings depend on the pose and the generator alone, and its grid of nearby walls takes a while to lay out."""
+    return sonar.model(np.frombuffer(walls).reshape(-1, 4))
+
+
 def start_pose_before_tag(world: World, tag_id: str, before_m: float = START_BEFORE_TAG_M,
                           wall_distance_m: float = FOLLOWER.wall_distance_m) -> tuple[float, float, float]:
     """A pose ``before_m`` before wall tag ``tag_id``, ``wall_distance_m`` out from its wall, heading so that the
@@ -128,7 +137,7 @@ def run_mission(world: World, topological_map: TopologicalMap, start_pose: tuple
                 weight: str = "length", recover_missed_tags: bool = True, robot: RobotSimParameters = ROBOT,
                 sonar: SonarParameters = SONAR) -> MissionRun:
     walls = world.wall_segments()
-    sonar_model = sonar.model(walls)
+    sonar_model = sonar_model_among(sonar, walls.tobytes())
     feeds = sonar_feeds([r.name for r in sonar_model.rangefinders], follower_offsets())
     reader = WallTagReader(InductionArea(), world.wall_tags, passage_miss_probability=miss_probability)
     follower = WallFollower(settings)
