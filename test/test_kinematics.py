@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from rfidnav_sim.kinematics import BaseLimits, DiffDriveBase, OdometryDrift, Pose2D
+from support.reference_cores import ReferenceBase
 
 pytestmark = pytest.mark.tier("unit")
 
@@ -254,3 +255,28 @@ def test_without_walls_the_base_drives_anywhere() -> None:
     base = make_base()
     assert drive_recording(base, 0.3, 0.0, 5.0) == []
     assert base.truth.x > 1.0
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_a_base_among_walls_steps_as_the_step_of_commit_249c210_did_to_the_bit(seed: int) -> None:
+    # Seeded random commands (forward, back, turning, beyond the wheel limits, gaps past the command timeout) in a
+    # 3 m box with a pillar: it bumps, stalls and gets free; truth, odometry (slip drawn in batches), speeds,
+    # bumps and events equal those of the old step at every step.
+    walls = np.array([[-1.5, -1.5, 1.5, -1.5], [1.5, -1.5, 1.5, 1.5], [1.5, 1.5, -1.5, 1.5], [-1.5, 1.5, -1.5, -1.5],
+                      [0.4, 0.4, 0.6, 0.6]])
+    drift = OdometryDrift(0.004, -0.004, 0.01, 0.002)
+    new, old = (kind(Pose2D(0.0, 0.0, 0.3), LIMITS, drift, np.random.default_rng(seed), walls)
+                for kind in (DiffDriveBase, ReferenceBase))
+    commands = np.random.default_rng([seed, 1])
+    bumped = 0
+    for step in range(6000):
+        if step % 50 == 0:
+            linear, angular, silent = commands.uniform(-0.4, 0.8), commands.uniform(-2.5, 2.5), commands.random() < 0.1
+        if not silent:
+            new.set_command(linear, angular)
+            old.set_command(linear, angular)
+        assert new.step(DT) == old.step(DT)
+        assert (new.truth, new.odom, new.left_speed, new.right_speed, new.bumps, new.distance_travelled_m) == \
+            (old.truth, old.odom, old.left_speed, old.right_speed, old.bumps, old.distance_travelled_m)
+        bumped += new.bumped
+    assert new.bumps > 0 and bumped > 0 and new.distance_travelled_m > 5.0      # it did meet the walls

@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 from rfidnav_sim.wall_tag_model import InductionArea, WallTag, WallTagReader
+from support.reference_cores import ReferenceReader
 
 pytestmark = pytest.mark.tier("unit")
 
@@ -122,3 +123,35 @@ def test_an_unreadable_tag_is_never_read_and_the_others_are() -> None:
     tags = [WallTag("A", (-0.1, 0.8), INTO_HALLWAY), WallTag("B", (0.1, 0.8), INTO_HALLWAY)]
     reader = WallTagReader(InductionArea(), tags, unreadable_tags=["B"])
     assert reader.read(0.0, 0.0, 0.0, np.random.default_rng(4)) == ["A"]
+
+
+@pytest.mark.parametrize("floor", ["building_large", "building_fig5", "building_eval", "building_ring"])
+def test_reads_along_a_floor_equal_those_of_the_reader_that_tests_every_tag(floor: str) -> None:
+    # The reference is the reader of commit 249c210 (numpy arrays over every tag). A random walk past the floor's
+    # tags and off the floor, miss probabilities of both kinds and an unreadable tag, one noise stream each:
+    # the same reads, round by round, and the same draws consumed.
+    from rfidnav_bringup.scenario import CONFIG_DIR
+    from rfidnav_sim.world import load_world
+
+    tags = load_world(CONFIG_DIR / "worlds" / f"{floor}.yaml").wall_tags
+    settings = {"miss_probability": 0.2, "passage_miss_probability": 0.3, "unreadable_tags": [tags[0].tag_id]}
+    new, old = WallTagReader(InductionArea(), tags, **settings), ReferenceReader(InductionArea(), tags, **settings)
+    walk = np.random.default_rng(11)
+    new_rng, old_rng = np.random.default_rng(5), np.random.default_rng(5)
+    reads = 0
+    for tag in tags:
+        # Along the tag's wall, 0.6-1.0 m out, both ways, then a jump anywhere near it.
+        heading = math.atan2(tag.normal[1], tag.normal[0]) + math.pi / 2.0
+        for direction in (1.0, -1.0):
+            out = walk.uniform(0.6, 1.0)
+            for along in np.arange(-1.5, 1.5, 0.05) * direction:
+                x = tag.position[0] + out * tag.normal[0] + along * math.cos(heading)
+                y = tag.position[1] + out * tag.normal[1] + along * math.sin(heading)
+                yaw = heading + (0.0 if direction > 0 else math.pi) + walk.normal(0.0, 0.1)
+                assert new.read(x, y, yaw, new_rng) == old.read(x, y, yaw, old_rng)
+                reads += bool(old.in_reach(x, y, yaw).any())
+                assert new.in_reach(x, y, yaw).tolist() == old.in_reach(x, y, yaw).tolist()
+        x, y = np.array(tag.position) + walk.uniform(-40.0, 40.0, 2)
+        assert new.read(x, y, 0.0, new_rng) == old.read(x, y, 0.0, old_rng)
+    assert new_rng.random() == old_rng.random()
+    assert reads > len(tags)                                          # the walk did pass the tags

@@ -24,6 +24,7 @@ from rfidnav_common.geometry import nearest_on_segments
 
 CONTACT_MARGIN_M = 0.005        # a wall this much beyond the footprint still presses the bumper (no flicker)
 BOTH_BUMPERS_RAD = math.radians(20.0)   # a wall this close to straight ahead presses both bumpers
+SLIP_BATCH = 256                # odometry slip draws fetched at a time (the generator is the odometry's alone)
 
 
 @dataclass(frozen=True)
@@ -90,12 +91,15 @@ class DiffDriveBase:
         self.limits = limits
         self.walls = np.zeros((0, 4)) if walls is None else np.asarray(walls, dtype=float).reshape(-1, 4)
         self.bumpers = ConditionTracker()
+        self.bumped = False             # either bumper pressed (the tracker's, kept here: asked every step)
         self.bumps = 0                  # presses so far (either bumper)
         # How far the base may move before a wall could be within CONTACT_MARGIN_M of its footprint: the distance
         # to the walls changes by no more than the distance moved, so until then no wall needs looking at.
         self.clearance_m = 0.0
         self.drift = drift
         self.rng = rng
+        self.slips: list[float] = []    # slip draws fetched, and the next one's index
+        self.slip_index = 0
         self.truth = Pose2D(start.x, start.y, start.yaw)
         self.odom = Pose2D()  # odom frame starts at the robot's start pose (REP 105)
         self.left_speed = 0.0
@@ -122,42 +126,52 @@ class DiffDriveBase:
         """Advance ``dt``; the /base/event records of bumpers pressed or released in this step."""
         limits = self.limits
         linear, angular = self.command if self.command_age_s <= limits.command_timeout_s else (0.0, 0.0)
-        linear, angular = gate_motion(linear, angular, bumped=self.bumpers.bumped, halted=False)
+        linear, angular = gate_motion(linear, angular, bumped=self.bumped, halted=False)
         self.command_age_s += dt
         half_track = 0.5 * limits.track_width_m
-        targets = (linear - angular * half_track, linear + angular * half_track)
+        left_target, right_target = linear - angular * half_track, linear + angular * half_track
         # Scale both wheels together so a saturated command keeps its curvature.
-        peak = max(abs(targets[0]), abs(targets[1]))
+        peak = max(abs(left_target), abs(right_target))
         if peak > limits.max_wheel_speed_mps:
-            targets = tuple(t * limits.max_wheel_speed_mps / peak for t in targets)
+            left_target = left_target * limits.max_wheel_speed_mps / peak
+            right_target = right_target * limits.max_wheel_speed_mps / peak
         max_change = limits.max_wheel_accel_mps2 * dt
         left_before, right_before = self.left_speed, self.right_speed
-        self.left_speed += min(max(targets[0] - self.left_speed, -max_change), max_change)
-        self.right_speed += min(max(targets[1] - self.right_speed, -max_change), max_change)
+        self.left_speed += min(max(left_target - left_before, -max_change), max_change)
+        self.right_speed += min(max(right_target - right_before, -max_change), max_change)
         left_m = 0.5 * (left_before + self.left_speed) * dt
         right_m = 0.5 * (right_before + self.right_speed) * dt
-        before = Pose2D(self.truth.x, self.truth.y, self.truth.yaw)
-        self.truth.advance(left_m, right_m, limits.track_width_m)
+        truth = self.truth
+        x, y, yaw = truth.x, truth.y, truth.yaw
+        truth.advance(left_m, right_m, limits.track_width_m)
         events: list[BaseEventRecord] = []
-        moved = math.hypot(self.truth.x - before.x, self.truth.y - before.y)
-        if len(self.walls) and (self.bumpers.bumped or moved >= self.clearance_m):
-            if moves_into_wall(self.walls, (before.x, before.y), (self.truth.x, self.truth.y),
-                               limits.footprint_radius_m):
+        moved = math.hypot(truth.x - x, truth.y - y)
+        if len(self.walls) and (self.bumped or moved >= self.clearance_m):
+            if moves_into_wall(self.walls, (x, y), (truth.x, truth.y), limits.footprint_radius_m):
                 # The wheels stall against the wall: the step is not made, and the encoders do not count it.
-                self.truth, self.left_speed, self.right_speed = before, 0.0, 0.0
+                truth.x, truth.y, truth.yaw, self.left_speed, self.right_speed = x, y, yaw, 0.0, 0.0
                 left_m = right_m = 0.0
-            distance, point = self.wall_distance(self.truth)
+            distance, point = self.wall_distance(truth)
             self.clearance_m = distance - limits.footprint_radius_m - CONTACT_MARGIN_M
             events = self.update_bumpers(distance, point)
         else:
             self.clearance_m -= moved
         self.distance_travelled_m += abs(0.5 * (left_m + right_m))
         drift = self.drift
-        slip = self.rng.normal(0.0, drift.slip_std, 2) if drift.slip_std > 0.0 else (0.0, 0.0)
-        self.odom.advance(left_m * (1.0 + drift.left_scale_error + slip[0]),
-                          right_m * (1.0 + drift.right_scale_error + slip[1]),
+        left_slip, right_slip = self.slip() if drift.slip_std > 0.0 else (0.0, 0.0)
+        self.odom.advance(left_m * (1.0 + drift.left_scale_error + left_slip),
+                          right_m * (1.0 + drift.right_scale_error + right_slip),
                           limits.track_width_m * (1.0 + drift.track_scale_error))
         return events
+
+    def slip(self) -> tuple[float, float]:
+        """This step's (left, right) slip: the next two of the generator's normal draws, fetched SLIP_BATCH
+        steps at a time (one draw of 2 n is the stream of n draws of 2, to the bit; far cheaper)."""
+        if self.slip_index == len(self.slips):
+            self.slips, self.slip_index = self.rng.normal(0.0, self.drift.slip_std, 2 * SLIP_BATCH).tolist(), 0
+        index = self.slip_index
+        self.slip_index = index + 2
+        return self.slips[index], self.slips[index + 1]
 
     def wall_distance(self, pose: Pose2D) -> tuple[float, np.ndarray]:
         return nearest_on_segments((pose.x, pose.y), self.walls)
@@ -174,6 +188,7 @@ class DiffDriveBase:
                 pressed[BUMP_LEFT] = bearing > -BOTH_BUMPERS_RAD
                 pressed[BUMP_RIGHT] = bearing < BOTH_BUMPERS_RAD
         events = self.bumpers.events(pressed)
+        self.bumped = self.bumpers.bumped
         if any(event.active for event in events):
             # The Create driver stops the base on a press; a new command is needed to move again.
             self.command, self.left_speed, self.right_speed = (0.0, 0.0), 0.0, 0.0

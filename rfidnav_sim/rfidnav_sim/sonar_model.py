@@ -24,7 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from rfidnav_common.geometry import point_segment_distance
+from rfidnav_sim.nearby import NearbyGrid
 
 ON_WALL_TOLERANCE_M = 1e-9      # a ray origin this far "behind" a wall is on it (rotated mounting points round off)
 NAME_PATTERN = re.compile(r"[A-Za-z][A-Za-z0-9_]*")      # a valid last token of a ROS topic name
@@ -82,74 +82,64 @@ def cast_rays(origins: np.ndarray, directions: np.ndarray, walls: np.ndarray,
               specular_angle_rad: float = math.pi / 2.0) -> np.ndarray:
     """Distance along each ray (K origins, K unit directions, K x 2 each) to the nearest wall (N x 4 rows
     x1, y1, x2, y2) it hits, inf where it hits none, or where it meets that wall more than
-    ``specular_angle_rad`` from the wall's normal (the unit direction's |d x w| / |w| is the cosine of that
-    angle); distances are in multiples of the directions' lengths.
-
-    Ray o + t d meets wall a + s (b - a) where t = ((a - o) x w) / (d x w) and s = ((a - o) x d) / (d x w), w = b - a;
-    a hit needs t >= 0 and 0 <= s <= 1 (a wall's ends belong to it, so a ray through the joint of two walls
-    hits). A ray parallel to a wall (d x w = 0) misses it, even one running inside it: that wall shows the
-    sonar no face to echo from. A ray whose origin lies on a wall hits that wall at 0 whichever way it points
-    (t down to -ON_WALL_TOLERANCE_M counts, reported as 0): a transducer against a wall, or a robot overlapping
-    one, reads the minimum range rather than seeing through it.
-    """
+    ``specular_angle_rad`` from the wall's normal; see :meth:`Walls.cast`."""
     origins = np.asarray(origins, dtype=float).reshape(-1, 2)
     directions = np.asarray(directions, dtype=float).reshape(-1, 2)
-    walls = np.asarray(walls, dtype=float).reshape(-1, 4)
-    if len(walls) == 0:
-        return np.full(len(origins), np.inf)
-    ax, ay = walls[:, 0], walls[:, 1]                                         # N
-    wx, wy = walls[:, 2] - ax, walls[:, 3] - ay                               # N
-    ox, oy = origins[:, 0:1] - ax, origins[:, 1:2] - ay                       # K x N: o - a
-    dx, dy = directions[:, 0:1], directions[:, 1:2]                           # K x 1
-    denominator = dx * wy - dy * wx                                           # K x N: d x w
-    parallel = denominator == 0.0
-    safe = np.where(parallel, 1.0, denominator)
-    t = (wx * oy - wy * ox) / safe                                            # (a - o) x w / (d x w)
-    s = (dx * oy - dy * ox) / safe                                            # (a - o) x d / (d x w)
-    hit = ~parallel & (t >= -ON_WALL_TOLERANCE_M) & (s >= 0.0) & (s <= 1.0)
-    distances = np.where(hit, np.maximum(t, 0.0), np.inf)
-    if specular_angle_rad >= math.pi / 2.0:
-        return distances.min(axis=1)
-    nearest = distances.argmin(axis=1)
-    rows = np.arange(len(origins))
-    cos_incidence = np.abs(denominator[rows, nearest]) / np.hypot(wx, wy)[nearest]
-    echoes = cos_incidence >= math.cos(specular_angle_rad)
-    return np.where(echoes, distances[rows, nearest], np.inf)
+    rays = np.concatenate((origins[:, 0], origins[:, 1], directions[:, 0], directions[:, 1]))
+    return Walls(walls, len(origins)).cast(rays, specular_angle_rad)
 
 
-class WallGrid:
-    """A uniform grid over a floor's walls: each ``cell_m`` square cell lists the walls that come within
-    ``reach_m`` of any point in it (within reach of its centre plus half its diagonal), so that the walls near a
-    point are one look-up, not a pass over all of them. A point off the grid gets every wall.
+class Walls:
+    """Walls (N x 4 rows x1, y1, x2, y2) as ``rays`` rays at a time are cast against them: each wall's start a,
+    direction w = b - a and length, worked out once (a sonar casts at the same few walls thousands of times),
+    and laid out ray by ray (K x N, flat): numpy's elementwise ops over whole arrays of a few hundred numbers take
+    about a third of the time of the same ops broadcast from K x 1 and N."""
 
-    Casting against a cell's walls instead of all gives the same readings: an echo within a beam's range comes
-    from a wall within ``reach_m`` of the robot, which the cell lists, and the walls it leaves out are farther
-    than every range (the nearest of them, specular or not, would read as no echo too)."""
+    def __init__(self, walls: np.ndarray, rays: int) -> None:
+        self.segments = np.asarray(walls, dtype=float).reshape(-1, 4)
+        self.rays = rays
+        count = len(self.segments)
+        ax, ay = self.segments[:, 0], self.segments[:, 1]
+        wx, wy = self.segments[:, 2] - ax, self.segments[:, 3] - ay
+        self.ax, self.ay, self.wx, self.wy = (np.tile(values, rays) for values in (ax, ay, wx, wy))   # K x N
+        self.length = np.hypot(wx, wy)                                                               # N
+        self.spread = np.repeat(np.arange(4 * rays), count)   # a ray's ox, oy, dx, dy beside each of the walls
+        self.firsts = np.arange(rays) * count                 # where each ray's walls start in K x N
 
-    def __init__(self, walls: np.ndarray, reach_m: float, cell_m: float = 1.0) -> None:
-        self.walls = np.asarray(walls, dtype=float).reshape(-1, 4)
-        self.cell_m = cell_m
-        if len(self.walls) == 0:
-            self.origin, self.shape, self.cells = np.zeros(2), (0, 0), []
-            return
-        low = np.minimum(self.walls[:, :2], self.walls[:, 2:]).min(axis=0) - reach_m
-        high = np.maximum(self.walls[:, :2], self.walls[:, 2:]).max(axis=0) + reach_m
-        self.origin = low
-        columns, rows = np.ceil((high - low) / cell_m)
-        self.shape = (int(columns), int(rows))
-        ix, iy = np.meshgrid(np.arange(self.shape[0]), np.arange(self.shape[1]), indexing="ij")
-        centres = low + (np.column_stack((ix.ravel(), iy.ravel())) + 0.5) * cell_m
-        distances = np.column_stack([point_segment_distance(centres, wall[:2], wall[2:]) for wall in self.walls])
-        within = distances <= reach_m + cell_m / math.sqrt(2.0)                          # cells x walls
-        self.cells = [self.walls[row] for row in within]
+    def __len__(self) -> int:
+        return len(self.segments)
 
-    def near(self, x: float, y: float) -> np.ndarray:
-        """The walls (M x 4) that may lie within reach of (x, y)."""
-        i = math.floor((x - self.origin[0]) / self.cell_m)
-        j = math.floor((y - self.origin[1]) / self.cell_m)
-        if not (0 <= i < self.shape[0] and 0 <= j < self.shape[1]):
-            return self.walls
-        return self.cells[i * self.shape[1] + j]
+    def cast(self, rays: np.ndarray, specular_angle_rad: float = math.pi / 2.0) -> np.ndarray:
+        """Distance along each ray (``rays``: the K origins' x, then their y, then the K unit directions' x, then
+        their y) to the nearest wall it hits, inf where it hits none, or where it meets that wall more than
+        ``specular_angle_rad`` from the wall's normal (the unit direction's |d x w| / |w| is the cosine of that
+        angle); distances are in multiples of the directions' lengths.
+
+        Ray o + t d meets wall a + s w where t = ((a - o) x w) / (d x w) and s = ((a - o) x d) / (d x w); a hit
+        needs t >= 0 and 0 <= s <= 1 (a wall's ends belong to it, so a ray through the joint of two walls hits).
+        A ray parallel to a wall (d x w = 0) misses it, even one running inside it: that wall shows the sonar no
+        face to echo from (dividing by NaN there makes t and s NaN, which no test passes). A ray whose origin
+        lies on a wall hits that wall at 0 whichever way it points (t down to -ON_WALL_TOLERANCE_M counts,
+        reported as 0): a transducer against a wall, or a robot overlapping one, reads the minimum range rather
+        than seeing through it.
+        """
+        count = len(self.segments)
+        if count == 0:
+            return np.full(self.rays, np.inf)
+        ox, oy, dx, dy = rays.take(self.spread).reshape(4, -1)                # K x N each
+        relative_x, relative_y = ox - self.ax, oy - self.ay                     # o - a
+        denominator = dx * self.wy - dy * self.wx                               # d x w
+        safe = np.where(denominator == 0.0, np.nan, denominator)
+        t = (self.wx * relative_y - self.wy * relative_x) / safe                # (a - o) x w / (d x w)
+        s = (dx * relative_y - dy * relative_x) / safe                          # (a - o) x d / (d x w)
+        hit = (t >= -ON_WALL_TOLERANCE_M) & (s >= 0.0) & (s <= 1.0)
+        distances = np.where(hit, np.maximum(t, 0.0), np.inf)
+        if specular_angle_rad >= math.pi / 2.0:
+            return distances.reshape(self.rays, count).min(axis=1)
+        nearest = distances.reshape(self.rays, count).argmin(axis=1)
+        flat = self.firsts + nearest
+        cos_incidence = np.abs(denominator.take(flat)) / self.length.take(nearest)
+        return np.where(cos_incidence >= math.cos(specular_angle_rad), distances.take(flat), np.inf)
 
 
 class SonarModel:
@@ -181,35 +171,46 @@ class SonarModel:
         self.specular_angle_rad = specular_angle_rad
         # Every ray of every beam, beam-major (K = beams x rays_per_beam): base_link origin and bearing.
         spread = np.linspace(-1.0, 1.0, rays_per_beam) if rays_per_beam > 1 else np.zeros(1)
-        self.ray_origins = np.repeat(np.array([r.position for r in self.rangefinders], dtype=float).reshape(-1, 2),
-                                     rays_per_beam, axis=0)
+        origins = np.repeat(np.array([r.position for r in self.rangefinders], dtype=float).reshape(-1, 2),
+                            rays_per_beam, axis=0)
+        self.ray_x, self.ray_y = origins[:, 0], origins[:, 1]
         self.ray_bearings = np.concatenate([r.bearing_rad + r.beam_half_angle_rad * spread
                                             for r in self.rangefinders] or [np.empty(0)])
-        self.min_range_m = np.array([r.min_range_m for r in self.rangefinders])
-        self.max_range_m = np.array([r.max_range_m for r in self.rangefinders])
+        self.min_range_m = [r.min_range_m for r in self.rangefinders]
+        self.max_range_m = [r.max_range_m for r in self.rangefinders]
         # No echo from farther than this from the robot's centre is in range: only the walls within it are cast
-        # against (on a floor of 110 walls about 7 lie within 5 m of a robot in a corridor).
-        self.reach_m = float(self.max_range_m.max(initial=0.0)
-                             + np.hypot(self.ray_origins[:, 0], self.ray_origins[:, 1]).max(initial=0.0))
-        self.nearby = WallGrid(walls, self.reach_m)
+        # against (on a floor of 110 walls about 7 lie within 5 m of a robot in a corridor). The readings are
+        # those cast against every wall: an echo within a beam's range comes from a wall within reach, which the
+        # cell lists, and the nearest of the walls left out would read as no echo too, specular or not.
+        self.reach_m = (max(self.max_range_m, default=0.0)
+                        + float(np.hypot(origins[:, 0], origins[:, 1]).max(initial=0.0)))
+        self.nearby = NearbyGrid(walls, self.reach_m, lambda indices: Walls(walls[indices], len(origins)))
 
-    def echo_distances(self, x: float, y: float, yaw: float) -> np.ndarray:
+    def echo_distances(self, x: float, y: float, yaw: float) -> list[float]:
         """Noise-free distance of the first echo of each beam (nearest wall in its cone), in order; inf for none,
         and for one from a wall farther than ``reach_m`` from the robot (beyond every beam's range)."""
         c, s = math.cos(yaw), math.sin(yaw)
-        local = self.ray_origins
-        origins = np.column_stack((x + c * local[:, 0] - s * local[:, 1], y + s * local[:, 0] + c * local[:, 1]))
         bearings = yaw + self.ray_bearings
-        distances = cast_rays(origins, np.column_stack((np.cos(bearings), np.sin(bearings))), self.nearby.near(x, y),
-                              self.specular_angle_rad)
-        return distances.reshape(len(self.rangefinders), self.rays_per_beam).min(axis=1)
+        rays = np.concatenate((x + c * self.ray_x - s * self.ray_y, y + s * self.ray_x + c * self.ray_y,
+                               np.cos(bearings), np.sin(bearings)))
+        distances = self.nearby.near(x, y).cast(rays, self.specular_angle_rad).tolist()
+        per_beam = self.rays_per_beam
+        return [min(distances[first:first + per_beam]) for first in range(0, len(distances), per_beam)]
+
+    def readings(self, x: float, y: float, yaw: float, rng: np.random.Generator) -> list[float]:
+        """One reading per rangefinder, in order, with the robot at (x, y, yaw): metres in [min, max], or +inf.
+        (Seven numbers: plain floats are quicker than arrays here.)"""
+        # Noise is drawn for every beam, echo or not, so the stream consumed does not depend on the pose.
+        noise = rng.standard_normal(len(self.rangefinders)).tolist()
+        readings = []
+        for echo, low, high, z in zip(self.echo_distances(x, y, yaw), self.min_range_m, self.max_range_m, noise):
+            if echo > high:
+                readings.append(math.inf)
+                continue
+            true_range = max(echo, low)
+            readings.append(min(max(true_range + z * (self.noise_sd_m + self.noise_fraction * true_range), low), high))
+        return readings
 
     def ranges(self, x: float, y: float, yaw: float, rng: np.random.Generator) -> dict[str, float]:
-        """One reading per rangefinder, by name, with the robot at (x, y, yaw): metres in [min, max], or +inf."""
-        echo = self.echo_distances(x, y, yaw)
-        in_range = echo <= self.max_range_m
-        true_range = np.where(in_range, np.maximum(echo, self.min_range_m), self.max_range_m)
-        # Noise is drawn for every beam, echo or not, so the stream consumed does not depend on the pose.
-        noise = rng.standard_normal(len(echo)) * (self.noise_sd_m + self.noise_fraction * true_range)
-        reading = np.where(in_range, np.clip(true_range + noise, self.min_range_m, self.max_range_m), np.inf)
-        return {r.name: float(value) for r, value in zip(self.rangefinders, reading)}
+        """:meth:`readings` by rangefinder name."""
+        return {r.name: value for r, value in zip(self.rangefinders, self.readings(x, y, yaw, rng))}

@@ -22,6 +22,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from rfidnav_sim.nearby import NearbyGrid
+
 UNIT_TOLERANCE = 1e-6
 
 
@@ -81,11 +83,14 @@ class WallTagReader:
         self.tags = tuple(tags)
         self.miss_probability = miss_probability
         self.passage_miss_probability = passage_miss_probability
-        self.readable = np.array([tag_id not in set(unreadable_tags) for tag_id in ids], dtype=bool)
-        self.passage_read = np.ones(len(self.tags), dtype=bool)   # per tag: read on its current passage
-        self.was_in_reach = np.zeros(len(self.tags), dtype=bool)
-        self.positions = np.array([tag.position for tag in self.tags], dtype=float).reshape(-1, 2)
-        self.normals = np.array([tag.normal for tag in self.tags], dtype=float).reshape(-1, 2)
+        self.readable = [tag_id not in set(unreadable_tags) for tag_id in ids]
+        self.passage_read = [True] * len(self.tags)   # per tag: read on its current passage
+        self.was_in_reach: set[int] = set()
+        # Only the tags within the area's reach of the robot's centre can be in it (plus a millimetre, over the
+        # rounding of the grid's distances): a robot among them tests a few, not the floor's every tag.
+        reach_m = math.hypot(*area.position) + math.hypot(area.depth_m, area.width_m / 2.0) + 1e-3
+        points = np.array([(*tag.position, *tag.position) for tag in self.tags], dtype=float).reshape(-1, 4)
+        self.nearby = NearbyGrid(points, reach_m, lambda indices: indices.tolist())
 
     def antenna_pose(self, x: float, y: float, yaw: float) -> tuple[float, float, float]:
         """World (x, y, bearing) of the antenna for a robot pose."""
@@ -93,23 +98,41 @@ class WallTagReader:
         ax, ay = self.area.position
         return x + c * ax - s * ay, y + s * ax + c * ay, yaw + self.area.bearing_rad
 
+    def reached(self, x: float, y: float, yaw: float) -> list[int]:
+        """Indices (ascending) of the tags that lie in the induction area and face the antenna."""
+        antenna_x, antenna_y, bearing = self.antenna_pose(x, y, yaw)
+        c, s = math.cos(bearing), math.sin(bearing)
+        depth_m, half_width_m = self.area.depth_m, self.area.width_m / 2.0
+        found = []
+        for index in self.nearby.near(x, y):
+            tag = self.tags[index]
+            to_tag_x, to_tag_y = tag.position[0] - antenna_x, tag.position[1] - antenna_y
+            depth = c * to_tag_x + s * to_tag_y                  # along the bearing
+            across = -s * to_tag_x + c * to_tag_y
+            if (0.0 <= depth <= depth_m and abs(across) <= half_width_m
+                    and tag.normal[0] * -to_tag_x + tag.normal[1] * -to_tag_y > 0.0):   # normal . (antenna - tag)
+                found.append(index)
+        return found
+
     def in_reach(self, x: float, y: float, yaw: float) -> np.ndarray:
         """Per tag, whether it lies in the induction area and faces the antenna: what a reader without misses reads."""
-        antenna_x, antenna_y, bearing = self.antenna_pose(x, y, yaw)
-        to_tag_x, to_tag_y = self.positions[:, 0] - antenna_x, self.positions[:, 1] - antenna_y
-        c, s = math.cos(bearing), math.sin(bearing)
-        depth = c * to_tag_x + s * to_tag_y                      # along the bearing
-        across = -s * to_tag_x + c * to_tag_y
-        facing = self.normals[:, 0] * -to_tag_x + self.normals[:, 1] * -to_tag_y > 0.0    # normal . (antenna - tag)
-        return (depth >= 0.0) & (depth <= self.area.depth_m) & (np.abs(across) <= self.area.width_m / 2.0) & facing
+        reach = np.zeros(len(self.tags), dtype=bool)
+        reach[self.reached(x, y, yaw)] = True
+        return reach
 
     def read(self, x: float, y: float, yaw: float, rng: np.random.Generator) -> list[str]:
         """Ids of the tags read in one round with the robot at (x, y, yaw), in tag order."""
-        reach = self.in_reach(x, y, yaw)
-        # Draws for every tag, read or not, so the stream consumed does not depend on the pose.
-        kept = rng.random(len(self.tags)) >= self.miss_probability
-        passage = rng.random(len(self.tags)) >= self.passage_miss_probability
-        arriving = reach & ~self.was_in_reach
-        self.passage_read[arriving] = passage[arriving]
-        self.was_in_reach = reach
-        return [self.tags[i].tag_id for i in np.flatnonzero(reach & kept & self.passage_read & self.readable)]
+        # Draws for every tag, read or not, so the stream consumed does not depend on the pose: per tag, whether
+        # this round's read is kept, then whether a passage starting now is read (one draw of 2 n is the stream
+        # of two of n, to the bit).
+        count = len(self.tags)
+        draws = rng.random(2 * count)
+        reach = self.reached(x, y, yaw)
+        ids = []
+        for index in reach:
+            if index not in self.was_in_reach:                   # arriving: its passage is decided now
+                self.passage_read[index] = bool(draws[count + index] >= self.passage_miss_probability)
+            if draws[index] >= self.miss_probability and self.passage_read[index] and self.readable[index]:
+                ids.append(self.tags[index].tag_id)
+        self.was_in_reach = set(reach)
+        return ids

@@ -27,7 +27,9 @@ robot in its corridor all the same.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -51,6 +53,7 @@ from rfidnav_control.wall_following import (
 from rfidnav_experiments.runners.shipped import shipped_parameters
 from rfidnav_planning.mission_executor import STOP, TURNS, Decision, MissionExecutor
 from rfidnav_sim.parameters import RobotSimParameters, SonarParameters
+from rfidnav_sim.sonar_model import SonarModel
 from rfidnav_sim.wall_tag_model import InductionArea, WallTagReader
 from rfidnav_sim.world import World, load_world
 
@@ -95,12 +98,24 @@ def follower_offsets(parameters: WallFollowerParameters = FOLLOWER) -> dict[str,
                                                                      parameters.sonar_offsets_m)}
 
 
-def centre_sonar(ranges: dict[str, float], offsets: dict[str, float],
-                 parameters: WallFollowerParameters = FOLLOWER) -> Sonar:
-    """The follower's Sonar (distances from the robot's centre) from the rangefinders' readings (inf stays inf),
-    fed as the wall_follower node feeds it: field by field from ``parameters.sonar_topics``."""
-    names = [topic.rsplit("/", 1)[-1] for topic in parameters.sonar_topics]
-    return Sonar(**{field: ranges[name] + offsets[name] for field, name in zip(SONAR_FIELDS, names)})
+def sonar_feeds(names: Sequence[str], offsets: dict[str, float],
+                parameters: WallFollowerParameters = FOLLOWER) -> list[tuple[str, int, float]]:
+    """Per field of the follower's Sonar, as the wall_follower node feeds it from ``parameters.sonar_topics``: the
+    position in a reading of the rangefinders ``names`` of the one that feeds it, and the offset added."""
+    feeding = [topic.rsplit("/", 1)[-1] for topic in parameters.sonar_topics]
+    return [(field, names.index(name), offsets[name]) for field, name in zip(SONAR_FIELDS, feeding)]
+
+
+def centre_sonar(readings: Sequence[float], feeds: list[tuple[str, int, float]]) -> Sonar:
+    """The follower's Sonar (distances from the robot's centre) from the rangefinders' readings (inf stays inf)."""
+    return Sonar(**{field: readings[index] + offset for field, index, offset in feeds})
+
+
+@functools.lru_cache(maxsize=8)
+def sonar_model_among(sonar: SonarParameters, walls: bytes) -> SonarModel:
+    """The sonar model among ``walls`` (an N x 4 float array's bytes), made once for a floor's missions: its
+    readings depend on the pose and the generator alone, and its grid of nearby walls takes a while to lay out."""
+    return sonar.model(np.frombuffer(walls).reshape(-1, 4))
 
 
 def start_pose_before_tag(world: World, tag_id: str, before_m: float = START_BEFORE_TAG_M,
@@ -122,8 +137,8 @@ def run_mission(world: World, topological_map: TopologicalMap, start_pose: tuple
                 weight: str = "length", recover_missed_tags: bool = True, robot: RobotSimParameters = ROBOT,
                 sonar: SonarParameters = SONAR) -> MissionRun:
     walls = world.wall_segments()
-    sonar_model = sonar.model(walls)
-    offsets = follower_offsets()
+    sonar_model = sonar_model_among(sonar, walls.tobytes())
+    feeds = sonar_feeds([r.name for r in sonar_model.rangefinders], follower_offsets())
     reader = WallTagReader(InductionArea(), world.wall_tags, passage_miss_probability=miss_probability)
     follower = WallFollower(settings)
     executor = MissionExecutor(topological_map, weight, recover_missed_tags)
@@ -160,7 +175,7 @@ def run_mission(world: World, topological_map: TopologicalMap, start_pose: tuple
             apply(at_dead_end, False)
         for decision in executor.on_reads(reader.read(truth.x, truth.y, truth.yaw, rng)):
             apply(decision, False)
-        command = follower.step(centre_sonar(sonar_model.ranges(truth.x, truth.y, truth.yaw, rng), offsets),
+        command = follower.step(centre_sonar(sonar_model.readings(truth.x, truth.y, truth.yaw, rng), feeds),
                                 OdomPose(odom.x, odom.y, odom.yaw))
         if command.event == STOPPED:
             finished = True
