@@ -35,6 +35,7 @@ its covering allows) and an ID therefore decodes to exactly the position the sim
 
 from __future__ import annotations
 
+import bisect
 import math
 from collections.abc import Iterable
 from dataclasses import dataclass
@@ -378,14 +379,17 @@ def disc_intervals(lattice: Lattice, read_range_m: float, coordinates: np.ndarra
     return t_in, t_out, crossed & (t_out > t_in)
 
 
-def partitions_along_segment(deployment: Deployment, start: tuple[float, float],
-                             end: tuple[float, float]) -> list[SegmentPiece]:
+def partitions_along_segment(deployment: Deployment, start: tuple[float, float], end: tuple[float, float],
+                             candidates: np.ndarray | None = None) -> list[SegmentPiece]:
     """The partitions the segment start-end passes, in order, found geometrically: every tag's read disc
     the segment crosses gives the parameter interval it is read on; between consecutive interval ends the
     set of tags read is constant. Stretches shorter than a nanometre (tangencies) are dropped; an empty
-    ``tags`` is a stretch no tag reads (outside the deployment)."""
+    ``tags`` is a stretch no tag reads (outside the deployment). ``candidates``, when given, must be what
+    ``deployment.candidates_near_segment(start, end, r)`` returns, in its order (:class:`StraightWalk` finds
+    them without the lattice arithmetic)."""
     r = deployment.read_range_m
-    candidates = deployment.candidates_near_segment(start, end, r)
+    if candidates is None:
+        candidates = deployment.candidates_near_segment(start, end, r)
     a, b = np.array(start, dtype=float), np.array(end, dtype=float)
     direction = b - a
     length = float(np.linalg.norm(direction))
@@ -422,6 +426,81 @@ def partitions_along_segment(deployment: Deployment, start: tuple[float, float],
                 active.discard(coordinate)
             index += 1
     return pieces
+
+
+# A stretch of a straight walk no read circle comes within this of crosses none (to float error, many times over).
+CLEAR_OF_CIRCLES_M = 1e-6
+# A tag this close to a step's read distance is left to candidates_near_segment's own arithmetic to include or not.
+BORDERLINE_M = 1e-9
+
+
+class StraightWalk:
+    """The deployed tags near a straight line walked in equal steps, found once, so that each step's partitions
+    cost no lattice arithmetic (the in-process robot walks a few centimetres between inventory rounds).
+
+    :meth:`quiet` tells the steps that pass no read circle (their partition is the one at their start), and
+    :meth:`pieces` is ``partitions_along_segment`` on a step, to the last bit: it hands it the very candidates
+    ``candidates_near_segment`` would find, in their order, since the interval arithmetic's dot products round
+    differently with the array they are taken in."""
+
+    def __init__(self, deployment: Deployment, origin: tuple[float, float], heading: float, step_m: float,
+                 steps: int) -> None:
+        self.deployment = deployment
+        self.origin = origin
+        self.direction = (math.cos(heading), math.sin(heading))
+        r, margin = deployment.read_range_m, CLEAR_OF_CIRCLES_M
+        ux, uy = self.direction
+        length = step_m * steps
+        coordinates = deployment.candidates_near_segment(
+            (origin[0] - margin * ux, origin[1] - margin * uy),
+            (origin[0] + (length + margin) * ux, origin[1] + (length + margin) * uy), r + 2.0 * margin)
+        positions = deployment.lattice.positions(coordinates)
+        relative = positions - np.array(origin)
+        along = relative[:, 0] * ux + relative[:, 1] * uy
+        across = np.abs(relative[:, 1] * ux - relative[:, 0] * uy)
+        order = np.argsort(along, kind="stable")
+        self._coordinates = coordinates[order]
+        self._positions = positions[order]
+        self._along = along[order].tolist()
+        # Where the line comes within ``margin`` of a read circle: |s - along| in [inner, outer] around each tag.
+        outer = np.sqrt(np.maximum((r + margin) ** 2 - across ** 2, 0.0))
+        inner = np.sqrt(np.maximum((r - margin) ** 2 - across ** 2, 0.0))
+        near = across <= r + margin
+        low = np.concatenate((along - outer, along + inner))[np.concatenate((near, near))]
+        high = np.concatenate((along - inner, along + outer))[np.concatenate((near, near))]
+        # Steps k overlapping [low, high] (with a nanometre to spare): k * step <= high, (k + 1) * step >= low.
+        first = np.clip(np.ceil((low - BORDERLINE_M) / step_m - 1.0), 0, steps).astype(int)
+        last = np.clip(np.floor((high + BORDERLINE_M) / step_m), -1, steps - 1).astype(int)
+        marks = np.zeros(steps + 1, dtype=int)
+        spans = first <= last
+        np.add.at(marks, first[spans], 1)
+        np.add.at(marks, last[spans] + 1, -1)
+        self._quiet = (np.cumsum(marks[:-1]) == 0).tolist()
+
+    def quiet(self, step: int) -> bool:
+        """Whether step ``step`` (from step * step_m to (step + 1) * step_m along the line) stays clear of every
+        read circle by CLEAR_OF_CIRCLES_M: the partition is the same all along it, and
+        ``partitions_along_segment`` on it gives one piece."""
+        return self._quiet[step]
+
+    def pieces(self, start: tuple[float, float], end: tuple[float, float]) -> list[SegmentPiece]:
+        """``partitions_along_segment(deployment, start, end)`` for a step start-end of this walk."""
+        r = self.deployment.read_range_m
+        ux, uy = self.direction
+        reach = r + 2.0 * CLEAR_OF_CIRCLES_M
+        s_start = (start[0] - self.origin[0]) * ux + (start[1] - self.origin[1]) * uy
+        s_end = (end[0] - self.origin[0]) * ux + (end[1] - self.origin[1]) * uy
+        low = bisect.bisect_left(self._along, min(s_start, s_end) - reach)
+        high = bisect.bisect_right(self._along, max(s_start, s_end) + reach)
+        coordinates = self._coordinates[low:high]
+        if len(coordinates):
+            distance = point_segment_distance(self._positions[low:high], np.array(start, dtype=float),
+                                              np.array(end, dtype=float))
+            if np.any(np.abs(distance - r) <= BORDERLINE_M):
+                return partitions_along_segment(self.deployment, start, end)
+            coordinates = coordinates[distance <= r]
+            coordinates = coordinates[np.lexsort((coordinates[:, 0], coordinates[:, 1]))]   # rows, then columns
+        return partitions_along_segment(self.deployment, start, end, coordinates)
 
 
 def partition_centre(lattice: Lattice, tags: Iterable[Coordinate]) -> tuple[float, float]:
