@@ -1,6 +1,7 @@
-"""Issue 19's faster partition walk: the tags near a straight drive are found once (StraightWalk) and a step that
-passes no read circle is one round, yet every navigation is the one the step-by-step walk made (kept as the
-reference in support.partition_walk), to the last bit."""
+"""Issue 19's faster partition navigations: the tags near a straight drive are found once (StraightWalk), a step
+that passes no read circle is one round, and the particle filter's round works in place; yet every navigation is
+the one the step-by-step walk and the filter before made (kept as the reference in support.partition_walk), to the
+last bit."""
 
 from __future__ import annotations
 
@@ -12,6 +13,7 @@ import pytest
 from rfidnav_common.seeding import rng_for
 from rfidnav_common.tag_lattice import LAYOUTS, StraightWalk, make_deployment, partitions_along_segment
 from rfidnav_experiments.reproduce import partitions as rp
+from rfidnav_localization.partition import ParticleFilter
 from support import partition_walk
 
 pytestmark = pytest.mark.tier("unit")
@@ -64,14 +66,19 @@ def outcome(run) -> tuple:
 
 
 @pytest.mark.parametrize("method", rp.METHODS)
-def test_the_faster_walk_navigates_exactly_as_the_step_by_step_walk(method: str) -> None:
+def test_the_faster_cores_navigate_exactly_as_the_step_by_step_walk_and_the_filter_before(method: str,
+                                                                                         monkeypatch) -> None:
     jobs = [rp.NavigationJob(method, r, level, index, rp.DEVELOPMENT_SEED)
             for r in rp.NAVIGATION_RANGES_M for level in (1, 4) for index in (0, 3)]
     for job in jobs:
+        new = outcome(rp.navigate(job))
         start, goal = rp.task_of(job)
-        reference = partition_walk.run_navigation(
-            rp.deployment(job.read_range_m), start, goal, rp.localizer_settings(method),
-            rp.navigator_settings(method, job.level),
-            rng_for(job.seed, f"run:{job.method}:{job.read_range_m}:{job.level}:{job.index}"),
-            odometry_noise=rp.ODOMETRY_NOISE, speeds=rp.robot_speeds(method))
-        assert outcome(rp.navigate(job)) == outcome(reference), job
+        with monkeypatch.context() as patched:   # the filter's old round arithmetic
+            for name, function in partition_walk.FILTER_ROUND.items():
+                patched.setattr(ParticleFilter, name, function)
+            reference = partition_walk.run_navigation(
+                rp.deployment(job.read_range_m), start, goal, rp.localizer_settings(method),
+                rp.navigator_settings(method, job.level),
+                rng_for(job.seed, f"run:{job.method}:{job.read_range_m}:{job.level}:{job.index}"),
+                odometry_noise=rp.ODOMETRY_NOISE, speeds=rp.robot_speeds(method))
+        assert new == outcome(reference), job
