@@ -38,7 +38,7 @@ from __future__ import annotations
 import bisect
 import math
 from collections.abc import Iterable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -229,6 +229,9 @@ class Deployment:
     lattice: Lattice
     read_range_m: float
     area: tuple[float, float, float, float]      # x_min, y_min, x_max, y_max [m], map frame
+    # Each row's deployed x interval (:meth:`_row_x_range`), as asked for: rounds ask for the same few rows again.
+    _row_ranges: dict[int, tuple[float, float] | None] = field(default_factory=dict, init=False, repr=False,
+                                                               compare=False)
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.read_range_m) and self.read_range_m > 0.0):
@@ -254,6 +257,12 @@ class Deployment:
 
     def _row_x_range(self, row: int) -> tuple[float, float] | None:
         """x interval of the vertices of ``row`` that are deployed (disc reaches into the area)."""
+        if row in self._row_ranges:
+            return self._row_ranges[row]
+        self._row_ranges[row] = row_range = self._compute_row_x_range(row)
+        return row_range
+
+    def _compute_row_x_range(self, row: int) -> tuple[float, float] | None:
         x_min, y_min, x_max, y_max = self.area
         y = row * self.lattice.row_height_m
         dy = max(y_min - y, 0.0, y - y_max)

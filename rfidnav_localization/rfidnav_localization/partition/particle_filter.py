@@ -139,9 +139,8 @@ class ParticleFilter:
     def bounding_circle(self) -> tuple[float, float, float]:
         """(x, y, radius) of a circle holding every particle's antenna: the centre and half-diagonal of their box."""
         antennas = self.antennas()
-        low, high = antennas.min(axis=1), antennas.max(axis=1)
-        centre = (low + high) / 2.0
-        return float(centre[0]), float(centre[1]), float(np.hypot(*(high - low)) / 2.0)
+        (x_low, y_low), (x_high, y_high) = antennas.min(axis=1).tolist(), antennas.max(axis=1).tolist()
+        return (x_low + x_high) / 2.0, (y_low + y_high) / 2.0, float(np.hypot(x_high - x_low, y_high - y_low)) / 2.0
 
     def log_likelihood(self, antennas: np.ndarray, read: np.ndarray, unread: np.ndarray,
                        read_range_m: float) -> np.ndarray:
