@@ -174,7 +174,10 @@ class Lattice:
     def positions(self, coordinates: np.ndarray) -> np.ndarray:
         """Vectorized :meth:`position` of an N x 2 integer array."""
         c = np.asarray(coordinates, dtype=float).reshape(-1, 2)
-        return np.column_stack((c[:, 0] * self.spacing_m + c[:, 1] * self.row_shift_m, c[:, 1] * self.row_height_m))
+        positions = np.empty_like(c)     # not column_stack: its overhead is most of the cost for a few tags
+        positions[:, 0] = c[:, 0] * self.spacing_m + c[:, 1] * self.row_shift_m
+        positions[:, 1] = c[:, 1] * self.row_height_m
+        return positions
 
     def tag_id(self, coordinate: Coordinate) -> str:
         return encode_tag_id(self.layout, self.spacing_m, coordinate)
@@ -468,8 +471,8 @@ class StraightWalk:
         along = relative[:, 0] * ux + relative[:, 1] * uy
         across = np.abs(relative[:, 1] * ux - relative[:, 0] * uy)
         order = np.argsort(along, kind="stable")
-        self._coordinates = coordinates[order]
-        self._positions = positions[order]
+        self._coordinates_list = [(int(i), int(j)) for i, j in coordinates[order].tolist()]
+        self._positions_list = positions[order].tolist()
         self._along = along[order].tolist()
         # Where the line comes within ``margin`` of a read circle: |s - along| in [inner, outer] around each tag.
         outer = np.sqrt(np.maximum((r + margin) ** 2 - across ** 2, 0.0))
@@ -501,14 +504,21 @@ class StraightWalk:
         s_end = (end[0] - self.origin[0]) * ux + (end[1] - self.origin[1]) * uy
         low = bisect.bisect_left(self._along, min(s_start, s_end) - reach)
         high = bisect.bisect_right(self._along, max(s_start, s_end) + reach)
-        coordinates = self._coordinates[low:high]
-        if len(coordinates):
-            distance = point_segment_distance(self._positions[low:high], np.array(start, dtype=float),
-                                              np.array(end, dtype=float))
-            if np.any(np.abs(distance - r) <= BORDERLINE_M):
+        (ax, ay), (bx, by) = start, end
+        dx, dy = bx - ax, by - ay
+        length_sq = dx * dx + dy * dy
+        within: list[tuple[int, int]] = []
+        # A handful of tags: plain Python. Their distance to the step decides only far from r, where any rounding
+        # agrees with candidates_near_segment's.
+        for (i, j), (px, py) in zip(self._coordinates_list[low:high], self._positions_list[low:high]):
+            t = min(max(((px - ax) * dx + (py - ay) * dy) / length_sq, 0.0), 1.0)
+            distance = math.hypot(px - (ax + t * dx), py - (ay + t * dy))
+            if abs(distance - r) <= BORDERLINE_M:
                 return partitions_along_segment(self.deployment, start, end)
-            coordinates = coordinates[distance <= r]
-            coordinates = coordinates[np.lexsort((coordinates[:, 0], coordinates[:, 1]))]   # rows, then columns
+            if distance <= r:
+                within.append((j, i))
+        within.sort()                                   # candidates_near_segment's order: rows, then columns
+        coordinates = np.array([(i, j) for j, i in within], dtype=np.int64).reshape(-1, 2)
         return partitions_along_segment(self.deployment, start, end, coordinates)
 
 
