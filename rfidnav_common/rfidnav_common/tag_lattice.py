@@ -35,9 +35,10 @@ its covering allows) and an ID therefore decodes to exactly the position the sim
 
 from __future__ import annotations
 
+import bisect
 import math
 from collections.abc import Iterable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -173,7 +174,10 @@ class Lattice:
     def positions(self, coordinates: np.ndarray) -> np.ndarray:
         """Vectorized :meth:`position` of an N x 2 integer array."""
         c = np.asarray(coordinates, dtype=float).reshape(-1, 2)
-        return np.column_stack((c[:, 0] * self.spacing_m + c[:, 1] * self.row_shift_m, c[:, 1] * self.row_height_m))
+        positions = np.empty_like(c)     # not column_stack: its overhead is most of the cost for a few tags
+        positions[:, 0] = c[:, 0] * self.spacing_m + c[:, 1] * self.row_shift_m
+        positions[:, 1] = c[:, 1] * self.row_height_m
+        return positions
 
     def tag_id(self, coordinate: Coordinate) -> str:
         return encode_tag_id(self.layout, self.spacing_m, coordinate)
@@ -228,6 +232,9 @@ class Deployment:
     lattice: Lattice
     read_range_m: float
     area: tuple[float, float, float, float]      # x_min, y_min, x_max, y_max [m], map frame
+    # Each row's deployed x interval (:meth:`_row_x_range`), as asked for: rounds ask for the same few rows again.
+    _row_ranges: dict[int, tuple[float, float] | None] = field(default_factory=dict, init=False, repr=False,
+                                                               compare=False)
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.read_range_m) and self.read_range_m > 0.0):
@@ -253,6 +260,12 @@ class Deployment:
 
     def _row_x_range(self, row: int) -> tuple[float, float] | None:
         """x interval of the vertices of ``row`` that are deployed (disc reaches into the area)."""
+        if row in self._row_ranges:
+            return self._row_ranges[row]
+        self._row_ranges[row] = row_range = self._compute_row_x_range(row)
+        return row_range
+
+    def _compute_row_x_range(self, row: int) -> tuple[float, float] | None:
         x_min, y_min, x_max, y_max = self.area
         y = row * self.lattice.row_height_m
         dy = max(y_min - y, 0.0, y - y_max)
@@ -378,14 +391,17 @@ def disc_intervals(lattice: Lattice, read_range_m: float, coordinates: np.ndarra
     return t_in, t_out, crossed & (t_out > t_in)
 
 
-def partitions_along_segment(deployment: Deployment, start: tuple[float, float],
-                             end: tuple[float, float]) -> list[SegmentPiece]:
+def partitions_along_segment(deployment: Deployment, start: tuple[float, float], end: tuple[float, float],
+                             candidates: np.ndarray | None = None) -> list[SegmentPiece]:
     """The partitions the segment start-end passes, in order, found geometrically: every tag's read disc
     the segment crosses gives the parameter interval it is read on; between consecutive interval ends the
     set of tags read is constant. Stretches shorter than a nanometre (tangencies) are dropped; an empty
-    ``tags`` is a stretch no tag reads (outside the deployment)."""
+    ``tags`` is a stretch no tag reads (outside the deployment). ``candidates``, when given, must be what
+    ``deployment.candidates_near_segment(start, end, r)`` returns, in its order (:class:`StraightWalk` finds
+    them without the lattice arithmetic)."""
     r = deployment.read_range_m
-    candidates = deployment.candidates_near_segment(start, end, r)
+    if candidates is None:
+        candidates = deployment.candidates_near_segment(start, end, r)
     a, b = np.array(start, dtype=float), np.array(end, dtype=float)
     direction = b - a
     length = float(np.linalg.norm(direction))
@@ -422,6 +438,88 @@ def partitions_along_segment(deployment: Deployment, start: tuple[float, float],
                 active.discard(coordinate)
             index += 1
     return pieces
+
+
+# A stretch of a straight walk no read circle comes within this of crosses none (to float error, many times over).
+CLEAR_OF_CIRCLES_M = 1e-6
+# A tag this close to a step's read distance is left to candidates_near_segment's own arithmetic to include or not.
+BORDERLINE_M = 1e-9
+
+
+class StraightWalk:
+    """The deployed tags near a straight line walked in equal steps, found once, so that each step's partitions
+    cost no lattice arithmetic (the in-process robot walks a few centimetres between inventory rounds).
+
+    :meth:`quiet` tells the steps that pass no read circle (their partition is the one at their start), and
+    :meth:`pieces` is ``partitions_along_segment`` on a step, to the last bit: it hands it the very candidates
+    ``candidates_near_segment`` would find, in their order, since the interval arithmetic's dot products round
+    differently with the array they are taken in."""
+
+    def __init__(self, deployment: Deployment, origin: tuple[float, float], heading: float, step_m: float,
+                 steps: int) -> None:
+        self.deployment = deployment
+        self.origin = origin
+        self.direction = (math.cos(heading), math.sin(heading))
+        r, margin = deployment.read_range_m, CLEAR_OF_CIRCLES_M
+        ux, uy = self.direction
+        length = step_m * steps
+        coordinates = deployment.candidates_near_segment(
+            (origin[0] - margin * ux, origin[1] - margin * uy),
+            (origin[0] + (length + margin) * ux, origin[1] + (length + margin) * uy), r + 2.0 * margin)
+        positions = deployment.lattice.positions(coordinates)
+        relative = positions - np.array(origin)
+        along = relative[:, 0] * ux + relative[:, 1] * uy
+        across = np.abs(relative[:, 1] * ux - relative[:, 0] * uy)
+        order = np.argsort(along, kind="stable")
+        self._coordinates_list = [(int(i), int(j)) for i, j in coordinates[order].tolist()]
+        self._positions_list = positions[order].tolist()
+        self._along = along[order].tolist()
+        # Where the line comes within ``margin`` of a read circle: |s - along| in [inner, outer] around each tag.
+        outer = np.sqrt(np.maximum((r + margin) ** 2 - across ** 2, 0.0))
+        inner = np.sqrt(np.maximum((r - margin) ** 2 - across ** 2, 0.0))
+        near = across <= r + margin
+        low = np.concatenate((along - outer, along + inner))[np.concatenate((near, near))]
+        high = np.concatenate((along - inner, along + outer))[np.concatenate((near, near))]
+        # Steps k overlapping [low, high] (with a nanometre to spare): k * step <= high, (k + 1) * step >= low.
+        first = np.clip(np.ceil((low - BORDERLINE_M) / step_m - 1.0), 0, steps).astype(int)
+        last = np.clip(np.floor((high + BORDERLINE_M) / step_m), -1, steps - 1).astype(int)
+        marks = np.zeros(steps + 1, dtype=int)
+        spans = first <= last
+        np.add.at(marks, first[spans], 1)
+        np.add.at(marks, last[spans] + 1, -1)
+        self._quiet = (np.cumsum(marks[:-1]) == 0).tolist()
+
+    def quiet(self, step: int) -> bool:
+        """Whether step ``step`` (from step * step_m to (step + 1) * step_m along the line) stays clear of every
+        read circle by CLEAR_OF_CIRCLES_M: the partition is the same all along it, and
+        ``partitions_along_segment`` on it gives one piece."""
+        return self._quiet[step]
+
+    def pieces(self, start: tuple[float, float], end: tuple[float, float]) -> list[SegmentPiece]:
+        """``partitions_along_segment(deployment, start, end)`` for a step start-end of this walk."""
+        r = self.deployment.read_range_m
+        ux, uy = self.direction
+        reach = r + 2.0 * CLEAR_OF_CIRCLES_M
+        s_start = (start[0] - self.origin[0]) * ux + (start[1] - self.origin[1]) * uy
+        s_end = (end[0] - self.origin[0]) * ux + (end[1] - self.origin[1]) * uy
+        low = bisect.bisect_left(self._along, min(s_start, s_end) - reach)
+        high = bisect.bisect_right(self._along, max(s_start, s_end) + reach)
+        (ax, ay), (bx, by) = start, end
+        dx, dy = bx - ax, by - ay
+        length_sq = dx * dx + dy * dy
+        within: list[tuple[int, int]] = []
+        # A handful of tags: plain Python. Their distance to the step decides only far from r, where any rounding
+        # agrees with candidates_near_segment's.
+        for (i, j), (px, py) in zip(self._coordinates_list[low:high], self._positions_list[low:high]):
+            t = min(max(((px - ax) * dx + (py - ay) * dy) / length_sq, 0.0), 1.0)
+            distance = math.hypot(px - (ax + t * dx), py - (ay + t * dy))
+            if abs(distance - r) <= BORDERLINE_M:
+                return partitions_along_segment(self.deployment, start, end)
+            if distance <= r:
+                within.append((j, i))
+        within.sort()                                   # candidates_near_segment's order: rows, then columns
+        coordinates = np.array([(i, j) for j, i in within], dtype=np.int64).reshape(-1, 2)
+        return partitions_along_segment(self.deployment, start, end, coordinates)
 
 
 def partition_centre(lattice: Lattice, tags: Iterable[Coordinate]) -> tuple[float, float]:

@@ -26,7 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from rfidnav_bringup.metrics import extra_time_cost_pct, travel_time_s
-from rfidnav_common.tag_lattice import Deployment, partitions_along_segment
+from rfidnav_common.tag_lattice import Coordinate, Deployment, StraightWalk, partitions_along_segment
 from rfidnav_localization.partition import LocalizerSettings, PartitionLocalizer
 from rfidnav_planning.parameters import PartitionNavigatorParameters
 from rfidnav_planning.partition_navigation import FORWARD, ROTATE, Decision, NavigatorSettings, PartitionNavigator
@@ -34,6 +34,10 @@ from rfidnav_planning.partition_navigation import FORWARD, ROTATE, Decision, Nav
 INSIDE_M = 1e-7                 # how far past a boundary the round on entering a partition is taken
 TURN_CHORD_RAD = math.radians(2.0)
 DEFAULT_ROUND_SPACING_M = 0.02  # at most this far between rounds (a reader's 25 Hz at 0.2 m/s: 8 mm)
+# Steps of the first look ahead of a straight drive, doubled at each further look up to the most: a drive between
+# two decisions takes a few dozen steps, and a look ahead costs about what its rows of lattice arithmetic do.
+WALK_STEPS = 16
+MAX_WALK_STEPS = 256
 
 
 @dataclass(frozen=True)
@@ -137,6 +141,38 @@ class IdealRobot:
         return self.x + self.antenna_offset_m * math.cos(yaw), self.y + self.antenna_offset_m * math.sin(yaw)
 
 
+class Rounds:
+    """The floor antenna's inventory rounds, each fed to the localizer and its estimate to the navigator. It
+    remembers where it last read, so a round after a step that crossed no read circle reuses that partition."""
+
+    def __init__(self, deployment: Deployment, robot: IdealRobot, localizer: PartitionLocalizer,
+                 navigator: PartitionNavigator) -> None:
+        self.deployment = deployment
+        self.robot = robot
+        self.localizer = localizer
+        self.navigator = navigator
+        self.point: tuple[float, float] | None = None
+        self.partition: frozenset[Coordinate] = frozenset()
+        self._tag_ids: dict[Coordinate, str] = {}
+
+    def __call__(self, unchanged_since: tuple[float, float] | None = None) -> Decision:
+        """One round where the antenna is now; ``unchanged_since``: a point the antenna has come from in a straight
+        line crossing no read circle (the partition there is the one here)."""
+        antenna = self.robot.antenna()
+        if unchanged_since is None or unchanged_since != self.point:
+            self.partition = self.deployment.partition_at(*antenna)
+        self.point = antenna
+        estimate = self.localizer.update(self.robot.time_s, [self._tag_id(c) for c in self.partition],
+                                         self.robot.odometry())
+        return self.navigator.on_estimate(estimate, self.robot.travelled_m)
+
+    def _tag_id(self, coordinate: Coordinate) -> str:
+        tag_id = self._tag_ids.get(coordinate)
+        if tag_id is None:
+            tag_id = self._tag_ids[coordinate] = self.deployment.lattice.tag_id(coordinate)
+        return tag_id
+
+
 def run_navigation(deployment: Deployment, start: tuple[float, float, float], goal: tuple[float, float],
                    localizer_settings: LocalizerSettings, navigator_settings: NavigatorSettings,
                    rng: np.random.Generator, round_spacing_m: float | None = None,
@@ -144,16 +180,9 @@ def run_navigation(deployment: Deployment, start: tuple[float, float, float], go
     """One navigation from ``start`` (x, y, yaw; ground truth) to ``goal``; the antenna offset is the
     localizer's (the robot is built as the localizer believes), the speeds the navigator node's."""
     robot = IdealRobot(*start, odometry_noise, rng, speeds, localizer_settings.antenna_offset_m)
-    localizer = PartitionLocalizer(localizer_settings, rng)
     navigator = PartitionNavigator(navigator_settings, deployment.area)
-    lattice = deployment.lattice
+    observe = Rounds(deployment, robot, PartitionLocalizer(localizer_settings, rng), navigator)
     spacing = round_spacing_m or min(deployment.read_range_m / 2.0, DEFAULT_ROUND_SPACING_M)
-
-    def observe() -> Decision:
-        tags = deployment.partition_at(*robot.antenna())
-        estimate = localizer.update(robot.time_s, [lattice.tag_id(c) for c in tags], robot.odometry())
-        return navigator.on_estimate(estimate, robot.travelled_m)
-
     decision = navigator.start(goal)
     decision = observe()
     while not decision.finished:
@@ -191,26 +220,36 @@ def turn_observing(deployment: Deployment, robot: IdealRobot, angle: float, obse
         robot.turn(step - turned)
 
 
-def drive_until_decision(deployment: Deployment, robot: IdealRobot, spacing: float,
-                         observe: Callable[[], Decision]) -> Decision:
+def drive_until_decision(deployment: Deployment, robot: IdealRobot, spacing: float, observe: Rounds) -> Decision:
     """Drive straight, observing on entering each partition and every ``spacing`` inside one, until the
-    navigator wants something other than driving on."""
+    navigator wants something other than driving on.
+
+    Step by step as a reader's rounds come, each step's crossings found on that step's own segment, so that the
+    walk does not depend on how far ahead it was looked at; the tags near the line ahead are found once for
+    WALK_STEPS steps or more (:class:`StraightWalk`), and a step that passes no read circle is one round."""
+    steps = WALK_STEPS
     while True:
-        start = (robot.x, robot.y)
-        antenna = robot.antenna()
-        end = (antenna[0] + spacing * math.cos(robot.yaw), antenna[1] + spacing * math.sin(robot.yaw))
-        pieces = partitions_along_segment(deployment, antenna, end)
-        for piece in pieces[1:]:
-            robot.drive(piece.t_start * spacing + INSIDE_M - math.dist(start, (robot.x, robot.y)))
-            decision = observe()
+        walk = StraightWalk(deployment, robot.antenna(), robot.yaw, spacing, steps)
+        for step in range(steps):
+            start = (robot.x, robot.y)
+            antenna = robot.antenna()
+            if walk.quiet(step):
+                robot.drive(spacing)
+                decision = observe(unchanged_since=antenna)
+            else:
+                end = (antenna[0] + spacing * math.cos(robot.yaw), antenna[1] + spacing * math.sin(robot.yaw))
+                for piece in walk.pieces(antenna, end)[1:]:
+                    robot.drive(piece.t_start * spacing + INSIDE_M - math.dist(start, (robot.x, robot.y)))
+                    decision = observe()
+                    if decision.motion.kind != FORWARD:
+                        robot.trajectory.append((robot.x, robot.y))
+                        return decision
+                robot.drive(spacing - math.dist(start, (robot.x, robot.y)))
+                decision = observe()
             if decision.motion.kind != FORWARD:
                 robot.trajectory.append((robot.x, robot.y))
                 return decision
-        robot.drive(spacing - math.dist(start, (robot.x, robot.y)))
-        decision = observe()
-        if decision.motion.kind != FORWARD:
-            robot.trajectory.append((robot.x, robot.y))
-            return decision
+        steps = min(2 * steps, MAX_WALK_STEPS)
 
 
 def random_task(deployment: Deployment, distance_m: float, rng: np.random.Generator,

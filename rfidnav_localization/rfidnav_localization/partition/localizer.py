@@ -52,7 +52,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -79,7 +79,7 @@ class _Heading:
     half_width: float    # half the width of the bounds [rad]
 
     def widened(self, by: float) -> _Heading:
-        return replace(self, half_width=min(self.half_width + by, math.pi))
+        return _Heading(self.offset, min(self.half_width + by, math.pi))   # not replace(): twice a round
 
 
 @dataclass(frozen=True)

@@ -79,7 +79,21 @@ class ParticleFilter:
         self.weights = np.full(settings.particles, 1.0 / settings.particles)
         self.evidence = 0.0   # the best particle's recent log-likelihood (see COLLAPSE_MEMORY)
         self._antennas: np.ndarray | None = None
+        self._headings: tuple[np.ndarray, np.ndarray] | None = None
         self.resets = 0       # sensor resettings (see weigh)
+
+    def _moved(self) -> None:
+        """The states changed: what was computed from them is stale."""
+        self._antennas = None
+        self._headings = None
+
+    def headings(self) -> tuple[np.ndarray, np.ndarray]:
+        """cos and sin of the particles' headings, computed once per change of the states: a round's estimate and
+        the next round's prediction both use them."""
+        if self._headings is None:
+            yaw = self.states[2]
+            self._headings = (np.cos(yaw), np.sin(yaw))
+        return self._headings
 
     def initialise(self, origin: np.ndarray, region: Region) -> None:
         """Antennas uniform in the partition's region, headings uniform; the centres behind the antennas."""
@@ -87,7 +101,7 @@ class ParticleFilter:
         self.states[:2] = (origin + region.sample(self.rng, count)).T
         self.states[2] = self.rng.uniform(-math.pi, math.pi, count)
         self.states[:2] -= self.settings.antenna_offset_m * np.vstack((np.cos(self.states[2]), np.sin(self.states[2])))
-        self._antennas = None
+        self._moved()
         self.weights.fill(1.0 / count)
         self.evidence = 0.0
 
@@ -103,11 +117,11 @@ class ParticleFilter:
         dx = forward + translation_sd * noise[0]
         dy = lateral + translation_sd * noise[1]
         x, y, yaw = self.states
-        cos_yaw, sin_yaw = np.cos(yaw), np.sin(yaw)
+        cos_yaw, sin_yaw = self.headings()
         x += cos_yaw * dx - sin_yaw * dy
         y += sin_yaw * dx + cos_yaw * dy
         yaw += rotation + rotation_sd * noise[2]
-        self._antennas = None
+        self._moved()
 
     def antenna(self, states: np.ndarray) -> np.ndarray:
         """Where each state's floor antenna reads (2 x count): ``antenna_offset_m`` ahead of the robot's centre."""
@@ -125,9 +139,8 @@ class ParticleFilter:
     def bounding_circle(self) -> tuple[float, float, float]:
         """(x, y, radius) of a circle holding every particle's antenna: the centre and half-diagonal of their box."""
         antennas = self.antennas()
-        low, high = antennas.min(axis=1), antennas.max(axis=1)
-        centre = (low + high) / 2.0
-        return float(centre[0]), float(centre[1]), float(np.hypot(*(high - low)) / 2.0)
+        (x_low, y_low), (x_high, y_high) = antennas.min(axis=1).tolist(), antennas.max(axis=1).tolist()
+        return (x_low + x_high) / 2.0, (y_low + y_high) / 2.0, float(np.hypot(x_high - x_low, y_high - y_low)) / 2.0
 
     def log_likelihood(self, antennas: np.ndarray, read: np.ndarray, unread: np.ndarray,
                        read_range_m: float) -> np.ndarray:
@@ -135,13 +148,25 @@ class ParticleFilter:
         s = self.settings
         tags = np.concatenate((read, unread))
         sign = np.concatenate((np.ones(len(read)), -np.ones(len(unread))))
-        dx = antennas[0][:, None] - tags[:, 0]
+        # In place, one particles x tags array throughout (the same operations as out of place, to the bit).
+        value = antennas[0][:, None] - tags[:, 0]
         dy = antennas[1][:, None] - tags[:, 1]
-        distance = np.sqrt(dx * dx + dy * dy)    # not np.hypot: its overflow care costs twice the rest here
-        margin = sign * ((read_range_m - distance) / s.boundary_softness_m)
+        value *= value
+        dy *= dy
+        value += dy
+        np.sqrt(value, out=value)                # the distance; not np.hypot: its overflow care costs twice the rest
+        np.subtract(read_range_m, value, out=value)
+        value /= s.boundary_softness_m
+        value *= sign                            # the margin
         # log(eps + (1 - 2 eps) * sigmoid(margin)); tanh keeps the sigmoid from overflowing.
         eps = s.read_error_probability
-        return np.log(eps + (1.0 - 2.0 * eps) * 0.5 * (1.0 + np.tanh(0.5 * margin))).sum(axis=1)
+        value *= 0.5
+        np.tanh(value, out=value)
+        value += 1.0
+        value *= (1.0 - 2.0 * eps) * 0.5
+        value += eps
+        np.log(value, out=value)
+        return value.sum(axis=1)
 
     def weigh(self, read: np.ndarray, unread: np.ndarray, read_range_m: float,
               proposals: Callable[[int], np.ndarray] | None = None) -> bool:
@@ -158,7 +183,7 @@ class ParticleFilter:
             count = round(RESET_FRACTION * len(self.weights))
             worst = np.argpartition(log_likelihood, count)[:count]
             self.states[:, worst] = proposals(count)
-            self._antennas = None
+            self._moved()
             self.weights[worst] = 1.0 / len(self.weights)
             log_likelihood[worst] = self.log_likelihood(self.antennas()[:, worst], read, unread, read_range_m)
             self.resets += 1
@@ -184,16 +209,17 @@ class ParticleFilter:
         yaw_offsets = np.remainder(yaw - yaw_mean + math.pi, 2.0 * math.pi) - math.pi
         spread = np.array((np.ptp(self.states[0]), np.ptp(self.states[1]), np.ptp(yaw_offsets)))
         self.states += self.rng.standard_normal((3, count)) * (ROUGHENING * count ** (-1.0 / 3.0) * spread)[:, None]
-        self._antennas = None
+        self._moved()
         self.weights.fill(1.0 / count)
 
     def estimate(self) -> tuple[tuple[float, float], tuple[float, float, float], float, float]:
         """(position, (var_x, cov_xy, var_y), circular mean yaw, circular sd of yaw)."""
         w = self.weights
-        x, y, yaw = self.states
+        x, y, _ = self.states
         mean_x, mean_y = float(w @ x), float(w @ y)
         dx, dy = x - mean_x, y - mean_y
-        sin_mean, cos_mean = float(w @ np.sin(yaw)), float(w @ np.cos(yaw))
+        cos_yaw, sin_yaw = self.headings()
+        sin_mean, cos_mean = float(w @ sin_yaw), float(w @ cos_yaw)
         resultant = min(math.hypot(sin_mean, cos_mean), 1.0)
         yaw_sd = math.sqrt(-2.0 * math.log(resultant)) if resultant > 1e-12 else math.pi
         return ((mean_x, mean_y), (float(w @ (dx * dx)), float(w @ (dx * dy)), float(w @ (dy * dy))),
