@@ -21,9 +21,14 @@ import numpy as np
 
 from rfidnav_common.base_safety import BUMP_LEFT, BUMP_RIGHT, CONDITIONS, BaseEventRecord, ConditionTracker, gate_motion
 from rfidnav_common.geometry import nearest_on_segments
+from rfidnav_sim.nearby import NearbyGrid
 
 CONTACT_MARGIN_M = 0.005        # a wall this much beyond the footprint still presses the bumper (no flicker)
 BOTH_BUMPERS_RAD = math.radians(20.0)   # a wall this close to straight ahead presses both bumpers
+# The walls the base's contact checks look at: those a 1 m cell lists within this of it (rfidnav_sim.nearby). A
+# check needs the nearest wall only when it is within the footprint and a step of it; beyond this, the clearance
+# taken as this distance only makes the next check come sooner.
+NEAR_WALLS_M = 1.0
 SLIP_BATCH = 256                # odometry slip draws fetched at a time (the generator is the odometry's alone)
 
 
@@ -76,6 +81,31 @@ def moves_into_wall(walls: np.ndarray, before: tuple[float, float], after: tuple
     return distance < footprint_radius_m and distance < nearest_on_segments(before, walls)[0]
 
 
+# A wall as the base's contact checks use it: start (x, y), direction (dx, dy) to its end, squared length.
+WallRow = tuple[float, float, float, float, float]
+
+
+def wall_rows(walls: np.ndarray) -> list[WallRow]:
+    return [(x1, y1, x2 - x1, y2 - y1, (x2 - x1) * (x2 - x1) + (y2 - y1) * (y2 - y1))
+            for x1, y1, x2, y2 in walls.tolist()]
+
+
+def nearest_wall(x: float, y: float, rows: list[WallRow]) -> tuple[float, float, float]:
+    """(distance, closest x, closest y) of the nearest of ``rows`` to (x, y), the first among equals: the arithmetic
+    of rfidnav_common.geometry.nearest_on_segments to the bit, in plain floats (a handful of walls: numpy's calls
+    would cost more than the sums)."""
+    best, best_x, best_y = math.inf, math.nan, math.nan
+    for x1, y1, dx, dy, length_sq in rows:
+        t = ((x - x1) * dx + (y - y1) * dy) / (length_sq if length_sq > 0.0 else 1.0)
+        t = 0.0 if t < 0.0 else 1.0 if t > 1.0 else t
+        closest_x, closest_y = x1 + t * dx, y1 + t * dy
+        ex, ey = closest_x - x, closest_y - y
+        distance = math.sqrt(ex * ex + ey * ey)
+        if distance < best:
+            best, best_x, best_y = distance, closest_x, closest_y
+    return best, best_x, best_y
+
+
 def unicycle_step(yaw: float, linear_mps: float, angular_radps: float, dt: float) -> tuple[float, float, float]:
     """(dx, dy, dyaw) of an ideal unicycle over ``dt``, moving along the mid-step heading: the robot of the
     in-process runners where the base's wheel limits and motor dynamics do not matter."""
@@ -90,6 +120,8 @@ class DiffDriveBase:
                  walls: np.ndarray | None = None) -> None:
         self.limits = limits
         self.walls = np.zeros((0, 4)) if walls is None else np.asarray(walls, dtype=float).reshape(-1, 4)
+        walls_array = self.walls
+        self.near_walls = NearbyGrid(walls_array, NEAR_WALLS_M, lambda indices: wall_rows(walls_array[indices]))
         self.bumpers = ConditionTracker()
         self.bumped = False             # either bumper pressed (the tracker's, kept here: asked every step)
         self.bumps = 0                  # presses so far (either bumper)
@@ -147,11 +179,18 @@ class DiffDriveBase:
         events: list[BaseEventRecord] = []
         moved = math.hypot(truth.x - x, truth.y - y)
         if len(self.walls) and (self.bumped or moved >= self.clearance_m):
-            if moves_into_wall(self.walls, (x, y), (truth.x, truth.y), limits.footprint_radius_m):
+            # The walls listed near the step's end, in the floor's order: every wall within NEAR_WALLS_M of it, so
+            # the nearest one (and its index among equals) when it matters, as among all the walls.
+            near = self.near_walls.near(truth.x, truth.y)
+            distance, closest_x, closest_y = nearest_wall(truth.x, truth.y, near)
+            # Into a wall (moves_into_wall): closer than the footprint's radius and closer than before.
+            if distance < limits.footprint_radius_m and distance < nearest_wall(x, y, near)[0]:
                 # The wheels stall against the wall: the step is not made, and the encoders do not count it.
                 truth.x, truth.y, truth.yaw, self.left_speed, self.right_speed = x, y, yaw, 0.0, 0.0
                 left_m = right_m = 0.0
-            distance, point = self.wall_distance(truth)
+                distance, closest_x, closest_y = nearest_wall(x, y, near)
+            distance = min(distance, NEAR_WALLS_M)
+            point = (closest_x, closest_y)
             self.clearance_m = distance - limits.footprint_radius_m - CONTACT_MARGIN_M
             events = self.update_bumpers(distance, point)
         else:
@@ -173,10 +212,7 @@ class DiffDriveBase:
         self.slip_index = index + 2
         return self.slips[index], self.slips[index + 1]
 
-    def wall_distance(self, pose: Pose2D) -> tuple[float, np.ndarray]:
-        return nearest_on_segments((pose.x, pose.y), self.walls)
-
-    def update_bumpers(self, distance: float, point: np.ndarray) -> list[BaseEventRecord]:
+    def update_bumpers(self, distance: float, point: tuple[float, float]) -> list[BaseEventRecord]:
         """The bumpers' edges with the nearest wall ``distance`` away at ``point``: pressed where it touches the
         front half (moving away from a wall the base already overlaps is allowed: that is how a robot placed
         too close gets free)."""

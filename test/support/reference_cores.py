@@ -9,6 +9,7 @@ import math
 import numpy as np
 
 from rfidnav_common.base_safety import BaseEventRecord, gate_motion
+from rfidnav_common.geometry import nearest_on_segments
 from rfidnav_sim.kinematics import CONTACT_MARGIN_M, DiffDriveBase, Pose2D, moves_into_wall
 from rfidnav_sim.sonar_model import ON_WALL_TOLERANCE_M, SonarModel
 from rfidnav_sim.wall_tag_model import WallTagReader
@@ -91,7 +92,7 @@ class ReferenceBase(DiffDriveBase):
                                limits.footprint_radius_m):
                 self.truth, self.left_speed, self.right_speed = before, 0.0, 0.0
                 left_m = right_m = 0.0
-            distance, point = self.wall_distance(self.truth)
+            distance, point = nearest_on_segments((self.truth.x, self.truth.y), self.walls)
             self.clearance_m = distance - limits.footprint_radius_m - CONTACT_MARGIN_M
             events = self.update_bumpers(distance, point)
         else:
