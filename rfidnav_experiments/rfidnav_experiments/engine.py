@@ -71,7 +71,6 @@ class Engine:
         self.rows: TaskRows | None = None
         self.header: Header | None = None
         self.resumed = 0                # tasks taken from the tasks file instead of run
-        self.ran = 0                    # tasks run
 
     def __enter__(self) -> Engine:
         try:
@@ -144,11 +143,12 @@ class Engine:
         keys = [task_key(label, job) for job in jobs]
         results: dict[str, Any] = dict(self.rows.finished_in(label)) if self.rows is not None else {}
         pending = {key: job for key, job in zip(keys, jobs) if key not in results}
-        taken = len(set(keys)) - len(pending)
+        tasks = len(set(keys))
+        taken = tasks - len(pending)
         self.resumed += taken
         if taken:
-            print(f"{label}: {taken} of {len(set(keys))} tasks taken from {self.options.tasks_file}", file=sys.stderr)
-        with progress(label, len(set(keys))) as advance:
+            print(f"{label}: {taken} of {tasks} tasks taken from {self.options.tasks_file}", file=sys.stderr)
+        with progress(label, tasks) as advance:
             advance(taken)
             futures = self.client.map(run_encoded, [function] * len(pending), list(pending.values()),
                                       key=list(pending), pure=False)
@@ -158,7 +158,6 @@ class Engine:
                     if self.rows is not None:
                         self.rows.append(label, future.key, pending[future.key], data)
                     results[future.key] = decode(data)
-                    self.ran += 1
                     advance(1)
             finally:
                 self.client.cancel(futures)

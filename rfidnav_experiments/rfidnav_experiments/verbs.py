@@ -49,7 +49,7 @@ PARTITION_METHODS = ("paper", "filter", "filter_boom_spin")
 def partition_methods(text: str) -> list[str]:
     methods = [part.strip() for part in text.split(",")]
     unknown = [method for method in methods if method not in PARTITION_METHODS]
-    if unknown or not methods:
+    if unknown:
         raise argparse.ArgumentTypeError(f"expected some of {', '.join(PARTITION_METHODS)}, got {text!r}")
     return list(dict.fromkeys(methods))
 
@@ -76,7 +76,7 @@ def add_engine_options(parser: argparse.ArgumentParser) -> None:
                        help="worker processes of the local cluster (default: this machine's cores)")
     where.add_argument("--scheduler", type=scheduler_value, default=None, metavar="ADDRESS",
                        help="run the tasks on an existing Dask cluster, e.g. tcp://10.0.0.5:8786 (README, "
-                            "\"Experiments on a cluster\")")
+                            "\"Experiments on Dask, on this machine or a cluster\")")
 
 
 def engine(args: argparse.Namespace, experiment: str = "", arguments: dict | None = None,

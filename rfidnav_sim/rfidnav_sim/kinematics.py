@@ -184,11 +184,13 @@ class DiffDriveBase:
             near = self.near_walls.near(truth.x, truth.y)
             distance, closest_x, closest_y = nearest_wall(truth.x, truth.y, near)
             # Into a wall (moves_into_wall): closer than the footprint's radius and closer than before.
-            if distance < limits.footprint_radius_m and distance < nearest_wall(x, y, near)[0]:
-                # The wheels stall against the wall: the step is not made, and the encoders do not count it.
-                truth.x, truth.y, truth.yaw, self.left_speed, self.right_speed = x, y, yaw, 0.0, 0.0
-                left_m = right_m = 0.0
-                distance, closest_x, closest_y = nearest_wall(x, y, near)
+            if distance < limits.footprint_radius_m:
+                before = nearest_wall(x, y, near)
+                if distance < before[0]:
+                    # The wheels stall against the wall: the step is not made, and the encoders do not count it.
+                    truth.x, truth.y, truth.yaw, self.left_speed, self.right_speed = x, y, yaw, 0.0, 0.0
+                    left_m = right_m = 0.0
+                    distance, closest_x, closest_y = before
             distance = min(distance, NEAR_WALLS_M)
             point = (closest_x, closest_y)
             self.clearance_m = distance - limits.footprint_radius_m - CONTACT_MARGIN_M

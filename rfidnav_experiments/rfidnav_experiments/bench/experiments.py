@@ -31,12 +31,15 @@ def topological_benchmark(runs: int) -> dict[str, Any]:
     results = run_all(runs, (EVALUATION,), "bench topological")
     wall = time.perf_counter() - started
     missions = sum(len(missions) for missions in results.values())
+
+    def success_pct(method: str, rate: float) -> float:
+        at_rate = results[(EVALUATION, method, rate)]
+        return round(100.0 * sum(run.success for run in at_rate) / len(at_rate), 1)
+
     return {"floor": EVALUATION, "runs": runs, "missions": missions, "workers": engine_workers(),
             "wall_s": round(wall, 2), "missions_per_s": round(missions / wall, 3),
-            "success_pct": {method: {f"{rate:g}": round(100.0 * sum(run.success for run in results[(EVALUATION, method,
-                                                                                                      rate)])
-                                                        / len(results[(EVALUATION, method, rate)]), 1)
-                                     for rate in MISS_RATES} for method in METHODS}}
+            "success_pct": {method: {f"{rate:g}": success_pct(method, rate) for rate in MISS_RATES}
+                            for method in METHODS}}
 
 
 def scaling_slice(experiment: str, runs: int) -> tuple[Callable[[Any], Any], list[Any], str]:
