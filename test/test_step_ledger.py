@@ -97,3 +97,32 @@ def test_an_input_first_reported_late_owes_only_what_comes_after() -> None:
     ledger.report(report(SIM, {"/cmd_vel": 0}, {"/sim/ground_truth": 5}))
     ledger.report(report(READER, {"/sim/ground_truth": 5}, {"/rfid/reads": 0}))
     assert [(u.node, u.behind) for u in ledger.unanswered()] == [(RECORDER, 1)]
+
+
+def test_a_step_waits_until_each_producer_has_matched_every_participant_consuming_its_topic() -> None:
+    ledger = StepLedger([SIM, READER, CONTROLLER, RECORDER])
+    ledger.report(report(SIM, {"/cmd_vel": 0}, {"/sim/ground_truth": 0}))
+    ledger.report(report(READER, {"/sim/ground_truth": 0}, {"/rfid/reads": 0}))
+    ledger.report(report(RECORDER, {"/rfid/reads": 0}))
+    # The controller's publisher has found the recorder but not the simulator yet (discovery lags): a command
+    # sent now would reach only the recorder, and the simulator would be counted behind on it for ever.
+    ledger.report(StepReport(CONTROLLER, 1, {"/rfid/reads": 0}, {"/cmd_vel": 0}, matched={"/cmd_vel": 0}))
+    ledger.report(StepReport(READER, 1, {"/sim/ground_truth": 0}, {"/rfid/reads": 0}, matched={"/rfid/reads": 1}))
+    assert [u.describe() for u in ledger.unanswered()] == [
+        f"{READER}'s /rfid/reads to reach its consumers (1 of 2 matched)",
+        f"{CONTROLLER}'s /cmd_vel to reach its consumers (0 of 1 matched)"]
+    ledger.report(StepReport(READER, 1, {"/sim/ground_truth": 0}, {"/rfid/reads": 0}, matched={"/rfid/reads": 2}))
+    # A foreign listener as well (``rfidnav echo /cmd_vel``) is more than needed, which is fine.
+    ledger.report(StepReport(CONTROLLER, 1, {"/rfid/reads": 0}, {"/cmd_vel": 0}, matched={"/cmd_vel": 2}))
+    assert ledger.answered()
+
+
+def test_a_consumer_that_subscribes_late_holds_the_step_until_the_producer_has_matched_it() -> None:
+    ledger = StepLedger([SIM, CONTROLLER])
+    ledger.report(StepReport(SIM, 1, {}, {"/sim/ground_truth": 0}, matched={"/sim/ground_truth": 0}))
+    ledger.report(report(CONTROLLER, {}))
+    assert ledger.answered()                                   # nobody consumes ground truth yet
+    ledger.report(report(CONTROLLER, {"/sim/ground_truth": 0}))
+    assert [(u.node, u.topic) for u in ledger.unanswered()] == [(SIM, "/sim/ground_truth")]
+    ledger.report(StepReport(SIM, 1, {}, {"/sim/ground_truth": 0}, matched={"/sim/ground_truth": 1}))
+    assert ledger.answered()

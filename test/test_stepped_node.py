@@ -71,6 +71,17 @@ def test_a_stepped_node_takes_time_from_stamps_fires_due_timers_first_and_answer
     assert last.node == "/participant" and last.produced == {"/cmd_vel": 5}
 
 
+def test_a_stepped_node_answers_again_when_its_publisher_matches_a_subscription_and_reports_the_count(graph) -> None:
+    received = answers(graph)
+    graph.add(Recording(graph.context))
+    graph.spin_until(lambda: received, "the participant's first answer")
+    assert step_report_of(received[-1]).matched == {"/cmd_vel": 0}   # nothing listens to its commands yet
+    graph.probe.create_subscription(Twist, "/cmd_vel", lambda _message: None, COMMAND_QOS)
+    # Nothing was handled or published: only the match makes it answer.
+    graph.spin_until(lambda: step_report_of(received[-1]).matched == {"/cmd_vel": 1}, "an answer with the match")
+    assert step_report_of(received[-1]).produced == {"/cmd_vel": 0}
+
+
 def test_a_node_without_the_parameter_is_a_plain_node(graph) -> None:
     received = answers(graph)
     node = graph.add(SteppedNode("plain", context=graph.context))

@@ -11,3 +11,7 @@ class LaunchError(RfidnavError):
 
 class ReadinessError(RfidnavError):
     """The node graph did not become ready: names the node or action that is missing, with its last log lines."""
+
+
+class NodeExitedError(ReadinessError):
+    """A node process exited while the graph was being readied: final, never worth waiting out or asking again."""

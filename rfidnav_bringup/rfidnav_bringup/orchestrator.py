@@ -51,7 +51,7 @@ from std_srvs.srv import Trigger
 
 from rfidnav_bag.errors import BagError
 from rfidnav_bag.recorder_node import recordable_definition
-from rfidnav_bringup.errors import ReadinessError
+from rfidnav_bringup.errors import NodeExitedError, ReadinessError
 from rfidnav_bringup.metrics import ground_truth_objection
 from rfidnav_bringup.processes import DomainLease, NodeProcess, child_environment, reach_text, resolve_executable
 from rfidnav_bringup.scenario import (
@@ -66,8 +66,9 @@ from rfidnav_common.errors import ConfigError, RfidnavError
 from rfidnav_common.files import write_atomically
 from rfidnav_common.progress import StatusLine
 from rfidnav_common.ros import events_executor, fill_message, interface_class
-from rfidnav_common.step_ledger import CLOCKS
-from rfidnav_common.stepped_node import STEP_ACK_TOPIC
+from rfidnav_common.step_ledger import CLOCKS, StepReport, Unwired, unwired
+from rfidnav_common.stepped_node import STEP_ACK_READER_QOS, STEP_ACK_TOPIC, step_report_of
+from rfidnav_msgs.msg import StepAck
 
 READY_TIMEOUT_S = 90.0
 STOP_GRACE_S = 5.0
@@ -352,9 +353,43 @@ class Orchestrator:
         if RECORDER_ROLE in self.processes:
             self.spin_until(executor, lambda: not self.unrecorded_topics(node), READY_TIMEOUT_S,
                             lambda: f"the recorder to subscribe to {', '.join(self.unrecorded_topics(node))}")
+        if self.stepped_with is not None:
+            self.wait_for_wiring(node, executor, self.stepped_with)
         self.write_graph(node)
         if self.stepped_with is None:
             self.start_clock(node, executor)
+
+    def wait_for_wiring(self, node: Node, executor: Executor, participants: tuple[str, ...]) -> None:
+        """Before the goal, which the mission's server answers at once (with the stepped clock, before the clock
+        starts): every participant's publishers matched with every participant subscribing to their topics, as
+        the participants report it (the simulator holds its own steps until its publishers are). A message sent
+        before its subscription is matched is lost, and its consumer would hold the clock for ever."""
+        reports: dict[str, StepReport] = {}
+
+        def take(message: StepAck) -> None:
+            report = step_report_of(message)
+            reports[report.node] = report
+
+        subscription = node.create_subscription(StepAck, STEP_ACK_TOPIC, take, STEP_ACK_READER_QOS)
+
+        def waiting() -> list[Unwired]:
+            consumers = {topic: sum(1 for info in node.get_subscriptions_info_by_topic(topic)
+                                    if qualified_name(info.node_name, info.node_namespace) in participants)
+                         for report in reports.values() for topic in report.matched}
+            return list(unwired(reports.values(), consumers))
+
+        # Participants in the simulator's own process hand it their counts directly, on no topic.
+        clock_process = next(self.process_of[role] for role, spec in self.scenario.nodes.items() if spec.clock_source)
+        beside_clock = {f"/{spec.name}" for role, spec in self.scenario.nodes.items()
+                        if spec.name and self.process_of[role] == clock_process}
+        answering = [name for name in participants if name not in beside_clock]
+        try:
+            self.spin_until(executor, lambda: set(answering) <= reports.keys() and not waiting(), READY_TIMEOUT_S,
+                            lambda: "the participants' publishers to match their subscribers: "
+                                    + (", ".join(u.describe() for u in waiting())
+                                       or f"no answer yet from {', '.join(sorted(set(answering) - reports.keys()))}"))
+        finally:
+            node.destroy_subscription(subscription)
 
     def start_clock(self, node: Node, executor: Executor) -> None:
         clock_roles = [spec for spec in self.scenario.nodes.values() if spec.clock_source and spec.name]
@@ -369,6 +404,8 @@ class Orchestrator:
                     self.spin_until(executor, lambda: node.get_clock().now().nanoseconds > 0, RESEND_TIMEOUT_S,
                                     "the simulation clock to start (the first /clock message)")
                     break
+                except NodeExitedError:   # final: asking again would swallow it (its process is forgotten)
+                    raise
                 except ReadinessError:
                     if attempt == RESEND_ATTEMPTS - 1:
                         raise
@@ -506,6 +543,8 @@ class Orchestrator:
         for attempt in range(RESEND_ATTEMPTS):
             try:
                 return self.send_goal(executor, goal, timeout_s=RESEND_TIMEOUT_S)
+            except NodeExitedError:
+                raise
             except ReadinessError:
                 if attempt == RESEND_ATTEMPTS - 1:
                     raise
@@ -574,7 +613,7 @@ class Orchestrator:
                 continue
             if starting or not process.respawn:
                 process.popen = None if starting else process.popen
-                raise ReadinessError(f"node {role} exited with code {code}; last log lines:\n{process.last_lines()}")
+                raise NodeExitedError(f"node {role} exited with code {code}; last log lines:\n{process.last_lines()}")
 
     def all_last_lines(self) -> str:
         return "\n".join(f"  {role} ({'running' if p.running else f'exit {p.exit_code}'}):\n{p.last_lines(5)}"
@@ -700,6 +739,10 @@ def choose_clock(scenario: Scenario, options: RunOptions) -> tuple[str, str]:
     if options.clock == "free" and not math.isfinite(options.rtf):
         raise ConfigError("--rtf", "", "max needs the stepped clock (the free-running clock keeps a fixed RTF)")
     return options.clock, ""
+
+
+def qualified_name(name: str, namespace: str) -> str:
+    return f"{namespace.rstrip('/')}/{name}"
 
 
 def rtf_text(rtf: float) -> str | float:

@@ -11,6 +11,13 @@ detection; it needs no stamps, so it covers messages without a header (``/cmd_ve
 
 Only topics with a counted producer are checked: a foreign or hardware node's messages (whose counts nobody
 reports) never hold a step, so such a node runs free-running beside the stepped ones.
+
+Counting finds a message that is late, not one that is lost: DDS delivers a volatile message only to the
+subscriptions its publisher has matched when it is sent, and discovery between two processes can lag well
+behind both joining the graph on a loaded machine. So each participant also reports, per topic it produces, how
+many subscriptions its publisher has matched, and a step (the first one included) waits until every producer
+reaches every participant that consumes its topic (:func:`unwired`): a message sent before then would be lost
+and its consumer counted behind for ever.
 """
 
 from __future__ import annotations
@@ -30,6 +37,8 @@ class StepReport:
     consumed: Mapping[str, int]
     produced: Mapping[str, int]
     slack: int = 0         # messages per input it may be behind without holding a step
+    # Per produced topic: the subscriptions its publisher has matched (the fewest, with several publishers).
+    matched: Mapping[str, int] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
@@ -43,6 +52,28 @@ class Unanswered:
         if not self.topic:
             return f"{self.node} (not heard from yet)"
         return f"{self.node} on {self.topic} ({self.behind} behind)"
+
+
+@dataclass(frozen=True)
+class Unwired:
+    """A participant whose publisher on a topic has not matched every participant consuming it (yet)."""
+    node: str
+    topic: str
+    matched: int
+    consumers: int
+
+    def describe(self) -> str:
+        return f"{self.node}'s {self.topic} to reach its consumers ({self.matched} of {self.consumers} matched)"
+
+
+def unwired(reports: Iterable[StepReport], consumers: Mapping[str, int]) -> Iterator[Unwired]:
+    """Producers whose publisher has matched fewer subscriptions than ``consumers`` (per topic: how many
+    participants subscribe to it). More is fine: a foreign node (``rfidnav echo``) may listen too."""
+    for report in reports:
+        for topic, matched in report.matched.items():
+            needed = consumers.get(topic, 0)
+            if matched < needed:
+                yield Unwired(report.node, topic, matched, needed)
 
 
 @dataclass
@@ -61,6 +92,7 @@ class StepLedger:
     def __init__(self, participants: Iterable[str]) -> None:
         self.participants: dict[str, _Participant] = {name: _Participant() for name in participants}
         self.totals: dict[str, int] = {}       # messages published per topic, restarted processes' included
+        self.wired = False                     # every producer reaches every consumer; recomputed on a change
 
     def report(self, report: StepReport) -> bool:
         """Take a participant's latest counts; False for a node that is not a participant (ignored)."""
@@ -77,6 +109,8 @@ class StepLedger:
             if count != before.get(topic, 0):
                 self.totals[topic] = self.totals.get(topic, 0) + count - before.get(topic, 0)
         entry.report = report
+        if previous is None or previous.matched != report.matched or previous.consumed.keys() != report.consumed.keys():
+            self.wired = not self._unwired()
         for topic, consumed in report.consumed.items():
             # An input first reported now (a new process, or a subscription made late, as the recorder's are)
             # owes nothing published before: those messages went by before it listened.
@@ -88,18 +122,32 @@ class StepLedger:
         """Messages on ``topic`` counted by any participant, restarted ones included."""
         return self.totals.get(topic, 0)
 
-    def unanswered(self) -> list[Unanswered]:
-        """Who still has to answer: participants never heard from, then inputs with unhandled messages."""
+    def unanswered(self) -> list[Unanswered | Unwired]:
+        """Who still has to answer: participants never heard from, producers not matched with their consumers,
+        then inputs with unhandled messages."""
         return list(self._waiting())
 
     def answered(self) -> bool:
         """Whether the step is done: :meth:`unanswered` is empty (stopping at the first that is not)."""
         return next(self._waiting(), None) is None
 
-    def _waiting(self) -> Iterator[Unanswered]:
+    def _reports(self) -> list[StepReport]:
+        return [entry.report for entry in self.participants.values() if entry.report is not None]
+
+    def _unwired(self) -> list[Unwired]:
+        reports = self._reports()
+        consumers: dict[str, int] = {}
+        for report in reports:
+            for topic in report.consumed:
+                consumers[topic] = consumers.get(topic, 0) + 1
+        return list(unwired(reports, consumers))
+
+    def _waiting(self) -> Iterator[Unanswered | Unwired]:
         for name, entry in self.participants.items():
             if entry.report is None:
                 yield Unanswered(name, "", 0)
+        if not self.wired:
+            yield from self._unwired()
         for name, entry in self.participants.items():
             report = entry.report
             if report is None:

@@ -5,7 +5,8 @@ With it true (the orchestrator sets it on every participant of a stepped simulat
 lockstep without code of its own:
 
 - every subscription callback and every publish is counted, per resolved topic, and after each callback (or a
-  publish from outside one: an action callback) the node publishes its cumulative counts on ``/sim/step_ack``
+  publish from outside one: an action callback, or a publisher matching a new subscription: the counts include
+  how many each publisher has matched) the node publishes its cumulative counts on ``/sim/step_ack``
   (rfidnav_msgs/StepAck); the simulator advances time only when every counted message has been handled
   (rfidnav_common.step_ledger);
 - its clock is simulated time taken from the stamps of the messages it handles (``header.stamp``, or a
@@ -33,7 +34,9 @@ from typing import Any, cast
 
 from rcl_interfaces.msg import ParameterDescriptor
 from rclpy.clock import Clock, ClockType, ROSClock
+from rclpy.event_handler import PublisherEventCallbacks
 from rclpy.node import Node
+from rclpy.publisher import Publisher
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.time import Time
 
@@ -112,6 +115,7 @@ class SteppedNode(Node):
                                             "answer on /sim/step_ack, take time from handled stamps")).value)
         self.consumed_counts: dict[str, int] = {}
         self.produced_counts: dict[str, int] = {}
+        self.counted_publishers: dict[str, list[Publisher]] = {}
         self.sim_timers: list[SimTimer] = []
         self.sim_time_ns = 0
         if not self.stepped:
@@ -161,11 +165,16 @@ class SteppedNode(Node):
         return super().create_subscription(msg_type, topic, counted, qos_profile, **kwargs)
 
     def create_publisher(self, msg_type: Any, topic: str, qos_profile: Any, **kwargs: Any) -> Any:
-        publisher = super().create_publisher(msg_type, topic, qos_profile, **kwargs)
         if not self.stepped:
-            return publisher
+            return super().create_publisher(msg_type, topic, qos_profile, **kwargs)
+        # A subscription matched (or gone) changes what the node reports: the simulator may be waiting for it.
+        events = kwargs.pop("event_callbacks", None) or PublisherEventCallbacks()
+        if events.matched is None:
+            events.matched = lambda _status: self.changed()
+        publisher = super().create_publisher(msg_type, topic, qos_profile, event_callbacks=events, **kwargs)
         resolved = publisher.topic_name
         self.produced_counts.setdefault(resolved, 0)
+        self.counted_publishers.setdefault(resolved, []).append(publisher)
         publish = publisher.publish
 
         def counted(message: Any) -> None:
@@ -237,14 +246,17 @@ class SteppedNode(Node):
         super().destroy_node()
 
     def step_report(self) -> StepReport:
+        matched = {topic: min(p.get_subscription_count() for p in publishers)
+                   for topic, publishers in self.counted_publishers.items()}
         return StepReport(self.get_fully_qualified_name(), self.incarnation, dict(self.consumed_counts),
-                          dict(self.produced_counts), self.step_slack)
+                          dict(self.produced_counts), self.step_slack, matched)
 
 
 def step_ack_message(report: StepReport, time_ns: int) -> StepAck:
     message = StepAck(node=report.node, incarnation=report.incarnation, slack=report.slack,
                       consumed_topics=list(report.consumed), consumed_counts=list(report.consumed.values()),
-                      produced_topics=list(report.produced), produced_counts=list(report.produced.values()))
+                      produced_topics=list(report.produced), produced_counts=list(report.produced.values()),
+                      produced_matched=[report.matched.get(topic, 0) for topic in report.produced])
     message.time.sec, message.time.nanosec = divmod(time_ns, 1_000_000_000)
     return message
 
@@ -252,4 +264,5 @@ def step_ack_message(report: StepReport, time_ns: int) -> StepAck:
 def step_report_of(message: StepAck) -> StepReport:
     return StepReport(message.node, message.incarnation,
                       dict(zip(message.consumed_topics, message.consumed_counts, strict=True)),
-                      dict(zip(message.produced_topics, message.produced_counts, strict=True)), message.slack)
+                      dict(zip(message.produced_topics, message.produced_counts, strict=True)), message.slack,
+                      dict(zip(message.produced_topics, message.produced_matched, strict=True)))
