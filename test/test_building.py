@@ -22,8 +22,9 @@ import yaml
 from rfidnav_common.errors import ConfigError
 from rfidnav_common.floor_plan import check_floor_map
 from rfidnav_common.topological_map import TopologicalMap, check_map, load_topological_map
+from rfidnav_common.wall_tags import InductionArea, WallTag
 from rfidnav_sim.building import Floor, building_floor, main, write_world
-from rfidnav_sim.wall_tag_model import InductionArea, WallTag, WallTagReader
+from rfidnav_sim.wall_tag_model import WallTagReader
 from rfidnav_sim.world import load_world
 
 pytestmark = pytest.mark.tier("unit")

@@ -359,7 +359,7 @@ def test_no_tags_no_reads():
 
 
 def test_a_side_antenna_reads_the_wall_tags_in_its_induction_area_and_nothing_else() -> None:
-    from rfidnav_sim.wall_tag_model import WallTag
+    from rfidnav_common.wall_tags import WallTag
 
     left = Antenna(1, (0.0, 0.0, 0.5), False, 1.0, math.radians(90.0), side_bearing_rad=math.pi / 2)
     model = ReaderModel(antennas=(left,

@@ -11,7 +11,8 @@ import math
 import numpy as np
 import pytest
 
-from rfidnav_sim.wall_tag_model import InductionArea, WallTag, WallTagReader
+from rfidnav_common.wall_tags import InductionArea, WallTag
+from rfidnav_sim.wall_tag_model import WallTagReader
 from support.reference_cores import ReferenceReader
 
 pytestmark = pytest.mark.tier("unit")

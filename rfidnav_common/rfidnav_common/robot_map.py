@@ -1,6 +1,7 @@
 """Robot maps (robot knowledge, ``config/maps/*.yaml``): what a navigation node may know of the world.
 
-They hold no tag positions: the robot never knows where tags are. A map has any of:
+They hold no tag positions unless surveyed ones are declared: the paper methods never know where tags are. A map
+has any of:
 
 * ``arrival_tags`` (paper 001, step 8): the floor tag that tells the robot it has arrived under each
   ceiling tag;
@@ -14,6 +15,9 @@ They hold no tag positions: the robot never knows where tags are. A map has any 
   rectangle the robot may drive in. The two-tier navigator plans its legs round the walls and keeps its spiral
   searches inside; a goal outside the extent is refused. Without ``extent`` it is the walls' bounding box, then
   the ``deployment_area``.
+* ``ceiling_tags`` and ``wall_tags`` (the fused localizer, rfidnav_localization.fused): surveyed positions of
+  ceiling tags (paper 001's route tags) and of wall tag plates (paper 004's, the world files' schema), as a
+  building's tag survey records them. No paper method reads them.
 
 Schema::
 
@@ -29,18 +33,23 @@ Schema::
     walls:                 # segments [x1, y1, x2, y2] [m], map frame
       - [0.0, 0.0, 12.0, 0.0]
     extent: [0.0, 0.0, 12.0, 8.0]          # x_min, y_min, x_max, y_max [m]
+    ceiling_tags:          # tag id -> [x, y, z] [m], map frame
+      C1: [0.0, 0.0, 3.0]
+    wall_tags:             # plates on walls; normal: out of the wall into the hallway
+      - {id: "8", position: [7.2, 9.0], normal: [0.0, -1.0]}
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from rfidnav_common.config import Section, check_number
 from rfidnav_common.errors import ConfigError
 from rfidnav_common.tag_groups import TagGroup
+from rfidnav_common.wall_tags import WallTag
 
 Wall = tuple[float, float, float, float]          # x1, y1, x2, y2 [m]
 Rectangle = tuple[float, float, float, float]     # x_min, y_min, x_max, y_max [m]
@@ -55,6 +64,8 @@ class RouteMap:
     radio_map_file: Path | None = None
     walls: tuple[Wall, ...] = ()
     declared_extent: Rectangle | None = None
+    ceiling_tags: dict[str, tuple[float, float, float]] = field(default_factory=dict)
+    wall_tags: tuple[WallTag, ...] = ()
 
     @property
     def extent(self) -> Rectangle | None:
@@ -71,7 +82,7 @@ def load_route_map(path: Path, radio_map_may_be_missing: bool = False) -> RouteM
     """A route map; its ``radio_map`` must exist unless ``radio_map_may_be_missing`` (the survey that writes it)."""
     section = Section.from_file(Path(path))
     section.reject_unknown(("name", "description", "arrival_tags", "deployment_area", "tag_groups", "radio_map",
-                            "walls", "extent"))
+                            "walls", "extent", "ceiling_tags", "wall_tags"))
     arrival = _arrival_tags(section) if section.has("arrival_tags") else {}
     area = rectangle_of(section, "deployment_area")
     extent = rectangle_of(section, "extent")
@@ -82,10 +93,14 @@ def load_route_map(path: Path, radio_map_may_be_missing: bool = False) -> RouteM
         radio_map = (Path(path).parent / section.string("radio_map")).resolve()
         if not (radio_map.is_file() or radio_map_may_be_missing and not radio_map.exists()):
             raise section.error("radio_map", f"no such file: {radio_map}")
-    if not arrival and area is None and not groups:
-        raise section.error("arrival_tags", "a map needs arrival_tags, a deployment_area or tag_groups (none given)")
+    ceiling_tags = ceiling_tags_of(section)
+    wall_tags = wall_tags_of(section)
+    if not arrival and area is None and not groups and not ceiling_tags and not wall_tags:
+        raise section.error("arrival_tags", "a map needs arrival_tags, a deployment_area, tag_groups, ceiling_tags "
+                                            "or wall_tags (none given)")
     return RouteMap(name=section.string("name"), arrival_tags=arrival, deployment_area=area, tag_groups=groups,
-                    radio_map_file=radio_map, walls=walls, declared_extent=extent)
+                    radio_map_file=radio_map, walls=walls, declared_extent=extent, ceiling_tags=ceiling_tags,
+                    wall_tags=wall_tags)
 
 
 def bounding_box(walls: Sequence[Wall]) -> Rectangle:
@@ -152,6 +167,41 @@ def tag_groups_of(section: Section) -> tuple[TagGroup, ...]:
         except ValueError as error:          # the message names the field: "... size_m: expected ..."
             raise ConfigError(entry.source, entry.prefix, str(error)) from None
     return tuple(groups)
+
+
+def wall_tags_of(section: Section, seen: dict[str, str] | None = None) -> tuple[WallTag, ...]:
+    """The optional ``wall_tags`` list of a map or world file; ids unique among the file's tags (``seen``: id ->
+    where, of the tags met before)."""
+    seen = {} if seen is None else seen
+    wall_tags = []
+    for entry in section.sections("wall_tags", []):
+        entry.reject_unknown(("id", "position", "normal"))
+        raw_id = entry.raw("id")
+        tag_id = str(raw_id) if isinstance(raw_id, (str, int)) and not isinstance(raw_id, bool) else entry.string("id")
+        if tag_id in seen:
+            raise entry.error("id", f"duplicate tag id '{tag_id}' (also at {seen[tag_id]})")
+        seen[tag_id] = entry.prefix
+        position = entry.numbers("position", length=2)
+        nx, ny = entry.numbers("normal", length=2)
+        length = (nx * nx + ny * ny) ** 0.5
+        if length == 0.0:
+            raise entry.error("normal", "must not be zero (it points out of the wall into the hallway)")
+        wall_tags.append(WallTag(tag_id, (position[0], position[1]), (nx / length, ny / length)))
+    return tuple(wall_tags)
+
+
+def ceiling_tags_of(section: Section) -> dict[str, tuple[float, float, float]]:
+    """The optional ``ceiling_tags`` of a map: tag id -> surveyed [x, y, z] [m], map frame."""
+    if not section.has("ceiling_tags"):
+        return {}
+    entries = section.section("ceiling_tags")
+    tags = {}
+    for tag_id in entries.keys():
+        if not isinstance(tag_id, str):
+            raise entries.error(str(tag_id), "tag ids must be strings")
+        x, y, z = entries.numbers(tag_id, length=3)
+        tags[tag_id] = (x, y, z)
+    return tags
 
 
 def _arrival_tags(section: Section) -> dict[str, str]:

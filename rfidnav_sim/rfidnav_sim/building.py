@@ -38,7 +38,7 @@ import numpy as np
 
 from rfidnav_common.floor_plan import DEAD_END_M, HALLWAY_WIDTH_M, TAG_SETBACK_M, check_floor_map, plan_floor
 from rfidnav_common.topological_map import DIRECTIONS, TopologicalMap, load_topological_map
-from rfidnav_sim.wall_tag_model import WallTag
+from rfidnav_common.wall_tags import WallTag
 
 DECIMALS = 9                # coordinates are rounded so that files read 8.0, not 8.000000000000002
 

@@ -34,7 +34,8 @@ from scipy.spatial import cKDTree
 from rfidnav_common.polling import PollClock
 from rfidnav_common.rf import round_trip_phase
 from rfidnav_common.tag_lattice import Deployment
-from rfidnav_sim.wall_tag_model import InductionArea, WallTag, WallTagReader
+from rfidnav_common.wall_tags import InductionArea, WallTag
+from rfidnav_sim.wall_tag_model import WallTagReader
 from rfidnav_sim.world import World
 
 TREE_FROM_TAGS = 256       # listed tags beyond which a round looks them up in a k-d tree

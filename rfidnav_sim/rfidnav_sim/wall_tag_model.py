@@ -18,50 +18,11 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
 
 import numpy as np
 
+from rfidnav_common.wall_tags import InductionArea, WallTag
 from rfidnav_sim.nearby import NearbyGrid
-
-UNIT_TOLERANCE = 1e-6
-
-
-@dataclass(frozen=True)
-class WallTag:
-    tag_id: str
-    position: tuple[float, float]           # on a wall, world frame [m]
-    normal: tuple[float, float]             # unit, out of the wall into the hallway the plate faces
-
-    def __post_init__(self) -> None:
-        if len(self.position) != 2 or not all(math.isfinite(v) for v in self.position):
-            raise ValueError(f"{self.tag_id}: position: {self.position} is not a finite (x, y)")
-        if len(self.normal) != 2 or not abs(math.hypot(*self.normal) - 1.0) <= UNIT_TOLERANCE:
-            raise ValueError(f"{self.tag_id}: normal: {self.normal} is not a unit (x, y)")
-
-
-@dataclass(frozen=True)
-class InductionArea:
-    """Where the sensor reads a tag: a width_m x depth_m rectangle reaching out from the antenna along its bearing.
-
-    The default antenna sits at the platform's centre looking left, so the area reaches 1 m from the robot's
-    centre: the paper's "the robot must move along the wall at a distance of less than 1 m".
-    """
-
-    position: tuple[float, float] = (0.0, 0.0)     # antenna in base_link [m]
-    bearing_rad: float = math.pi / 2.0             # CCW from forward: left, towards the followed wall
-    width_m: float = 0.40
-    depth_m: float = 1.00
-
-    def __post_init__(self) -> None:
-        if len(self.position) != 2 or not all(math.isfinite(v) for v in self.position):
-            raise ValueError(f"position: {self.position} is not a finite (x, y)")
-        if not math.isfinite(self.bearing_rad):
-            raise ValueError(f"bearing_rad: {self.bearing_rad} is not finite")
-        for name in ("width_m", "depth_m"):
-            value = getattr(self, name)
-            if not (math.isfinite(value) and value > 0.0):
-                raise ValueError(f"{name}: {value} is not a finite positive number")
 
 
 class WallTagReader:

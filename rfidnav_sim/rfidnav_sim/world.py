@@ -43,10 +43,10 @@ import numpy as np
 
 from rfidnav_common.config import DBM, Section
 from rfidnav_common.errors import ConfigError, ParameterError
-from rfidnav_common.robot_map import rectangle_of, tag_groups_of, walls_of
+from rfidnav_common.robot_map import rectangle_of, tag_groups_of, wall_tags_of, walls_of
 from rfidnav_common.tag_groups import TagGroup
 from rfidnav_common.tag_lattice import Deployment, DeploymentError, make_deployment
-from rfidnav_sim.wall_tag_model import WallTag
+from rfidnav_common.wall_tags import WallTag
 from rfidnav_sim.wifi_model import AccessPoint, PropagationSettings
 
 TAG_KINDS = ("ceiling", "floor")
@@ -114,7 +114,7 @@ def world_from_section(section: Section) -> World:
                                     f"tag group {group.group_id}'s tag id '{tag_id}' is also at {seen[tag_id]}")
             seen[tag_id] = f"tag group {group.group_id}"
             tags.append(Tag(tag_id=tag_id, position=(x, y, 0.0), kind="floor"))
-    wall_tags = _wall_tags(section, seen)
+    wall_tags = wall_tags_of(section, seen)
     if not tags and not deployments and not wall_tags:
         raise section.error("tags", "a world needs tags, lattices or wall_tags (none given)")
     wifi, wifi_seed = _wifi(section.section("wifi", {}))
@@ -122,25 +122,6 @@ def world_from_section(section: Section) -> World:
                  tags=tuple(tags), walls=tuple(walls), deployments=deployments, tag_groups=groups, wall_tags=wall_tags,
                  access_points=_access_points(section), wifi=wifi, wifi_seed=wifi_seed,
                  extent=rectangle_of(section, "extent"), source=section.source)
-
-
-def _wall_tags(section: Section, seen: dict[str, str]) -> tuple[WallTag, ...]:
-    """The ``wall_tags`` list; ids unique among all the world's tags (``seen``: id -> where)."""
-    wall_tags = []
-    for entry in section.sections("wall_tags", []):
-        entry.reject_unknown(("id", "position", "normal"))
-        raw_id = entry.raw("id")
-        tag_id = str(raw_id) if isinstance(raw_id, (str, int)) and not isinstance(raw_id, bool) else entry.string("id")
-        if tag_id in seen:
-            raise entry.error("id", f"duplicate tag id '{tag_id}' (also at {seen[tag_id]})")
-        seen[tag_id] = entry.prefix
-        position = entry.numbers("position", length=2)
-        nx, ny = entry.numbers("normal", length=2)
-        length = (nx * nx + ny * ny) ** 0.5
-        if length == 0.0:
-            raise entry.error("normal", "must not be zero (it points out of the wall into the hallway)")
-        wall_tags.append(WallTag(tag_id, (position[0], position[1]), (nx / length, ny / length)))
-    return tuple(wall_tags)
 
 
 def _access_points(section: Section) -> tuple[AccessPoint, ...]:

@@ -49,6 +49,7 @@ import numpy as np  # noqa: E402
 from rfidnav_bringup.metrics import GOAL_RADIUS_M  # noqa: E402
 from rfidnav_common.errors import ConfigError  # noqa: E402
 from rfidnav_common.topological_map import load_topological_map  # noqa: E402
+from rfidnav_common.wall_tags import InductionArea  # noqa: E402
 from rfidnav_experiments.engine import run_tasks  # noqa: E402
 from rfidnav_experiments.reproduce.tables import (  # noqa: E402
     Condition,
@@ -73,7 +74,6 @@ from rfidnav_experiments.runners.topological import (  # noqa: E402
 )
 from rfidnav_planning.mission_executor import EARLY_MARGIN  # noqa: E402
 from rfidnav_planning.parameters import MissionExecutorParameters  # noqa: E402
-from rfidnav_sim.wall_tag_model import InductionArea  # noqa: E402
 from rfidnav_sim.world import load_world  # noqa: E402
 
 EXPERIMENT = "topological"

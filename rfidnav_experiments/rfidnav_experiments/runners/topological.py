@@ -38,6 +38,7 @@ import numpy as np
 from rfidnav_bringup.metrics import GOAL_RADIUS_M, ground_truth_objection, topological_shortest_m, wall_crossings
 from rfidnav_bringup.scenario import CONFIG_DIR
 from rfidnav_common.topological_map import UNKNOWN, TopologicalMap, load_topological_map
+from rfidnav_common.wall_tags import InductionArea
 from rfidnav_control.parameters import SONAR_FIELDS, WallFollowerParameters
 from rfidnav_control.wall_following import (
     JUNCTION_CENTRE,
@@ -54,7 +55,7 @@ from rfidnav_experiments.runners.shipped import shipped_parameters
 from rfidnav_planning.mission_executor import STOP, TURNS, Decision, MissionExecutor
 from rfidnav_sim.parameters import RobotSimParameters, SonarParameters
 from rfidnav_sim.sonar_model import SonarModel
-from rfidnav_sim.wall_tag_model import InductionArea, WallTagReader
+from rfidnav_sim.wall_tag_model import WallTagReader
 from rfidnav_sim.world import World, load_world
 
 FOLLOWER_EVENTS = (JUNCTION_CENTRE, NO_OPENING, TURN_DONE, OBSTACLE)

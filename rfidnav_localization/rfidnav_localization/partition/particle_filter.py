@@ -35,6 +35,7 @@ from rfidnav_common.tag_lattice import Coordinate, Deployment
 from rfidnav_localization.partition.estimate import LocalizerSettings, YawEstimate
 from rfidnav_localization.partition.geometry import CIRCLE_SAMPLES, PartitionGeometry, Region, orientation_bounds
 from rfidnav_localization.partition.stretch import Stretch
+from rfidnav_localization.read_model import soft_read_log_likelihood
 
 ROUGHENING = 0.2                 # Gordon et al.'s K: jitter = K * spread * N^(-1/3) per dimension
 # The filter re-initialises when its best particle's recent evidence amounts to this many contradicted tags:
@@ -146,27 +147,8 @@ class ParticleFilter:
                        read_range_m: float) -> np.ndarray:
         """log P(this round's reads | particle) for antennas (2 x count) under the soft read model."""
         s = self.settings
-        tags = np.concatenate((read, unread))
-        sign = np.concatenate((np.ones(len(read)), -np.ones(len(unread))))
-        # In place, one particles x tags array throughout (the same operations as out of place, to the bit).
-        value = antennas[0][:, None] - tags[:, 0]
-        dy = antennas[1][:, None] - tags[:, 1]
-        value *= value
-        dy *= dy
-        value += dy
-        np.sqrt(value, out=value)                # the distance; not np.hypot: its overflow care costs twice the rest
-        np.subtract(read_range_m, value, out=value)
-        value /= s.boundary_softness_m
-        value *= sign                            # the margin
-        # log(eps + (1 - 2 eps) * sigmoid(margin)); tanh keeps the sigmoid from overflowing.
-        eps = s.read_error_probability
-        value *= 0.5
-        np.tanh(value, out=value)
-        value += 1.0
-        value *= (1.0 - 2.0 * eps) * 0.5
-        value += eps
-        np.log(value, out=value)
-        return value.sum(axis=1)
+        return soft_read_log_likelihood(antennas, read, unread, read_range_m, s.boundary_softness_m,
+                                        s.read_error_probability)
 
     def weigh(self, read: np.ndarray, unread: np.ndarray, read_range_m: float,
               proposals: Callable[[int], np.ndarray] | None = None) -> bool:
