@@ -1,0 +1,63 @@
+"""The fused localizer over time (pure): odometry poses in, a map-frame pose with covariance out. The node
+(rfid_localizer) and the in-process runners feed it alike.
+
+The odometry arrives as poses in the odom frame; the filter is moved by the increment since the last one, in the
+robot frame (so the odom frame's drift never enters). With no start given, the first round with evidence starts
+global localization; ``/initialpose`` (:meth:`FusedLocalizer.set_pose`) restarts about a given pose.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from rfidnav_common.geometry import wrap_angle
+from rfidnav_localization.fused.filter import Evidence, FusedFilter, FusedSettings, PoseEstimate, Update
+from rfidnav_localization.fused.tag_map import FusedMap
+
+Pose2D = tuple[float, float, float]
+
+
+@dataclass(frozen=True)
+class FusedEstimate:
+    pose: PoseEstimate
+    odom: Pose2D                 # the odometry pose the estimate is for: map -> odom follows from the two
+    update: Update
+
+    def map_to_odom(self) -> Pose2D:
+        """map -> odom, which puts ``odom`` on the estimated pose: T_map_odom = T_map_base T_odom_base^-1."""
+        x, y, yaw = self.pose.x, self.pose.y, self.pose.yaw
+        ox, oy, oyaw = self.odom
+        rotation = wrap_angle(yaw - oyaw)
+        c, s = math.cos(rotation), math.sin(rotation)
+        return x - (c * ox - s * oy), y - (s * ox + c * oy), rotation
+
+
+class FusedLocalizer:
+    def __init__(self, settings: FusedSettings, fused_map: FusedMap, rng: np.random.Generator) -> None:
+        self.filter = FusedFilter(settings, fused_map, rng)
+        self.odom: Pose2D | None = None
+
+    def on_odometry(self, odom: Pose2D) -> None:
+        """The latest wheel odometry pose (odom frame): the particles move by the increment since the last."""
+        previous, self.odom = self.odom, odom
+        if previous is None or not self.filter.initialised:
+            return
+        dx, dy = odom[0] - previous[0], odom[1] - previous[1]
+        c, s = math.cos(previous[2]), math.sin(previous[2])
+        self.filter.predict(c * dx + s * dy, -s * dx + c * dy, wrap_angle(odom[2] - previous[2]))
+
+    def set_pose(self, x: float, y: float, yaw: float, covariance: np.ndarray) -> None:
+        """Restart about a pose (``/initialpose``); a 3 x 3 covariance over (x, y, yaw)."""
+        self.filter.initialise_at(x, y, yaw, covariance)
+
+    def on_round(self, evidence: Evidence) -> FusedEstimate | None:
+        """Weigh one round's evidence; the estimate, None before odometry or while nothing has started it."""
+        if self.odom is None:
+            return None
+        if not self.filter.initialised:
+            self.filter.initialise_global()
+        update = self.filter.update(evidence)
+        return FusedEstimate(self.filter.estimate(), self.odom, update)

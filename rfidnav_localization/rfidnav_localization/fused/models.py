@@ -1,0 +1,122 @@
+"""The fused localizer's measurement models: log-likelihoods of one kind of evidence for many robot poses (pure).
+
+Every model takes the poses as ``states`` (3 x n: x, y, yaw of the robot's centre in the map frame) and returns
+log P(evidence | pose) per pose, *scaled so that the best possible agreement scores 0* (a Gaussian's peak, a
+certain read): the constants a density would add do not change a filter's weights, and the scale lets the
+filter compare how well its particles explain a round from one round to the next (kidnap detection:
+rfidnav_localization.fused.filter). Each model has a floor (``eps``) on what one reading can cost, so that one
+outlier -- a reflection, a wrong WiFi fix -- never wipes out the particles near the truth.
+
+The sensor geometry and noise are the simulator's and the drivers' parameters (rfidnav_sim.rfid_model,
+rfidnav_common.wall_tags, rfidnav_sim.compass_model), taken from the same parameter files.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from rfidnav_common.geometry import wrap_angles
+from rfidnav_common.rf import wavelength_m
+from rfidnav_common.wall_tags import InductionArea, WallTag, area_margins
+from rfidnav_localization.read_model import soft_read_log_likelihood
+
+
+def mounted(states: np.ndarray, offset: tuple[float, float]) -> tuple[np.ndarray, np.ndarray]:
+    """Map-frame (x, y) of a point mounted at ``offset`` (base_link, metres) on each pose."""
+    x, y, yaw = states
+    cos_yaw, sin_yaw = np.cos(yaw), np.sin(yaw)
+    return x + cos_yaw * offset[0] - sin_yaw * offset[1], y + sin_yaw * offset[0] + cos_yaw * offset[1]
+
+
+def robust_gaussian(residual: np.ndarray, sd: np.ndarray | float, eps: float) -> np.ndarray:
+    """log(eps + (1 - eps) exp(-residual^2 / (2 sd^2))): a Gaussian with a floor, 0 at residual 0."""
+    return np.log(eps + (1.0 - eps) * np.exp(-0.5 * np.square(residual / sd)))
+
+
+@dataclass(frozen=True)
+class FloorModel:
+    """The downward antenna over floor tags (lattice tags of paper 000, tag groups of paper 003): the soft read
+    model (rfidnav_localization.read_model) of the tags it read and of known tags near the particles it did not."""
+    antenna_xy: tuple[float, float]          # in base_link [m]
+    softness_m: float = 0.004
+    eps: float = 0.01
+
+    def log_likelihood(self, states: np.ndarray, read: np.ndarray, unread: np.ndarray,
+                       read_range_m: float) -> np.ndarray:
+        antennas = np.vstack(mounted(states, self.antenna_xy))
+        # The best case (every read tag at the antenna, every unread one far) scores about 0 already.
+        return soft_read_log_likelihood(antennas, read, unread, read_range_m, self.softness_m, self.eps)
+
+
+@dataclass(frozen=True)
+class PhaseDifferenceModel:
+    """Paper 001's two receiving antennas under a ceiling tag: the phase difference of one backscatter received
+    on both, dphi = 4 pi (d1 - d2) / lambda + (offset1 - offset2) mod 2 pi, where the tag's own phase cancels.
+    Each antenna's phase has noise of ``noise_rad_per_m`` per metre of its distance to the tag (the simulator's
+    model), so the difference has sd = noise * sqrt(d1^2 + d2^2) (plus ``floor_rad``: quantisation, multipath)."""
+    antenna1: tuple[float, float, float]     # in base_link [m]
+    antenna2: tuple[float, float, float]
+    offset1_rad: float = 0.0                 # cable and port delays (reader parameters)
+    offset2_rad: float = 0.0
+    noise_rad_per_m: float = 0.02
+    floor_rad: float = 0.02
+    eps: float = 0.01
+
+    def log_likelihood(self, states: np.ndarray, tag: tuple[float, float, float], dphi_rad: float,
+                       frequency_hz: float) -> np.ndarray:
+        distances = []
+        for antenna in (self.antenna1, self.antenna2):
+            x, y = mounted(states, (antenna[0], antenna[1]))
+            distances.append(np.sqrt(np.square(tag[0] - x) + np.square(tag[1] - y) + (tag[2] - antenna[2]) ** 2))
+        d1, d2 = distances
+        predicted = 4.0 * math.pi * (d1 - d2) / wavelength_m(frequency_hz) + (self.offset1_rad - self.offset2_rad)
+        residual = wrap_angles(dphi_rad - predicted)
+        sd = np.sqrt(np.square(self.noise_rad_per_m * d1) + np.square(self.noise_rad_per_m * d2)
+                     + self.floor_rad ** 2)
+        return robust_gaussian(residual, sd, self.eps)
+
+
+@dataclass(frozen=True)
+class WallTagModel:
+    """Paper 004's side antenna: a wall tag read lies in its induction area (rfidnav_common.wall_tags), up to a
+    soft edge. Only reads are evidence: a tag *not* read says little, since read failures miss whole passages
+    (paper 004), and a model that counted them would drive the particles off the truth at every failure."""
+    area: InductionArea
+    softness_m: float = 0.02
+    eps: float = 0.01
+
+    def log_likelihood(self, states: np.ndarray, tag: WallTag) -> np.ndarray:
+        margin = area_margins(self.area, states, tag)
+        inside = 0.5 * (1.0 + np.tanh(0.5 * margin / self.softness_m))   # sigmoid(margin / softness); 0 facing away
+        return np.log(self.eps + (1.0 - self.eps) * inside)
+
+
+@dataclass(frozen=True)
+class WifiModel:
+    """A fingerprint fix (the location server's weighted k-nearest neighbours) with its uncertainty: a circular
+    Gaussian of sd max(scale * uncertainty, floor) about the fix."""
+    sd_scale: float = 1.0
+    sd_floor_m: float = 1.0
+    eps: float = 0.01
+
+    def sd_m(self, uncertainty_m: float) -> float:
+        return max(self.sd_scale * uncertainty_m, self.sd_floor_m)
+
+    def log_likelihood(self, states: np.ndarray, fix: tuple[float, float], uncertainty_m: float) -> np.ndarray:
+        distance = np.hypot(states[0] - fix[0], states[1] - fix[1])
+        return robust_gaussian(distance, self.sd_m(uncertainty_m), self.eps)
+
+
+@dataclass(frozen=True)
+class CompassModel:
+    """An e-compass heading: a wrapped Gaussian of the reading-to-reading noise about the particle's heading plus
+    its compass bias (a per-particle state: the bias stays put for a run, paper 003's robot calibrates it away,
+    and counting it as noise would make a thousand readings claim a heading they cannot know)."""
+    sd_rad: float = math.radians(2.0)
+    eps: float = 0.01
+
+    def log_likelihood(self, states: np.ndarray, biases: np.ndarray, yaw_rad: float) -> np.ndarray:
+        return robust_gaussian(wrap_angles(yaw_rad - states[2] - biases), self.sd_rad, self.eps)

@@ -1,0 +1,159 @@
+"""The fused localizer's measurement models (rfidnav_localization.fused.models) against likelihoods computed by
+hand, and against what the simulator's sensors produce; the filter's handling of absent and unknown evidence."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from rfidnav_common.rf import wavelength_m
+from rfidnav_common.wall_tags import InductionArea, WallTag
+from rfidnav_localization.fused.filter import Evidence, FusedFilter, FusedSettings, PhaseReading
+from rfidnav_localization.fused.models import (
+    CompassModel,
+    FloorModel,
+    PhaseDifferenceModel,
+    WallTagModel,
+    WifiModel,
+)
+from rfidnav_localization.fused.tag_map import FusedMap
+from rfidnav_sim.rfid_model import Antenna, ReaderModel, ReaderSimulator
+
+pytestmark = pytest.mark.tier("unit")
+
+EPS = 0.01
+
+
+def pose(x: float, y: float, yaw: float) -> np.ndarray:
+    return np.array([[x], [y], [yaw]])
+
+
+def sigmoid(value: float) -> float:
+    return 1.0 / (1.0 + math.exp(-value))
+
+
+def test_a_floor_tag_read_scores_the_soft_disc_at_the_mounted_antenna_and_an_unread_one_its_complement() -> None:
+    model = FloorModel(antenna_xy=(0.1, 0.0), softness_m=0.004, eps=EPS)
+    # Heading +y, so the antenna 0.1 m ahead sits at (1, 2.1); the tag is 0.05 m from it, inside r = 0.06.
+    tag = np.array([[1.03, 2.14]])
+    read_by_hand = math.log(EPS + (1 - 2 * EPS) * sigmoid((0.06 - 0.05) / 0.004))
+    unread_by_hand = math.log(EPS + (1 - 2 * EPS) * sigmoid(-(0.06 - 0.05) / 0.004))
+    state = pose(1.0, 2.0, math.pi / 2)
+    assert model.log_likelihood(state, tag, np.zeros((0, 2)), 0.06)[0] == pytest.approx(read_by_hand, rel=1e-9)
+    assert model.log_likelihood(state, np.zeros((0, 2)), tag, 0.06)[0] == pytest.approx(unread_by_hand, rel=1e-9)
+    assert read_by_hand == pytest.approx(-0.08812, abs=1e-4)
+
+
+def test_the_phase_difference_of_the_two_antennas_scores_the_round_trip_path_difference_modulo_two_pi() -> None:
+    model = PhaseDifferenceModel((0.0, 0.03, 0.30), (0.0, -0.03, 0.30), noise_rad_per_m=0.02, floor_rad=0.02,
+                                 eps=EPS)
+    tag, frequency = (1.0, 0.5, 3.0), 915.25e6
+    d1 = math.sqrt(1.0 ** 2 + 0.47 ** 2 + 2.7 ** 2)
+    d2 = math.sqrt(1.0 ** 2 + 0.53 ** 2 + 2.7 ** 2)
+    predicted = 4 * math.pi * (d1 - d2) / (299_792_458.0 / frequency)
+    sd = math.sqrt((0.02 * d1) ** 2 + (0.02 * d2) ** 2 + 0.02 ** 2)
+    by_hand = math.log(EPS + (1 - EPS) * math.exp(-0.5 * (0.05 / sd) ** 2))
+    at_origin = pose(0.0, 0.0, 0.0)
+    assert model.log_likelihood(at_origin, tag, predicted + 0.05, frequency)[0] == pytest.approx(by_hand, rel=1e-9)
+    # Phase is modulo 2 pi: a whole turn more is the same reading.
+    wrapped = predicted + 0.05 + 2 * math.pi
+    assert model.log_likelihood(at_origin, tag, wrapped, frequency)[0] == pytest.approx(by_hand, rel=1e-9)
+    assert model.log_likelihood(at_origin, tag, predicted, frequency)[0] == pytest.approx(0.0, abs=1e-12)
+
+
+def test_the_phase_model_peaks_where_the_simulated_reader_stood() -> None:
+    antennas = (Antenna(1, (0.0, 0.03, 0.30), True, 12.0, math.radians(85)),
+                Antenna(2, (0.0, -0.03, 0.30), True, 12.0, math.radians(85)))
+    reader = ReaderSimulator(ReaderModel(antennas, (915.25e6,), phase_noise_rad_per_m=0.0), ["C1"],
+                             np.array([[2.0, 1.0, 3.0]]), np.array([0.7]), np.random.default_rng(1))
+    reads = {read.antenna: read for read in reader.inventory(0.5, 0.2, 0.3, 0.0)}
+    dphi = reads[1].phase_rad - reads[2].phase_rad      # the tag's own 0.7 rad cancels
+    model = PhaseDifferenceModel(antennas[0].position, antennas[1].position)
+    # The truth; turned 0.1 rad; 0.5 m aside across the bearing to the tag: both change d1 - d2 by millimetres,
+    # several standard deviations of the difference's phase noise.
+    states = np.array([[0.5, 0.5, 0.5 + 0.5 * 0.9], [0.2, 0.2, 0.2 - 0.5 * 0.43], [0.3, 0.4, 0.3]])
+    scores = model.log_likelihood(states, (2.0, 1.0, 3.0), dphi, reads[1].frequency_hz)
+    assert scores[0] == pytest.approx(0.0, abs=1e-9)
+    assert scores[1] < -0.5 and scores[2] < -1.0
+
+
+def test_a_wall_tag_read_scores_its_depth_into_the_induction_area_and_nothing_for_a_plate_facing_away() -> None:
+    model = WallTagModel(InductionArea((0.0, 0.0), math.pi / 2, 0.40, 1.00), softness_m=0.02, eps=EPS)
+    robot = pose(0.0, 0.0, 0.0)        # looking along +x: the area reaches 1 m to the left (+y), 0.4 m wide
+    inside = WallTag("8", (0.1, 0.5), (0.0, -1.0))            # 0.1 m from the area's side edge
+    by_hand = math.log(EPS + (1 - EPS) * sigmoid(0.1 / 0.02))
+    assert model.log_likelihood(robot, inside)[0] == pytest.approx(by_hand, rel=1e-9)
+    facing_away = WallTag("9", (0.1, 0.5), (0.0, 1.0))
+    assert model.log_likelihood(robot, facing_away)[0] == pytest.approx(math.log(EPS), rel=1e-12)
+    outside = WallTag("10", (0.5, 0.5), (0.0, -1.0))          # 0.3 m beyond the side edge
+    assert model.log_likelihood(robot, outside)[0] == pytest.approx(
+        math.log(EPS + (1 - EPS) * sigmoid(-0.3 / 0.02)), rel=1e-9)
+
+
+def test_a_wifi_fix_scores_a_gaussian_of_its_uncertainty_never_tighter_than_the_floor() -> None:
+    model = WifiModel(sd_scale=1.0, sd_floor_m=1.0, eps=EPS)
+    state = pose(1.5, 0.0, 0.0)
+    assert model.log_likelihood(state, (0.0, 0.0), 2.0)[0] == pytest.approx(
+        math.log(EPS + (1 - EPS) * math.exp(-0.5 * (1.5 / 2.0) ** 2)), rel=1e-9)
+    assert model.log_likelihood(state, (0.0, 0.0), 0.3)[0] == pytest.approx(     # 0.3 m claimed: the 1 m floor
+        math.log(EPS + (1 - EPS) * math.exp(-0.5 * 1.5 ** 2)), rel=1e-9)
+
+
+def test_a_compass_reading_scores_the_heading_plus_the_particles_bias_across_the_wrap() -> None:
+    model = CompassModel(sd_rad=math.radians(2.0), eps=EPS)
+    residual = 3.1 - (-3.1 + 0.05) - 2 * math.pi
+    assert model.log_likelihood(pose(0.0, 0.0, -3.1), np.array([0.05]), 3.1)[0] == pytest.approx(
+        math.log(EPS + (1 - EPS) * math.exp(-0.5 * (residual / math.radians(2.0)) ** 2)), rel=1e-9)
+
+
+def small_filter(**settings) -> FusedFilter:
+    fused_map = FusedMap(extent=(0.0, 0.0, 10.0, 10.0), floor_tags={"G1-00": (2.0, 2.0)},
+                         wall_tags={"8": WallTag("8", (5.0, 6.0), (0.0, -1.0))})
+    return FusedFilter(FusedSettings(particles=200, **settings), fused_map, np.random.default_rng(3))
+
+
+def test_a_round_without_evidence_costs_nothing_and_unknown_tags_are_named_not_used() -> None:
+    fused = small_filter()
+    fused.initialise_global()
+    states, weights = fused.states.copy(), fused.weights.copy()
+    update = fused.update(Evidence(floor_tag_ids=("NOT-A-TAG",), wall_tag_ids=((4, "99"),)))
+    assert update.used == () and update.ignored_tag_ids == ("NOT-A-TAG", "99")
+    assert np.array_equal(fused.states, states) and np.array_equal(fused.weights, weights)
+
+
+def test_the_estimate_averages_headings_on_the_circle_and_its_covariance_spans_the_wrap() -> None:
+    fused = small_filter()
+    fused.states = np.array([[1.0, 1.0, 1.0, 1.0], [2.0, 2.0, 2.0, 2.0], [3.1, -3.1, 3.1, -3.1]])
+    fused.weights = np.full(4, 0.25)
+    estimate = fused.estimate()
+    assert abs(abs(estimate.yaw) - math.pi) < 1e-9
+    offset = 2 * math.pi - 6.2
+    assert estimate.covariance[2, 2] == pytest.approx((offset / 2) ** 2, rel=1e-6)
+    assert estimate.covariance[0, 0] == pytest.approx(0.0, abs=1e-18)
+
+
+def test_a_filter_sure_of_the_wrong_place_is_redrawn_where_the_evidence_says_it_is() -> None:
+    fused = small_filter()
+    fused.initialise_at(8.0, 8.0, 0.0, np.diag([0.01, 0.01, 0.01]))
+    for _ in range(5):                                   # well placed first: the averages learn what "good" is
+        fused.predict(2.0, 0.0, 0.0)
+        fused.predict(-2.0, 0.0, 0.0)
+        fused.update(Evidence(wifi_fix=((8.0, 8.0), 1.0), compass_yaw_rad=0.0))
+    injected = 0
+    for _ in range(30):                                  # kidnapped to (2, 2): the fixes say so
+        fused.predict(2.0, 0.0, 0.0)
+        fused.predict(-2.0, 0.0, 0.0)
+        injected += fused.update(Evidence(wifi_fix=((2.0, 2.0), 1.0), compass_yaw_rad=0.0)).injected
+    estimate = fused.estimate()
+    assert injected > 0
+    assert math.hypot(estimate.x - 2.0, estimate.y - 2.0) < 1.0
+
+
+def test_phase_readings_of_unknown_ceiling_tags_are_ignored_by_name() -> None:
+    fused = small_filter(phase=PhaseDifferenceModel((0.0, 0.03, 0.3), (0.0, -0.03, 0.3)))
+    fused.initialise_global()
+    update = fused.update(Evidence(phase=(PhaseReading("C9", 0.1, 915e6),)))
+    assert update.used == () and update.ignored_tag_ids == ("C9",)
+    assert wavelength_m(915e6) == pytest.approx(0.3276, abs=1e-4)
