@@ -112,6 +112,9 @@ def add_reproduce(verbs: argparse._SubParsersAction) -> Handler:
     topological = names.add_parser("topological", parents=[common], help="paper 004 sec. 5: topological "
                                                                          "missions under read failures")
     topological.add_argument("--runs", type=runs_value, help="missions per miss rate, default 100")
+    fused = names.add_parser("fused", parents=[common], help="ours: the fused localizer beside each paper's own "
+                                                             "localizer, same runs, paired")
+    fused.add_argument("--runs", type=runs_value, help="runs per world, default 10")
     return run_reproduce
 
 
@@ -242,6 +245,10 @@ def run_reproduce(args: argparse.Namespace) -> int:
         from rfidnav_experiments.reproduce.two_tier import RUNS, reproduce_two_tier
 
         reproduce, arguments = reproduce_two_tier, {"runs": args.runs or RUNS}
+    elif args.name == "fused":
+        from rfidnav_experiments.reproduce.fused import RUNS, reproduce_fused
+
+        reproduce, arguments = reproduce_fused, {"runs": args.runs or RUNS}
     else:
         from rfidnav_experiments.reproduce.flc import reproduce_flc
 

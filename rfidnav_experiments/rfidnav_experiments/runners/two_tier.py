@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -35,7 +35,7 @@ from rfidnav_common.robot_map import RouteMap, bounding_box
 from rfidnav_common.seeding import derive_seed, rng_for
 from rfidnav_common.tag_groups import HF_READ_RANGE_M
 from rfidnav_experiments.runners.shipped import file_parameters, shipped_parameters
-from rfidnav_localization.dead_reckoning import TIER_TAG, Fix
+from rfidnav_localization.dead_reckoning import TIER_TAG, DeadReckoningEstimate, Fix
 from rfidnav_localization.errors import LocateError
 from rfidnav_localization.fingerprint import Fingerprint, LocateSettings, RadioMap
 from rfidnav_planning.parameters import TwoTierNavigatorParameters
@@ -213,6 +213,19 @@ def grid_radio_map(world: World, points: Sequence[tuple[float, float]], rng: np.
 
 
 @dataclass(frozen=True)
+class StepSeen:
+    """What the robot's sensors gave in one step of a run, with the truth and the navigator's own estimate after
+    it: for a localizer run beside the paper's on the same streams (rfidnav_experiments.reproduce.fused)."""
+    time_s: float
+    truth: tuple[float, float, float]
+    odom: tuple[float, float, float]
+    compass_yaw_rad: float
+    floor_reads: tuple[str, ...]
+    wifi_fix: tuple[tuple[float, float], float] | None     # the location server's answer this step, if any
+    paper: DeadReckoningEstimate
+
+
+@dataclass(frozen=True)
 class TwoTierRun:
     success: bool
     message: str
@@ -240,13 +253,14 @@ def run_two_tier(site: Site, start: tuple[float, float, float], target: tuple[fl
                  odometry_scale_error: float = ODOMETRY_SCALE_ERROR, compass: CompassModel = COMPASS,
                  locate: LocateSettings = LocateSettings(), max_time_s: float = 1800.0,
                  survey_spacing_m: float | None = None, known_start: Fix | None = None,
-                 floor: WallMap = WallMap()) -> TwoTierRun:
+                 floor: WallMap = WallMap(), observe: Callable[[StepSeen], None] | None = None) -> TwoTierRun:
     """One navigation from ``start`` (true pose) to ``target``, the compass and WiFi drawn from ``rng``, the floor
     reader's streams seeded from ``reader_seed`` (as the rfid_reader_sim node seeds them from its seed). With
     ``survey_spacing_m`` the robot also surveys (paper 003's automatic radio map construction): a scan every that
     many metres while its position is fresh from a tag fix (within SURVEY_FRESH_M), recorded at the position it
     believes (never the true one) and added to the site's radio map at once, as the add_fingerprint service
-    does. ``floor``: the walls and extent of the robot's map, which its legs are planned round."""
+    does. ``floor``: the walls and extent of the robot's map, which its legs are planned round. ``observe`` is
+    called after every step with what the sensors gave (:class:`StepSeen`); it draws nothing."""
     x, y, yaw = start
     reader = FLOOR_READER.simulated_reader(site.world, reader_seed)
     floor_port = NAVIGATOR.floor_antenna
@@ -263,9 +277,10 @@ def run_two_tier(site: Site, start: tuple[float, float, float], target: tuple[fl
     time_s = path_m = 0.0
     walls, bumps = site.world.wall_segments(), 0
     track = [(x, y)]
+    located: list[tuple[tuple[float, float], float]] = []
     while not decision.finished and time_s < max_time_s:
         if decision.request is not None:
-            decision = answer(site, navigator, decision.request, (x, y), rng, locate, tier_one_errors)
+            decision = answer(site, navigator, decision.request, (x, y), rng, locate, tier_one_errors, located)
             continue
         linear, angular = decision.command
         dx, dy, dyaw = unicycle_step(yaw, linear, angular, STEP_S)
@@ -281,7 +296,11 @@ def run_two_tier(site: Site, start: tuple[float, float, float], target: tuple[fl
         time_s += STEP_S
         round_reads = reader.round_at(x, y, yaw, time_s) or []
         reads = [read.tag_id for read in round_reads if read.antenna == floor_port]
-        decision = navigator.step(odom, compass.measure(yaw, rng), reads)
+        compass_yaw = compass.measure(yaw, rng)
+        decision = navigator.step(odom, compass_yaw, reads)
+        if observe is not None:
+            observe(StepSeen(time_s, (x, y, yaw), odom, compass_yaw, tuple(reads),
+                             located.pop() if located else None, navigator.estimate()))
         fixes = navigator.progress.fixes
         for fix in fixes[fixes_seen:]:
             if fix.tag_id:
@@ -311,8 +330,10 @@ def run_two_tier(site: Site, start: tuple[float, float, float], target: tuple[fl
 
 
 def answer(site: Site, navigator: TwoTierNavigator, request: Request, true_position: tuple[float, float],
-           rng: np.random.Generator, locate: LocateSettings, tier_one_errors: list[float]):
-    """The location server's answer to ``request``, as the node gets it over DDS."""
+           rng: np.random.Generator, locate: LocateSettings, tier_one_errors: list[float],
+           located: list[tuple[tuple[float, float], float]] | None = None):
+    """The location server's answer to ``request``, as the node gets it over DDS (a position found is appended
+    to ``located`` with its uncertainty)."""
     if request.kind == LOCATE:
         scan = {reading.bssid: reading.rssi_dbm for reading in site.wifi.scan(*true_position, rng)}
         try:
@@ -320,6 +341,8 @@ def answer(site: Site, navigator: TwoTierNavigator, request: Request, true_posit
         except LocateError:
             return navigator.on_located(None, 0.0)
         tier_one_errors.append(math.dist(result.position, true_position))
+        if located is not None:
+            located[:] = [(result.position, result.uncertainty_m)]
         return navigator.on_located(result.position, result.uncertainty_m)
     return navigator.on_tag_map(site.tags_near(request.centre, request.radius_m))
 

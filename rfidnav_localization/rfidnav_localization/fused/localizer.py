@@ -13,6 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from rfidnav_common.frames import map_to_odom
 from rfidnav_common.geometry import wrap_angle
 from rfidnav_localization.fused.filter import Evidence, FusedFilter, FusedSettings, PoseEstimate, Update
 from rfidnav_localization.fused.tag_map import FusedMap
@@ -27,12 +28,8 @@ class FusedEstimate:
     update: Update
 
     def map_to_odom(self) -> Pose2D:
-        """map -> odom, which puts ``odom`` on the estimated pose: T_map_odom = T_map_base T_odom_base^-1."""
-        x, y, yaw = self.pose.x, self.pose.y, self.pose.yaw
-        ox, oy, oyaw = self.odom
-        rotation = wrap_angle(yaw - oyaw)
-        c, s = math.cos(rotation), math.sin(rotation)
-        return x - (c * ox - s * oy), y - (s * ox + c * oy), rotation
+        """map -> odom, which puts ``odom`` on the estimated pose (REP 105)."""
+        return map_to_odom((self.pose.x, self.pose.y, self.pose.yaw), self.odom)
 
 
 class FusedLocalizer:
