@@ -20,5 +20,6 @@ setup(
     entry_points={"console_scripts": [
         "partition_localizer = rfidnav_localization.partition_localizer_node:main",
         "location_server = rfidnav_localization.location_server_node:main",
+        "rfid_localizer = rfidnav_localization.rfid_localizer_node:main",
     ]},
 )

@@ -34,7 +34,11 @@ from rfidnav_common.robot_map import RouteMap, contains, load_route_map
 from rfidnav_common.topological_map import TopologicalMap, load_topological_map
 from rfidnav_control.parameters import HeadingControllerParameters, WallFollowerParameters
 from rfidnav_drivers.parameters import CreateBaseParameters, LlrpReaderParameters, WifiScannerParameters
-from rfidnav_localization.parameters import LocationServerParameters, PartitionLocalizerParameters
+from rfidnav_localization.parameters import (
+    LocationServerParameters,
+    PartitionLocalizerParameters,
+    RfidLocalizerParameters,
+)
 from rfidnav_localization.radio_map_file import load_radio_map
 from rfidnav_planning.parameters import (
     MissionExecutorParameters,
@@ -68,6 +72,7 @@ KNOWN_NODES: dict[tuple[str, str], tuple[str, type]] = {
     ("rfidnav_sim", "wifi_sim"): ("wifi_sim", WifiSimParameters),
     ("rfidnav_sim", "sonar_sim"): ("sonar_sim", SonarParameters),
     ("rfidnav_localization", "location_server"): ("location_server", LocationServerParameters),
+    ("rfidnav_localization", "rfid_localizer"): ("rfid_localizer", RfidLocalizerParameters),
     ("rfidnav_planning", "two_tier_navigator"): ("two_tier_navigator", TwoTierNavigatorParameters),
     ("rfidnav_control", "wall_follower"): ("wall_follower", WallFollowerParameters),
     ("rfidnav_planning", "mission_executor"): ("mission_executor", MissionExecutorParameters),

@@ -45,8 +45,8 @@ def declare_parameters(node: Node, cls: type) -> Any:
     """Declare one ROS parameter per field of dataclass ``cls`` (default and description from the field),
     read them once and return a validated instance; a bad value is a ConfigError naming the node.
 
-    An empty string-array default is declared by type (Jazzy cannot infer a type from ``[]``), an integer list
-    is dynamically typed (an empty override ``[]`` arrives as a byte array), and float
+    An empty string-array default is declared by type (Jazzy cannot infer a type from ``[]``), a number list
+    is dynamically typed (an empty ``[]`` arrives as a byte array), and float
     parameters accept integers (``-p rate:=2``), which Jazzy's static typing would reject with a traceback."""
     hints = typing.get_type_hints(cls)
     source = f"parameters of node '{node.get_fully_qualified_name()}'"
@@ -59,8 +59,9 @@ def declare_parameters(node: Node, cls: type) -> Any:
                 value = node.declare_parameter(field.name, Parameter.Type.STRING_ARRAY,
                                                ParameterDescriptor(description=doc)).value
                 values[field.name] = list(value) if value is not None else list(default)
-            elif hints[field.name] == list[int]:
-                # Jazzy types an empty override ``[]`` as a byte array: declared with dynamic typing, it is [].
+            elif hints[field.name] in (list[int], list[float]):
+                # Jazzy types an empty ``[]`` (default or override) as a byte array: declared with dynamic typing,
+                # it is [].
                 value = node.declare_parameter(field.name, default,
                                                ParameterDescriptor(description=doc, dynamic_typing=True)).value
                 values[field.name] = [] if value is None or isinstance(value, (bytes, bytearray)) else list(value)

@@ -1,12 +1,19 @@
 """Localization domain objects <-> ROS messages: estimates (PoseWithCovarianceStamped, LocalizationStatus) and
-floor tags of the location server (a WiFi scan is read by rfidnav_common.inputs.wifi_rss, checked)."""
+floor tags of the location server (a WiFi scan is read by rfidnav_common.inputs.wifi_rss, checked); the fused
+localizer's pose and status, and /initialpose."""
 
 from __future__ import annotations
 
+import math
+
+import numpy as np
 from builtin_interfaces.msg import Time
 from geometry_msgs.msg import PoseWithCovarianceStamped
 
+from rfidnav_common import inputs
 from rfidnav_common.geometry import yaw_to_quaternion
+from rfidnav_localization.fused.filter import PoseEstimate
+from rfidnav_localization.fused.localizer import FusedEstimate
 from rfidnav_localization.location_store import TagRecord
 from rfidnav_localization.partition import LocalizationEstimate
 from rfidnav_msgs.msg import FloorTag, LocalizationStatus
@@ -67,3 +74,47 @@ def status_message(estimate: LocalizationEstimate, stamp: Time, frame_id: str) -
 def floor_tag_message(tag: TagRecord) -> FloorTag:
     return FloorTag(tag_id=tag.tag_id, x=float(tag.position[0]), y=float(tag.position[1]), group_id=tag.group_id,
                     shape=tag.shape)
+
+
+def fused_pose_message(pose: PoseEstimate, stamp: Time, frame_id: str) -> PoseWithCovarianceStamped:
+    """The fused filter's pose with the particles' covariance over (x, y, yaw)."""
+    message = PoseWithCovarianceStamped()
+    message.header.stamp = stamp
+    message.header.frame_id = frame_id
+    position, orientation = message.pose.pose.position, message.pose.pose.orientation
+    position.x, position.y = float(pose.x), float(pose.y)
+    orientation.x, orientation.y, orientation.z, orientation.w = yaw_to_quaternion(pose.yaw)
+    covariance = [0.0] * 36
+    for row, index in enumerate((0, 1, 5)):            # x, y, yaw among (x, y, z, roll, pitch, yaw)
+        for column, other in enumerate((0, 1, 5)):
+            covariance[6 * index + other] = float(pose.covariance[row, column])
+    message.pose.covariance = covariance
+    return message
+
+
+def fused_status_message(estimate: FusedEstimate, stamp: Time, frame_id: str, ignored_count: int) -> LocalizationStatus:
+    """The fused localizer's status: the evidence weighed this round and the particles redrawn from it."""
+    pose = estimate.pose
+    message = LocalizationStatus(method="fused", position_valid=True, x=float(pose.x), y=float(pose.y),
+                                 orientation_valid=True, yaw_rad=float(pose.yaw),
+                                 evidence_used=list(estimate.update.used),
+                                 particles_redrawn=int(estimate.update.injected),
+                                 undecodable_count=int(ignored_count))
+    message.header.stamp = stamp
+    message.header.frame_id = frame_id
+    yaw_sd = math.sqrt(max(float(pose.covariance[2, 2]), 0.0))
+    message.yaw_lower_rad, message.yaw_upper_rad = float(pose.yaw - 2.0 * yaw_sd), float(pose.yaw + 2.0 * yaw_sd)
+    return message
+
+
+def initial_pose(message: PoseWithCovarianceStamped) -> tuple[tuple[float, float, float], np.ndarray]:
+    """(x, y, yaw) and its 3 x 3 covariance from an /initialpose message (checked: finite, a planar pose, a
+    covariance that is symmetric positive semi-definite in x, y, yaw)."""
+    pose = inputs.planar_pose(message.pose.pose, "pose.pose")
+    full = np.asarray(message.pose.covariance, dtype=float).reshape(6, 6)
+    covariance = full[np.ix_((0, 1, 5), (0, 1, 5))]
+    if not np.all(np.isfinite(covariance)):
+        raise inputs.BadInput("pose.covariance: not finite")
+    if not np.allclose(covariance, covariance.T) or np.linalg.eigvalsh(covariance).min() < -1e-12:
+        raise inputs.BadInput("pose.covariance: x, y, yaw block is not symmetric positive semi-definite")
+    return pose, covariance

@@ -13,10 +13,29 @@ import math
 from dataclasses import dataclass
 from pathlib import Path
 
-from rfidnav_common.config import AT_LEAST_ONE, DBM, NON_NEGATIVE, PORT, POSITIVE, SEED, Limits, param
+from rfidnav_common.config import (
+    AT_LEAST_ONE,
+    DBM,
+    MAX_PORT,
+    NON_NEGATIVE,
+    PORT,
+    POSITIVE,
+    READ_RANGE_M,
+    SEED,
+    Limits,
+    param,
+)
 from rfidnav_common.errors import ParameterError
 from rfidnav_common.robot_map import load_route_map
+from rfidnav_common.wall_tags import InductionArea
 from rfidnav_localization.fingerprint import WEIGHTINGS, LocateSettings
+from rfidnav_localization.fused.filter import FusedSettings
+from rfidnav_localization.fused.models import (
+    CompassModel,
+    FloorModel,
+    PhaseDifferenceModel,
+    WifiModel,
+)
 from rfidnav_localization.partition import LocalizerSettings
 from rfidnav_localization.partition.estimate import METHODS
 
@@ -102,3 +121,123 @@ class LocationServerParameters:
     def locate_settings(self) -> LocateSettings:
         return LocateSettings(k=self.k, missing_rss_dbm=self.missing_rss_dbm, min_common_aps=self.min_common_aps,
                               weighting=self.weighting)
+
+
+@dataclass(frozen=True)
+class RfidLocalizerParameters:
+    """rfid_localizer (the fused localizer): what the robot map declares decides which evidence it weighs; the
+    reader's geometry and noise are the reader's own parameters under the same names (antenna_positions,
+    antenna_phase_offset_rad, phase_noise_rad_per_m: copy them from the reader's file), so one file describes
+    the robot for the simulator, the driver and the localizer."""
+
+    map_file: str = param("robot map: extent, tag_groups, deployment_area, ceiling_tags, wall_tags (required)",
+                          "unused")
+    map_frame: str = param("frame of the published pose and the parent of map -> odom", "map")
+    pose_topic: str = param("where the pose goes (AMCL's is amcl_pose)", "/localization/pose")
+    status_topic: str = param("where LocalizationStatus goes", "/localization/status")
+    initial_pose_topic: str = param("a PoseWithCovarianceStamped in map_frame restarts the filter about it",
+                                    "/initialpose")
+    publish_tf: bool = param("publish map -> odom on /tf from each estimate (REP 105)", True)
+    seed: int = param("run seed; the node draws its own random stream from it", 0, SEED)
+    initial_pose: list[float] = param("x, y, yaw [m, m, rad] of a known start; empty: unknown (global "
+                                      "localization from the first evidence)", [])
+    initial_sd: list[float] = param("sd of x, y, yaw about initial_pose [m, m, rad]", [0.1, 0.1, 0.05])
+    particles: int = param("particles of the filter", 1000, Limits(10, 1_000_000))
+    motion_noise_fraction: float = param("odometry translation and rotation noise, relative", 0.05,
+                                         Limits(0.0, 1.0))
+    motion_noise_floor_m: float = param("translation noise added to each step that moves [m]", 0.002,
+                                        NON_NEGATIVE)
+    motion_noise_yaw_rad_per_m: float = param("heading noise per metre travelled (wheel slip) [rad/m]", 0.02,
+                                              NON_NEGATIVE)
+    odometry_scale_sd: float = param("prior sd of the odometry's distance scale about 1 (per particle)", 0.05,
+                                     NON_NEGATIVE)
+    antenna_positions: list[float] = param("x, y, z of each reader port 1, 2, ... in base_link [m] (the reader's "
+                                           "parameter)", [0.0, 0.0, 0.05])
+    antenna_phase_offset_rad: list[float] = param("each port's phase offset [rad] (the reader's parameter)", [0.0])
+    phase_noise_rad_per_m: float = param("phase noise per metre of tag distance [rad/m] (the reader's parameter)",
+                                         0.02, NON_NEGATIVE)
+    floor_antenna: int = param("reader port of the downward antenna over floor tags; 0: none", 1,
+                               Limits(0, MAX_PORT))
+    floor_softness_m: float = param("width of a floor tag disc's soft read edge [m]", 0.004, POSITIVE)
+    tag_group_read_range_m: float = param("the floor antenna's reach over a tag group's tags [m]", 0.05,
+                                          READ_RANGE_M)
+    phase_antennas: list[int] = param("the two receiving ports whose phase difference locates a ceiling tag "
+                                      "(paper 001); empty: none", [])
+    phase_floor_rad: float = param("phase difference noise besides the distance's (multipath) [rad]", 0.02,
+                                   NON_NEGATIVE)
+    wall_antenna: int = param("reader port of the side antenna reading wall tags (paper 004); 0: none", 0,
+                              Limits(0, MAX_PORT))
+    wall_area_bearing_rad: float = param("the side antenna's bearing, CCW from forward [rad]", math.pi / 2.0,
+                                         Limits(-math.pi, math.pi))
+    wall_area_width_m: float = param("its induction area's width [m]", 0.40, POSITIVE)
+    wall_area_depth_m: float = param("its induction area's depth from the antenna [m]", 1.00, POSITIVE)
+    wall_softness_m: float = param("width of the induction area's soft edge [m]", 0.02, POSITIVE)
+    use_wifi: bool = param("ask the location server to locate each /wifi/scan and weigh its answer", False)
+    locate_service: str = param("the location server's Locate service", "/location_server/locate")
+    wifi_sd_floor_m: float = param("a WiFi fix is never trusted closer than this [m]", 1.0, POSITIVE)
+    wifi_min_travel_m: float = param("odometry distance between WiFi fixes weighed (their errors are spatially "
+                                     "correlated) [m]", 2.0, NON_NEGATIVE)
+    use_compass: bool = param("weigh /compass headings", True)
+    compass_sd_rad: float = param("compass noise from reading to reading [rad]", math.radians(2.0), POSITIVE)
+    compass_bias_sd_rad: float = param("prior sd of the compass's constant bias (per particle) [rad]",
+                                       math.radians(4.0), NON_NEGATIVE)
+    eps: float = param("the most one reading can cost: its likelihood never falls below this", 0.01,
+                       Limits(0.0, 0.5, low_open=True, high_open=True))
+    reset_threshold: float = param("the average likelihood of a kind's evidence below which particles are "
+                                   "redrawn from it (0: never)", 0.1, Limits(0.0, 1.0, high_open=True))
+    resample_threshold: float = param("resample when the effective sample size falls below this share", 0.5,
+                                      Limits(0.0, 1.0, low_open=True))
+
+    def validate(self) -> None:
+        if self.map_file == "unused":
+            raise ParameterError("map_file", "required: the robot map says which tags exist and where")
+        if len(self.initial_pose) not in (0, 3):
+            raise ParameterError("initial_pose", f"x, y, yaw or empty, got {len(self.initial_pose)} numbers")
+        if len(self.initial_sd) != 3 or min(self.initial_sd) <= 0.0:
+            raise ParameterError("initial_sd", f"three positive numbers, got {self.initial_sd}")
+        ports = len(self.antenna_positions) // 3
+        if len(self.antenna_positions) % 3 or ports == 0:
+            raise ParameterError("antenna_positions", "x, y, z per port: a positive multiple of 3 numbers")
+        if len(self.antenna_phase_offset_rad) != ports:
+            raise ParameterError("antenna_phase_offset_rad", f"one per port ({ports}), got "
+                                                             f"{len(self.antenna_phase_offset_rad)}")
+        if self.phase_antennas and (len(self.phase_antennas) != 2 or len(set(self.phase_antennas)) != 2):
+            raise ParameterError("phase_antennas", f"two different ports or none, got {self.phase_antennas}")
+        for name, port in [("floor_antenna", self.floor_antenna), ("wall_antenna", self.wall_antenna),
+                           *(("phase_antennas", p) for p in self.phase_antennas)]:
+            if port > ports:
+                raise ParameterError(name, f"port {port} has no antenna_positions entry ({ports} ports)")
+
+    def antenna_ports_read(self) -> dict[str, int]:
+        """The reader ports this node takes reads of, by parameter: the reader must publish each of them."""
+        ports = {"floor_antenna": self.floor_antenna, "wall_antenna": self.wall_antenna}
+        ports.update({f"phase_antennas[{i}]": port for i, port in enumerate(self.phase_antennas)})
+        return {name: port for name, port in ports.items() if port}
+
+    def antenna(self, port: int) -> tuple[float, float, float]:
+        x, y, z = self.antenna_positions[3 * (port - 1):3 * port]
+        return x, y, z
+
+    def settings(self) -> FusedSettings:
+        floor = self.antenna(self.floor_antenna) if self.floor_antenna else (0.0, 0.0, 0.0)
+        phase = None
+        if self.phase_antennas:
+            first, second = self.phase_antennas
+            phase = PhaseDifferenceModel(self.antenna(first), self.antenna(second),
+                                         self.antenna_phase_offset_rad[first - 1],
+                                         self.antenna_phase_offset_rad[second - 1], self.phase_noise_rad_per_m,
+                                         self.phase_floor_rad, self.eps)
+        walls = {}
+        if self.wall_antenna:
+            x, y, _ = self.antenna(self.wall_antenna)
+            walls[self.wall_antenna] = InductionArea((x, y), self.wall_area_bearing_rad, self.wall_area_width_m,
+                                                     self.wall_area_depth_m)
+        return FusedSettings(
+            particles=self.particles, motion_noise_fraction=self.motion_noise_fraction,
+            motion_noise_floor_m=self.motion_noise_floor_m, motion_noise_yaw_rad_per_m=self.motion_noise_yaw_rad_per_m,
+            floor=FloorModel((floor[0], floor[1]), self.floor_softness_m, self.eps),
+            tag_group_read_range_m=self.tag_group_read_range_m, phase=phase, wall_areas=walls,
+            wall_softness_m=self.wall_softness_m, wifi=WifiModel(sd_floor_m=self.wifi_sd_floor_m, eps=self.eps),
+            wifi_min_travel_m=self.wifi_min_travel_m, compass=CompassModel(self.compass_sd_rad, self.eps),
+            compass_bias_sd_rad=self.compass_bias_sd_rad, odometry_scale_sd=self.odometry_scale_sd, eps=self.eps,
+            reset_threshold=self.reset_threshold, resample_threshold=self.resample_threshold)

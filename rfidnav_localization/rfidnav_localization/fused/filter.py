@@ -359,6 +359,7 @@ class FusedFilter:
         mean_yaw = math.atan2(float(w @ np.sin(yaw)), float(w @ np.cos(yaw)))
         offsets = np.vstack((x - mean_x, y - mean_y, wrap_angles(yaw - mean_yaw)))
         covariance = (offsets * w) @ offsets.T
+        covariance = 0.5 * (covariance + covariance.T)    # symmetric to the bit, as a covariance message must be
         return PoseEstimate(mean_x, mean_y, wrap_angle(mean_yaw), covariance)
 
 

@@ -1,0 +1,184 @@
+"""rfid_localizer: the fused localizer (beyond the papers) as AMCL is for a laser -- a pose with covariance and
+map -> odom from every kind of tag evidence the robot map declares, WiFi fixes, the compass and the odometry.
+
+A thin adapter around FusedLocalizer (rfidnav_localization.fused). /odom moves the particles; every /rfid/reads
+round is one update with what it holds -- the floor antenna's tags (lattice or tag-group tags), the side
+antenna's wall tags, the phase difference of each ceiling tag heard on both receiving antennas -- together with
+the /compass heading and the location server's latest answer to a /wifi/scan that arrived since the last round.
+Each update publishes the pose (``pose_topic``), map -> odom on /tf and LocalizationStatus with the evidence
+weighed. ``initial_pose_topic`` (/initialpose, as AMCL and RViz use it) restarts the filter about a pose.
+
+Every input is checked (rfidnav_common.inputs); what fails is dropped and counted with a throttled warning: /odom
+that is not a pose in odom, a round not in base_link or with reads no reader reports, a compass reading not in
+its frame, a scan not in base_link, an /initialpose not in the map frame or with a covariance that is none. A
+tag id the map does not know is ignored and counted (LocalizationStatus.undecodable_count).
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from geometry_msgs.msg import PoseWithCovarianceStamped
+from nav_msgs.msg import Odometry
+from rclpy.task import Future
+from sensor_msgs.msg import Imu
+
+from rfidnav_common import inputs
+from rfidnav_common.frames import COMPASS_FRAMES, WIFI_FRAME
+from rfidnav_common.robot_map import load_route_map
+from rfidnav_common.ros import COMMAND_QOS, SENSOR_QOS, declare_parameters, run_node
+from rfidnav_common.seeding import rng_for
+from rfidnav_common.stepped_node import SteppedNode
+from rfidnav_common.transforms import FrameBroadcaster
+from rfidnav_localization.conversions import fused_pose_message, fused_status_message, initial_pose
+from rfidnav_localization.fused.filter import Evidence, PhaseReading
+from rfidnav_localization.fused.localizer import FusedLocalizer
+from rfidnav_localization.fused.tag_map import FusedMap
+from rfidnav_localization.parameters import RfidLocalizerParameters
+from rfidnav_msgs.msg import LocalizationStatus, TagReadArray, WifiScan
+from rfidnav_msgs.srv import Locate
+
+NODE_NAME = "rfid_localizer"
+
+
+class RfidLocalizerNode(SteppedNode):
+    def __init__(self, **node_options: Any) -> None:
+        """``node_options``: keyword arguments of rclpy's Node (``context``, ``parameter_overrides``), for tests."""
+        super().__init__(NODE_NAME, **node_options)
+        self.params: RfidLocalizerParameters = declare_parameters(self, RfidLocalizerParameters)
+        p = self.params
+        fused_map = FusedMap.of_route_map(load_route_map(Path(p.map_file)))
+        self.localizer = FusedLocalizer(p.settings(), fused_map, rng_for(p.seed, NODE_NAME))
+        if p.initial_pose:
+            x, y, yaw = p.initial_pose
+            self.localizer.set_pose(x, y, yaw, _diagonal(p.initial_sd))
+        self.drops = inputs.Drops(self.get_logger().warning)
+        self.compass_yaw: float | None = None
+        self.wifi_fix: tuple[tuple[float, float], float] | None = None
+        self.locating: Future | None = None
+        self.ignored_count = 0
+        self.pose_pub = self.create_publisher(PoseWithCovarianceStamped, p.pose_topic, SENSOR_QOS)
+        self.status_pub = self.create_publisher(LocalizationStatus, p.status_topic, SENSOR_QOS)
+        self.frames = FrameBroadcaster(self) if p.publish_tf else None
+        self.create_subscription(Odometry, "/odom", self.on_odometry, SENSOR_QOS)
+        self.create_subscription(TagReadArray, "/rfid/reads", self.on_reads, SENSOR_QOS)
+        # /initialpose is a command, sent once: reliable, as RViz publishes it.
+        self.create_subscription(PoseWithCovarianceStamped, p.initial_pose_topic, self.on_initial_pose, COMMAND_QOS)
+        if p.use_compass:
+            self.create_subscription(Imu, "/compass", self.on_compass, SENSOR_QOS)
+        self.locate_client = None
+        if p.use_wifi:
+            self.locate_client = self.create_client(Locate, p.locate_service)
+            self.create_subscription(WifiScan, "/wifi/scan", self.on_scan, SENSOR_QOS)
+        declared = [kind for kind, present in (("floor tags", bool(fused_map.floor_tags) or
+                                                 fused_map.deployment_area is not None),
+                                                ("ceiling tags", bool(fused_map.ceiling_tags)),
+                                                ("wall tags", bool(fused_map.wall_tags)),
+                                                ("wifi", p.use_wifi), ("compass", p.use_compass)) if present]
+        start = f"known start {p.initial_pose}" if p.initial_pose else "unknown start (global localization)"
+        self.get_logger().info(f"{p.particles} particles over {', '.join(declared) or 'odometry alone'}; {start}")
+
+    # ---------------------------------------------------------------------------------------------- inputs
+    def on_odometry(self, msg: Odometry) -> None:
+        try:
+            odom = inputs.odometry_pose(msg)
+        except inputs.BadInput as error:
+            self.drops.drop("/odom", error)
+            return
+        self.localizer.on_odometry(odom)
+
+    def on_compass(self, msg: Imu) -> None:
+        try:
+            inputs.frame(msg.header.frame_id, COMPASS_FRAMES)
+            self.compass_yaw = inputs.yaw(msg.orientation, "orientation")
+        except inputs.BadInput as error:
+            self.drops.drop("/compass", error)
+
+    def on_scan(self, msg: WifiScan) -> None:
+        """Locate the scan unless a call is out (scans come faster than fixes are weighed, by wifi_min_travel_m)."""
+        try:
+            inputs.frame(msg.header.frame_id, WIFI_FRAME)
+            inputs.wifi_rss(msg)
+        except inputs.BadInput as error:
+            self.drops.drop("/wifi/scan", error)
+            return
+        if self.locating is not None or self.locate_client is None or not self.locate_client.service_is_ready():
+            return
+        self.locating = self.locate_client.call_async(Locate.Request(scan=msg))
+        self.locating.add_done_callback(self.on_located)
+
+    def on_located(self, future: Future) -> None:
+        self.locating = None
+        response = future.result()
+        if response is None or not response.success:
+            return
+        try:
+            self.wifi_fix = (inputs.point(response.x, response.y, "position"),
+                             inputs.length(response.uncertainty_m, "uncertainty_m"))
+        except inputs.BadInput as error:
+            self.drops.drop(self.params.locate_service, f"answer ignored: {error}")
+
+    def on_initial_pose(self, msg: PoseWithCovarianceStamped) -> None:
+        try:
+            inputs.frame(msg.header.frame_id, self.params.map_frame)
+            (x, y, yaw), covariance = initial_pose(msg)
+        except inputs.BadInput as error:
+            self.drops.drop(self.params.initial_pose_topic, error)
+            return
+        self.localizer.set_pose(x, y, yaw, covariance)
+        self.get_logger().info(f"restarted about ({x:.2f}, {y:.2f}, {yaw:.2f} rad) from "
+                               f"{self.params.initial_pose_topic}")
+
+    def on_reads(self, msg: TagReadArray) -> None:
+        p = self.params
+        reads = inputs.round_reads(msg, self.drops, ports=set(p.antenna_ports_read().values()))
+        if reads is None:
+            return
+        # A ceiling tag's phase difference needs its phase on both receiving ports, on one channel.
+        phases: dict[int, dict[str, inputs.TagRead]] = {port: {} for port in p.phase_antennas}
+        for read in reads:
+            if read.antenna in phases and not (math.isnan(read.phase_rad) or math.isnan(read.frequency_hz)):
+                phases[read.antenna][read.tag_id] = read
+        phase_readings = []
+        if p.phase_antennas:
+            first, second = (phases[port] for port in p.phase_antennas)
+            phase_readings = [PhaseReading(tag_id, first[tag_id].phase_rad - second[tag_id].phase_rad,
+                                           first[tag_id].frequency_hz)
+                              for tag_id in first if tag_id in second
+                              and first[tag_id].frequency_hz == second[tag_id].frequency_hz]
+        evidence = Evidence(floor_tag_ids=[read.tag_id for read in reads if read.antenna == p.floor_antenna],
+                            phase=phase_readings,
+                            wall_tag_ids=[(read.antenna, read.tag_id) for read in reads
+                                          if read.antenna == p.wall_antenna],
+                            wifi_fix=self.wifi_fix, compass_yaw_rad=self.compass_yaw)
+        self.wifi_fix = self.compass_yaw = None           # each reading is weighed once
+        estimate = self.localizer.on_round(evidence)
+        if estimate is None:
+            self.get_logger().warning("no /odom yet: nothing to localize", throttle_duration_sec=5.0)
+            return
+        if estimate.update.ignored_tag_ids:
+            self.ignored_count += len(estimate.update.ignored_tag_ids)
+            self.get_logger().warning("ignored tags the map does not know: "
+                                      f"{', '.join(estimate.update.ignored_tag_ids)} ({self.ignored_count} so far)",
+                                      throttle_duration_sec=5.0)
+        stamp = msg.header.stamp
+        self.pose_pub.publish(fused_pose_message(estimate.pose, stamp, p.map_frame))
+        if self.frames is not None:
+            self.frames.send_map_to_odom(p.map_frame, (estimate.pose.x, estimate.pose.y, estimate.pose.yaw),
+                                         estimate.odom, stamp)
+        self.status_pub.publish(fused_status_message(estimate, stamp, p.map_frame, self.ignored_count))
+
+
+def _diagonal(sd: list[float]) -> np.ndarray:
+    return np.diag(np.square(np.asarray(sd, dtype=float)))
+
+
+def main(args: list[str] | None = None) -> int:
+    return run_node(RfidLocalizerNode, args)
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
