@@ -38,12 +38,13 @@ def test_a_floor_tag_read_scores_the_soft_disc_at_the_mounted_antenna_and_an_unr
     model = FloorModel(antenna_xy=(0.1, 0.0), softness_m=0.004, eps=EPS)
     # Heading +y, so the antenna 0.1 m ahead sits at (1, 2.1); the tag is 0.05 m from it, inside r = 0.06.
     tag = np.array([[1.03, 2.14]])
-    read_by_hand = math.log(EPS + (1 - 2 * EPS) * sigmoid((0.06 - 0.05) / 0.004))
-    unread_by_hand = math.log(EPS + (1 - 2 * EPS) * sigmoid(-(0.06 - 0.05) / 0.004))
+    # Scaled by the best a tag can score (1 - eps), so that a perfect round scores 0.
+    read_by_hand = math.log(EPS + (1 - 2 * EPS) * sigmoid((0.06 - 0.05) / 0.004)) - math.log(1 - EPS)
+    unread_by_hand = math.log(EPS + (1 - 2 * EPS) * sigmoid(-(0.06 - 0.05) / 0.004)) - math.log(1 - EPS)
     state = pose(1.0, 2.0, math.pi / 2)
     assert model.log_likelihood(state, tag, np.zeros((0, 2)), 0.06)[0] == pytest.approx(read_by_hand, rel=1e-9)
     assert model.log_likelihood(state, np.zeros((0, 2)), tag, 0.06)[0] == pytest.approx(unread_by_hand, rel=1e-9)
-    assert read_by_hand == pytest.approx(-0.08812, abs=1e-4)
+    assert read_by_hand == pytest.approx(-0.08812 + 0.01005, abs=1e-4)
 
 
 def test_the_phase_difference_of_the_two_antennas_scores_the_round_trip_path_difference_modulo_two_pi() -> None:
@@ -157,3 +158,21 @@ def test_phase_readings_of_unknown_ceiling_tags_are_ignored_by_name() -> None:
     update = fused.update(Evidence(phase=(PhaseReading("C9", 0.1, 915e6),)))
     assert update.used == () and update.ignored_tag_ids == ("C9",)
     assert wavelength_m(915e6) == pytest.approx(0.3276, abs=1e-4)
+
+
+@pytest.mark.parametrize("kind", ["lattice", "tag_group", "ceiling_phase", "wall_tag", "compass", "all_kinds"])
+def test_each_case_of_bench_fused_weighs_its_kind_of_evidence_and_the_estimate_stays_on_the_truth(kind: str) -> None:
+    from rfidnav_experiments.bench.fused import CASES, PARAMETERS, fused_map
+    from rfidnav_localization.fused.localizer import FusedLocalizer
+
+    (x, y, yaw), evidence_at = CASES[kind]
+    localizer = FusedLocalizer(PARAMETERS.settings(), fused_map(), np.random.default_rng(3))
+    localizer.on_odometry((0.0, 0.0, 0.0))
+    localizer.set_pose(x, y, yaw, np.diag(np.square(PARAMETERS.initial_sd)))
+    for step in range(1, 9):
+        localizer.on_odometry((0.012 * step, 0.0, 0.0))
+        estimate = localizer.on_round(evidence_at(x + 0.012 * step, y, yaw))
+        assert estimate is not None and not estimate.update.ignored_tag_ids
+        assert set(estimate.update.used) >= ({"lattice", "ceiling_phase", "wall_tag", "compass"} if kind == "all_kinds"
+                                             else {kind})
+    assert math.hypot(estimate.pose.x - (x + 0.096), estimate.pose.y - y) < 0.15

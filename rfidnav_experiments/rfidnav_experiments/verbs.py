@@ -224,6 +224,8 @@ def add_bench(verbs: argparse._SubParsersAction) -> Handler:
     add_engine_options(routes)
     names.add_parser("reader", parents=[common], help="the reader simulator's round among 1k, 10k and 100k listed "
                                                       "ceiling tags")
+    names.add_parser("fused", parents=[common], help="the fused localizer's update per round, per kind of evidence, "
+                                                     "on one core")
     names.add_parser("location_server", parents=[common], help="paper 003's tier-one locate over DDS")
     names.add_parser("llrp", parents=[common], help="the llrp_reader driver against llrpkit's LLRP emulator "
                                                     "(latency, lossless rate)")
@@ -322,6 +324,12 @@ def timed_bench(args: argparse.Namespace) -> int:
               f"tier-one locate over DDS, {figures['requests']} requests on a {figures['fingerprints']}-fingerprint "
               f"map: p50 {figures['p50_ms']:.2f} ms, p99 {figures['p99_ms']:.2f} ms (the matcher alone "
               f"{figures['matcher_ms']:.3f} ms)")
+        return 0
+    if args.name == "fused":
+        from rfidnav_experiments.bench.fused import fused_benchmark, fused_lines
+
+        fused_figures = fused_benchmark()
+        print(json.dumps(fused_figures) if args.json else "\n".join(fused_lines(fused_figures)))
         return 0
     if args.name == "llrp":
         from rfidnav_experiments.bench.llrp import bench_llrp

@@ -30,6 +30,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 from rfidnav_common.errors import ParameterError
 from rfidnav_common.geometry import wrap_angle, wrap_angles
@@ -51,6 +52,9 @@ RESET_MEMORY = {"lattice": 1.0, "tag_group": 1.0, "wall_tag": 1.0, "wifi": 0.5}
 # Negative floor evidence (known tags near the particles that were not read) is weighed only while the cloud is
 # this compact: a wide cloud would need thousands of lattice tags a round, and is placed by the reads anyway.
 NEGATIVE_FLOOR_RADIUS_M = 0.5
+# An unread tag farther than the read range plus this many soft edges from every particle's antenna scores
+# 1 - eps for all of them (to within e^-6): it cannot change the weights, and weighing it costs particles x tags.
+UNREAD_REACH_SOFTNESS = 6.0
 
 
 @dataclass(frozen=True)
@@ -273,30 +277,32 @@ class FusedFilter:
         if not lattice_read and not group_read:
             return           # an empty round says nothing: a failed inventory looks the same
         model = self.settings.floor
-        antennas_x, antennas_y = mounted(states, model.antenna_xy)
-        centre_x, centre_y = float(self.weights @ antennas_x), float(self.weights @ antennas_y)
-        spread = float(np.sqrt(self.weights @ (np.square(antennas_x - centre_x) + np.square(antennas_y - centre_y))))
+        antennas = np.vstack(mounted(states, model.antenna_xy))
+        centre_x, centre_y = (float(v) for v in antennas @ self.weights)
+        spread = float(np.sqrt(self.weights @ (np.square(antennas[0] - centre_x) + np.square(antennas[1] - centre_y))))
         compact = spread <= NEGATIVE_FLOOR_RADIUS_M
+        margin_m = UNREAD_REACH_SOFTNESS * model.softness_m
         if lattice_read and read_range is not None and self.map.deployment is not None:
             unread = np.zeros((0, 2))
             if compact:
                 deployment = self.map.deployment
                 read_set = {tuple(p) for p in lattice_read}
-                near = [c for c in deployment.lattice.within(centre_x, centre_y, 3.0 * spread + 2.0 * read_range)
+                near = [c for c in deployment.lattice.within(centre_x, centre_y, 3.0 * spread + read_range + margin_m)
                         if deployment.is_deployed(c) and deployment.lattice.position(c) not in read_set]
                 if near:
-                    unread = deployment.lattice.positions(np.array(near, dtype=float))
+                    unread = _within_reach(deployment.lattice.positions(np.array(near, dtype=float)), antennas,
+                                           read_range + margin_m)
             _add(by_kind, "lattice", model.log_likelihood(states, np.array(lattice_read), unread, read_range))
         if group_read:
             range_m = self.settings.tag_group_read_range_m
-            unread_tags = []
+            unread_tags = np.zeros((0, 2))
             if compact:
                 read_set = set(group_read)
-                unread_tags = [position for _, position in
-                               self.map.floor_tags_near(centre_x, centre_y, 3.0 * spread + 2.0 * range_m)
-                               if position not in read_set]
-            _add(by_kind, "tag_group", model.log_likelihood(states, np.array(group_read),
-                                                            np.array(unread_tags).reshape(-1, 2), range_m))
+                unread_tags = _within_reach(np.array([
+                    position for _, position in self.map.floor_tags_near(centre_x, centre_y,
+                                                                         3.0 * spread + range_m + margin_m)
+                    if position not in read_set]).reshape(-1, 2), antennas, range_m + margin_m)
+            _add(by_kind, "tag_group", model.log_likelihood(states, np.array(group_read), unread_tags, range_m))
 
     # ---------------------------------------------------------------------------------------- resampling
     def _resample(self, redraw: float, evidence: Evidence) -> int:
@@ -361,6 +367,14 @@ class FusedFilter:
         covariance = (offsets * w) @ offsets.T
         covariance = 0.5 * (covariance + covariance.T)    # symmetric to the bit, as a covariance message must be
         return PoseEstimate(mean_x, mean_y, wrap_angle(mean_yaw), covariance)
+
+
+def _within_reach(tags: np.ndarray, antennas: np.ndarray, reach_m: float) -> np.ndarray:
+    """The rows of ``tags`` (k x 2) within ``reach_m`` of at least one of the ``antennas`` (2 x n)."""
+    if len(tags) == 0:
+        return tags
+    distance, _ = cKDTree(antennas.T).query(tags, distance_upper_bound=reach_m)
+    return tags[np.isfinite(distance)]
 
 
 def _add(by_kind: dict[str, np.ndarray], kind: str, values: np.ndarray) -> None:

@@ -47,8 +47,10 @@ class FloorModel:
     def log_likelihood(self, states: np.ndarray, read: np.ndarray, unread: np.ndarray,
                        read_range_m: float) -> np.ndarray:
         antennas = np.vstack(mounted(states, self.antenna_xy))
-        # The best case (every read tag at the antenna, every unread one far) scores about 0 already.
-        return soft_read_log_likelihood(antennas, read, unread, read_range_m, self.softness_m, self.eps)
+        # Each tag's read or no-read is at best 1 - eps likely (a tag under the antenna, or far from it): that
+        # much per tag is taken off, so that the best case scores 0 however many tags were weighed.
+        best = (len(read) + len(unread)) * math.log1p(-self.eps)
+        return soft_read_log_likelihood(antennas, read, unread, read_range_m, self.softness_m, self.eps) - best
 
 
 @dataclass(frozen=True)
