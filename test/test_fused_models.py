@@ -176,3 +176,31 @@ def test_each_case_of_bench_fused_weighs_its_kind_of_evidence_and_the_estimate_s
         assert set(estimate.update.used) >= ({"lattice", "ceiling_phase", "wall_tag", "compass"} if kind == "all_kinds"
                                              else {kind})
     assert math.hypot(estimate.pose.x - (x + 0.096), estimate.pose.y - y) < 0.15
+
+
+@pytest.mark.parametrize(("localizer_file", "reader_file"), [("rfid_localizer_mixed.yaml", "reader_mixed.yaml"),
+                                                             ("rfid_localizer_hf_floor.yaml", "reader_hf_floor.yaml")])
+def test_each_shipped_rfid_localizer_file_describes_its_robots_reader_as_the_reader_file_does(
+        localizer_file: str, reader_file: str) -> None:
+    from rfidnav_bringup.scenario import CONFIG_DIR
+    from rfidnav_experiments.runners.shipped import file_parameters
+    from rfidnav_localization.parameters import RfidLocalizerParameters
+    from rfidnav_sim.parameters import SIDE_BEARINGS, ReaderParameters
+
+    fused = file_parameters(RfidLocalizerParameters, CONFIG_DIR / "params" / localizer_file, "rfid_localizer",
+                            map_file="(any)")
+    reader = file_parameters(ReaderParameters, CONFIG_DIR / "params" / reader_file, "rfid_reader_sim",
+                             world_file="unused")
+    assert fused.antenna_positions == reader.antenna_positions
+    assert fused.antenna_phase_offset_rad == reader.antenna_phase_offset_rad
+    assert fused.phase_noise_rad_per_m == reader.phase_noise_rad_per_m
+    facing = dict(enumerate(reader.antenna_facing, start=1))
+    assert facing[fused.floor_antenna] == "down"
+    assert fused.tag_group_read_range_m == pytest.approx(reader.antenna_max_range_m[fused.floor_antenna - 1])
+    assert all(facing[port] == "up" for port in fused.phase_antennas)
+    if fused.wall_antenna:
+        assert fused.wall_area_bearing_rad == SIDE_BEARINGS[facing[fused.wall_antenna]]
+        assert fused.wall_area_width_m == reader.side_area_width_m
+        assert fused.wall_area_depth_m == reader.antenna_max_range_m[fused.wall_antenna - 1]
+    else:
+        assert not any(side in reader.antenna_facing for side in SIDE_BEARINGS)

@@ -1,5 +1,6 @@
-"""./rfidnav reproduce fused: the fused localizer beside paper 003's own on the same seeded runs, and what its
-estimate means for tf (map -> odom composed with odom -> base_link is the estimated pose)."""
+"""./rfidnav reproduce fused: the fused localizer beside paper 003's own on the same seeded runs, beside each kind of
+evidence alone on the mixed floor, and what its estimate means for tf (map -> odom composed with odom -> base_link is
+the estimated pose)."""
 
 from __future__ import annotations
 
@@ -11,7 +12,15 @@ import sys
 import numpy as np
 import pytest
 
-from rfidnav_experiments.reproduce.fused import DEVELOPMENT_SEED, HOMES, METRICS, home_run
+from rfidnav_experiments.reproduce.fused import (
+    DEVELOPMENT_SEED,
+    METRICS,
+    MIXED,
+    SINGLE_EVIDENCE,
+    WORLDS,
+    home_run,
+    localizers_of,
+)
 from rfidnav_localization.fused.filter import PoseEstimate, Update
 from rfidnav_localization.fused.localizer import FusedEstimate
 from support.runs import WORKSPACE
@@ -24,10 +33,23 @@ def test_beside_the_two_tier_navigator_the_fused_localizer_tracks_within_half_a_
         world: str) -> None:
     run = home_run((world, 0, DEVELOPMENT_SEED))
     assert run.success
-    assert run.fused.fix_rate == 1.0 and run.paper.fix_rate == 1.0
-    assert run.fused.position_rmse_m is not None and run.fused.position_rmse_m < 0.6
-    assert run.fused.heading_rmse_deg is not None and run.fused.heading_rmse_deg < 5.0
-    assert run.fused.consistent is not None and run.fused.consistent > 0.8
+    fused, paper = run.figures["fused"], run.figures["paper"]
+    assert fused.fix_rate == 1.0 and paper.fix_rate == 1.0
+    assert fused.position_rmse_m is not None and fused.position_rmse_m < 0.6
+    assert fused.heading_rmse_deg is not None and fused.heading_rmse_deg < 5.0
+    assert fused.consistent is not None and fused.consistent > 0.8
+
+
+def test_on_the_mixed_floor_every_kind_of_evidence_together_beats_each_alone_and_a_kidnap_is_found_again() -> None:
+    run = home_run((MIXED, 1, DEVELOPMENT_SEED))
+    assert run.success and set(run.figures) == {"fused", *SINGLE_EVIDENCE, "paper"}
+    fused = run.figures["fused"].position_rmse_m
+    assert fused is not None and fused < 0.2
+    assert all(figure.position_rmse_m is not None and fused < figure.position_rmse_m
+               for name, figure in run.figures.items() if name != "fused")
+    assert run.figures["fused"].heading_rmse_deg is not None and run.figures["fused"].heading_rmse_deg < 2.0
+    assert run.global_s is not None and run.global_s < 30.0
+    assert run.kidnap_recovery_s is not None and run.kidnap_recovery_s < 30.0
 
 
 def test_map_to_odom_composed_with_the_odometry_pose_is_the_estimated_pose() -> None:
@@ -47,7 +69,15 @@ def test_the_command_prints_every_metric_for_every_world_with_both_localizers_an
                             capture_output=True, text=True, timeout=900)
     assert result.returncode == 0, result.stderr
     rows = json.loads(result.stdout)
-    assert {(row["setting"].split()[0], row["metric"]) for row in rows} == {(w, m) for w in HOMES for m in METRICS}
+    recovery = ("global_s", "late_global_s", "kidnap_recovery_s")
+    assert {(row["setting"].split()[0], row["metric"]) for row in rows} == {
+        (w, m) for w in WORLDS for m in (*METRICS, *recovery)}
     for row in rows:
-        assert row["ours"]["n"] == 2 and row["paper"]["n"] == 2 and row["difference"]["n"] == 2
+        world = row["setting"].split()[0]
+        if row["metric"] in recovery:
+            assert row["fused"]["runs"] == 2 and row["fused"]["runs_found"] == row["fused"]["n"]
+            continue
+        names = localizers_of(world)
+        assert set(row) == {"experiment", "setting", "metric", *names, *(f"{n} - fused" for n in names[1:])}
+        assert all(row[name]["n"] == 2 for name in names)
     assert json.loads((tmp_path / "fused_rows.json").read_text()) == rows

@@ -29,7 +29,7 @@ from rfidnav_common.errors import ParameterError
 from rfidnav_common.robot_map import load_route_map
 from rfidnav_common.wall_tags import InductionArea
 from rfidnav_localization.fingerprint import WEIGHTINGS, LocateSettings
-from rfidnav_localization.fused.filter import FusedSettings
+from rfidnav_localization.fused.filter import FusedSettings, Ports
 from rfidnav_localization.fused.models import (
     CompassModel,
     FloorModel,
@@ -213,6 +213,10 @@ class RfidLocalizerParameters:
         ports = {"floor_antenna": self.floor_antenna, "wall_antenna": self.wall_antenna}
         ports.update({f"phase_antennas[{i}]": port for i, port in enumerate(self.phase_antennas)})
         return {name: port for name, port in ports.items() if port}
+
+    def ports(self) -> Ports:
+        first_and_second = (self.phase_antennas[0], self.phase_antennas[1]) if self.phase_antennas else None
+        return Ports(self.floor_antenna, first_and_second, self.wall_antenna)
 
     def antenna(self, port: int) -> tuple[float, float, float]:
         x, y, z = self.antenna_positions[3 * (port - 1):3 * port]

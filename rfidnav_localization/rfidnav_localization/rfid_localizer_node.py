@@ -16,7 +16,6 @@ tag id the map does not know is ignored and counted (LocalizationStatus.undecoda
 
 from __future__ import annotations
 
-import math
 from pathlib import Path
 from typing import Any
 
@@ -34,7 +33,7 @@ from rfidnav_common.seeding import rng_for
 from rfidnav_common.stepped_node import SteppedNode
 from rfidnav_common.transforms import FrameBroadcaster
 from rfidnav_localization.conversions import fused_pose_message, fused_status_message, initial_pose
-from rfidnav_localization.fused.filter import Evidence, PhaseReading
+from rfidnav_localization.fused.filter import round_evidence
 from rfidnav_localization.fused.localizer import FusedLocalizer
 from rfidnav_localization.fused.tag_map import FusedMap
 from rfidnav_localization.parameters import RfidLocalizerParameters
@@ -134,26 +133,10 @@ class RfidLocalizerNode(SteppedNode):
 
     def on_reads(self, msg: TagReadArray) -> None:
         p = self.params
-        reads = inputs.round_reads(msg, self.drops, ports=set(p.antenna_ports_read().values()))
+        reads = inputs.round_reads(msg, self.drops, ports=p.ports().all())
         if reads is None:
             return
-        # A ceiling tag's phase difference needs its phase on both receiving ports, on one channel.
-        phases: dict[int, dict[str, inputs.TagRead]] = {port: {} for port in p.phase_antennas}
-        for read in reads:
-            if read.antenna in phases and not (math.isnan(read.phase_rad) or math.isnan(read.frequency_hz)):
-                phases[read.antenna][read.tag_id] = read
-        phase_readings = []
-        if p.phase_antennas:
-            first, second = (phases[port] for port in p.phase_antennas)
-            phase_readings = [PhaseReading(tag_id, first[tag_id].phase_rad - second[tag_id].phase_rad,
-                                           first[tag_id].frequency_hz)
-                              for tag_id in first if tag_id in second
-                              and first[tag_id].frequency_hz == second[tag_id].frequency_hz]
-        evidence = Evidence(floor_tag_ids=[read.tag_id for read in reads if read.antenna == p.floor_antenna],
-                            phase=phase_readings,
-                            wall_tag_ids=[(read.antenna, read.tag_id) for read in reads
-                                          if read.antenna == p.wall_antenna],
-                            wifi_fix=self.wifi_fix, compass_yaw_rad=self.compass_yaw)
+        evidence = round_evidence(reads, p.ports(), self.wifi_fix, self.compass_yaw)
         self.wifi_fix = self.compass_yaw = None           # each reading is weighed once
         estimate = self.localizer.on_round(evidence)
         if estimate is None:

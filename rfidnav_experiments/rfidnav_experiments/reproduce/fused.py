@@ -1,14 +1,28 @@
 """``./rfidnav reproduce fused``: the fused localizer (rfidnav_localization.fused) beside each paper's own
 localizer, on the same runs, paired.
 
-So far: paper 003's homes (HOMES of reproduce two_tier: the in-tree flat and two of ours). Each run is the
-two-tier navigator's mission from the scenario's start to its goal, its legs planned round the map's walls,
-driven by the paper's localizer (WiFi fingerprints, then floor tag groups, dead reckoning between); the fused
-localizer runs beside it on what the same sensors gave in each step (floor reads, the location server's
-answers, the compass, the odometry), with the same shipped settings on every world. Per run and localizer: the
-position and heading RMSE over the steps it had an estimate, the fix rate (the share of steps it had one), and
-the share of steps whose NEES lies in its two-sided 95 % chi-square band (consistency). Per home: means with
-95 % intervals over the runs, and the paired difference fused - paper with its interval.
+Worlds: paper 003's homes (HOMES of reproduce two_tier: the in-tree flat and two of ours) and the mixed floor
+(ours: every kind of tag on one floor). Each run is the two-tier navigator's mission from the scenario's start to its
+goal, its legs planned round the map's walls, driven by the paper's localizer (WiFi fingerprints, then floor tag
+groups, dead reckoning between) with the scenario's reader; the fused localizers ride beside it on what the same
+sensors gave in each reader round (every antenna's reads, the location server's answers to the navigator's locate
+calls, the compass, the odometry), with the settings of the robot's rfid_localizer parameter file (the filter's
+the same for every robot and world). Every fused localizer starts, as the paper's does, knowing only the map:
+global localization from its first evidence.
+
+Localizers: ``fused`` (every kind of evidence), on the mixed floor also the same filter given one kind of evidence
+and the compass (``floor_only``: lattice and tag-group reads, paper 000's and 003's tier two; ``phase_only``:
+ceiling tags, paper 001; ``wall_only``: wall tags, paper 004; ``wifi_only``: paper 003's tier one), and ``paper``
+(the two-tier navigator's own estimate). A ``kidnap`` run of the fused filter is told at KIDNAP_AT_S, confidently,
+that the robot stands mirrored through the floor's centre, facing the other way (a wrong /initialpose); the
+figures give how long it takes to find the robot again. A ``late`` one starts at LATE_START_S, mid-mission, with no
+idea where the robot is (a second global localization, away from the start).
+
+Per run and localizer: the position and heading RMSE over the rounds it had an estimate, the fix rate (the share
+of rounds it had one), the share of rounds whose NEES lies in its two-sided 95 % chi-square band (consistency);
+the time global localization took (error below 0.5 m for 5 s, from the start) and the kidnap's recovery time (the
+same, from the kidnap). Per world: means with 95 % intervals over the runs, and the paired difference of each
+localizer less the fused one.
 
 Development and evaluation apart: the code and its settings were chosen on DEVELOPMENT_SEED; the command
 reports EVALUATION_SEED, never used to tune anything.
@@ -23,35 +37,52 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-import numpy as np
 from scipy import stats
 
+from rfidnav_bringup.scenario import CONFIG_DIR
 from rfidnav_common.errors import ConfigError
 from rfidnav_common.seeding import derive_seed, rng_for
 from rfidnav_experiments.engine import run_tasks
 from rfidnav_experiments.reproduce.tables import Interval, paired_interval, table
-from rfidnav_experiments.reproduce.two_tier import HOMES, floor_range_m, home
-from rfidnav_experiments.runners.fused import Beside, Track
-from rfidnav_experiments.runners.two_tier import COMPASS, FLOOR_READER, NAVIGATOR, SETTINGS, run_two_tier
-from rfidnav_localization.fused.filter import FusedSettings
+from rfidnav_experiments.reproduce.two_tier import HOMES, Home, home
+from rfidnav_experiments.runners.fused import CONVERGED_FOR_S, CONVERGED_M, KINDS, Beside, Rider, Track
+from rfidnav_experiments.runners.shipped import file_parameters
+from rfidnav_experiments.runners.two_tier import SETTINGS, run_two_tier
 from rfidnav_localization.fused.localizer import FusedLocalizer
-from rfidnav_localization.fused.models import CompassModel, FloorModel
 from rfidnav_localization.fused.tag_map import FusedMap
+from rfidnav_localization.parameters import RfidLocalizerParameters
+from rfidnav_sim.parameters import ReaderParameters
 
 EXPERIMENT = "fused"
 RUNS = 10
 DEVELOPMENT_SEED = 1
 EVALUATION_SEED = 401
-LOCALIZERS = ("fused", "paper")
+MIXED = "mixed_floor"
+WORLDS = (*HOMES, MIXED)
+# Paper 003's robot: its rfid_localizer file where the scenario runs none (the homes).
+HF_FLOOR_LOCALIZER = CONFIG_DIR / "params" / "rfid_localizer_hf_floor.yaml"
+SINGLE_EVIDENCE = {"floor_only": ("floor", "compass"), "phase_only": ("phase", "compass"),
+                   "wall_only": ("wall", "compass"), "wifi_only": ("wifi", "compass")}
+KIDNAP_AT_S = 30.0
+LATE_START_S = 20.0        # a second global localization, out of the start's room (a mission takes 50-250 s)
 NEES_BAND = 0.95
 
 
-def two_tier_settings() -> FusedSettings:
-    """The fused localizer on paper 003's robot: its HF floor antenna and the compass_sim node's noise."""
-    antenna = np.reshape(FLOOR_READER.antenna_positions, (-1, 3))[NAVIGATOR.floor_antenna - 1]   # ports 1, 2, ...
-    return FusedSettings(floor=FloorModel((float(antenna[0]), float(antenna[1]))),
-                         tag_group_read_range_m=floor_range_m(),
-                         compass=CompassModel(sd_rad=max(COMPASS.noise_sd_rad, math.radians(0.5))))
+def localizers_of(world: str) -> tuple[str, ...]:
+    return ("fused", *(SINGLE_EVIDENCE if world == MIXED else ()), "paper")
+
+
+def localizer_parameters(place: Home) -> RfidLocalizerParameters:
+    """The scenario's rfid_localizer parameters, or paper 003's robot's file for a scenario without one."""
+    spec = place.scenario.nodes.get("rfid_localizer")
+    path = spec.param_files[0] if spec is not None else HF_FLOOR_LOCALIZER
+    return file_parameters(RfidLocalizerParameters, path, "rfid_localizer", map_file=str(place.scenario.map_file))
+
+
+def reader_parameters(place: Home) -> ReaderParameters:
+    """The reader of the scenario's rfid_reader role: the robot's sensors, as the DDS run has them."""
+    return file_parameters(ReaderParameters, place.scenario.nodes["rfid_reader"].param_files[0], "rfid_reader_sim",
+                           world_file=str(place.scenario.world_file))
 
 
 @dataclass(frozen=True)
@@ -59,7 +90,7 @@ class TrackFigures:
     position_rmse_m: float | None
     heading_rmse_deg: float | None
     fix_rate: float
-    consistent: float | None          # share of steps with an estimate whose NEES is in its 95 % band
+    consistent: float | None          # share of rounds with an estimate whose NEES is in its 95 % band
 
     @classmethod
     def of(cls, track: Track) -> TrackFigures:
@@ -74,8 +105,11 @@ class FusedRun:
     world: str
     run: int
     success: bool                     # the paper's mission arrived
-    fused: TrackFigures
-    paper: TrackFigures
+    figures: dict[str, TrackFigures]  # per localizer of localizers_of(world)
+    global_s: float | None            # the fused localizer's global localization from the start [s]; None: never
+    late_global_s: float | None       # the same, for one started at LATE_START_S (mid-mission) [s]
+    kidnap_recovery_s: float | None   # [s] from the kidnap; None: not found again (or the run ended first)
+    duration_s: float
 
 
 def _rms(values: list[float]) -> float | None:
@@ -83,26 +117,54 @@ def _rms(values: list[float]) -> float | None:
 
 
 def home_run(job: tuple[str, int, int]) -> FusedRun:
-    """One two-tier mission of a home with the fused localizer beside; the same streams as reproduce two_tier's
+    """One two-tier mission of a world with the fused localizers beside; the same streams as reproduce two_tier's
     planned-legs run of that home and run number."""
     name, run, seed = job
     place = home(name)
     robot_map = place.scenario.route_map
     assert robot_map is not None                       # home() refuses a home without its map
-    beside = Beside(FusedLocalizer(two_tier_settings(), FusedMap.of_route_map(robot_map, place.site.radio_map),
-                                   rng_for(seed, f"fused:{name}:{run}")))
+    parameters = localizer_parameters(place)
+    settings = parameters.settings()
+
+    def localizer(label: str) -> FusedLocalizer:
+        return FusedLocalizer(settings, FusedMap.of_route_map(robot_map, place.site.radio_map),
+                              rng_for(seed, f"fused:{name}:{run}:{label}"))
+
+    x_min, y_min, x_max, y_max = FusedMap.of_route_map(robot_map).extent
+    riders = {"fused": Rider(localizer("fused"))}
+    if name == MIXED:
+        riders.update({label: Rider(localizer(label), kinds) for label, kinds in SINGLE_EVIDENCE.items()})
     x, y, yaw_deg = place.scenario.robot
+    # Kidnapped: told the robot stands mirrored through the floor's centre, facing the other way.
+    kidnap = Rider(localizer("kidnap"), tuple(KINDS), KIDNAP_AT_S)
+    riders["kidnap"] = kidnap
+    late = Rider(localizer("late"), joins_at_s=LATE_START_S)
+    riders["late"] = late
+    beside = Beside(riders, parameters.ports())
     target = place.scenario.mission.goal["target"]
+
+    def observe(seen: Any) -> None:
+        if kidnap.kidnap_at_s is not None and seen.time_s >= kidnap.kidnap_at_s:
+            tx, ty, tyaw = seen.truth     # the harness, not the localizer, knows where the robot is not
+            kidnap.kidnap_pose = (x_min + x_max - tx, y_min + y_max - ty, tyaw + math.pi)
+        beside(seen)
+
     result = run_two_tier(place.site, (x, y, math.radians(yaw_deg)), (target["x"], target["y"]), SETTINGS,
                           rng_for(seed, f"homes:{name}:{run}"), derive_seed(seed, f"homes:{name}:{run}:reader"),
-                          max_time_s=place.scenario.mission.timeout_s, floor=place.floor, observe=beside)
-    return FusedRun(name, run, result.success, TrackFigures.of(beside.fused), TrackFigures.of(beside.paper))
+                          max_time_s=place.scenario.mission.timeout_s, floor=place.floor, observe=observe,
+                          reader_parameters=reader_parameters(place))
+    figures = {label: TrackFigures.of(riders[label].track) for label in localizers_of(name) if label != "paper"}
+    figures["paper"] = TrackFigures.of(beside.paper)
+    recovery = kidnap.track.settled_after(KIDNAP_AT_S) if result.duration_s > KIDNAP_AT_S else None
+    found = late.track.settled_after(LATE_START_S) if result.duration_s > LATE_START_S else None
+    return FusedRun(name, run, result.success, figures, riders["fused"].track.settled_after(0.0), found, recovery,
+                    result.duration_s)
 
 
 def fused_runs(runs: int, seed: int) -> list[FusedRun]:
-    results = run_tasks(home_run, [(name, run, seed) for name in HOMES for run in range(runs)],
-                        "reproduce fused: paper 003 homes")
-    return sorted(results, key=lambda r: (HOMES.index(r.world), r.run))
+    results = run_tasks(home_run, [(name, run, seed) for name in WORLDS for run in range(runs)],
+                        "reproduce fused: worlds")
+    return sorted(results, key=lambda r: (WORLDS.index(r.world), r.run))
 
 
 METRICS = {"position_rmse_m": ("position RMSE [m]", 1.0, 3),
@@ -112,13 +174,25 @@ METRICS = {"position_rmse_m": ("position RMSE [m]", 1.0, 3),
 
 
 def figures(results: list[FusedRun], world: str) -> dict[str, dict[str, Interval]]:
-    """Per metric: each localizer's mean over the runs and the paired difference fused - paper."""
+    """Per metric: each localizer's mean over the runs and the paired difference of each other one less fused."""
     mine = [r for r in results if r.world == world]
     out: dict[str, dict[str, Interval]] = {}
     for metric in METRICS:
-        values = {name: {r.run: getattr(getattr(r, name), metric) for r in mine} for name in LOCALIZERS}
-        out[metric] = {name: Interval.of([v for v in values[name].values() if v is not None]) for name in LOCALIZERS}
-        out[metric]["difference"] = paired_interval(values["fused"], values["paper"])
+        values = {name: {r.run: getattr(r.figures[name], metric) for r in mine} for name in localizers_of(world)}
+        out[metric] = {name: Interval.of([v for v in values[name].values() if v is not None])
+                       for name in localizers_of(world)}
+        for name in localizers_of(world)[1:]:
+            out[metric][f"{name} - fused"] = paired_interval(values[name], values["fused"])
+    return out
+
+
+def recovery_figures(results: list[FusedRun], world: str) -> dict[str, tuple[Interval, int]]:
+    """Global localization and kidnap recovery [s]: the mean over the runs where it happened, and how many did."""
+    mine = [r for r in results if r.world == world]
+    out = {}
+    for key in ("global_s", "late_global_s", "kidnap_recovery_s"):
+        found = [getattr(r, key) for r in mine if getattr(r, key) is not None]
+        out[key] = (Interval.of(found), len(found))
     return out
 
 
@@ -126,11 +200,22 @@ def report_lines(results: list[FusedRun], runs: int) -> list[str]:
     lines = [f"reproduce fused: the fused localizer beside each paper's own, same runs ({runs} per world)", ""]
     for world in dict.fromkeys(r.world for r in results):
         arrived = sum(r.success for r in results if r.world == world)
-        lines += [f"{world} (paper 003, two-tier navigator driving; {arrived}/{runs} arrived)"]
-        rows = [[label, *(figure[name].text(scale, digits) for name in (*LOCALIZERS, "difference"))]
-                for metric, (label, scale, digits) in METRICS.items()
-                for figure in (figures(results, world)[metric],)]
-        lines += table(["metric", "fused", "paper", "fused - paper (paired)"], rows) + [""]
+        names = localizers_of(world)
+        lines += [f"{world} (the two-tier navigator driving with paper 003's localizer; {arrived}/{runs} arrived)"]
+        world_figures = figures(results, world)
+        rows = [[label, *(world_figures[metric][name].text(scale, digits) for name in names)]
+                for metric, (label, scale, digits) in METRICS.items()]
+        lines += table(["metric", *names], rows)
+        rows = [[label, world_figures[metric][f"{name} - fused"].text(scale, digits)]
+                for metric, (label, scale, digits) in METRICS.items() for name in names[1:]
+                for label in (f"{METRICS[metric][0]}: {name} - fused",)]
+        lines += table(["paired difference", "mean [95 % interval]"], rows)
+        recovery = recovery_figures(results, world)
+        lines += [f"global localization (error below {CONVERGED_M:g} m for {CONVERGED_FOR_S:g} s): from the start "
+                  f"{recovery['global_s'][0].text(1.0, 1)} s in {recovery['global_s'][1]}/{runs} runs; started at "
+                  f"{LATE_START_S:g} s {recovery['late_global_s'][0].text(1.0, 1)} s in "
+                  f"{recovery['late_global_s'][1]}/{runs}; kidnapped at {KIDNAP_AT_S:g} s, found again after "
+                  f"{recovery['kidnap_recovery_s'][0].text(1.0, 1)} s in {recovery['kidnap_recovery_s'][1]}/{runs}", ""]
     return lines
 
 
@@ -139,8 +224,11 @@ def json_rows(results: list[FusedRun], seed: int) -> list[dict[str, Any]]:
     for world in dict.fromkeys(r.world for r in results):
         for metric, figure in figures(results, world).items():
             rows.append({"experiment": EXPERIMENT, "setting": f"{world} seed {seed}", "metric": metric,
-                         "ours": _interval_json(figure["fused"]), "paper": _interval_json(figure["paper"]),
-                         "difference": _interval_json(figure["difference"])})
+                         **{name: _interval_json(interval) for name, interval in figure.items()}})
+        for key, (interval, count) in recovery_figures(results, world).items():
+            rows.append({"experiment": EXPERIMENT, "setting": f"{world} seed {seed}", "metric": key,
+                         "fused": {**_interval_json(interval), "runs_found": count,
+                                   "runs": sum(r.world == world for r in results)}})
     return rows
 
 

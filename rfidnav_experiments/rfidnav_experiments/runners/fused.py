@@ -1,37 +1,53 @@
 """The fused localizer (rfidnav_localization.fused) run beside a paper's own localizer on the same runs: it sees
 what the robot's sensors give in each step (the runner's ``observe`` hook), never the truth, and is scored
-against the truth step by step together with the paper's estimate (pure, in-process).
+against the truth together with the paper's estimate (pure, in-process).
 
-Per step with an estimate: the position and heading errors, and the normalised estimation error squared (NEES)
-of the pose against the estimate's own covariance -- (x, y, yaw) for the fused filter, (x, y) with the paper's
-isotropic sd for the two-tier dead reckoning, whose heading is the compass's and has no sd.
+Each reader round is one update, built as the rfid_localizer node builds it (``round_evidence``): the round's reads
+of every antenna, the compass's latest heading and the location server's latest answer. Several localizers may
+ride on one run (:class:`Rider`): the fused one with every kind of evidence, the same filter restricted to one
+kind (a single-evidence localizer), one that starts with no idea where the robot is (global localization), one
+that is kidnapped (told, confidently, that the robot stands elsewhere, as a wrong /initialpose would).
+
+Per round: the position and heading errors, and the normalised estimation error squared (NEES) of the pose
+against the estimate's own covariance -- (x, y, yaw) for the fused filter, (x, y) with the paper's isotropic sd for
+the two-tier dead reckoning, whose heading is the compass's and has no sd.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
+from collections.abc import Collection
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from rfidnav_common.geometry import wrap_angle
 from rfidnav_experiments.runners.two_tier import StepSeen
-from rfidnav_localization.fused.filter import Evidence
+from rfidnav_localization.fused.filter import Evidence, Ports, round_evidence
 from rfidnav_localization.fused.localizer import FusedLocalizer
 
 MIN_VARIANCE = 1e-12     # a covariance with a zero variance (a collapsed cloud) is floored, not inverted
+# The kinds a rider may be restricted to: the fields of Evidence they keep.
+KINDS = {"floor": "floor_tag_ids", "phase": "phase", "wall": "wall_tag_ids", "wifi": "wifi_fix",
+         "compass": "compass_yaw_rad"}
+CONVERGED_M = 0.5        # global localization and kidnap recovery: the error below this...
+CONVERGED_FOR_S = 5.0    # ...for this long
 
 
 @dataclass
 class Track:
-    """A localizer's errors over a run, one entry per step it had an estimate."""
-    steps: int = 0                                   # steps of the run, estimate or not
+    """A localizer's errors over a run, one entry per round it had an estimate."""
+    rounds: int = 0                                  # rounds of the run, estimate or not
+    times_s: list[float] = field(default_factory=list)
     position_errors_m: list[float] = field(default_factory=list)
     heading_errors_rad: list[float] = field(default_factory=list)
     nees: list[float] = field(default_factory=list)
     nees_dof: int = 3
 
-    def add(self, position_error: tuple[float, float], heading_error: float | None, covariance: np.ndarray) -> None:
+    def add(self, time_s: float, position_error: tuple[float, float], heading_error: float | None,
+            covariance: np.ndarray) -> None:
+        self.times_s.append(time_s)
         self.position_errors_m.append(math.hypot(*position_error))
         if heading_error is not None:
             self.heading_errors_rad.append(heading_error)
@@ -41,29 +57,73 @@ class Track:
 
     @property
     def fix_rate(self) -> float:
-        return len(self.position_errors_m) / self.steps if self.steps else 0.0
+        return len(self.position_errors_m) / self.rounds if self.rounds else 0.0
+
+    def settled_after(self, since_s: float) -> float | None:
+        """Sim seconds from ``since_s`` until the position error went below CONVERGED_M and stayed there for
+        CONVERGED_FOR_S (or to the end of the run, if that came first but after at least one round); None: never."""
+        start: float | None = None
+        for time_s, error in zip(self.times_s, self.position_errors_m, strict=True):
+            if time_s < since_s:
+                continue
+            if error >= CONVERGED_M:
+                start = None
+            elif start is None:
+                start = time_s
+            if start is not None and time_s - start >= CONVERGED_FOR_S:
+                return start - since_s
+        return start - since_s if start is not None else None
+
+
+@dataclass
+class Rider:
+    """One fused localizer on the run: the evidence ``kinds`` it is given (all by default); started at
+    ``joins_at_s`` (before, it hears nothing: a localizer started mid-mission with no idea where the robot is); and
+    a kidnap at ``kidnap_at_s``: it is told the robot stands at ``kidnap_pose`` with a 10 cm / 0.05 rad sd."""
+    localizer: FusedLocalizer
+    kinds: Collection[str] = tuple(KINDS)
+    kidnap_at_s: float | None = None
+    kidnap_pose: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    joins_at_s: float = 0.0
+    track: Track = field(default_factory=Track)
+
+    def evidence(self, evidence: Evidence) -> Evidence:
+        dropped = {name: Evidence.__dataclass_fields__[name].default for kind, name in KINDS.items()
+                   if kind not in self.kinds}
+        return dataclasses.replace(evidence, **dropped)
 
 
 class Beside:
-    """The fused localizer fed by a two-tier run's steps (paper 003), and both tracks scored."""
+    """Fused localizers fed by a two-tier run's steps (paper 003), and their tracks and the paper's scored."""
 
-    def __init__(self, localizer: FusedLocalizer) -> None:
-        self.localizer = localizer
-        self.fused = Track(nees_dof=3)
+    def __init__(self, riders: dict[str, Rider], ports: Ports) -> None:
+        self.riders = riders
+        self.ports = ports
         self.paper = Track(nees_dof=2)
+        self.wifi_fix: tuple[tuple[float, float], float] | None = None
 
     def __call__(self, seen: StepSeen) -> None:
-        self.localizer.on_odometry(seen.odom)
-        estimate = self.localizer.on_round(Evidence(floor_tag_ids=seen.floor_reads, wifi_fix=seen.wifi_fix,
-                                                    compass_yaw_rad=seen.compass_yaw_rad))
+        riders = [rider for rider in self.riders.values() if seen.time_s >= rider.joins_at_s]
+        for rider in riders:
+            rider.localizer.on_odometry(seen.odom)
+            if rider.kidnap_at_s is not None and seen.time_s >= rider.kidnap_at_s:
+                rider.kidnap_at_s = None
+                rider.localizer.set_pose(*rider.kidnap_pose, np.diag([0.01, 0.01, 0.0025]))
+        self.wifi_fix = seen.wifi_fix or self.wifi_fix         # kept for the next round, as the node keeps it
+        if seen.round_reads is None:
+            return                                             # the node updates once per reader round
+        evidence = round_evidence(seen.round_reads, self.ports, self.wifi_fix, seen.compass_yaw_rad)
+        self.wifi_fix = None
         x, y, yaw = seen.truth
-        self.fused.steps += 1
-        self.paper.steps += 1
-        if estimate is not None:
-            pose = estimate.pose
-            self.fused.add((pose.x - x, pose.y - y), wrap_angle(pose.yaw - yaw), pose.covariance)
+        for rider in riders:
+            estimate = rider.localizer.on_round(rider.evidence(evidence))
+            rider.track.rounds += 1
+            if estimate is not None:
+                pose = estimate.pose
+                rider.track.add(seen.time_s, (pose.x - x, pose.y - y), wrap_angle(pose.yaw - yaw), pose.covariance)
+        self.paper.rounds += 1
         paper = seen.paper
         if paper.position is not None:
             heading = wrap_angle(paper.yaw - yaw) if paper.yaw is not None else None
-            self.paper.add((paper.position[0] - x, paper.position[1] - y), heading,
+            self.paper.add(seen.time_s, (paper.position[0] - x, paper.position[1] - y), heading,
                            np.eye(2) * max(paper.sd_m, 1e-6) ** 2)

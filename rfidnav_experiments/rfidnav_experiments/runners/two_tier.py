@@ -44,6 +44,7 @@ from rfidnav_planning.wall_paths import WallMap
 from rfidnav_sim.compass_model import CompassModel
 from rfidnav_sim.kinematics import moves_into_wall, unicycle_step
 from rfidnav_sim.parameters import CompassParameters, ReaderParameters, RobotSimParameters, WifiSimParameters
+from rfidnav_sim.rfid_model import Read
 from rfidnav_sim.wifi_model import WifiModel
 from rfidnav_sim.world import World
 
@@ -220,7 +221,7 @@ class StepSeen:
     truth: tuple[float, float, float]
     odom: tuple[float, float, float]
     compass_yaw_rad: float
-    floor_reads: tuple[str, ...]
+    round_reads: tuple[Read, ...] | None                   # every antenna's reads; None: no round this step
     wifi_fix: tuple[tuple[float, float], float] | None     # the location server's answer this step, if any
     paper: DeadReckoningEstimate
 
@@ -253,16 +254,18 @@ def run_two_tier(site: Site, start: tuple[float, float, float], target: tuple[fl
                  odometry_scale_error: float = ODOMETRY_SCALE_ERROR, compass: CompassModel = COMPASS,
                  locate: LocateSettings = LocateSettings(), max_time_s: float = 1800.0,
                  survey_spacing_m: float | None = None, known_start: Fix | None = None,
-                 floor: WallMap = WallMap(), observe: Callable[[StepSeen], None] | None = None) -> TwoTierRun:
+                 floor: WallMap = WallMap(), observe: Callable[[StepSeen], None] | None = None,
+                 reader_parameters: ReaderParameters = FLOOR_READER) -> TwoTierRun:
     """One navigation from ``start`` (true pose) to ``target``, the compass and WiFi drawn from ``rng``, the floor
     reader's streams seeded from ``reader_seed`` (as the rfid_reader_sim node seeds them from its seed). With
     ``survey_spacing_m`` the robot also surveys (paper 003's automatic radio map construction): a scan every that
     many metres while its position is fresh from a tag fix (within SURVEY_FRESH_M), recorded at the position it
     believes (never the true one) and added to the site's radio map at once, as the add_fingerprint service
     does. ``floor``: the walls and extent of the robot's map, which its legs are planned round. ``observe`` is
-    called after every step with what the sensors gave (:class:`StepSeen`); it draws nothing."""
+    called after every step with what the sensors gave (:class:`StepSeen`); it draws nothing.
+    ``reader_parameters``: the robot's reader (the navigator reads its floor antenna's port)."""
     x, y, yaw = start
-    reader = FLOOR_READER.simulated_reader(site.world, reader_seed)
+    reader = reader_parameters.simulated_reader(site.world, reader_seed)
     floor_port = NAVIGATOR.floor_antenna
     positions = {tag.tag_id: tag.position for tag in site.tag_map}
     survey: list[tuple[tuple[float, float], dict[str, float]]] = []
@@ -294,12 +297,12 @@ def run_two_tier(site: Site, start: tuple[float, float, float], target: tuple[fl
         odom = (odom[0] + dx, odom[1] + dy, odom[2] + dyaw)
         path_m += abs(linear) * STEP_S
         time_s += STEP_S
-        round_reads = reader.round_at(x, y, yaw, time_s) or []
-        reads = [read.tag_id for read in round_reads if read.antenna == floor_port]
+        due = reader.round_at(x, y, yaw, time_s)
+        reads = [read.tag_id for read in due or () if read.antenna == floor_port]
         compass_yaw = compass.measure(yaw, rng)
         decision = navigator.step(odom, compass_yaw, reads)
         if observe is not None:
-            observe(StepSeen(time_s, (x, y, yaw), odom, compass_yaw, tuple(reads),
+            observe(StepSeen(time_s, (x, y, yaw), odom, compass_yaw, None if due is None else tuple(due),
                              located.pop() if located else None, navigator.estimate()))
         fixes = navigator.progress.fixes
         for fix in fixes[fixes_seen:]:

@@ -28,6 +28,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import Protocol
 
 import numpy as np
 from scipy.spatial import cKDTree
@@ -107,6 +108,47 @@ class Evidence:
     wall_tag_ids: Sequence[tuple[int, str]] = ()           # (side antenna port, tag id)
     wifi_fix: tuple[tuple[float, float], float] | None = None   # (position, uncertainty [m])
     compass_yaw_rad: float | None = None
+
+
+class RoundRead(Protocol):
+    """One read of an inventory round, as the node checks it (rfidnav_common.inputs.TagRead) and as the simulator
+    makes it (rfidnav_sim.rfid_model.Read); a measurement not reported is NaN."""
+    tag_id: str
+    antenna: int
+    phase_rad: float
+    frequency_hz: float
+
+
+@dataclass(frozen=True)
+class Ports:
+    """Which reader port gives which evidence; 0 or None: no such antenna."""
+    floor: int = 0                          # downward: floor tags
+    phase: tuple[int, int] | None = None    # the two receiving antennas under ceiling tags
+    wall: int = 0                           # side: wall tags
+
+    def all(self) -> set[int]:
+        return {port for port in (self.floor, self.wall, *(self.phase or ())) if port}
+
+
+def round_evidence(reads: Sequence[RoundRead], ports: Ports, wifi_fix: tuple[tuple[float, float], float] | None,
+                   compass_yaw_rad: float | None) -> Evidence:
+    """One round's evidence: the floor antenna's tags, the side antenna's wall tags, and the phase difference of
+    each ceiling tag heard on both receiving antennas on one channel (the last read of it on each), with the
+    latest WiFi fix and compass heading. The node and the in-process runners both build it here."""
+    phase: list[PhaseReading] = []
+    if ports.phase is not None:
+        heard: dict[int, dict[str, RoundRead]] = {port: {} for port in ports.phase}
+        for read in reads:
+            if read.antenna in heard and not (math.isnan(read.phase_rad) or math.isnan(read.frequency_hz)):
+                heard[read.antenna][read.tag_id] = read
+        first, second = (heard[port] for port in ports.phase)
+        phase = [PhaseReading(tag_id, first[tag_id].phase_rad - second[tag_id].phase_rad, first[tag_id].frequency_hz)
+                 for tag_id in first if tag_id in second and first[tag_id].frequency_hz == second[tag_id].frequency_hz]
+    return Evidence(floor_tag_ids=[read.tag_id for read in reads if ports.floor and read.antenna == ports.floor],
+                    phase=phase,
+                    wall_tag_ids=[(read.antenna, read.tag_id) for read in reads
+                                  if ports.wall and read.antenna == ports.wall],
+                    wifi_fix=wifi_fix, compass_yaw_rad=compass_yaw_rad)
 
 
 @dataclass(frozen=True)
