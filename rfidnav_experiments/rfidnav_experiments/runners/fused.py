@@ -19,6 +19,7 @@ import dataclasses
 import math
 from collections.abc import Collection
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -31,6 +32,7 @@ MIN_VARIANCE = 1e-12     # a covariance with a zero variance (a collapsed cloud)
 # The kinds a rider may be restricted to: the fields of Evidence they keep.
 KINDS = {"floor": "floor_tag_ids", "phase": "phase", "wall": "wall_tag_ids", "wifi": "wifi_fix",
          "compass": "compass_yaw_rad"}
+NO_EVIDENCE = Evidence()
 CONVERGED_M = 0.5        # global localization and kidnap recovery: the error below this...
 CONVERGED_FOR_S = 5.0    # ...for this long
 
@@ -88,8 +90,9 @@ class Rider:
     track: Track = field(default_factory=Track)
 
     def evidence(self, evidence: Evidence) -> Evidence:
-        dropped = {name: Evidence.__dataclass_fields__[name].default for kind, name in KINDS.items()
-                   if kind not in self.kinds}
+        """``evidence`` with the kinds this rider is not given left empty."""
+        dropped: dict[str, Any] = {name: getattr(NO_EVIDENCE, name) for kind, name in KINDS.items()
+                                   if kind not in self.kinds}
         return dataclasses.replace(evidence, **dropped)
 
 

@@ -113,10 +113,18 @@ class Evidence:
 class RoundRead(Protocol):
     """One read of an inventory round, as the node checks it (rfidnav_common.inputs.TagRead) and as the simulator
     makes it (rfidnav_sim.rfid_model.Read); a measurement not reported is NaN."""
-    tag_id: str
-    antenna: int
-    phase_rad: float
-    frequency_hz: float
+
+    @property
+    def tag_id(self) -> str: ...
+
+    @property
+    def antenna(self) -> int: ...
+
+    @property
+    def phase_rad(self) -> float: ...
+
+    @property
+    def frequency_hz(self) -> float: ...
 
 
 @dataclass(frozen=True)
