@@ -40,6 +40,16 @@ class Trajectory:
         return Trajectory(self.times_s[keep], self.xy[keep])
 
 
+def position_errors(truth: Trajectory, times_s: np.ndarray, xy: np.ndarray) -> np.ndarray:
+    """A localizer's position error at each of its estimates (``xy``, N x 2, stamped ``times_s``): the distance to
+    the ground truth interpolated at the estimate's stamp. Estimates stamped outside the truth's span are left out."""
+    times_s, xy = np.asarray(times_s, dtype=float), np.asarray(xy, dtype=float).reshape(-1, 2)
+    inside = (times_s >= truth.times_s[0]) & (times_s <= truth.times_s[-1])
+    at = times_s[inside]
+    true_xy = np.column_stack([np.interp(at, truth.times_s, truth.xy[:, axis]) for axis in (0, 1)])
+    return np.hypot(*(xy[inside] - true_xy).T)
+
+
 def wall_crossings(xy: np.ndarray, walls: np.ndarray) -> int:
     """How many times the track ``xy`` (N x 2, the robot centre's ground truth) crosses one of ``walls`` (W x 4 rows
     x1, y1, x2, y2): from one side of a wall's line to the other through the wall itself.
