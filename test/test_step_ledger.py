@@ -126,3 +126,22 @@ def test_a_consumer_that_subscribes_late_holds_the_step_until_the_producer_has_m
     assert [(u.node, u.topic) for u in ledger.unanswered()] == [(SIM, "/sim/ground_truth")]
     ledger.report(StepReport(SIM, 1, {}, {"/sim/ground_truth": 0}, matched={"/sim/ground_truth": 1}))
     assert ledger.answered()
+
+
+def test_a_step_waits_until_each_consumers_subscription_has_matched_every_participant_producing_its_topic() -> None:
+    ledger = StepLedger([SIM, CONTROLLER])
+    # The controller's publisher has already matched the simulator's subscription, but the simulator's subscription
+    # has not matched the controller's publisher yet: DDS would drop a command sent now on the simulator's side.
+    ledger.report(StepReport(CONTROLLER, 1, {}, {"/cmd_vel": 0}, matched={"/cmd_vel": 1}))
+    ledger.report(StepReport(SIM, 1, {"/cmd_vel": 0}, {}, subscribed={"/cmd_vel": 0}))
+    assert [u.describe() for u in ledger.wiring()] == [
+        f"{SIM}'s subscription to /cmd_vel to match its producers (0 of 1)"]
+    assert not ledger.answered()
+    ledger.report(StepReport(SIM, 1, {"/cmd_vel": 0}, {}, subscribed={"/cmd_vel": 1}))
+    assert ledger.wiring() == [] and ledger.answered()
+
+
+def test_wiring_names_the_participants_never_heard_from_first() -> None:
+    ledger = StepLedger([SIM, CONTROLLER])
+    ledger.report(StepReport(SIM, 1, {"/cmd_vel": 0}, {}, subscribed={"/cmd_vel": 0}))
+    assert [u.describe() for u in ledger.wiring()] == [f"{CONTROLLER} (not heard from yet)"]

@@ -82,6 +82,18 @@ def test_a_stepped_node_answers_again_when_its_publisher_matches_a_subscription_
     assert step_report_of(received[-1]).produced == {"/cmd_vel": 0}
 
 
+def test_a_stepped_node_answers_again_when_its_subscription_matches_a_publisher_and_reports_the_count(graph) -> None:
+    received = answers(graph)
+    graph.add(Recording(graph.context))
+    graph.spin_until(lambda: received, "the participant's first answer")
+    assert step_report_of(received[-1]).subscribed == {"/sim/ground_truth": 0}   # no ground truth published yet
+    graph.probe.create_publisher(Odometry, "/sim/ground_truth", SENSOR_QOS)
+    # Nothing was handled or published: only the match makes it answer.
+    graph.spin_until(lambda: step_report_of(received[-1]).subscribed == {"/sim/ground_truth": 1},
+                     "an answer with the match")
+    assert step_report_of(received[-1]).consumed == {"/sim/ground_truth": 0}
+
+
 def test_a_node_without_the_parameter_is_a_plain_node(graph) -> None:
     received = answers(graph)
     node = graph.add(SteppedNode("plain", context=graph.context))

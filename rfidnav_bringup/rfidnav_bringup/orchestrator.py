@@ -47,6 +47,7 @@ from rclpy.context import Context
 from rclpy.executors import Executor
 from rclpy.node import Node
 from rclpy.signals import SignalHandlerOptions
+from rclpy.task import Future
 from std_srvs.srv import Trigger
 
 from rfidnav_bag.errors import BagError
@@ -66,9 +67,8 @@ from rfidnav_common.errors import ConfigError, RfidnavError
 from rfidnav_common.files import write_atomically
 from rfidnav_common.progress import StatusLine
 from rfidnav_common.ros import events_executor, fill_message, interface_class
-from rfidnav_common.step_ledger import CLOCKS, StepReport, Unwired, unwired
-from rfidnav_common.stepped_node import STEP_ACK_READER_QOS, STEP_ACK_TOPIC, step_report_of
-from rfidnav_msgs.msg import StepAck
+from rfidnav_common.step_ledger import CLOCKS
+from rfidnav_common.stepped_node import STEP_ACK_TOPIC
 
 READY_TIMEOUT_S = 90.0
 STOP_GRACE_S = 5.0
@@ -354,42 +354,37 @@ class Orchestrator:
             self.spin_until(executor, lambda: not self.unrecorded_topics(node), READY_TIMEOUT_S,
                             lambda: f"the recorder to subscribe to {', '.join(self.unrecorded_topics(node))}")
         if self.stepped_with is not None:
-            self.wait_for_wiring(node, executor, self.stepped_with)
+            self.wait_for_wiring(node, executor)
         self.write_graph(node)
         if self.stepped_with is None:
             self.start_clock(node, executor)
 
-    def wait_for_wiring(self, node: Node, executor: Executor, participants: tuple[str, ...]) -> None:
+    def wait_for_wiring(self, node: Node, executor: Executor) -> None:
         """Before the goal, which the mission's server answers at once (with the stepped clock, before the clock
-        starts): every participant's publishers matched with every participant subscribing to their topics, as
-        the participants report it (the simulator holds its own steps until its publishers are). A message sent
-        before its subscription is matched is lost, and its consumer would hold the clock for ever."""
-        reports: dict[str, StepReport] = {}
+        starts): the clock source's ledger has every participant's report and every publisher and subscription of
+        theirs matched with the participants on the other side of its topic (``~/wired``). A message sent before
+        both sides have matched is lost, and its consumer would hold the clock for ever."""
+        clock_role = next(spec for spec in self.scenario.nodes.values() if spec.clock_source and spec.name)
+        wired = node.create_client(Trigger, f"/{clock_role.name}/wired")
+        answer: dict[str, str] = {}
+        pending: list[Future] = []
 
-        def take(message: StepAck) -> None:
-            report = step_report_of(message)
-            reports[report.node] = report
+        def ask() -> bool:
+            if pending and pending[0].done():
+                result = pending.pop().result()
+                if result is not None and result.success:
+                    return True
+                answer["waiting"] = result.message if result is not None else "no answer"
+            if not pending and wired.service_is_ready():
+                pending.append(wired.call_async(Trigger.Request()))
+            return False
 
-        subscription = node.create_subscription(StepAck, STEP_ACK_TOPIC, take, STEP_ACK_READER_QOS)
-
-        def waiting() -> list[Unwired]:
-            consumers = {topic: sum(1 for info in node.get_subscriptions_info_by_topic(topic)
-                                    if qualified_name(info.node_name, info.node_namespace) in participants)
-                         for report in reports.values() for topic in report.matched}
-            return list(unwired(reports.values(), consumers))
-
-        # Participants in the simulator's own process hand it their counts directly, on no topic.
-        clock_process = next(self.process_of[role] for role, spec in self.scenario.nodes.items() if spec.clock_source)
-        beside_clock = {f"/{spec.name}" for role, spec in self.scenario.nodes.items()
-                        if spec.name and self.process_of[role] == clock_process}
-        answering = [name for name in participants if name not in beside_clock]
         try:
-            self.spin_until(executor, lambda: set(answering) <= reports.keys() and not waiting(), READY_TIMEOUT_S,
-                            lambda: "the participants' publishers to match their subscribers: "
-                                    + (", ".join(u.describe() for u in waiting())
-                                       or f"no answer yet from {', '.join(sorted(set(answering) - reports.keys()))}"))
+            self.spin_until(executor, ask, READY_TIMEOUT_S,
+                            lambda: f"the participants' publishers and subscriptions to match: "
+                                    f"{answer.get('waiting', 'no answer yet from the clock source')}")
         finally:
-            node.destroy_subscription(subscription)
+            node.destroy_client(wired)
 
     def start_clock(self, node: Node, executor: Executor) -> None:
         clock_roles = [spec for spec in self.scenario.nodes.values() if spec.clock_source and spec.name]
@@ -739,10 +734,6 @@ def choose_clock(scenario: Scenario, options: RunOptions) -> tuple[str, str]:
     if options.clock == "free" and not math.isfinite(options.rtf):
         raise ConfigError("--rtf", "", "max needs the stepped clock (the free-running clock keeps a fixed RTF)")
     return options.clock, ""
-
-
-def qualified_name(name: str, namespace: str) -> str:
-    return f"{namespace.rstrip('/')}/{name}"
 
 
 def rtf_text(rtf: float) -> str | float:

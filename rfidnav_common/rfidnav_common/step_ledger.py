@@ -15,9 +15,9 @@ reports) never hold a step, so such a node runs free-running beside the stepped 
 Counting finds a message that is late, not one that is lost: DDS delivers a volatile message only to the
 subscriptions its publisher has matched when it is sent, and discovery between two processes can lag well
 behind both joining the graph on a loaded machine. So each participant also reports, per topic it produces, how
-many subscriptions its publisher has matched, and a step (the first one included) waits until every producer
-reaches every participant that consumes its topic (:func:`unwired`): a message sent before then would be lost
-and its consumer counted behind for ever.
+many subscriptions its publisher has matched (and per topic it consumes, how many publishers its subscription
+has), and a step (the first one included) waits until every producer and every consumer of a topic have matched
+each other (:func:`unwired`): a message sent before then would be lost and its consumer counted behind for ever.
 """
 
 from __future__ import annotations
@@ -39,6 +39,8 @@ class StepReport:
     slack: int = 0         # messages per input it may be behind without holding a step
     # Per produced topic: the subscriptions its publisher has matched (the fewest, with several publishers).
     matched: Mapping[str, int] = field(default_factory=dict)
+    # Per consumed topic: the publishers its subscription has matched (the fewest, with several subscriptions).
+    subscribed: Mapping[str, int] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
@@ -56,24 +58,43 @@ class Unanswered:
 
 @dataclass(frozen=True)
 class Unwired:
-    """A participant whose publisher on a topic has not matched every participant consuming it (yet)."""
+    """A participant whose publisher on a topic has not matched every participant consuming it, or whose
+    subscription has not matched every participant producing it (yet)."""
     node: str
     topic: str
     matched: int
-    consumers: int
+    needed: int
+    side: str = "publisher"          # or "subscription"
 
     def describe(self) -> str:
-        return f"{self.node}'s {self.topic} to reach its consumers ({self.matched} of {self.consumers} matched)"
+        if self.side == "publisher":
+            return f"{self.node}'s {self.topic} to reach its consumers ({self.matched} of {self.needed} matched)"
+        return f"{self.node}'s subscription to {self.topic} to match its producers ({self.matched} of {self.needed})"
 
 
-def unwired(reports: Iterable[StepReport], consumers: Mapping[str, int]) -> Iterator[Unwired]:
-    """Producers whose publisher has matched fewer subscriptions than ``consumers`` (per topic: how many
-    participants subscribe to it). More is fine: a foreign node (``rfidnav echo``) may listen too."""
+def unwired(reports: Iterable[StepReport]) -> Iterator[Unwired]:
+    """Participants not yet matched with every participant on the other side of a topic: a publisher that has
+    matched fewer subscriptions than there are participants consuming its topic, or a subscription fewer
+    publishers than there are participants producing it. DDS delivers a message only where both sides have matched
+    each other. More is fine: a foreign node (``rfidnav echo``, a driver) may be on the topic too."""
+    reports = list(reports)
+    consumers: dict[str, int] = {}
+    producers: dict[str, int] = {}
+    for report in reports:
+        for topic in report.consumed:
+            consumers[topic] = consumers.get(topic, 0) + 1
+        for topic in report.produced:
+            producers[topic] = producers.get(topic, 0) + 1
     for report in reports:
         for topic, matched in report.matched.items():
-            needed = consumers.get(topic, 0)
+            if matched < consumers.get(topic, 0):
+                yield Unwired(report.node, topic, matched, consumers[topic])
+        for topic, matched in report.subscribed.items():
+            # Its own publisher does not deliver to its own subscription's count: a node consuming what it
+            # produces (none does) would be counted once too many; producers are other participants.
+            needed = producers.get(topic, 0) - (topic in report.produced)
             if matched < needed:
-                yield Unwired(report.node, topic, matched, needed)
+                yield Unwired(report.node, topic, matched, needed, "subscription")
 
 
 @dataclass
@@ -109,7 +130,9 @@ class StepLedger:
             if count != before.get(topic, 0):
                 self.totals[topic] = self.totals.get(topic, 0) + count - before.get(topic, 0)
         entry.report = report
-        if previous is None or previous.matched != report.matched or previous.consumed.keys() != report.consumed.keys():
+        if (previous is None or previous.matched != report.matched or previous.subscribed != report.subscribed
+                or previous.consumed.keys() != report.consumed.keys()
+                or previous.produced.keys() != report.produced.keys()):
             self.wired = not self._unwired()
         for topic, consumed in report.consumed.items():
             # An input first reported now (a new process, or a subscription made late, as the recorder's are)
@@ -135,12 +158,14 @@ class StepLedger:
         return [entry.report for entry in self.participants.values() if entry.report is not None]
 
     def _unwired(self) -> list[Unwired]:
-        reports = self._reports()
-        consumers: dict[str, int] = {}
-        for report in reports:
-            for topic in report.consumed:
-                consumers[topic] = consumers.get(topic, 0) + 1
-        return list(unwired(reports, consumers))
+        return list(unwired(self._reports()))
+
+    def wiring(self) -> list[Unanswered | Unwired]:
+        """What the graph still waits for before a message sent now would reach every participant it is for:
+        participants never heard from, then publishers and subscriptions not matched with each other."""
+        missing: list[Unanswered | Unwired] = [Unanswered(name, "", 0) for name, entry in self.participants.items()
+                                               if entry.report is None]
+        return missing + self._unwired()
 
     def _waiting(self) -> Iterator[Unanswered | Unwired]:
         for name, entry in self.participants.items():

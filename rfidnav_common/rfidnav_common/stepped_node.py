@@ -5,8 +5,8 @@ With it true (the orchestrator sets it on every participant of a stepped simulat
 lockstep without code of its own:
 
 - every subscription callback and every publish is counted, per resolved topic, and after each callback (or a
-  publish from outside one: an action callback, or a publisher matching a new subscription: the counts include
-  how many each publisher has matched) the node publishes its cumulative counts on ``/sim/step_ack``
+  publish from outside one: an action callback, or a publisher or subscription matching a new peer: the counts
+  include how many each has matched) the node publishes its cumulative counts on ``/sim/step_ack``
   (rfidnav_msgs/StepAck); the simulator advances time only when every counted message has been handled
   (rfidnav_common.step_ledger);
 - its clock is simulated time taken from the stamps of the messages it handles (``header.stamp``, or a
@@ -34,10 +34,11 @@ from typing import Any, cast
 
 from rcl_interfaces.msg import ParameterDescriptor
 from rclpy.clock import Clock, ClockType, ROSClock
-from rclpy.event_handler import PublisherEventCallbacks
+from rclpy.event_handler import PublisherEventCallbacks, SubscriptionEventCallbacks
 from rclpy.node import Node
 from rclpy.publisher import Publisher
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.subscription import Subscription
 from rclpy.time import Time
 
 from rfidnav_common.step_ledger import StepReport
@@ -116,6 +117,7 @@ class SteppedNode(Node):
         self.consumed_counts: dict[str, int] = {}
         self.produced_counts: dict[str, int] = {}
         self.counted_publishers: dict[str, list[Publisher]] = {}
+        self.counted_subscriptions: dict[str, list[Subscription]] = {}
         self.sim_timers: list[SimTimer] = []
         self.sim_time_ns = 0
         if not self.stepped:
@@ -162,7 +164,14 @@ class SteppedNode(Node):
                 self.changed()
 
         self.changed()   # a new input: the simulator learns to wait for it
-        return super().create_subscription(msg_type, topic, counted, qos_profile, **kwargs)
+        # A publisher matched (or gone) changes what the node reports, as for its publishers.
+        events = kwargs.pop("event_callbacks", None) or SubscriptionEventCallbacks()
+        if events.matched is None:
+            events.matched = lambda _status: self.changed()
+        subscription = super().create_subscription(msg_type, topic, counted, qos_profile, event_callbacks=events,
+                                                   **kwargs)
+        self.counted_subscriptions.setdefault(resolved, []).append(subscription)
+        return subscription
 
     def create_publisher(self, msg_type: Any, topic: str, qos_profile: Any, **kwargs: Any) -> Any:
         if not self.stepped:
@@ -248,15 +257,18 @@ class SteppedNode(Node):
     def step_report(self) -> StepReport:
         matched = {topic: min(p.get_subscription_count() for p in publishers)
                    for topic, publishers in self.counted_publishers.items()}
+        subscribed = {topic: min(s.get_publisher_count() for s in subscriptions)
+                      for topic, subscriptions in self.counted_subscriptions.items()}
         return StepReport(self.get_fully_qualified_name(), self.incarnation, dict(self.consumed_counts),
-                          dict(self.produced_counts), self.step_slack, matched)
+                          dict(self.produced_counts), self.step_slack, matched, subscribed)
 
 
 def step_ack_message(report: StepReport, time_ns: int) -> StepAck:
     message = StepAck(node=report.node, incarnation=report.incarnation, slack=report.slack,
                       consumed_topics=list(report.consumed), consumed_counts=list(report.consumed.values()),
                       produced_topics=list(report.produced), produced_counts=list(report.produced.values()),
-                      produced_matched=[report.matched.get(topic, 0) for topic in report.produced])
+                      produced_matched=[report.matched.get(topic, 0) for topic in report.produced],
+                      consumed_matched=[report.subscribed.get(topic, 0) for topic in report.consumed])
     message.time.sec, message.time.nanosec = divmod(time_ns, 1_000_000_000)
     return message
 
@@ -265,4 +277,5 @@ def step_report_of(message: StepAck) -> StepReport:
     return StepReport(message.node, message.incarnation,
                       dict(zip(message.consumed_topics, message.consumed_counts, strict=True)),
                       dict(zip(message.produced_topics, message.produced_counts, strict=True)), message.slack,
-                      dict(zip(message.produced_topics, message.produced_matched, strict=True)))
+                      dict(zip(message.produced_topics, message.produced_matched, strict=True)),
+                      dict(zip(message.consumed_topics, message.consumed_matched, strict=True)))

@@ -18,7 +18,8 @@ scaled down to them and counted as clamped; one with a NaN or an infinity is dro
 (rfidnav_common.inputs).
 
 With ``start_paused`` the clock stays at zero until ``~/start`` (std_srvs/Trigger) is called, so slow process
-start-up costs no sim time.
+start-up costs no sim time. With the stepped clock ``~/wired`` (std_srvs/Trigger) says whether every participant's
+publishers and subscriptions have matched each other, or what is still waited for.
 """
 
 from __future__ import annotations
@@ -88,6 +89,7 @@ class RobotSimNode(SteppedNode):
         steady = Clock(clock_type=ClockType.STEADY_TIME)
         if self.stepped:
             self.create_subscription(StepAck, STEP_ACK_TOPIC, self.on_step_ack, STEP_ACK_READER_QOS)
+            self.create_service(Trigger, "~/wired", self.on_wired)
             self.create_timer(STALL_REPORT_S, self.report_stall, clock=steady)
         # The clock source cannot pace itself on sim time: a steady wall timer drives the steps, running as many
         # as are due so that the long-run rate is exactly rtf (at most rtf, stepped, where answers drive them
@@ -127,6 +129,16 @@ class RobotSimNode(SteppedNode):
             self.advance()
         response.success = True
         response.message = f"running at sim time {self.steps * self.params.step_s:.3f} s"
+        return response
+
+    def on_wired(self, _request, response):
+        """Whether every participant has reported and every publisher and subscription of theirs has matched the
+        participants on the other side of its topic: the orchestrator sends the goal only then (a message a node
+        publishes when its goal comes would otherwise be lost, and its consumer counted behind for ever)."""
+        self.ledger.report(self.step_report())
+        waiting = self.ledger.wiring()
+        response.success = not waiting
+        response.message = ", ".join(u.describe() for u in waiting) or "every participant wired"
         return response
 
     def on_step_ack(self, message: StepAck) -> None:
