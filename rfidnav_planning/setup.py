@@ -20,6 +20,7 @@ setup(
     entry_points={"console_scripts": [
         "partition_navigator = rfidnav_planning.partition_navigator_node:main",
         "two_tier_navigator = rfidnav_planning.two_tier_navigator_node:main",
+        "pose_navigator = rfidnav_planning.pose_navigator_node:main",
         "mission_executor = rfidnav_planning.mission_executor_node:main",
     ]},
 )

@@ -43,6 +43,7 @@ from rfidnav_localization.radio_map_file import load_radio_map
 from rfidnav_planning.parameters import (
     MissionExecutorParameters,
     PartitionNavigatorParameters,
+    PoseNavigatorParameters,
     TwoTierNavigatorParameters,
 )
 from rfidnav_planning.partition_planner import lattice_refusal
@@ -74,6 +75,7 @@ KNOWN_NODES: dict[tuple[str, str], tuple[str, type]] = {
     ("rfidnav_localization", "location_server"): ("location_server", LocationServerParameters),
     ("rfidnav_localization", "rfid_localizer"): ("rfid_localizer", RfidLocalizerParameters),
     ("rfidnav_planning", "two_tier_navigator"): ("two_tier_navigator", TwoTierNavigatorParameters),
+    ("rfidnav_planning", "pose_navigator"): ("pose_navigator", PoseNavigatorParameters),
     ("rfidnav_control", "wall_follower"): ("wall_follower", WallFollowerParameters),
     ("rfidnav_planning", "mission_executor"): ("mission_executor", MissionExecutorParameters),
     ("rfidnav_drivers", "llrp_reader"): ("llrp_reader", LlrpReaderParameters),

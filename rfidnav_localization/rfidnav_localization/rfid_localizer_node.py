@@ -20,6 +20,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from builtin_interfaces.msg import Time
 from geometry_msgs.msg import PoseWithCovarianceStamped
 from nav_msgs.msg import Odometry
 from rclpy.task import Future
@@ -56,6 +57,7 @@ class RfidLocalizerNode(SteppedNode):
             self.localizer.set_pose(x, y, yaw, _diagonal(p.initial_sd))
         self.drops = inputs.Drops(self.get_logger().warning)
         self.compass_yaw: float | None = None
+        self.odom_stamp = Time()
         self.wifi_fix: tuple[tuple[float, float], float] | None = None
         self.locating: Future | None = None
         self.ignored_count = 0
@@ -88,6 +90,7 @@ class RfidLocalizerNode(SteppedNode):
             self.drops.drop("/odom", error)
             return
         self.localizer.on_odometry(odom)
+        self.odom_stamp = msg.header.stamp
 
     def on_compass(self, msg: Imu) -> None:
         try:
@@ -150,8 +153,10 @@ class RfidLocalizerNode(SteppedNode):
         stamp = msg.header.stamp
         self.pose_pub.publish(fused_pose_message(estimate.pose, stamp, p.map_frame))
         if self.frames is not None:
+            # Stamped with the odometry the estimate rests on (it may be a step older than the round): composed with
+            # odom -> base_link at that stamp, map -> odom gives the estimate.
             self.frames.send_map_to_odom(p.map_frame, (estimate.pose.x, estimate.pose.y, estimate.pose.yaw),
-                                         estimate.odom, stamp)
+                                         estimate.odom, self.odom_stamp)
         self.status_pub.publish(fused_status_message(estimate, stamp, p.map_frame, self.ignored_count))
 
 

@@ -26,6 +26,7 @@ from rfidnav_common.errors import ParameterError
 from rfidnav_common.topological_map import WEIGHTS
 from rfidnav_control.go_to import GoToSettings
 from rfidnav_planning.partition_navigation import ARRIVALS, DEVIATION_CHECKS, NavigatorSettings, TurnSettings
+from rfidnav_planning.pose_navigation import PoseNavigatorSettings
 from rfidnav_planning.two_tier_navigation import TwoTierSettings
 
 
@@ -144,6 +145,42 @@ class TwoTierNavigatorParameters:
                              heading_gain_per_s=self.heading_gain_per_s, tolerance_m=self.goal_tolerance_m)
         names = {field.name for field in dataclasses.fields(TwoTierSettings)} - {"go_to"}
         return TwoTierSettings(**{name: getattr(self, name) for name in names}, go_to=go_to)
+
+
+@dataclass(frozen=True)
+class PoseNavigatorParameters:
+    """pose_navigator (ours, issue 20): to a point on a localizer's pose; config/params/pose_navigator.yaml."""
+
+    ACTION: ClassVar[tuple[str, str]] = ("/navigate_to_point", "rfidnav_msgs/action/NavigateToPoint")   # it serves
+
+    map_file: str = param("robot map: its walls and extent, when it has them; 'unused': none", "unused")
+    pose_topic: str = param("the localizer's PoseWithCovarianceStamped (map frame) the robot drives on",
+                            "/localization/pose")
+    map_frame: str = param("frame the poses must be in", "map")
+    control_rate_hz: float = param("control steps per second [Hz, sim time]", 20.0, RATE_HZ)
+    pose_timeout_s: float = param("a pose older than this is stale: the robot stands still [s]", 1.0, DURATION_S)
+    max_position_sd_m: float = param("stand still while the pose's position sd exceeds this [m]", 0.30, POSITIVE)
+    replan_jump_m: float = param("plan the way again when the pose moves this much between two steps [m]", 0.30,
+                                 POSITIVE)
+    wall_clearance_m: float = param("the way keeps this far from the map's walls [m]", 0.30, POSITIVE)
+    waypoint_tolerance_m: float = param("a waypoint round a wall is passed within this [m]", 0.10, POSITIVE)
+    speed_mps: float = param("driving speed [m/s]", 0.2, SPEED_MPS)
+    turn_rate_radps: float = param("largest yaw rate [rad/s]", 0.8, YAW_RATE_RADPS)
+    heading_gain_per_s: float = param("yaw rate per radian of heading error [1/s]", 2.0, POSITIVE)
+    goal_tolerance_m: float = param("the target is reached within this [m]", 0.05, POSITIVE)
+
+    def validate(self) -> None:
+        self.settings().validate()
+
+    def commanded_speeds(self) -> dict[str, float]:
+        """The forward speeds this node commands, by parameter: the base must be able to drive them."""
+        return {"speed_mps": self.speed_mps}
+
+    def settings(self) -> PoseNavigatorSettings:
+        go_to = GoToSettings(speed_mps=self.speed_mps, turn_rate_radps=self.turn_rate_radps,
+                             heading_gain_per_s=self.heading_gain_per_s, tolerance_m=self.goal_tolerance_m)
+        return PoseNavigatorSettings(go_to, self.wall_clearance_m, self.waypoint_tolerance_m, self.max_position_sd_m,
+                                     self.replan_jump_m)
 
 
 @dataclass(frozen=True)

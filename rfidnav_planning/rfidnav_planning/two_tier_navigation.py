@@ -38,7 +38,6 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from rfidnav_common.errors import ParameterError
-from rfidnav_common.robot_map import contains
 from rfidnav_control.go_to import GoToSettings, go_to_command
 from rfidnav_control.spiral import SpiralSearch, separation_for_group
 from rfidnav_localization.dead_reckoning import TIER_TAG, TIER_WIFI, DeadReckoning, DeadReckoningEstimate, Fix
@@ -196,13 +195,7 @@ class TwoTierNavigator:
 
     def refusal(self, target: tuple[float, float]) -> str | None:
         """Why ``target`` cannot be navigated to (not a finite point, outside the map's extent), None if it can."""
-        if not all(math.isfinite(v) for v in target):
-            return f"target ({target[0]}, {target[1]}) is not a finite point"
-        extent = self.floor.extent
-        if extent is not None and not contains(extent, target[0], target[1]):
-            return (f"target ({target[0]:g}, {target[1]:g}) is outside the map's extent [x_min, y_min, x_max, y_max] "
-                    f"= {list(extent)}")
-        return None
+        return self.floor.refusal(target)
 
     def estimate(self) -> DeadReckoningEstimate:
         return self.reckoning.estimate()

@@ -66,6 +66,15 @@ class WallMap:
     def empty(self) -> bool:
         return not self.walls and self.extent is None
 
+    def refusal(self, target: Sequence[float]) -> str | None:
+        """Why ``target`` cannot be navigated to (not a finite point, outside the extent), None if it can."""
+        if not all(math.isfinite(v) for v in target):
+            return f"target ({target[0]}, {target[1]}) is not a finite point"
+        if self.extent is not None and not contains(self.extent, target[0], target[1]):
+            return (f"target ({target[0]:g}, {target[1]:g}) is outside the map's extent [x_min, y_min, x_max, "
+                    f"y_max] = {list(self.extent)}")
+        return None
+
 
 class WallPlanner:
     """Shortest paths round a floor plan's walls, within its extent, ``clearance_m`` from the walls (see the
