@@ -179,7 +179,9 @@ def test_each_case_of_bench_fused_weighs_its_kind_of_evidence_and_the_estimate_s
 
 
 @pytest.mark.parametrize(("localizer_file", "reader_file"), [("rfid_localizer_mixed.yaml", "reader_mixed.yaml"),
-                                                             ("rfid_localizer_hf_floor.yaml", "reader_hf_floor.yaml")])
+                                                             ("rfid_localizer_hf_floor.yaml", "reader_hf_floor.yaml"),
+                                                             ("rfid_localizer_floor_lattice.yaml",
+                                                              "reader_floor_lattice.yaml")])
 def test_each_shipped_rfid_localizer_file_describes_its_robots_reader_as_the_reader_file_does(
         localizer_file: str, reader_file: str) -> None:
     from rfidnav_bringup.scenario import CONFIG_DIR

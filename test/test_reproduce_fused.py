@@ -16,10 +16,12 @@ from rfidnav_experiments.reproduce.fused import (
     DEVELOPMENT_SEED,
     METRICS,
     MIXED,
+    PARTITIONS,
     SINGLE_EVIDENCE,
     WORLDS,
     home_run,
     localizers_of,
+    world_run,
 )
 from rfidnav_localization.fused.filter import PoseEstimate, Update
 from rfidnav_localization.fused.localizer import FusedEstimate
@@ -50,6 +52,16 @@ def test_on_the_mixed_floor_every_kind_of_evidence_together_beats_each_alone_and
     assert run.figures["fused"].heading_rmse_deg is not None and run.figures["fused"].heading_rmse_deg < 2.0
     assert run.global_s is not None and run.global_s < 30.0
     assert run.kidnap_recovery_s is not None and run.kidnap_recovery_s < 30.0
+
+
+def test_on_paper_000s_field_the_fused_localizer_places_the_robot_as_well_as_the_partitions_and_finds_it_again(
+        ) -> None:
+    run = world_run((PARTITIONS, 0, DEVELOPMENT_SEED))
+    assert run.success and set(run.figures) == {"fused", "paper"}
+    fused, paper = run.figures["fused"].position_rmse_m, run.figures["paper"].position_rmse_m
+    assert fused is not None and paper is not None and fused < 0.15 and fused < paper
+    assert run.global_s is not None and run.global_s < 1.0      # a lattice tag's id is its position
+    assert run.kidnap_recovery_s is not None and run.kidnap_recovery_s < 5.0
 
 
 def test_map_to_odom_composed_with_the_odometry_pose_is_the_estimated_pose() -> None:

@@ -30,6 +30,7 @@ reports EVALUATION_SEED, never used to tune anything.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 import sys
@@ -39,13 +40,25 @@ from typing import Any
 
 from scipy import stats
 
-from rfidnav_bringup.scenario import CONFIG_DIR
+from rfidnav_bringup.scenario import CONFIG_DIR, load_scenario
 from rfidnav_common.errors import ConfigError
 from rfidnav_common.seeding import derive_seed, rng_for
 from rfidnav_experiments.engine import run_tasks
+from rfidnav_experiments.reproduce.partitions import PAPER, headline_level, robot_speeds
+from rfidnav_experiments.reproduce.partitions import localizer_settings as partition_localizer_settings
+from rfidnav_experiments.reproduce.partitions import navigator_settings as partition_navigator_settings
 from rfidnav_experiments.reproduce.tables import Interval, paired_interval, table
 from rfidnav_experiments.reproduce.two_tier import HOMES, Home, home
-from rfidnav_experiments.runners.fused import CONVERGED_FOR_S, CONVERGED_M, KINDS, Beside, Rider, Track
+from rfidnav_experiments.runners.fused import (
+    CONVERGED_FOR_S,
+    CONVERGED_M,
+    KINDS,
+    Beside,
+    PartitionBeside,
+    Rider,
+    Track,
+)
+from rfidnav_experiments.runners.partitions import random_task, run_navigation
 from rfidnav_experiments.runners.shipped import file_parameters
 from rfidnav_experiments.runners.two_tier import SETTINGS, run_two_tier
 from rfidnav_localization.fused.localizer import FusedLocalizer
@@ -58,12 +71,21 @@ RUNS = 10
 DEVELOPMENT_SEED = 1
 EVALUATION_SEED = 401
 MIXED = "mixed_floor"
-WORLDS = (*HOMES, MIXED)
+PARTITIONS = "partition_field"
+WORLDS = (*HOMES, MIXED, PARTITIONS)
+# Paper 000: the partition navigator with the paper's localizer drives tasks of this length across the field (the
+# scenario's world, r = 20 cm), with this much relative odometry noise (the fused filter's motion model needs
+# some; the paper's simulated motion is exact).
+PARTITION_TASK_M = 3.0
+PARTITION_ODOMETRY_NOISE = 0.02
+FLOOR_LATTICE_LOCALIZER = CONFIG_DIR / "params" / "rfid_localizer_floor_lattice.yaml"
 # Paper 003's robot: its rfid_localizer file where the scenario runs none (the homes).
 HF_FLOOR_LOCALIZER = CONFIG_DIR / "params" / "rfid_localizer_hf_floor.yaml"
 SINGLE_EVIDENCE = {"floor_only": ("floor", "compass"), "phase_only": ("phase", "compass"),
                    "wall_only": ("wall", "compass"), "wifi_only": ("wifi", "compass")}
 KIDNAP_AT_S = 30.0
+PARTITION_KIDNAP_AT_S = 5.0        # a 3 m task takes ~20 s
+PARTITION_LATE_START_S = 3.0
 LATE_START_S = 20.0        # a second global localization, out of the start's room (a mission takes 50-250 s)
 NEES_BAND = 0.95
 
@@ -94,8 +116,9 @@ class TrackFigures:
 
     @classmethod
     def of(cls, track: Track) -> TrackFigures:
-        low, high = (float(stats.chi2.ppf(q, track.nees_dof)) for q in ((1 - NEES_BAND) / 2, (1 + NEES_BAND) / 2))
-        inside = [low <= value <= high for value in track.nees]
+        bands = {dof: stats.chi2.ppf(((1 - NEES_BAND) / 2, (1 + NEES_BAND) / 2), dof) for dof in set(track.nees_dofs)}
+        inside = [bool(bands[dof][0] <= value <= bands[dof][1]) for value, dof in zip(track.nees, track.nees_dofs,
+                                                                                      strict=True)]
         return cls(_rms(track.position_errors_m), _rms([math.degrees(e) for e in track.heading_errors_rad]),
                    track.fix_rate, sum(inside) / len(inside) if inside else None)
 
@@ -161,8 +184,46 @@ def home_run(job: tuple[str, int, int]) -> FusedRun:
                     result.duration_s)
 
 
+def partition_run(job: tuple[str, int, int]) -> FusedRun:
+    """One paper 000 navigation across the field: the partition navigator driving on the paper's localizer, the
+    fused localizers beside on the same rounds (the floor antenna's tags and the odometry: the robot has nothing
+    else)."""
+    name, run, seed = job
+    scenario = load_scenario(name)
+    assert scenario.route_map is not None and scenario.world.deployments
+    field_deployment = scenario.world.deployments[0]
+    settings = file_parameters(RfidLocalizerParameters, FLOOR_LATTICE_LOCALIZER, "rfid_localizer",
+                               map_file=str(scenario.map_file)).settings()
+    fused_map = FusedMap.of_route_map(scenario.route_map)
+
+    def localizer(label: str) -> FusedLocalizer:
+        return FusedLocalizer(settings, dataclasses.replace(fused_map), rng_for(seed, f"fused:{name}:{run}:{label}"))
+
+    x_min, y_min, x_max, y_max = fused_map.extent
+    start, goal = random_task(field_deployment, PARTITION_TASK_M, rng_for(seed, f"fused:{name}:{run}:task"))
+    kidnap = Rider(localizer("kidnap"), tuple(KINDS), PARTITION_KIDNAP_AT_S,
+                   (x_min + x_max - start[0], y_min + y_max - start[1], start[2] + math.pi))
+    late = Rider(localizer("late"), joins_at_s=PARTITION_LATE_START_S)
+    riders = {"fused": Rider(localizer("fused")), "kidnap": kidnap, "late": late}
+    beside = PartitionBeside(riders)
+    result = run_navigation(field_deployment, start, goal, partition_localizer_settings(PAPER),
+                            partition_navigator_settings(PAPER, headline_level()),
+                            rng_for(seed, f"fused:{name}:{run}:robot"), odometry_noise=PARTITION_ODOMETRY_NOISE,
+                            speeds=robot_speeds(PAPER), observer=beside)
+    duration_s = result.travel_time_s
+    figures = {"fused": TrackFigures.of(riders["fused"].track), "paper": TrackFigures.of(beside.paper)}
+    recovery = kidnap.track.settled_after(PARTITION_KIDNAP_AT_S) if duration_s > PARTITION_KIDNAP_AT_S else None
+    found = late.track.settled_after(PARTITION_LATE_START_S) if duration_s > PARTITION_LATE_START_S else None
+    return FusedRun(name, run, result.success, figures, riders["fused"].track.settled_after(0.0), found, recovery,
+                    duration_s)
+
+
+def world_run(job: tuple[str, int, int]) -> FusedRun:
+    return partition_run(job) if job[0] == PARTITIONS else home_run(job)
+
+
 def fused_runs(runs: int, seed: int) -> list[FusedRun]:
-    results = run_tasks(home_run, [(name, run, seed) for name in WORLDS for run in range(runs)],
+    results = run_tasks(world_run, [(name, run, seed) for name in WORLDS for run in range(runs)],
                         "reproduce fused: worlds")
     return sorted(results, key=lambda r: (WORLDS.index(r.world), r.run))
 

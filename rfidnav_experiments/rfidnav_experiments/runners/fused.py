@@ -24,9 +24,11 @@ from typing import Any
 import numpy as np
 
 from rfidnav_common.geometry import wrap_angle
+from rfidnav_experiments.runners.partitions import IdealRobot
 from rfidnav_experiments.runners.two_tier import StepSeen
 from rfidnav_localization.fused.filter import Evidence, Ports, round_evidence
 from rfidnav_localization.fused.localizer import FusedLocalizer
+from rfidnav_localization.partition import LocalizationEstimate
 
 MIN_VARIANCE = 1e-12     # a covariance with a zero variance (a collapsed cloud) is floored, not inverted
 # The kinds a rider may be restricted to: the fields of Evidence they keep.
@@ -45,7 +47,7 @@ class Track:
     position_errors_m: list[float] = field(default_factory=list)
     heading_errors_rad: list[float] = field(default_factory=list)
     nees: list[float] = field(default_factory=list)
-    nees_dof: int = 3
+    nees_dofs: list[int] = field(default_factory=list)    # each NEES's degrees of freedom: 3, or 2 without a heading
 
     def add(self, time_s: float, position_error: tuple[float, float], heading_error: float | None,
             covariance: np.ndarray) -> None:
@@ -56,6 +58,7 @@ class Track:
         error = np.array(position_error if covariance.shape[0] == 2 else (*position_error, heading_error or 0.0))
         covariance = covariance + MIN_VARIANCE * np.eye(len(error))
         self.nees.append(float(error @ np.linalg.solve(covariance, error)))
+        self.nees_dofs.append(len(error))
 
     @property
     def fix_rate(self) -> float:
@@ -102,7 +105,7 @@ class Beside:
     def __init__(self, riders: dict[str, Rider], ports: Ports) -> None:
         self.riders = riders
         self.ports = ports
-        self.paper = Track(nees_dof=2)
+        self.paper = Track()
         self.wifi_fix: tuple[tuple[float, float], float] | None = None
 
     def __call__(self, seen: StepSeen) -> None:
@@ -130,3 +133,33 @@ class Beside:
             heading = wrap_angle(paper.yaw - yaw) if paper.yaw is not None else None
             self.paper.add(seen.time_s, (paper.position[0] - x, paper.position[1] - y), heading,
                            np.eye(2) * max(paper.sd_m, 1e-6) ** 2)
+
+
+class PartitionBeside:
+    """Fused localizers fed by a paper 000 navigation's rounds (rfidnav_experiments.runners.partitions: the floor
+    antenna's tags and the odometry), and their tracks and the partition localizer's scored."""
+
+    def __init__(self, riders: dict[str, Rider]) -> None:
+        self.riders = riders
+        self.paper = Track()
+
+    def __call__(self, robot: IdealRobot, tag_ids: list[str], estimate: LocalizationEstimate) -> None:
+        time_s, truth = robot.time_s, (robot.x, robot.y, robot.yaw)
+        for rider in self.riders.values():
+            rider.localizer.on_odometry(robot.odometry())
+            fused = rider.localizer.on_round(rider.evidence(Evidence(floor_tag_ids=tag_ids)))
+            rider.track.rounds += 1
+            if fused is not None:
+                pose = fused.pose
+                rider.track.add(time_s, (pose.x - truth[0], pose.y - truth[1]), wrap_angle(pose.yaw - truth[2]),
+                                pose.covariance)
+        self.paper.rounds += 1
+        if estimate.position is None:
+            return
+        var_x, cov_xy, var_y = estimate.position_covariance
+        error = (estimate.position[0] - truth[0], estimate.position[1] - truth[1])
+        if estimate.yaw is None or estimate.yaw_std is None:
+            self.paper.add(time_s, error, None, np.array([[var_x, cov_xy], [cov_xy, var_y]]))
+        else:
+            covariance = np.array([[var_x, cov_xy, 0.0], [cov_xy, var_y, 0.0], [0.0, 0.0, estimate.yaw_std ** 2]])
+            self.paper.add(time_s, error, wrap_angle(estimate.yaw - truth[2]), covariance)

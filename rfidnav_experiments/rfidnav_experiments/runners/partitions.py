@@ -27,7 +27,7 @@ import numpy as np
 
 from rfidnav_bringup.metrics import extra_time_cost_pct, travel_time_s
 from rfidnav_common.tag_lattice import Coordinate, Deployment, StraightWalk, partitions_along_segment
-from rfidnav_localization.partition import LocalizerSettings, PartitionLocalizer
+from rfidnav_localization.partition import LocalizationEstimate, LocalizerSettings, PartitionLocalizer
 from rfidnav_planning.parameters import PartitionNavigatorParameters
 from rfidnav_planning.partition_navigation import FORWARD, ROTATE, Decision, NavigatorSettings, PartitionNavigator
 
@@ -141,16 +141,21 @@ class IdealRobot:
         return self.x + self.antenna_offset_m * math.cos(yaw), self.y + self.antenna_offset_m * math.sin(yaw)
 
 
+# Told of every round: the robot (truth and odometry), the tags read and the localizer's estimate from them.
+RoundObserver = Callable[[IdealRobot, list[str], LocalizationEstimate], None]
+
+
 class Rounds:
     """The floor antenna's inventory rounds, each fed to the localizer and its estimate to the navigator. It
     remembers where it last read, so a round after a step that crossed no read circle reuses that partition."""
 
     def __init__(self, deployment: Deployment, robot: IdealRobot, localizer: PartitionLocalizer,
-                 navigator: PartitionNavigator) -> None:
+                 navigator: PartitionNavigator, observer: RoundObserver | None = None) -> None:
         self.deployment = deployment
         self.robot = robot
         self.localizer = localizer
         self.navigator = navigator
+        self.observer = observer
         self.point: tuple[float, float] | None = None
         self.partition: frozenset[Coordinate] = frozenset()
         self._tag_ids: dict[Coordinate, str] = {}
@@ -162,8 +167,10 @@ class Rounds:
         if unchanged_since is None or unchanged_since != self.point:
             self.partition = self.deployment.partition_at(*antenna)
         self.point = antenna
-        estimate = self.localizer.update(self.robot.time_s, [self._tag_id(c) for c in self.partition],
-                                         self.robot.odometry())
+        tag_ids = [self._tag_id(c) for c in self.partition]
+        estimate = self.localizer.update(self.robot.time_s, tag_ids, self.robot.odometry())
+        if self.observer is not None:
+            self.observer(self.robot, tag_ids, estimate)
         return self.navigator.on_estimate(estimate, self.robot.travelled_m)
 
     def _tag_id(self, coordinate: Coordinate) -> str:
@@ -176,12 +183,14 @@ class Rounds:
 def run_navigation(deployment: Deployment, start: tuple[float, float, float], goal: tuple[float, float],
                    localizer_settings: LocalizerSettings, navigator_settings: NavigatorSettings,
                    rng: np.random.Generator, round_spacing_m: float | None = None,
-                   odometry_noise: float = 0.0, speeds: RobotSpeeds = NODE_DEFAULT_SPEEDS) -> NavigationRun:
+                   odometry_noise: float = 0.0, speeds: RobotSpeeds = NODE_DEFAULT_SPEEDS,
+                   observer: RoundObserver | None = None) -> NavigationRun:
     """One navigation from ``start`` (x, y, yaw; ground truth) to ``goal``; the antenna offset is the
-    localizer's (the robot is built as the localizer believes), the speeds the navigator node's."""
+    localizer's (the robot is built as the localizer believes), the speeds the navigator node's. ``observer`` is
+    told of every round (it draws nothing)."""
     robot = IdealRobot(*start, odometry_noise, rng, speeds, localizer_settings.antenna_offset_m)
     navigator = PartitionNavigator(navigator_settings, deployment.area)
-    observe = Rounds(deployment, robot, PartitionLocalizer(localizer_settings, rng), navigator)
+    observe = Rounds(deployment, robot, PartitionLocalizer(localizer_settings, rng), navigator, observer)
     spacing = round_spacing_m or min(deployment.read_range_m / 2.0, DEFAULT_ROUND_SPACING_M)
     decision = navigator.start(goal)
     decision = observe()
