@@ -45,6 +45,7 @@ from rfidnav_localization.fused.models import (
     mounted,
 )
 from rfidnav_localization.fused.tag_map import FusedMap
+from rfidnav_localization.motion_model import sampled_increments
 
 EVIDENCE_KINDS = ("lattice", "tag_group", "ceiling_phase", "wall_tag", "wifi", "compass")
 # The kinds that can propose poses, and how much of their running average of the likelihood a new round
@@ -228,22 +229,21 @@ class FusedFilter:
 
     # -------------------------------------------------------------------------------------------- motion
     def predict(self, forward: float, lateral: float, rotation: float) -> None:
-        """Move every particle by the odometry increment (robot frame of the previous pose), with noise."""
-        distance = math.hypot(forward, lateral)
-        if distance == 0.0 and rotation == 0.0:
-            return   # standing still: odometry adds no uncertainty
+        """Move every particle by the odometry increment (robot frame of the previous pose), with noise, its
+        distance times the particle's own odometry scale."""
         s = self.settings
-        translation_sd = s.motion_noise_fraction * distance + s.motion_noise_floor_m
-        rotation_sd = s.motion_noise_fraction * abs(rotation) + s.motion_noise_yaw_rad_per_m * distance
-        noise = self.rng.standard_normal((3, self.states.shape[1]))
-        dx = forward * self.scales + translation_sd * noise[0]
-        dy = lateral * self.scales + translation_sd * noise[1]
+        increments = sampled_increments(forward, lateral, rotation, self.states.shape[1], self.rng,
+                                        s.motion_noise_fraction, s.motion_noise_floor_m, s.motion_noise_yaw_rad_per_m,
+                                        self.scales)
+        if increments is None:
+            return
+        dx, dy, dyaw = increments
         x, y, yaw = self.states
         cos_yaw, sin_yaw = np.cos(yaw), np.sin(yaw)
         x += cos_yaw * dx - sin_yaw * dy
         y += sin_yaw * dx + cos_yaw * dy
-        yaw += rotation + rotation_sd * noise[2]
-        self.travel_since_wifi_m += distance
+        yaw += dyaw
+        self.travel_since_wifi_m += math.hypot(forward, lateral)
 
     # -------------------------------------------------------------------------------------------- update
     def update(self, evidence: Evidence) -> Update:

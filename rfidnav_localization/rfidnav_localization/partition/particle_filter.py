@@ -32,6 +32,7 @@ import numpy as np
 
 from rfidnav_common.geometry import wrap_angle
 from rfidnav_common.tag_lattice import Coordinate, Deployment
+from rfidnav_localization.motion_model import sampled_increments
 from rfidnav_localization.partition.estimate import LocalizerSettings, YawEstimate
 from rfidnav_localization.partition.geometry import CIRCLE_SAMPLES, PartitionGeometry, Region, orientation_bounds
 from rfidnav_localization.partition.stretch import Stretch
@@ -108,20 +109,17 @@ class ParticleFilter:
 
     def predict(self, forward: float, lateral: float, rotation: float) -> None:
         """Move every particle by the odometry increment (robot frame of the previous pose), with noise."""
-        distance = math.hypot(forward, lateral)
-        if distance == 0.0 and rotation == 0.0:
-            return   # standing still: odometry adds no uncertainty
         s = self.settings
-        translation_sd = s.motion_noise_fraction * distance + s.motion_noise_floor_m
-        rotation_sd = s.motion_noise_fraction * abs(rotation) + s.motion_noise_yaw_rad_per_m * distance
-        noise = self.rng.standard_normal((3, self.states.shape[1]))
-        dx = forward + translation_sd * noise[0]
-        dy = lateral + translation_sd * noise[1]
+        increments = sampled_increments(forward, lateral, rotation, self.states.shape[1], self.rng,
+                                        s.motion_noise_fraction, s.motion_noise_floor_m, s.motion_noise_yaw_rad_per_m)
+        if increments is None:
+            return
+        dx, dy, dyaw = increments
         x, y, yaw = self.states
         cos_yaw, sin_yaw = self.headings()
         x += cos_yaw * dx - sin_yaw * dy
         y += sin_yaw * dx + cos_yaw * dy
-        yaw += rotation + rotation_sd * noise[2]
+        yaw += dyaw
         self._moved()
 
     def antenna(self, states: np.ndarray) -> np.ndarray:

@@ -1,0 +1,27 @@
+"""The odometry motion model the particle filters share (the partition filter of paper 000, the fused localizer):
+an odometry increment in the robot frame of the previous pose, drawn per particle with noise relative to the motion
+plus floors (pure)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+
+def sampled_increments(forward: float, lateral: float, rotation: float, count: int, rng: np.random.Generator,
+                       noise_fraction: float, noise_floor_m: float, yaw_noise_per_m: float,
+                       scales: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+    """Per particle, the increment (dx, dy in the robot frame, dyaw) the odometry's (``forward``, ``lateral``,
+    ``rotation``) stands for: translation noise ``noise_fraction`` of the distance plus ``noise_floor_m``, rotation
+    noise ``noise_fraction`` of the turn plus ``yaw_noise_per_m`` per metre (wheel slip); the distance times each
+    particle's odometry scale (``scales``) where the filter estimates one. None when standing still: odometry adds
+    no uncertainty then (and draws nothing)."""
+    distance = math.hypot(forward, lateral)
+    if distance == 0.0 and rotation == 0.0:
+        return None
+    translation_sd = noise_fraction * distance + noise_floor_m
+    rotation_sd = noise_fraction * abs(rotation) + yaw_noise_per_m * distance
+    noise = rng.standard_normal((3, count))
+    along, across = (forward, lateral) if scales is None else (forward * scales, lateral * scales)
+    return along + translation_sd * noise[0], across + translation_sd * noise[1], rotation + rotation_sd * noise[2]
