@@ -1,14 +1,16 @@
 """``./rfidnav reproduce fused``: the fused localizer (rfidnav_localization.fused) beside each paper's own
 localizer, on the same runs, paired.
 
-Worlds: paper 003's homes (HOMES of reproduce two_tier: the in-tree flat and two of ours) and the mixed floor
-(ours: every kind of tag on one floor). Each run is the two-tier navigator's mission from the scenario's start to its
-goal, its legs planned round the map's walls, driven by the paper's localizer (WiFi fingerprints, then floor tag
-groups, dead reckoning between) with the scenario's reader; the fused localizers ride beside it on what the same
-sensors gave in each reader round (every antenna's reads, the location server's answers to the navigator's locate
-calls, the compass, the odometry), with the settings of the robot's rfid_localizer parameter file (the filter's
-the same for every robot and world). Every fused localizer starts, as the paper's does, knowing only the map:
-global localization from its first evidence.
+Worlds: paper 003's homes (HOMES of reproduce two_tier: the in-tree flat and two of ours), the mixed floor (ours:
+every kind of tag on one floor) and paper 000's field. On the homes and the mixed floor each run is the two-tier
+navigator's mission from the scenario's start to its goal, its legs planned round the map's walls, driven by the
+paper's localizer (WiFi fingerprints, then floor tag groups, dead reckoning between) with the scenario's reader;
+the fused localizers ride beside it on what the same sensors gave in each reader round (every antenna's reads, the
+location server's answers to the navigator's locate calls, the compass, the odometry). On paper 000's field
+(``partition_field``) each run is a 3 m task of the partition navigator on the paper's localizer, the fused
+localizers beside it on the same rounds (its robot has no compass and no WiFi). The fused settings are those of
+the robot's rfid_localizer parameter file (the filter's the same for every robot and world). Every fused localizer
+starts, as the paper's does, knowing only the map: global localization from its first evidence.
 
 Localizers: ``fused`` (every kind of evidence), on the mixed floor also the same filter given one kind of evidence
 and the compass (``floor_only``: lattice and tag-group reads, paper 000's and 003's tier two; ``phase_only``:
@@ -88,6 +90,16 @@ PARTITION_KIDNAP_AT_S = 5.0        # a 3 m task takes ~20 s
 PARTITION_LATE_START_S = 3.0
 LATE_START_S = 20.0        # a second global localization, out of the start's room (a mission takes 50-250 s)
 NEES_BAND = 0.95
+
+
+def driver_of(world: str) -> str:
+    return ("the partition navigator driving with paper 000's localizer" if world == PARTITIONS
+            else "the two-tier navigator driving with paper 003's localizer")
+
+
+def kidnap_times_of(world: str) -> tuple[float, float]:
+    """(late start, kidnap) [s] of the world's runs."""
+    return (PARTITION_LATE_START_S, PARTITION_KIDNAP_AT_S) if world == PARTITIONS else (LATE_START_S, KIDNAP_AT_S)
 
 
 def localizers_of(world: str) -> tuple[str, ...]:
@@ -262,7 +274,7 @@ def report_lines(results: list[FusedRun], runs: int) -> list[str]:
     for world in dict.fromkeys(r.world for r in results):
         arrived = sum(r.success for r in results if r.world == world)
         names = localizers_of(world)
-        lines += [f"{world} (the two-tier navigator driving with paper 003's localizer; {arrived}/{runs} arrived)"]
+        lines += [f"{world} ({driver_of(world)}; {arrived}/{runs} arrived)"]
         world_figures = figures(results, world)
         rows = [[label, *(world_figures[metric][name].text(scale, digits) for name in names)]
                 for metric, (label, scale, digits) in METRICS.items()]
@@ -272,10 +284,11 @@ def report_lines(results: list[FusedRun], runs: int) -> list[str]:
                 for label in (f"{METRICS[metric][0]}: {name} - fused",)]
         lines += table(["paired difference", "mean [95 % interval]"], rows)
         recovery = recovery_figures(results, world)
+        late_s, kidnap_s = kidnap_times_of(world)
         lines += [f"global localization (error below {CONVERGED_M:g} m for {CONVERGED_FOR_S:g} s): from the start "
                   f"{recovery['global_s'][0].text(1.0, 1)} s in {recovery['global_s'][1]}/{runs} runs; started at "
-                  f"{LATE_START_S:g} s {recovery['late_global_s'][0].text(1.0, 1)} s in "
-                  f"{recovery['late_global_s'][1]}/{runs}; kidnapped at {KIDNAP_AT_S:g} s, found again after "
+                  f"{late_s:g} s {recovery['late_global_s'][0].text(1.0, 1)} s in "
+                  f"{recovery['late_global_s'][1]}/{runs}; kidnapped at {kidnap_s:g} s, found again after "
                   f"{recovery['kidnap_recovery_s'][0].text(1.0, 1)} s in {recovery['kidnap_recovery_s'][1]}/{runs}", ""]
     return lines
 
