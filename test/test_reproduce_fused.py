@@ -17,6 +17,7 @@ from rfidnav_experiments.reproduce.fused import (
     METRICS,
     MIXED,
     PARTITIONS,
+    RING,
     SINGLE_EVIDENCE,
     WORLDS,
     home_run,
@@ -64,6 +65,16 @@ def test_on_paper_000s_field_the_fused_localizer_places_the_robot_as_well_as_the
     assert run.kidnap_recovery_s is not None and run.kidnap_recovery_s < 5.0
 
 
+def test_on_paper_004s_ring_the_fused_localizer_rides_the_mission_and_scores_the_executors_node_without_nees(
+        ) -> None:
+    run = world_run((RING, 1, DEVELOPMENT_SEED))
+    assert run.success and set(run.figures) == {"fused", "paper"}
+    assert run.figures["paper"].consistent is None and run.figures["paper"].heading_rmse_deg is None
+    fused = run.figures["fused"].position_rmse_m
+    assert fused is not None and fused < run.figures["paper"].position_rmse_m
+    assert run.global_s is not None and run.global_s < 30.0     # from its first wall tag
+
+
 def test_map_to_odom_composed_with_the_odometry_pose_is_the_estimated_pose() -> None:
     estimate = FusedEstimate(PoseEstimate(3.0, -1.0, 2.5, np.eye(3)), (0.7, 1.9, -0.4), Update((), (), 0.0, 0))
     tx, ty, tyaw = estimate.map_to_odom()
@@ -91,5 +102,7 @@ def test_the_command_prints_every_metric_for_every_world_with_both_localizers_an
             continue
         names = localizers_of(world)
         assert set(row) == {"experiment", "setting", "metric", *names, *(f"{n} - fused" for n in names[1:])}
-        assert all(row[name]["n"] == 2 for name in names)
+        # The mission executor has a node, not a pose with a covariance: no heading and no NEES.
+        without = {("paper", "heading_rmse_deg"), ("paper", "consistent")} if world == RING else set()
+        assert all(row[name]["n"] == (0 if (name, row["metric"]) in without else 2) for name in names)
     assert json.loads((tmp_path / "fused_rows.json").read_text()) == rows

@@ -16,9 +16,9 @@ Localizers: ``fused`` (every kind of evidence), on the mixed floor also the same
 and the compass (``floor_only``: lattice and tag-group reads, paper 000's and 003's tier two; ``phase_only``:
 ceiling tags, paper 001; ``wall_only``: wall tags, paper 004; ``wifi_only``: paper 003's tier one), and ``paper``
 (the two-tier navigator's own estimate). A ``kidnap`` run of the fused filter is told at KIDNAP_AT_S, confidently,
-that the robot stands mirrored through the floor's centre, facing the other way (a wrong /initialpose); the
-figures give how long it takes to find the robot again. A ``late`` one starts at LATE_START_S, mid-mission, with no
-idea where the robot is (a second global localization, away from the start).
+that the robot stands half the floor away in x and in y, facing the other way (a wrong /initialpose:
+runners.fused.kidnapped); the figures give how long it takes to find the robot again. A ``late`` one starts at
+LATE_START_S, mid-mission, with no idea where the robot is (a second global localization, away from the start).
 
 Per run and localizer: the position and heading RMSE over the rounds it had an estimate, the fix rate (the share
 of rounds it had one), the share of rounds whose NEES lies in its two-sided 95 % chi-square band (consistency);
@@ -44,7 +44,9 @@ from scipy import stats
 
 from rfidnav_bringup.scenario import CONFIG_DIR, load_scenario
 from rfidnav_common.errors import ConfigError
+from rfidnav_common.robot_map import bounding_box
 from rfidnav_common.seeding import derive_seed, rng_for
+from rfidnav_common.topological_map import load_topological_map
 from rfidnav_experiments.engine import run_tasks
 from rfidnav_experiments.reproduce.partitions import PAPER, headline_level, robot_speeds
 from rfidnav_experiments.reproduce.partitions import localizer_settings as partition_localizer_settings
@@ -54,19 +56,21 @@ from rfidnav_experiments.reproduce.two_tier import HOMES, Home, home
 from rfidnav_experiments.runners.fused import (
     CONVERGED_FOR_S,
     CONVERGED_M,
-    KINDS,
     Beside,
     PartitionBeside,
     Rider,
+    TopologicalBeside,
     Track,
 )
 from rfidnav_experiments.runners.partitions import random_task, run_navigation
 from rfidnav_experiments.runners.shipped import file_parameters
+from rfidnav_experiments.runners.topological import FLOORS, mission_tasks, run_mission, start_pose_before_tag
 from rfidnav_experiments.runners.two_tier import SETTINGS, run_two_tier
 from rfidnav_localization.fused.localizer import FusedLocalizer
 from rfidnav_localization.fused.tag_map import FusedMap
 from rfidnav_localization.parameters import RfidLocalizerParameters
 from rfidnav_sim.parameters import ReaderParameters
+from rfidnav_sim.world import load_world
 
 EXPERIMENT = "fused"
 RUNS = 10
@@ -74,7 +78,9 @@ DEVELOPMENT_SEED = 1
 EVALUATION_SEED = 401
 MIXED = "mixed_floor"
 PARTITIONS = "partition_field"
-WORLDS = (*HOMES, MIXED, PARTITIONS)
+RING = "building_ring"
+WORLDS = (*HOMES, MIXED, PARTITIONS, RING)
+WALL_SIDE_LOCALIZER = CONFIG_DIR / "params" / "rfid_localizer_wall_side.yaml"
 # Paper 000: the partition navigator with the paper's localizer drives tasks of this length across the field (the
 # scenario's world, r = 20 cm), with this much relative odometry noise (the fused filter's motion model needs
 # some; the paper's simulated motion is exact).
@@ -93,6 +99,8 @@ NEES_BAND = 0.95
 
 
 def driver_of(world: str) -> str:
+    if world == RING:
+        return "paper 004's mission executor driving; its 'paper' position is the node it believes it is at"
     return ("the partition navigator driving with paper 000's localizer" if world == PARTITIONS
             else "the two-tier navigator driving with paper 003's localizer")
 
@@ -165,28 +173,18 @@ def home_run(job: tuple[str, int, int]) -> FusedRun:
         return FusedLocalizer(settings, FusedMap.of_route_map(robot_map, place.site.radio_map),
                               rng_for(seed, f"fused:{name}:{run}:{label}"))
 
-    x_min, y_min, x_max, y_max = FusedMap.of_route_map(robot_map).extent
+    extent = FusedMap.of_route_map(robot_map).extent
     riders = {"fused": Rider(localizer("fused"))}
     if name == MIXED:
         riders.update({label: Rider(localizer(label), kinds) for label, kinds in SINGLE_EVIDENCE.items()})
     x, y, yaw_deg = place.scenario.robot
-    # Kidnapped: told the robot stands mirrored through the floor's centre, facing the other way.
-    kidnap = Rider(localizer("kidnap"), tuple(KINDS), KIDNAP_AT_S)
-    riders["kidnap"] = kidnap
-    late = Rider(localizer("late"), joins_at_s=LATE_START_S)
-    riders["late"] = late
+    kidnap = riders["kidnap"] = Rider(localizer("kidnap"), kidnap_at_s=KIDNAP_AT_S, extent=extent)
+    late = riders["late"] = Rider(localizer("late"), joins_at_s=LATE_START_S)
     beside = Beside(riders, parameters.ports())
     target = place.scenario.mission.goal["target"]
-
-    def observe(seen: Any) -> None:
-        if kidnap.kidnap_at_s is not None and seen.time_s >= kidnap.kidnap_at_s:
-            tx, ty, tyaw = seen.truth     # the harness, not the localizer, knows where the robot is not
-            kidnap.kidnap_pose = (x_min + x_max - tx, y_min + y_max - ty, tyaw + math.pi)
-        beside(seen)
-
     result = run_two_tier(place.site, (x, y, math.radians(yaw_deg)), (target["x"], target["y"]), SETTINGS,
                           rng_for(seed, f"homes:{name}:{run}"), derive_seed(seed, f"homes:{name}:{run}:reader"),
-                          max_time_s=place.scenario.mission.timeout_s, floor=place.floor, observe=observe,
+                          max_time_s=place.scenario.mission.timeout_s, floor=place.floor, observe=beside,
                           reader_parameters=reader_parameters(place))
     figures = {label: TrackFigures.of(riders[label].track) for label in localizers_of(name) if label != "paper"}
     figures["paper"] = TrackFigures.of(beside.paper)
@@ -211,10 +209,8 @@ def partition_run(job: tuple[str, int, int]) -> FusedRun:
     def localizer(label: str) -> FusedLocalizer:
         return FusedLocalizer(settings, dataclasses.replace(fused_map), rng_for(seed, f"fused:{name}:{run}:{label}"))
 
-    x_min, y_min, x_max, y_max = fused_map.extent
     start, goal = random_task(field_deployment, PARTITION_TASK_M, rng_for(seed, f"fused:{name}:{run}:task"))
-    kidnap = Rider(localizer("kidnap"), tuple(KINDS), PARTITION_KIDNAP_AT_S,
-                   (x_min + x_max - start[0], y_min + y_max - start[1], start[2] + math.pi))
+    kidnap = Rider(localizer("kidnap"), kidnap_at_s=PARTITION_KIDNAP_AT_S, extent=fused_map.extent)
     late = Rider(localizer("late"), joins_at_s=PARTITION_LATE_START_S)
     riders = {"fused": Rider(localizer("fused")), "kidnap": kidnap, "late": late}
     beside = PartitionBeside(riders)
@@ -230,8 +226,41 @@ def partition_run(job: tuple[str, int, int]) -> FusedRun:
                     duration_s)
 
 
+def topological_run(job: tuple[str, int, int]) -> FusedRun:
+    """One paper 004 mission on a generated floor (the mission executor's own task list), the fused localizers
+    beside on the same control steps: the side antenna's wall tags and the odometry. Their map is the floor's tag
+    survey (every plate where the world has it) within the walls' bounding box."""
+    name, run, seed = job
+    floor = FLOORS[name]
+    topological_map, world = load_topological_map(floor.map_path), load_world(floor.world_path)
+    parameters = file_parameters(RfidLocalizerParameters, WALL_SIDE_LOCALIZER, "rfid_localizer",
+                                 map_file=str(floor.map_path))
+    fused_map = FusedMap(extent=bounding_box(world.walls), wall_tags={tag.tag_id: tag for tag in world.wall_tags})
+
+    def localizer(label: str) -> FusedLocalizer:
+        return FusedLocalizer(parameters.settings(), dataclasses.replace(fused_map),
+                              rng_for(seed, f"fused:{name}:{run}:{label}"))
+
+    riders = {"fused": Rider(localizer("fused")),
+              "kidnap": Rider(localizer("kidnap"), kidnap_at_s=KIDNAP_AT_S, extent=fused_map.extent),
+              "late": Rider(localizer("late"), joins_at_s=LATE_START_S)}
+    nodes = {node_name: node.position for node_name, node in topological_map.nodes.items()
+             if node.position is not None}
+    beside = TopologicalBeside(riders, parameters.wall_antenna, nodes)
+    tag, goal = mission_tasks(topological_map, run + 1, seed)[run]
+    result = run_mission(world, topological_map, start_pose_before_tag(world, tag), goal,
+                         rng_for(seed, f"fused:{name}:{run}:mission"), observer=beside)
+    figures = {"fused": TrackFigures.of(riders["fused"].track), "paper": TrackFigures.of(beside.paper)}
+    recovery = riders["kidnap"].track.settled_after(KIDNAP_AT_S) if result.duration_s > KIDNAP_AT_S else None
+    found = riders["late"].track.settled_after(LATE_START_S) if result.duration_s > LATE_START_S else None
+    return FusedRun(name, run, result.success, figures, riders["fused"].track.settled_after(0.0), found, recovery,
+                    result.duration_s)
+
+
 def world_run(job: tuple[str, int, int]) -> FusedRun:
-    return partition_run(job) if job[0] == PARTITIONS else home_run(job)
+    if job[0] == PARTITIONS:
+        return partition_run(job)
+    return topological_run(job) if job[0] == RING else home_run(job)
 
 
 def fused_runs(runs: int, seed: int) -> list[FusedRun]:

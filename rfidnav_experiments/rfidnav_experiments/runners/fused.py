@@ -25,6 +25,7 @@ import numpy as np
 
 from rfidnav_common.geometry import wrap_angle
 from rfidnav_experiments.runners.partitions import IdealRobot
+from rfidnav_experiments.runners.topological import MissionStep
 from rfidnav_experiments.runners.two_tier import StepSeen
 from rfidnav_localization.fused.filter import Evidence, Ports, round_evidence
 from rfidnav_localization.fused.localizer import FusedLocalizer
@@ -60,6 +61,11 @@ class Track:
         self.nees.append(float(error @ np.linalg.solve(covariance, error)))
         self.nees_dofs.append(len(error))
 
+    def add_position(self, time_s: float, position_error: tuple[float, float]) -> None:
+        """An estimate with a position only and no covariance to judge it by (no heading, no NEES)."""
+        self.times_s.append(time_s)
+        self.position_errors_m.append(math.hypot(*position_error))
+
     @property
     def fix_rate(self) -> float:
         return len(self.position_errors_m) / self.rounds if self.rounds else 0.0
@@ -84,11 +90,12 @@ class Track:
 class Rider:
     """One fused localizer on the run: the evidence ``kinds`` it is given (all by default); started at
     ``joins_at_s`` (before, it hears nothing: a localizer started mid-mission with no idea where the robot is); and
-    a kidnap at ``kidnap_at_s``: it is told the robot stands at ``kidnap_pose`` with a 10 cm / 0.05 rad sd."""
+    a kidnap at ``kidnap_at_s``: it is told, with a 10 cm / 0.05 rad sd, that the robot stands half the floor's
+    ``extent`` away in x and in y (wrapped round inside it) and faces the other way (:func:`kidnapped`)."""
     localizer: FusedLocalizer
     kinds: Collection[str] = tuple(KINDS)
     kidnap_at_s: float | None = None
-    kidnap_pose: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    extent: tuple[float, float, float, float] = (0.0, 0.0, 1.0, 1.0)
     joins_at_s: float = 0.0
     track: Track = field(default_factory=Track)
 
@@ -97,6 +104,36 @@ class Rider:
         dropped: dict[str, Any] = {name: getattr(NO_EVIDENCE, name) for kind, name in KINDS.items()
                                    if kind not in self.kinds}
         return dataclasses.replace(evidence, **dropped)
+
+    def moved(self, time_s: float, odom: tuple[float, float, float], truth: tuple[float, float, float]) -> bool:
+        """The odometry at ``time_s``, and the kidnap when it is due (the harness, not the localizer, knows the
+        ``truth`` it is made from); False before the rider has joined."""
+        if time_s < self.joins_at_s:
+            return False
+        self.localizer.on_odometry(odom)
+        if self.kidnap_at_s is not None and time_s >= self.kidnap_at_s:
+            self.kidnap_at_s = None
+            self.localizer.set_pose(*kidnapped(truth, self.extent), np.diag([0.01, 0.01, 0.0025]))
+        return True
+
+    def update(self, time_s: float, evidence: Evidence, truth: tuple[float, float, float]) -> None:
+        """One round's evidence (of the kinds it is given), its estimate scored against ``truth``."""
+        estimate = self.localizer.on_round(self.evidence(evidence))
+        self.track.rounds += 1
+        if estimate is not None:
+            pose = estimate.pose
+            self.track.add(time_s, (pose.x - truth[0], pose.y - truth[1]), wrap_angle(pose.yaw - truth[2]),
+                           pose.covariance)
+
+
+def kidnapped(truth: tuple[float, float, float], extent: tuple[float, float, float, float]) \
+        -> tuple[float, float, float]:
+    """A pose half the extent away from ``truth`` in x and in y (wrapped round inside it), facing the other way: as
+    far off as the floor allows wherever the robot is."""
+    x_min, y_min, x_max, y_max = extent
+    width, height = x_max - x_min, y_max - y_min
+    return (x_min + (truth[0] - x_min + width / 2.0) % width, y_min + (truth[1] - y_min + height / 2.0) % height,
+            truth[2] + math.pi)
 
 
 class Beside:
@@ -109,12 +146,7 @@ class Beside:
         self.wifi_fix: tuple[tuple[float, float], float] | None = None
 
     def __call__(self, seen: StepSeen) -> None:
-        riders = [rider for rider in self.riders.values() if seen.time_s >= rider.joins_at_s]
-        for rider in riders:
-            rider.localizer.on_odometry(seen.odom)
-            if rider.kidnap_at_s is not None and seen.time_s >= rider.kidnap_at_s:
-                rider.kidnap_at_s = None
-                rider.localizer.set_pose(*rider.kidnap_pose, np.diag([0.01, 0.01, 0.0025]))
+        riders = [rider for rider in self.riders.values() if rider.moved(seen.time_s, seen.odom, seen.truth)]
         self.wifi_fix = seen.wifi_fix or self.wifi_fix         # kept for the next round, as the node keeps it
         if seen.round_reads is None:
             return                                             # the node updates once per reader round
@@ -122,11 +154,7 @@ class Beside:
         self.wifi_fix = None
         x, y, yaw = seen.truth
         for rider in riders:
-            estimate = rider.localizer.on_round(rider.evidence(evidence))
-            rider.track.rounds += 1
-            if estimate is not None:
-                pose = estimate.pose
-                rider.track.add(seen.time_s, (pose.x - x, pose.y - y), wrap_angle(pose.yaw - yaw), pose.covariance)
+            rider.update(seen.time_s, evidence, seen.truth)
         self.paper.rounds += 1
         paper = seen.paper
         if paper.position is not None:
@@ -146,13 +174,8 @@ class PartitionBeside:
     def __call__(self, robot: IdealRobot, tag_ids: list[str], estimate: LocalizationEstimate) -> None:
         time_s, truth = robot.time_s, (robot.x, robot.y, robot.yaw)
         for rider in self.riders.values():
-            rider.localizer.on_odometry(robot.odometry())
-            fused = rider.localizer.on_round(rider.evidence(Evidence(floor_tag_ids=tag_ids)))
-            rider.track.rounds += 1
-            if fused is not None:
-                pose = fused.pose
-                rider.track.add(time_s, (pose.x - truth[0], pose.y - truth[1]), wrap_angle(pose.yaw - truth[2]),
-                                pose.covariance)
+            if rider.moved(time_s, robot.odometry(), truth):
+                rider.update(time_s, Evidence(floor_tag_ids=tag_ids), truth)
         self.paper.rounds += 1
         if estimate.position is None:
             return
@@ -163,3 +186,28 @@ class PartitionBeside:
         else:
             covariance = np.array([[var_x, cov_xy, 0.0], [cov_xy, var_y, 0.0], [0.0, 0.0, estimate.yaw_std ** 2]])
             self.paper.add(time_s, error, wrap_angle(estimate.yaw - truth[2]), covariance)
+
+
+class TopologicalBeside:
+    """Fused localizers fed by a paper 004 mission's control steps (rfidnav_experiments.runners.topological: the side
+    antenna's wall tags and the odometry; the robot has no other sensor the fused filter weighs), scored with the
+    executor's own idea of where the robot is: the position of the node it believes it is at (it has no metric
+    estimate, so no NEES)."""
+
+    def __init__(self, riders: dict[str, Rider], wall_port: int, node_positions: dict[str, tuple[float, float]]) \
+            -> None:
+        self.riders = riders
+        self.wall_port = wall_port
+        self.node_positions = node_positions
+        self.paper = Track()
+
+    def __call__(self, step: MissionStep) -> None:
+        x, y, _ = step.truth
+        evidence = Evidence(wall_tag_ids=[(self.wall_port, tag_id) for tag_id in step.wall_reads])
+        for rider in self.riders.values():
+            if rider.moved(step.time_s, step.odom, step.truth):
+                rider.update(step.time_s, evidence, step.truth)
+        self.paper.rounds += 1
+        node = self.node_positions.get(step.current_node or "")
+        if node is not None:
+            self.paper.add_position(step.time_s, (node[0] - x, node[1] - y))

@@ -29,7 +29,7 @@ from __future__ import annotations
 import dataclasses
 import functools
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -71,6 +71,17 @@ FOLLOWER = shipped_parameters(WallFollowerParameters, "wall_follower")   # its s
 ROBOT = shipped_parameters(RobotSimParameters, "robot_sim", world_file="-")   # the base: limits, odometry drift
 SONAR = shipped_parameters(SonarParameters, "sonar_sim", world_file="-")     # noise, rays, specular loss
 START_BEFORE_TAG_M = 1.2                # a mission starts this far before its first tag
+
+
+@dataclass(frozen=True)
+class MissionStep:
+    """What one control step of a mission gave: the truth, the odometry, the wall tags read and the node the
+    executor believes the robot is at (for a localizer run beside it: rfidnav_experiments.reproduce.fused)."""
+    time_s: float
+    truth: tuple[float, float, float]
+    odom: tuple[float, float, float]
+    wall_reads: tuple[str, ...]
+    current_node: str | None
 
 
 @dataclass(frozen=True)
@@ -136,7 +147,9 @@ def run_mission(world: World, topological_map: TopologicalMap, start_pose: tuple
                 goal_node: str, rng: np.random.Generator, miss_probability: float = 0.0,
                 max_time_s: float = 900.0, settings: WallFollowerSettings = FOLLOWER.settings(),
                 weight: str = "length", recover_missed_tags: bool = True, robot: RobotSimParameters = ROBOT,
-                sonar: SonarParameters = SONAR) -> MissionRun:
+                sonar: SonarParameters = SONAR, observer: Callable[[MissionStep], None] | None = None) -> MissionRun:
+    """One mission from ``start_pose`` (true pose) to ``goal_node``. ``observer`` is told of every control step
+    (:class:`MissionStep`; it draws nothing)."""
     walls = world.wall_segments()
     sonar_model = sonar_model_among(sonar, walls.tobytes())
     feeds = sonar_feeds([r.name for r in sonar_model.rangefinders], follower_offsets())
@@ -174,8 +187,12 @@ def run_mission(world: World, topological_map: TopologicalMap, start_pose: tuple
         at_dead_end = executor.on_odometry(odom.x, odom.y)
         if at_dead_end is not None:
             apply(at_dead_end, False)
-        for decision in executor.on_reads(reader.read(truth.x, truth.y, truth.yaw, rng)):
+        reads = reader.read(truth.x, truth.y, truth.yaw, rng)
+        for decision in executor.on_reads(reads):
             apply(decision, False)
+        if observer is not None:
+            observer(MissionStep(t, (truth.x, truth.y, truth.yaw), (odom.x, odom.y, odom.yaw), tuple(reads),
+                                 executor.state.current_node))
         command = follower.step(centre_sonar(sonar_model.readings(truth.x, truth.y, truth.yaw, rng), feeds),
                                 OdomPose(odom.x, odom.y, odom.yaw))
         if command.event == STOPPED:
