@@ -305,10 +305,10 @@ def report_lines(results: list[FusedRun], runs: int) -> list[str]:
         names = localizers_of(world)
         lines += [f"{world} ({driver_of(world)}; {arrived}/{runs} arrived)"]
         world_figures = figures(results, world)
-        rows = [[label, *(world_figures[metric][name].text(scale, digits) for name in names)]
+        rows = [[label, *(_text(world_figures[metric][name], scale, digits) for name in names)]
                 for metric, (label, scale, digits) in METRICS.items()]
         lines += table(["metric", *names], rows)
-        rows = [[label, world_figures[metric][f"{name} - fused"].text(scale, digits)]
+        rows = [[label, _text(world_figures[metric][f"{name} - fused"], scale, digits)]
                 for metric, (label, scale, digits) in METRICS.items() for name in names[1:]
                 for label in (f"{METRICS[metric][0]}: {name} - fused",)]
         lines += table(["paired difference", "mean [95 % interval]"], rows)
@@ -320,6 +320,10 @@ def report_lines(results: list[FusedRun], runs: int) -> list[str]:
                   f"{recovery['late_global_s'][1]}/{runs}; kidnapped at {kidnap_s:g} s, found again after "
                   f"{recovery['kidnap_recovery_s'][0].text(1.0, 1)} s in {recovery['kidnap_recovery_s'][1]}/{runs}", ""]
     return lines
+
+
+def _text(interval: Interval, scale: float, digits: int) -> str:
+    return interval.text(scale, digits) if interval.n else "-"     # a localizer without such a figure
 
 
 def json_rows(results: list[FusedRun], seed: int) -> list[dict[str, Any]]:
