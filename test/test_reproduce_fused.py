@@ -12,6 +12,7 @@ import sys
 import numpy as np
 import pytest
 
+from rfidnav_common.frames import map_to_odom
 from rfidnav_experiments.reproduce.fused import (
     DEVELOPMENT_SEED,
     METRICS,
@@ -76,8 +77,9 @@ def test_on_paper_004s_ring_the_fused_localizer_rides_the_mission_and_scores_the
 
 
 def test_map_to_odom_composed_with_the_odometry_pose_is_the_estimated_pose() -> None:
-    estimate = FusedEstimate(PoseEstimate(3.0, -1.0, 2.5, np.eye(3)), (0.7, 1.9, -0.4), Update((), (), 0.0, 0))
-    tx, ty, tyaw = estimate.map_to_odom()
+    estimate = FusedEstimate(PoseEstimate(3.0, -1.0, 2.5, np.eye(3)), (0.7, 1.9, -0.4), Update((), (), 0))
+    pose = estimate.pose
+    tx, ty, tyaw = map_to_odom((pose.x, pose.y, pose.yaw), estimate.odom)     # what rfid_localizer sends on /tf
     ox, oy, oyaw = estimate.odom
     x = tx + math.cos(tyaw) * ox - math.sin(tyaw) * oy
     y = ty + math.sin(tyaw) * ox + math.cos(tyaw) * oy

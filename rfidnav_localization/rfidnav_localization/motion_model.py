@@ -8,6 +8,17 @@ import math
 
 import numpy as np
 
+from rfidnav_common.geometry import wrap_angle
+
+
+def odometry_increment(previous: tuple[float, float, float],
+                       odom: tuple[float, float, float]) -> tuple[float, float, float]:
+    """(forward, lateral, rotation) from odometry pose ``previous`` to ``odom``, in the robot frame of ``previous``
+    (the odom frame's own drift never enters)."""
+    dx, dy = odom[0] - previous[0], odom[1] - previous[1]
+    cos_yaw, sin_yaw = math.cos(previous[2]), math.sin(previous[2])
+    return cos_yaw * dx + sin_yaw * dy, -sin_yaw * dx + cos_yaw * dy, wrap_angle(odom[2] - previous[2])
+
 
 def sampled_increments(forward: float, lateral: float, rotation: float, count: int, rng: np.random.Generator,
                        noise_fraction: float, noise_floor_m: float, yaw_noise_per_m: float,

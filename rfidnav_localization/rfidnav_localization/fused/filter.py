@@ -162,10 +162,9 @@ def round_evidence(reads: Sequence[RoundRead], ports: Ports, wifi_fix: tuple[tup
 
 @dataclass(frozen=True)
 class Update:
-    """What an update used, and how well the particles explained it (0: perfectly; a log-likelihood average)."""
+    """What an update weighed, the tag ids it ignored (unknown to the map) and the particles it redrew."""
     used: tuple[str, ...]
     ignored_tag_ids: tuple[str, ...]
-    mean_log_likelihood: float
     injected: int
 
 
@@ -194,7 +193,6 @@ class FusedFilter:
         self.explained: dict[str, float] = {}
         self.travel_since_wifi_m = math.inf
         self.initialised = False
-        self.global_initialisations = 0
 
     # ------------------------------------------------------------------------------------ initialisation
     def initialise_global(self) -> None:
@@ -204,7 +202,6 @@ class FusedFilter:
         self.explained = dict.fromkeys(RESET_MEMORY, 0.0)    # an unknown start explains nothing yet
         self.weights.fill(1.0 / self.settings.particles)
         self.initialised = True
-        self.global_initialisations += 1
 
     def initialise_at(self, x: float, y: float, yaw: float, covariance: np.ndarray) -> None:
         """A known start (``/initialpose``): a Gaussian about (x, y, yaw) with the 3 x 3 ``covariance``."""
@@ -250,7 +247,7 @@ class FusedFilter:
         """Weigh the particles by this round's evidence; resample (with recovery particles) when due."""
         by_kind, ignored = self._log_likelihoods(self.states, evidence)
         if not by_kind:
-            return Update((), ignored, 0.0, 0)
+            return Update((), ignored, 0)
         s = self.settings
         redraw = 0.0
         log_likelihood = np.zeros(self.states.shape[1])
@@ -267,14 +264,13 @@ class FusedFilter:
                 redraw = max(redraw, 1.0 - average / s.reset_threshold)
         best = float(log_likelihood.max())
         weights = self.weights * np.exp(log_likelihood - best)
-        mean_log_likelihood = float(np.log(max(float(self.weights @ np.exp(log_likelihood - best)), 1e-300))) + best
         self.weights = weights / weights.sum()
         injected = 0
         if redraw > 0.0 or 1.0 / float(self.weights @ self.weights) < s.resample_threshold * len(self.weights):
             injected = self._resample(redraw, evidence)
         if injected:
             self.explained = {}      # the new particles are trusted until contradicted, by any kind
-        return Update(tuple(by_kind), ignored, mean_log_likelihood, injected)
+        return Update(tuple(by_kind), ignored, injected)
 
     def _log_likelihoods(self, states: np.ndarray, evidence: Evidence) -> tuple[dict[str, np.ndarray],
                                                                                  tuple[str, ...]]:

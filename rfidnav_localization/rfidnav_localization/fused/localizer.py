@@ -8,15 +8,13 @@ global localization; ``/initialpose`` (:meth:`FusedLocalizer.set_pose`) restarts
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
 
-from rfidnav_common.frames import map_to_odom
-from rfidnav_common.geometry import wrap_angle
 from rfidnav_localization.fused.filter import Evidence, FusedFilter, FusedSettings, PoseEstimate, Update
 from rfidnav_localization.fused.tag_map import FusedMap
+from rfidnav_localization.motion_model import odometry_increment
 
 Pose2D = tuple[float, float, float]
 
@@ -26,10 +24,6 @@ class FusedEstimate:
     pose: PoseEstimate
     odom: Pose2D                 # the odometry pose the estimate is for: map -> odom follows from the two
     update: Update
-
-    def map_to_odom(self) -> Pose2D:
-        """map -> odom, which puts ``odom`` on the estimated pose (REP 105)."""
-        return map_to_odom((self.pose.x, self.pose.y, self.pose.yaw), self.odom)
 
 
 class FusedLocalizer:
@@ -42,9 +36,7 @@ class FusedLocalizer:
         previous, self.odom = self.odom, odom
         if previous is None or not self.filter.initialised:
             return
-        dx, dy = odom[0] - previous[0], odom[1] - previous[1]
-        c, s = math.cos(previous[2]), math.sin(previous[2])
-        self.filter.predict(c * dx + s * dy, -s * dx + c * dy, wrap_angle(odom[2] - previous[2]))
+        self.filter.predict(*odometry_increment(previous, odom))
 
     def set_pose(self, x: float, y: float, yaw: float, covariance: np.ndarray) -> None:
         """Restart about a pose (``/initialpose``); a 3 x 3 covariance over (x, y, yaw)."""

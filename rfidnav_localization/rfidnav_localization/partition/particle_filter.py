@@ -32,7 +32,7 @@ import numpy as np
 
 from rfidnav_common.geometry import wrap_angle
 from rfidnav_common.tag_lattice import Coordinate, Deployment
-from rfidnav_localization.motion_model import sampled_increments
+from rfidnav_localization.motion_model import odometry_increment, sampled_increments
 from rfidnav_localization.partition.estimate import LocalizerSettings, YawEstimate
 from rfidnav_localization.partition.geometry import CIRCLE_SAMPLES, PartitionGeometry, Region, orientation_bounds
 from rfidnav_localization.partition.stretch import Stretch
@@ -235,10 +235,7 @@ class FilterTracker:
               rejected: frozenset[Coordinate], stretch: Stretch) -> bool:
         """One round after the start: predict with the odometry's increment, then weigh the tags read (none:
         prediction only). False when no particle has explained the recent rounds: the robot is lost."""
-        dx, dy = odom[0] - previous_odom[0], odom[1] - previous_odom[1]
-        cos_yaw, sin_yaw = math.cos(previous_odom[2]), math.sin(previous_odom[2])
-        self.particles.predict(cos_yaw * dx + sin_yaw * dy, -sin_yaw * dx + cos_yaw * dy,
-                               wrap_angle(odom[2] - previous_odom[2]))
+        self.particles.predict(*odometry_increment(previous_odom, odom))
         if not partition:
             return True
         proposals = None
@@ -247,7 +244,8 @@ class FilterTracker:
             arc = self.geometry.crossing_arc(previous_partition, partition)
             if arc is not None:
                 crossing = _Crossing(arc, self._odom_antenna(previous_odom), self._odom_antenna(odom))
-                proposals = partial(self._crossing_proposals, crossing, math.hypot(dx, dy), odom, stretch)
+                travelled = math.hypot(odom[0] - previous_odom[0], odom[1] - previous_odom[1])
+                proposals = partial(self._crossing_proposals, crossing, travelled, odom, stretch)
                 self._crossings.append(crossing)
         read, unread = self._tags(partition, rejected)
         return self.particles.weigh(read, unread, self.read_range_m, proposals)
