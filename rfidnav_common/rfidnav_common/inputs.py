@@ -24,7 +24,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from rfidnav_common.errors import RfidnavError
-from rfidnav_common.frames import BASE_FRAME, ODOM_FRAME, READER_FRAME
+from rfidnav_common.frames import BASE_FRAME, COMPASS_FRAMES, ODOM_FRAME, READER_FRAME, WIFI_FRAME
 from rfidnav_common.geometry import quaternion_to_yaw, wrap_angle
 
 # Any position, pose or distance [m]: 100 km is beyond any building or campus a robot of this suite maps, and the
@@ -210,6 +210,18 @@ def wifi_rss(scan: Any) -> dict[str, float]:
         value = rss_dbm(access_point.rssi_dbm, f"{where}.rssi_dbm ({access_point.bssid})")
         rss[access_point.bssid] = max(value, rss.get(access_point.bssid, value))
     return rss
+
+
+def compass_heading(msg: Any) -> float:
+    """The heading [rad] of a sensor_msgs/Imu compass reading, in its frame (compass or base_link), checked."""
+    frame(msg.header.frame_id, COMPASS_FRAMES)
+    return yaw(msg.orientation, "orientation")
+
+
+def scan_rss(scan: Any) -> dict[str, float]:
+    """:func:`wifi_rss` of a WifiScan from the robot's receiver, in base_link (what a navigator may locate)."""
+    frame(scan.header.frame_id, WIFI_FRAME)
+    return wifi_rss(scan)
 
 
 @dataclass(frozen=True)

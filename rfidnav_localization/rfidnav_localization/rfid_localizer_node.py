@@ -27,7 +27,6 @@ from rclpy.task import Future
 from sensor_msgs.msg import Imu
 
 from rfidnav_common import inputs
-from rfidnav_common.frames import COMPASS_FRAMES, WIFI_FRAME
 from rfidnav_common.robot_map import load_route_map
 from rfidnav_common.ros import COMMAND_QOS, SENSOR_QOS, declare_parameters, run_node
 from rfidnav_common.seeding import rng_for
@@ -52,9 +51,10 @@ class RfidLocalizerNode(SteppedNode):
         p = self.params
         fused_map = FusedMap.of_route_map(load_route_map(Path(p.map_file)))
         self.localizer = FusedLocalizer(p.settings(), fused_map, rng_for(p.seed, NODE_NAME))
+        self.ports = p.ports()
         if p.initial_pose:
             x, y, yaw = p.initial_pose
-            self.localizer.set_pose(x, y, yaw, _diagonal(p.initial_sd))
+            self.localizer.set_pose(x, y, yaw, np.diag(np.square(p.initial_sd)))
         self.drops = inputs.Drops(self.get_logger().warning)
         self.compass_yaw: float | None = None
         self.odom_stamp = Time()
@@ -94,16 +94,14 @@ class RfidLocalizerNode(SteppedNode):
 
     def on_compass(self, msg: Imu) -> None:
         try:
-            inputs.frame(msg.header.frame_id, COMPASS_FRAMES)
-            self.compass_yaw = inputs.yaw(msg.orientation, "orientation")
+            self.compass_yaw = inputs.compass_heading(msg)
         except inputs.BadInput as error:
             self.drops.drop("/compass", error)
 
     def on_scan(self, msg: WifiScan) -> None:
         """Locate the scan unless a call is out (scans come faster than fixes are weighed, by wifi_min_travel_m)."""
         try:
-            inputs.frame(msg.header.frame_id, WIFI_FRAME)
-            inputs.wifi_rss(msg)
+            inputs.scan_rss(msg)
         except inputs.BadInput as error:
             self.drops.drop("/wifi/scan", error)
             return
@@ -136,10 +134,10 @@ class RfidLocalizerNode(SteppedNode):
 
     def on_reads(self, msg: TagReadArray) -> None:
         p = self.params
-        reads = inputs.round_reads(msg, self.drops, ports=p.ports().all())
+        reads = inputs.round_reads(msg, self.drops, ports=set(p.antenna_ports_read().values()))
         if reads is None:
             return
-        evidence = round_evidence(reads, p.ports(), self.wifi_fix, self.compass_yaw)
+        evidence = round_evidence(reads, self.ports, self.wifi_fix, self.compass_yaw)
         self.wifi_fix = self.compass_yaw = None           # each reading is weighed once
         estimate = self.localizer.on_round(evidence)
         if estimate is None:
@@ -158,10 +156,6 @@ class RfidLocalizerNode(SteppedNode):
             self.frames.send_map_to_odom(p.map_frame, (estimate.pose.x, estimate.pose.y, estimate.pose.yaw),
                                          estimate.odom, self.odom_stamp)
         self.status_pub.publish(fused_status_message(estimate, stamp, p.map_frame, self.ignored_count))
-
-
-def _diagonal(sd: list[float]) -> np.ndarray:
-    return np.diag(np.square(np.asarray(sd, dtype=float)))
 
 
 def main(args: list[str] | None = None) -> int:

@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
+from typing import Any
 
 from builtin_interfaces.msg import Time
 from geometry_msgs.msg import Point, PoseStamped
@@ -74,3 +76,13 @@ def plan_messages(plan: PartitionPlan, lattice: Lattice, replans: int, stamp: Ti
         partitions.partitions.append(Partition(tag_ids=sorted(lattice.tag_id(c) for c in tags),
                                                centre=Point(x=x, y=y, z=0.0)))
     return path, partitions
+
+
+def point_goal_refusal(goal: Any, refusal: Callable[[tuple[float, float]], str | None]) -> str | None:
+    """Why a NavigateToPoint goal is refused: a target that is no point within any map, or the navigator's own
+    ``refusal`` of it (outside the robot map's extent); None to accept it."""
+    try:
+        target = inputs.point(goal.target.x, goal.target.y, "target")
+    except inputs.BadInput as error:
+        return str(error)
+    return refusal(target)

@@ -25,6 +25,7 @@ from rfidnav_common.robot_map import load_route_map
 from rfidnav_common.ros import COMMAND_QOS, SENSOR_QOS, declare_parameters, run_node, seconds_of, twist
 from rfidnav_common.stepped_node import SteppedNode
 from rfidnav_msgs.action import NavigateToPoint
+from rfidnav_planning.conversions import point_goal_refusal
 from rfidnav_planning.parameters import PoseNavigatorParameters
 from rfidnav_planning.pose_navigation import Pose, PoseNavigator, Step
 from rfidnav_planning.wall_paths import WallMap
@@ -77,11 +78,7 @@ class PoseNavigatorNode(SteppedNode):
 
     # -------------------------------------------------------------------------------------- goals
     def refusal(self, goal: NavigateToPoint.Goal) -> str | None:
-        try:
-            inputs.point(goal.target.x, goal.target.y, "target")
-        except inputs.BadInput as error:
-            return str(error)
-        return self.navigator.refusal((goal.target.x, goal.target.y))
+        return point_goal_refusal(goal, self.navigator.refusal)
 
     def on_started(self, goal: ActiveGoal) -> None:
         target = goal.handle.request.target

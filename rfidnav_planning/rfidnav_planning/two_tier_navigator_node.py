@@ -30,7 +30,6 @@ from rclpy.task import Future
 from sensor_msgs.msg import Imu
 
 from rfidnav_common import inputs
-from rfidnav_common.frames import COMPASS_FRAMES, WIFI_FRAME
 from rfidnav_common.geometry import yaw_to_quaternion
 from rfidnav_common.goal_server import ActiveGoal, GoalOutcome, SingleGoalServer
 from rfidnav_common.robot_map import load_route_map
@@ -40,6 +39,7 @@ from rfidnav_common.transforms import FrameBroadcaster
 from rfidnav_msgs.action import NavigateToPoint
 from rfidnav_msgs.msg import LocalizationStatus, TagReadArray, WifiScan
 from rfidnav_msgs.srv import GetTagMap, Locate
+from rfidnav_planning.conversions import point_goal_refusal
 from rfidnav_planning.parameters import TwoTierNavigatorParameters
 from rfidnav_planning.two_tier_navigation import LOCATE, Decision, MapTag, Request, TwoTierNavigator
 from rfidnav_planning.wall_paths import WallMap
@@ -102,8 +102,7 @@ class TwoTierNavigatorNode(SteppedNode):
 
     def on_compass(self, msg: Imu) -> None:
         try:
-            inputs.frame(msg.header.frame_id, COMPASS_FRAMES)
-            self.compass_yaw = inputs.yaw(msg.orientation, "orientation")
+            self.compass_yaw = inputs.compass_heading(msg)
         except inputs.BadInput as error:
             self.drops.drop("/compass", error)
             return
@@ -123,8 +122,7 @@ class TwoTierNavigatorNode(SteppedNode):
     def on_scan(self, msg: WifiScan) -> None:
         """The latest scan, for the next locate; one the location server would refuse is dropped here."""
         try:
-            inputs.frame(msg.header.frame_id, WIFI_FRAME)
-            inputs.wifi_rss(msg)
+            inputs.scan_rss(msg)
         except inputs.BadInput as error:
             self.drops.drop("/wifi/scan", error)
             return
@@ -132,11 +130,7 @@ class TwoTierNavigatorNode(SteppedNode):
 
     # -------------------------------------------------------------------------------------- goals
     def refusal(self, goal: NavigateToPoint.Goal) -> str | None:
-        try:
-            inputs.point(goal.target.x, goal.target.y, "target")
-        except inputs.BadInput as error:
-            return str(error)
-        return self.navigator.refusal((goal.target.x, goal.target.y))
+        return point_goal_refusal(goal, self.navigator.refusal)
 
     def on_started(self, goal: ActiveGoal) -> None:
         target = goal.handle.request.target

@@ -135,9 +135,6 @@ class Ports:
     phase: tuple[int, int] | None = None    # the two receiving antennas under ceiling tags
     wall: int = 0                           # side: wall tags
 
-    def all(self) -> set[int]:
-        return {port for port in (self.floor, self.wall, *(self.phase or ())) if port}
-
 
 def round_evidence(reads: Sequence[RoundRead], ports: Ports, wifi_fix: tuple[tuple[float, float], float] | None,
                    compass_yaw_rad: float | None) -> Evidence:
