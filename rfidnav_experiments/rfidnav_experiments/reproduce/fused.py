@@ -2,15 +2,18 @@
 localizer, on the same runs, paired.
 
 Worlds: paper 003's homes (HOMES of reproduce two_tier: the in-tree flat and two of ours), the mixed floor (ours:
-every kind of tag on one floor) and paper 000's field. On the homes and the mixed floor each run is the two-tier
-navigator's mission from the scenario's start to its goal, its legs planned round the map's walls, driven by the
-paper's localizer (WiFi fingerprints, then floor tag groups, dead reckoning between) with the scenario's reader;
-the fused localizers ride beside it on what the same sensors gave in each reader round (every antenna's reads, the
-location server's answers to the navigator's locate calls, the compass, the odometry). On paper 000's field
-(``partition_field``) each run is a 3 m task of the partition navigator on the paper's localizer, the fused
-localizers beside it on the same rounds (its robot has no compass and no WiFi). The fused settings are those of
-the robot's rfid_localizer parameter file (the filter's the same for every robot and world). Every fused localizer
-starts, as the paper's does, knowing only the map: global localization from its first evidence.
+every kind of tag on one floor), paper 000's field and paper 004's ring. On the homes and the mixed floor each run
+is the two-tier navigator's mission from the scenario's start to its goal, its legs planned round the map's walls,
+driven by the paper's localizer (WiFi fingerprints, then floor tag groups, dead reckoning between) with the
+scenario's reader; the fused localizers ride beside it on what the same sensors gave in each reader round (every
+antenna's reads, the location server's answers to the navigator's locate calls, the compass, the odometry). On
+paper 000's field (``partition_field``) each run is a 3 m task of the partition navigator on the paper's localizer,
+the fused localizers beside it on the same rounds (its robot has no compass and no WiFi). On paper 004's ring
+(``building_ring``) each run is one of the mission executor's missions, the fused localizers beside it on the side
+antenna's wall tags and the odometry, scored with the node the executor believes the robot is at. The fused
+settings are those of the robot's rfid_localizer parameter file (the filter's the same for every robot and world).
+Every fused localizer starts, as the paper's does, knowing only the map: global localization from its first
+evidence.
 
 Localizers: ``fused`` (every kind of evidence), on the mixed floor also the same filter given one kind of evidence
 and the compass (``floor_only``: lattice and tag-group reads, paper 000's and 003's tier two; ``phase_only``:
@@ -66,6 +69,7 @@ from rfidnav_experiments.runners.partitions import random_task, run_navigation
 from rfidnav_experiments.runners.shipped import file_parameters
 from rfidnav_experiments.runners.topological import FLOORS, mission_tasks, run_mission, start_pose_before_tag
 from rfidnav_experiments.runners.two_tier import SETTINGS, run_two_tier
+from rfidnav_localization.fused.filter import FusedSettings
 from rfidnav_localization.fused.localizer import FusedLocalizer
 from rfidnav_localization.fused.tag_map import FusedMap
 from rfidnav_localization.parameters import RfidLocalizerParameters
@@ -159,6 +163,34 @@ def _rms(values: list[float]) -> float | None:
     return math.sqrt(sum(v * v for v in values) / len(values)) if values else None
 
 
+def riders_for(world: str, run: int, seed: int, settings: FusedSettings, fused_map: FusedMap) -> dict[str, Rider]:
+    """The fused localizers of one run: ``fused``, on the mixed floor the single-evidence ones, ``kidnap`` and
+    ``late``; each with its own copy of the map (it learns the lattice from the first id read) and random stream."""
+    late_s, kidnap_s = kidnap_times_of(world)
+
+    def localizer(label: str) -> FusedLocalizer:
+        return FusedLocalizer(settings, dataclasses.replace(fused_map), rng_for(seed, f"fused:{world}:{run}:{label}"))
+
+    riders = {"fused": Rider(localizer("fused"))}
+    if world == MIXED:
+        riders.update({label: Rider(localizer(label), kinds) for label, kinds in SINGLE_EVIDENCE.items()})
+    riders["kidnap"] = Rider(localizer("kidnap"), kidnap_at_s=kidnap_s, extent=fused_map.extent)
+    riders["late"] = Rider(localizer("late"), joins_at_s=late_s)
+    return riders
+
+
+def fused_run(world: str, run: int, success: bool, riders: dict[str, Rider], paper: Track,
+              duration_s: float) -> FusedRun:
+    """The figures of one run's tracks."""
+    late_s, kidnap_s = kidnap_times_of(world)
+    figures = {label: TrackFigures.of(riders[label].track) for label in localizers_of(world) if label != "paper"}
+    figures["paper"] = TrackFigures.of(paper)
+    recovery = riders["kidnap"].track.settled_after(kidnap_s) if duration_s > kidnap_s else None
+    found = riders["late"].track.settled_after(late_s) if duration_s > late_s else None
+    return FusedRun(world, run, success, figures, riders["fused"].track.settled_after(0.0), found, recovery,
+                    duration_s)
+
+
 def home_run(job: tuple[str, int, int]) -> FusedRun:
     """One two-tier mission of a world with the fused localizers beside; the same streams as reproduce two_tier's
     planned-legs run of that home and run number."""
@@ -167,31 +199,16 @@ def home_run(job: tuple[str, int, int]) -> FusedRun:
     robot_map = place.scenario.route_map
     assert robot_map is not None                       # home() refuses a home without its map
     parameters = localizer_parameters(place)
-    settings = parameters.settings()
-
-    def localizer(label: str) -> FusedLocalizer:
-        return FusedLocalizer(settings, FusedMap.of_route_map(robot_map, place.site.radio_map),
-                              rng_for(seed, f"fused:{name}:{run}:{label}"))
-
-    extent = FusedMap.of_route_map(robot_map).extent
-    riders = {"fused": Rider(localizer("fused"))}
-    if name == MIXED:
-        riders.update({label: Rider(localizer(label), kinds) for label, kinds in SINGLE_EVIDENCE.items()})
-    x, y, yaw_deg = place.scenario.robot
-    kidnap = riders["kidnap"] = Rider(localizer("kidnap"), kidnap_at_s=KIDNAP_AT_S, extent=extent)
-    late = riders["late"] = Rider(localizer("late"), joins_at_s=LATE_START_S)
+    riders = riders_for(name, run, seed, parameters.settings(),
+                        FusedMap.of_route_map(robot_map, place.site.radio_map))
     beside = Beside(riders, parameters.ports())
+    x, y, yaw_deg = place.scenario.robot
     target = place.scenario.mission.goal["target"]
     result = run_two_tier(place.site, (x, y, math.radians(yaw_deg)), (target["x"], target["y"]), SETTINGS,
                           rng_for(seed, f"homes:{name}:{run}"), derive_seed(seed, f"homes:{name}:{run}:reader"),
                           max_time_s=place.scenario.mission.timeout_s, floor=place.floor, observe=beside,
                           reader_parameters=reader_parameters(place))
-    figures = {label: TrackFigures.of(riders[label].track) for label in localizers_of(name) if label != "paper"}
-    figures["paper"] = TrackFigures.of(beside.paper)
-    recovery = kidnap.track.settled_after(KIDNAP_AT_S) if result.duration_s > KIDNAP_AT_S else None
-    found = late.track.settled_after(LATE_START_S) if result.duration_s > LATE_START_S else None
-    return FusedRun(name, run, result.success, figures, riders["fused"].track.settled_after(0.0), found, recovery,
-                    result.duration_s)
+    return fused_run(name, run, result.success, riders, beside.paper, result.duration_s)
 
 
 def partition_run(job: tuple[str, int, int]) -> FusedRun:
@@ -204,26 +221,14 @@ def partition_run(job: tuple[str, int, int]) -> FusedRun:
     field_deployment = scenario.world.deployments[0]
     settings = file_parameters(RfidLocalizerParameters, FLOOR_LATTICE_LOCALIZER, "rfid_localizer",
                                map_file=str(scenario.map_file)).settings()
-    fused_map = FusedMap.of_route_map(scenario.route_map)
-
-    def localizer(label: str) -> FusedLocalizer:
-        return FusedLocalizer(settings, dataclasses.replace(fused_map), rng_for(seed, f"fused:{name}:{run}:{label}"))
-
-    start, goal = random_task(field_deployment, PARTITION_TASK_M, rng_for(seed, f"fused:{name}:{run}:task"))
-    kidnap = Rider(localizer("kidnap"), kidnap_at_s=PARTITION_KIDNAP_AT_S, extent=fused_map.extent)
-    late = Rider(localizer("late"), joins_at_s=PARTITION_LATE_START_S)
-    riders = {"fused": Rider(localizer("fused")), "kidnap": kidnap, "late": late}
+    riders = riders_for(name, run, seed, settings, FusedMap.of_route_map(scenario.route_map))
     beside = PartitionBeside(riders)
+    start, goal = random_task(field_deployment, PARTITION_TASK_M, rng_for(seed, f"fused:{name}:{run}:task"))
     result = run_navigation(field_deployment, start, goal, partition_localizer_settings(PAPER),
                             partition_navigator_settings(PAPER, headline_level()),
                             rng_for(seed, f"fused:{name}:{run}:robot"), odometry_noise=PARTITION_ODOMETRY_NOISE,
                             speeds=robot_speeds(PAPER), observer=beside)
-    duration_s = result.travel_time_s
-    figures = {"fused": TrackFigures.of(riders["fused"].track), "paper": TrackFigures.of(beside.paper)}
-    recovery = kidnap.track.settled_after(PARTITION_KIDNAP_AT_S) if duration_s > PARTITION_KIDNAP_AT_S else None
-    found = late.track.settled_after(PARTITION_LATE_START_S) if duration_s > PARTITION_LATE_START_S else None
-    return FusedRun(name, run, result.success, figures, riders["fused"].track.settled_after(0.0), found, recovery,
-                    duration_s)
+    return fused_run(name, run, result.success, riders, beside.paper, result.travel_time_s)
 
 
 def topological_run(job: tuple[str, int, int]) -> FusedRun:
@@ -236,25 +241,14 @@ def topological_run(job: tuple[str, int, int]) -> FusedRun:
     parameters = file_parameters(RfidLocalizerParameters, WALL_SIDE_LOCALIZER, "rfid_localizer",
                                  map_file=str(floor.map_path))
     fused_map = FusedMap(extent=bounding_box(world.walls), wall_tags={tag.tag_id: tag for tag in world.wall_tags})
-
-    def localizer(label: str) -> FusedLocalizer:
-        return FusedLocalizer(parameters.settings(), dataclasses.replace(fused_map),
-                              rng_for(seed, f"fused:{name}:{run}:{label}"))
-
-    riders = {"fused": Rider(localizer("fused")),
-              "kidnap": Rider(localizer("kidnap"), kidnap_at_s=KIDNAP_AT_S, extent=fused_map.extent),
-              "late": Rider(localizer("late"), joins_at_s=LATE_START_S)}
+    riders = riders_for(name, run, seed, parameters.settings(), fused_map)
     nodes = {node_name: node.position for node_name, node in topological_map.nodes.items()
              if node.position is not None}
     beside = TopologicalBeside(riders, parameters.wall_antenna, nodes)
     tag, goal = mission_tasks(topological_map, run + 1, seed)[run]
     result = run_mission(world, topological_map, start_pose_before_tag(world, tag), goal,
                          rng_for(seed, f"fused:{name}:{run}:mission"), observer=beside)
-    figures = {"fused": TrackFigures.of(riders["fused"].track), "paper": TrackFigures.of(beside.paper)}
-    recovery = riders["kidnap"].track.settled_after(KIDNAP_AT_S) if result.duration_s > KIDNAP_AT_S else None
-    found = riders["late"].track.settled_after(LATE_START_S) if result.duration_s > LATE_START_S else None
-    return FusedRun(name, run, result.success, figures, riders["fused"].track.settled_after(0.0), found, recovery,
-                    result.duration_s)
+    return fused_run(name, run, result.success, riders, beside.paper, result.duration_s)
 
 
 def world_run(job: tuple[str, int, int]) -> FusedRun:
