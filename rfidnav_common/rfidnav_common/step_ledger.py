@@ -163,14 +163,15 @@ class StepLedger:
     def wiring(self) -> list[Unanswered | Unwired]:
         """What the graph still waits for before a message sent now would reach every participant it is for:
         participants never heard from, then publishers and subscriptions not matched with each other."""
-        missing: list[Unanswered | Unwired] = [Unanswered(name, "", 0) for name, entry in self.participants.items()
-                                               if entry.report is None]
-        return missing + self._unwired()
+        return [*self._never_heard(), *self._unwired()]
 
-    def _waiting(self) -> Iterator[Unanswered | Unwired]:
+    def _never_heard(self) -> Iterator[Unanswered]:
         for name, entry in self.participants.items():
             if entry.report is None:
                 yield Unanswered(name, "", 0)
+
+    def _waiting(self) -> Iterator[Unanswered | Unwired]:
+        yield from self._never_heard()
         if not self.wired:
             yield from self._unwired()
         for name, entry in self.participants.items():
