@@ -18,6 +18,7 @@ from rclpy.parameter import Parameter
 from sensor_msgs.msg import Imu
 from tf2_msgs.msg import TFMessage
 
+from rfidnav_common.errors import ConfigError
 from rfidnav_common.frames import compose
 from rfidnav_common.geometry import quaternion_to_yaw, yaw_to_quaternion
 from rfidnav_common.ros import COMMAND_QOS, SENSOR_QOS, time_msg
@@ -202,3 +203,15 @@ def test_bad_odometry_unknown_tags_and_a_foreign_initial_pose_are_dropped_counte
     assert math.isfinite(x) and math.hypot(x - 3.0, y - 1.2) < 0.3     # neither the NaN nor the odom-frame pose
     assert harness.node.drops.counts == {"/odom": 1, "/initialpose": 1}
     harness.spin_until(lambda: harness.logged("rfid_localizer", "NOT-A-TAG"), "the unknown tag's warning")
+
+
+def test_a_map_that_does_not_say_where_the_robot_may_be_is_one_error_naming_the_map_and_its_extent(
+        domain: int, tmp_path: Path) -> None:
+    map_file = tmp_path / "ceiling_only.yaml"
+    map_file.write_text("name: ceiling_only\nceiling_tags:\n  C1: [1.0, 2.0, 3.0]\n")
+    graph = Graph(domain)
+    try:
+        with pytest.raises(ConfigError, match="map 'ceiling_only': extent: none given"):
+            RfidLocalizerNode(context=graph.context, parameter_overrides=[Parameter("map_file", value=str(map_file))])
+    finally:
+        graph.close()

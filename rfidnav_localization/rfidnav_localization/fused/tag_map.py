@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.spatial import cKDTree
 
+from rfidnav_common.errors import ConfigError
 from rfidnav_common.robot_map import Rectangle, RouteMap
 from rfidnav_common.tag_lattice import Deployment, TagIdError, decode_tag_id, lattice_of
 from rfidnav_common.wall_tags import WallTag
@@ -41,7 +42,8 @@ class FusedMap:
     def of_route_map(cls, route_map: RouteMap, radio_map: RadioMap | None = None) -> FusedMap:
         extent = route_map.extent
         if extent is None:
-            raise ValueError(f"map '{route_map.name}' has no extent, walls or deployment area: where may the robot be?")
+            raise ConfigError(f"map '{route_map.name}'", "extent", "none given, and no walls or deployment_area to "
+                                                                   "take it from: where may the robot be?")
         floor = {tag_id: position for group in route_map.tag_groups for tag_id, position in group.tags()}
         return cls(extent=extent, floor_tags=floor, ceiling_tags=dict(route_map.ceiling_tags),
                    wall_tags={tag.tag_id: tag for tag in route_map.wall_tags},
