@@ -54,7 +54,7 @@ def test_the_fused_pose_beside_the_navigator_tracks_the_robot_to_a_decimetre_fro
     for _, _, status in read_messages(mixed_run / "bag", ["/fused/status"]):
         assert status.method == "fused"
         used.update(status.evidence_used)
-    assert used == {"lattice", "tag_group", "ceiling_phase", "wall_tag", "wifi", "compass"}
+    assert used == {"lattice", "tag_group", "ceiling_phase", "ceiling_range_rate", "wall_tag", "wifi", "compass"}
 
 
 def test_the_fused_localizer_knows_neither_world_nor_ground_truth(mixed_run: Path) -> None:

@@ -34,6 +34,14 @@ def sigmoid(value: float) -> float:
     return 1.0 / (1.0 + math.exp(-value))
 
 
+def phase_by_hand(residual: float, sd: float, sd_best: float) -> float:
+    """A phase reading's Gaussian density (1 / sd kept) mixed with 1 % outliers uniform over the circle, relative
+    to a perfect reading at the smallest sd."""
+    def density(r: float, s: float) -> float:
+        return EPS / (2 * math.pi) + (1 - EPS) * math.exp(-0.5 * (r / s) ** 2) / (math.sqrt(2 * math.pi) * s)
+    return math.log(density(residual, sd) / density(0.0, sd_best))
+
+
 def test_a_floor_tag_read_scores_the_soft_disc_at_the_mounted_antenna_and_an_unread_one_its_complement() -> None:
     model = FloorModel(antenna_xy=(0.1, 0.0), softness_m=0.004, eps=EPS)
     # Heading +y, so the antenna 0.1 m ahead sits at (1, 2.1); the tag is 0.05 m from it, inside r = 0.06.
@@ -55,13 +63,51 @@ def test_the_phase_difference_of_the_two_antennas_scores_the_round_trip_path_dif
     d2 = math.sqrt(1.0 ** 2 + 0.53 ** 2 + 2.7 ** 2)
     predicted = 4 * math.pi * (d1 - d2) / (299_792_458.0 / frequency)
     sd = math.sqrt((0.02 * d1) ** 2 + (0.02 * d2) ** 2 + 0.02 ** 2)
-    by_hand = math.log(EPS + (1 - EPS) * math.exp(-0.5 * (0.05 / sd) ** 2))
     at_origin = pose(0.0, 0.0, 0.0)
-    assert model.log_likelihood(at_origin, tag, predicted + 0.05, frequency)[0] == pytest.approx(by_hand, rel=1e-9)
+    assert model.log_likelihood(at_origin, tag, predicted + 0.05, frequency)[0] == pytest.approx(
+        phase_by_hand(0.05, sd, 0.02), rel=1e-9)
     # Phase is modulo 2 pi: a whole turn more is the same reading.
     wrapped = predicted + 0.05 + 2 * math.pi
-    assert model.log_likelihood(at_origin, tag, wrapped, frequency)[0] == pytest.approx(by_hand, rel=1e-9)
-    assert model.log_likelihood(at_origin, tag, predicted, frequency)[0] == pytest.approx(0.0, abs=1e-12)
+    assert model.log_likelihood(at_origin, tag, wrapped, frequency)[0] == pytest.approx(
+        phase_by_hand(0.05, sd, 0.02), rel=1e-9)
+    # Even a perfect reading scores below 0 at this distance: a farther tag's phase says less.
+    assert model.log_likelihood(at_origin, tag, predicted, frequency)[0] == pytest.approx(
+        phase_by_hand(0.0, sd, 0.02), rel=1e-9)
+    assert phase_by_hand(0.0, sd, 0.02) == pytest.approx(math.log(0.02 / sd), abs=0.01)
+
+
+def test_each_antennas_phase_change_since_the_last_round_scores_the_change_of_its_round_trip_distance() -> None:
+    model = PhaseDifferenceModel((0.0, 0.03, 0.30), (0.0, -0.03, 0.30), offset1_rad=0.4, noise_rad_per_m=0.02,
+                                 floor_rad=0.02, eps=EPS)
+    tag, frequency = (1.0, 0.5, 3.0), 915.25e6
+    wavelength = 299_792_458.0 / frequency
+    before, now = pose(0.0, 0.0, 0.0), pose(0.01, 0.0, 0.0)          # 1 cm towards the tag's side
+    changes, sds = [], []
+    for lateral in (0.03, -0.03):
+        d_before = math.sqrt(1.0 ** 2 + (0.5 - lateral) ** 2 + 2.7 ** 2)
+        d_now = math.sqrt(0.99 ** 2 + (0.5 - lateral) ** 2 + 2.7 ** 2)
+        changes.append(4 * math.pi * (d_now - d_before) / wavelength)    # the port offsets cancel
+        sds.append(math.sqrt((0.02 * d_before) ** 2 + (0.02 * d_now) ** 2 + 0.02 ** 2))
+    off = (changes[0] + 0.03, changes[1] - 0.03)
+    assert model.range_change_log_likelihood(before, now, tag, off, frequency)[0] == pytest.approx(
+        sum(phase_by_hand(0.03, sd, 0.02) for sd in sds), rel=1e-9)
+    assert model.range_change_log_likelihood(before, now, tag, tuple(changes), frequency)[0] == pytest.approx(
+        sum(phase_by_hand(0.0, sd, 0.02) for sd in sds), rel=1e-9)
+    # Closing in and moving away differ in sign: the tag ahead and the tag behind are told apart.
+    assert model.range_change_log_likelihood(now, before, tag, tuple(changes), frequency)[0] < -5.0
+
+
+def test_a_ceiling_tag_heard_again_on_the_same_channel_gives_its_range_rate_and_not_across_a_hop() -> None:
+    fused = FusedFilter(FusedSettings(particles=50, phase=PhaseDifferenceModel((0.0, 0.03, 0.3), (0.0, -0.03, 0.3))),
+                        FusedMap(extent=(0.0, 0.0, 10.0, 10.0), ceiling_tags={"C1": (5.0, 5.0, 3.0)}),
+                        np.random.default_rng(4))
+    fused.initialise_global()
+    assert fused.update(Evidence(phase=(PhaseReading("C1", 0.3, 0.2, 915e6),))).used == ("ceiling_phase",)
+    fused.predict(0.01, 0.0, 0.0)
+    assert fused.update(Evidence(phase=(PhaseReading("C1", 0.35, 0.26, 915e6),))).used == \
+        ("ceiling_phase", "ceiling_range_rate")
+    fused.predict(0.01, 0.0, 0.0)
+    assert fused.update(Evidence(phase=(PhaseReading("C1", 1.35, 1.26, 916e6),))).used == ("ceiling_phase",)
 
 
 def test_the_phase_model_peaks_where_the_simulated_reader_stood() -> None:
@@ -76,8 +122,7 @@ def test_the_phase_model_peaks_where_the_simulated_reader_stood() -> None:
     # several standard deviations of the difference's phase noise.
     states = np.array([[0.5, 0.5, 0.5 + 0.5 * 0.9], [0.2, 0.2, 0.2 - 0.5 * 0.43], [0.3, 0.4, 0.3]])
     scores = model.log_likelihood(states, (2.0, 1.0, 3.0), dphi, reads[1].frequency_hz)
-    assert scores[0] == pytest.approx(0.0, abs=1e-9)
-    assert scores[1] < -0.5 and scores[2] < -1.0
+    assert scores[0] - scores[1] > 0.5 and scores[0] - scores[2] > 1.0
 
 
 def test_a_wall_tag_read_scores_its_depth_into_the_induction_area_and_nothing_for_a_plate_facing_away() -> None:
@@ -155,7 +200,7 @@ def test_a_filter_sure_of_the_wrong_place_is_redrawn_where_the_evidence_says_it_
 def test_phase_readings_of_unknown_ceiling_tags_are_ignored_by_name() -> None:
     fused = small_filter(phase=PhaseDifferenceModel((0.0, 0.03, 0.3), (0.0, -0.03, 0.3)))
     fused.initialise_global()
-    update = fused.update(Evidence(phase=(PhaseReading("C9", 0.1, 915e6),)))
+    update = fused.update(Evidence(phase=(PhaseReading("C9", 0.3, 0.2, 915e6),)))
     assert update.used == () and update.ignored_tag_ids == ("C9",)
     assert wavelength_m(915e6) == pytest.approx(0.3276, abs=1e-4)
 

@@ -151,6 +151,9 @@ class RfidLocalizerParameters:
                                               NON_NEGATIVE)
     odometry_scale_sd: float = param("prior sd of the odometry's distance scale about 1 (per particle)", 0.05,
                                      NON_NEGATIVE)
+    odometry_scale_walk: float = param("random walk of each particle's odometry scale [per sqrt(m) travelled]: it "
+                                       "drifts, and a parameter that never moves collapses to one value", 0.005,
+                                       NON_NEGATIVE)
     antenna_positions: list[float] = param("x, y, z of each reader port 1, 2, ... in base_link [m] (the reader's "
                                            "parameter)", [0.0, 0.0, 0.05])
     antenna_phase_offset_rad: list[float] = param("each port's phase offset [rad] (the reader's parameter)", [0.0])
@@ -164,7 +167,7 @@ class RfidLocalizerParameters:
     phase_antennas: list[int] = param("the two receiving ports whose phase difference locates a ceiling tag "
                                       "(paper 001); empty: none", [])
     phase_floor_rad: float = param("phase difference noise besides the distance's (multipath) [rad]", 0.02,
-                                   NON_NEGATIVE)
+                                   POSITIVE)
     wall_antenna: int = param("reader port of the side antenna reading wall tags (paper 004); 0: none", 0,
                               Limits(0, MAX_PORT))
     wall_area_bearing_rad: float = param("the side antenna's bearing, CCW from forward [rad]", math.pi / 2.0,
@@ -181,6 +184,8 @@ class RfidLocalizerParameters:
     compass_sd_rad: float = param("compass noise from reading to reading [rad]", math.radians(2.0), POSITIVE)
     compass_bias_sd_rad: float = param("prior sd of the compass's constant bias (per particle) [rad]",
                                        math.radians(4.0), NON_NEGATIVE)
+    compass_bias_walk_rad: float = param("random walk of each particle's compass bias [rad per sqrt(m) travelled]",
+                                         math.radians(0.5), NON_NEGATIVE)
     eps: float = param("the most one reading can cost: its likelihood never falls below this", 0.01,
                        Limits(0.0, 0.5, low_open=True, high_open=True))
     reset_threshold: float = param("the average likelihood of a kind's evidence below which particles are "
@@ -243,5 +248,7 @@ class RfidLocalizerParameters:
             tag_group_read_range_m=self.tag_group_read_range_m, phase=phase, wall_areas=walls,
             wall_softness_m=self.wall_softness_m, wifi=WifiModel(sd_floor_m=self.wifi_sd_floor_m, eps=self.eps),
             wifi_min_travel_m=self.wifi_min_travel_m, compass=CompassModel(self.compass_sd_rad, self.eps),
-            compass_bias_sd_rad=self.compass_bias_sd_rad, odometry_scale_sd=self.odometry_scale_sd, eps=self.eps,
+            compass_bias_sd_rad=self.compass_bias_sd_rad, odometry_scale_sd=self.odometry_scale_sd,
+            odometry_scale_walk=self.odometry_scale_walk, compass_bias_walk_rad=self.compass_bias_walk_rad,
+            eps=self.eps,
             reset_threshold=self.reset_threshold, resample_threshold=self.resample_threshold)

@@ -47,7 +47,7 @@ def fused_map() -> FusedMap:
 
 
 def phase_reading(x: float, y: float, yaw: float) -> PhaseReading:
-    """The noiseless phase difference of the ceiling tag on the two receiving antennas at pose (x, y, yaw)."""
+    """The noiseless phases of the ceiling tag on the two receiving antennas at pose (x, y, yaw)."""
     tag = np.array(CEILING_TAG[1])
     phases = []
     for port in PARAMETERS.phase_antennas:
@@ -55,7 +55,7 @@ def phase_reading(x: float, y: float, yaw: float) -> PhaseReading:
         antenna = np.array((x + math.cos(yaw) * ax - math.sin(yaw) * ay, y + math.sin(yaw) * ax + math.cos(yaw) * ay,
                             az))
         phases.append(float(round_trip_phase(float(np.linalg.norm(tag - antenna)), FREQUENCY_HZ)))
-    return PhaseReading(CEILING_TAG[0], phases[0] - phases[1], FREQUENCY_HZ)
+    return PhaseReading(CEILING_TAG[0], phases[0], phases[1], FREQUENCY_HZ)
 
 
 def lattice_reads(x: float, y: float) -> list[str]:

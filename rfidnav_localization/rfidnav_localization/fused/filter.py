@@ -6,8 +6,15 @@ of tag evidence a robot map declares, WiFi fixes and the compass, moved by the w
   particle's own odometry scale: wheel odometry is off by a scale that stays put (paper 003: about 1 m per
   20 m with a load), which noise drawn afresh each step would understate by an order of magnitude.
 * Each particle also carries a compass bias (rfidnav_localization.fused.models.CompassModel).
+* Both walk a little with the distance travelled (a random walk of sd ``*_walk`` per square root of a metre):
+  they do drift (a load, a floor's grip, the steel near the compass), and a parameter with no dynamics collapses
+  to one value after a few resamplings (sample impoverishment; Liu and West 2001), after which the filter can
+  neither correct it nor know it is wrong: on paper 001's hallway every particle came to share one scale 7 %
+  short within 5 s of its first floor tag, and the estimate fell half a metre behind the truth while claiming 4 cm.
 * Weights: the sum of the log-likelihoods of the evidence present (rfidnav_localization.fused.models); a kind
-  absent this round costs nothing. Resampling (systematic) when the effective sample size falls below half.
+  absent this round costs nothing. A ceiling tag heard on the same channel in the previous round also gives its
+  range rate, weighed against each particle's pose then (kept from that round, after its resampling) and now.
+  Resampling (systematic) when the effective sample size falls below half.
 * Global localization and kidnap recovery: sensor resetting (Lenser and Veloso 2000), in the spirit of
   augmented MCL (Thrun, Burgard and Fox, *Probabilistic Robotics*, table 8.3). Each model scores 0 at best
   agreement, so the weight-averaged likelihood of a round's evidence of one kind says how well the particles
@@ -25,6 +32,7 @@ of tag evidence a robot map declares, WiFi fixes and the compass, moved by the w
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -47,7 +55,7 @@ from rfidnav_localization.fused.models import (
 from rfidnav_localization.fused.tag_map import FusedMap
 from rfidnav_localization.motion_model import sampled_increments
 
-EVIDENCE_KINDS = ("lattice", "tag_group", "ceiling_phase", "wall_tag", "wifi", "compass")
+EVIDENCE_KINDS = ("lattice", "tag_group", "ceiling_phase", "ceiling_range_rate", "wall_tag", "wifi", "compass")
 # The kinds that can propose poses, and how much of their running average of the likelihood a new round
 # replaces: a tag read no particle explains resets at once, a WiFi fix only after several (see the docstring).
 RESET_MEMORY = {"lattice": 1.0, "tag_group": 1.0, "wall_tag": 1.0, "wifi": 0.5}
@@ -75,6 +83,8 @@ class FusedSettings:
     compass: CompassModel = CompassModel()
     compass_bias_sd_rad: float = math.radians(4.0)   # prior of the compass's constant bias
     odometry_scale_sd: float = 0.05                  # prior of the odometry's distance scale, about 1
+    odometry_scale_walk: float = 0.005               # its random walk [per sqrt(m) travelled]
+    compass_bias_walk_rad: float = math.radians(0.5)   # the compass bias's random walk [rad per sqrt(m)]
     eps: float = 0.01
     reset_threshold: float = 0.1                  # the average likelihood below which particles are redrawn
     resample_threshold: float = 0.5               # resample when the effective sample size falls below this share
@@ -83,7 +93,8 @@ class FusedSettings:
         if self.particles < 10:
             raise ParameterError("particles", f"at least 10 needed, got {self.particles}")
         for name in ("motion_noise_fraction", "motion_noise_floor_m", "motion_noise_yaw_rad_per_m",
-                     "wifi_min_travel_m", "compass_bias_sd_rad", "odometry_scale_sd"):
+                     "wifi_min_travel_m", "compass_bias_sd_rad", "odometry_scale_sd", "odometry_scale_walk",
+                     "compass_bias_walk_rad"):
             value = getattr(self, name)
             if not (math.isfinite(value) and value >= 0.0):
                 raise ParameterError(name, f"must be a non-negative number, got {value}")
@@ -95,10 +106,15 @@ class FusedSettings:
 
 @dataclass(frozen=True)
 class PhaseReading:
-    """One backscatter of a ceiling tag received on both antennas: their phase difference phi1 - phi2."""
+    """One backscatter of a ceiling tag received on both antennas: the phase on each."""
     tag_id: str
-    dphi_rad: float
+    phase1_rad: float
+    phase2_rad: float
     frequency_hz: float
+
+    @property
+    def dphi_rad(self) -> float:
+        return self.phase1_rad - self.phase2_rad
 
 
 @dataclass(frozen=True)
@@ -138,8 +154,8 @@ class Ports:
 
 def round_evidence(reads: Sequence[RoundRead], ports: Ports, wifi_fix: tuple[tuple[float, float], float] | None,
                    compass_yaw_rad: float | None) -> Evidence:
-    """One round's evidence: the floor antenna's tags, the side antenna's wall tags, and the phase difference of
-    each ceiling tag heard on both receiving antennas on one channel (the last read of it on each), with the
+    """One round's evidence: the floor antenna's tags, the side antenna's wall tags, and the phases of each
+    ceiling tag heard on both receiving antennas on one channel (the last read of it on each), with the
     latest WiFi fix and compass heading. The node and the in-process runners both build it here."""
     phase: list[PhaseReading] = []
     if ports.phase is not None:
@@ -148,7 +164,7 @@ def round_evidence(reads: Sequence[RoundRead], ports: Ports, wifi_fix: tuple[tup
             if read.antenna in heard and not (math.isnan(read.phase_rad) or math.isnan(read.frequency_hz)):
                 heard[read.antenna][read.tag_id] = read
         first, second = (heard[port] for port in ports.phase)
-        phase = [PhaseReading(tag_id, first[tag_id].phase_rad - second[tag_id].phase_rad, first[tag_id].frequency_hz)
+        phase = [PhaseReading(tag_id, first[tag_id].phase_rad, second[tag_id].phase_rad, first[tag_id].frequency_hz)
                  for tag_id in first if tag_id in second and first[tag_id].frequency_hz == second[tag_id].frequency_hz]
     return Evidence(floor_tag_ids=[read.tag_id for read in reads if ports.floor and read.antenna == ports.floor],
                     phase=phase,
@@ -190,6 +206,9 @@ class FusedFilter:
         self.explained: dict[str, float] = {}
         self.travel_since_wifi_m = math.inf
         self.initialised = False
+        # The particles at the previous round and its ceiling tag phases: the range rate's other end.
+        self.previous_states: np.ndarray | None = None
+        self.previous_phase: dict[str, PhaseReading] = {}
 
     # ------------------------------------------------------------------------------------ initialisation
     def initialise_global(self) -> None:
@@ -199,6 +218,7 @@ class FusedFilter:
         self.explained = dict.fromkeys(RESET_MEMORY, 0.0)    # an unknown start explains nothing yet
         self.weights.fill(1.0 / self.settings.particles)
         self.initialised = True
+        self.previous_states, self.previous_phase = None, {}
 
     def initialise_at(self, x: float, y: float, yaw: float, covariance: np.ndarray) -> None:
         """A known start (``/initialpose``): a Gaussian about (x, y, yaw) with the 3 x 3 ``covariance``."""
@@ -209,6 +229,7 @@ class FusedFilter:
         self.explained = {}                                   # a given start: trusted until contradicted
         self.weights.fill(1.0 / count)
         self.initialised = True
+        self.previous_states, self.previous_phase = None, {}
 
     def _draw_biases(self, rows: np.ndarray) -> None:
         """Fresh odometry scales and compass biases from their priors for these particles."""
@@ -224,7 +245,7 @@ class FusedFilter:
     # -------------------------------------------------------------------------------------------- motion
     def predict(self, forward: float, lateral: float, rotation: float) -> None:
         """Move every particle by the odometry increment (robot frame of the previous pose), with noise, its
-        distance times the particle's own odometry scale."""
+        distance times the particle's own odometry scale; the scales and compass biases walk with the distance."""
         s = self.settings
         increments = sampled_increments(forward, lateral, rotation, self.states.shape[1], self.rng,
                                         s.motion_noise_fraction, s.motion_noise_floor_m, s.motion_noise_yaw_rad_per_m,
@@ -237,14 +258,24 @@ class FusedFilter:
         x += cos_yaw * dx - sin_yaw * dy
         y += sin_yaw * dx + cos_yaw * dy
         yaw += dyaw
-        self.travel_since_wifi_m += math.hypot(forward, lateral)
+        distance = math.hypot(forward, lateral)
+        self.travel_since_wifi_m += distance
+        if distance > 0.0:
+            root = math.sqrt(distance)
+            count = len(self.scales)
+            self.scales += s.odometry_scale_walk * root * self.rng.standard_normal(count)
+            self.biases += s.compass_bias_walk_rad * root * self.rng.standard_normal(count)
 
     # -------------------------------------------------------------------------------------------- update
     def update(self, evidence: Evidence) -> Update:
         """Weigh the particles by this round's evidence; resample (with recovery particles) when due."""
         by_kind, ignored = self._log_likelihoods(self.states, evidence)
-        if not by_kind:
-            return Update((), ignored, 0)
+        update = self._weigh(by_kind, evidence) if by_kind else Update((), ignored, 0)
+        self.previous_states = self.states.copy()
+        self.previous_phase = {reading.tag_id: reading for reading in evidence.phase}
+        return dataclasses.replace(update, ignored_tag_ids=ignored)
+
+    def _weigh(self, by_kind: dict[str, np.ndarray], evidence: Evidence) -> Update:
         s = self.settings
         redraw = 0.0
         log_likelihood = np.zeros(self.states.shape[1])
@@ -267,7 +298,7 @@ class FusedFilter:
             injected = self._resample(redraw, evidence)
         if injected:
             self.explained = {}      # the new particles are trusted until contradicted, by any kind
-        return Update(tuple(by_kind), ignored, injected)
+        return Update(tuple(by_kind), (), injected)
 
     def _log_likelihoods(self, states: np.ndarray, evidence: Evidence) -> tuple[dict[str, np.ndarray],
                                                                                  tuple[str, ...]]:
@@ -284,6 +315,11 @@ class FusedFilter:
                 continue
             _add(by_kind, "ceiling_phase",
                  phase_model.log_likelihood(states, ceiling_tag, reading.dphi_rad, reading.frequency_hz))
+            before = self.previous_phase.get(reading.tag_id)
+            if before is not None and before.frequency_hz == reading.frequency_hz and self.previous_states is not None:
+                changes = (reading.phase1_rad - before.phase1_rad, reading.phase2_rad - before.phase2_rad)
+                _add(by_kind, "ceiling_range_rate", phase_model.range_change_log_likelihood(
+                    self.previous_states, states, ceiling_tag, changes, reading.frequency_hz))
         for port, tag_id in evidence.wall_tag_ids:
             wall_tag = self.map.wall_tags.get(tag_id)
             model = self.wall_models.get(port)
