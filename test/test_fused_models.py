@@ -226,7 +226,8 @@ def test_each_case_of_bench_fused_weighs_its_kind_of_evidence_and_the_estimate_s
 SHIPPED_PAIRS = [("rfid_localizer_mixed.yaml", "reader_mixed.yaml"),
                  ("rfid_localizer_hf_floor.yaml", "reader_hf_floor.yaml"),
                  ("rfid_localizer_floor_lattice.yaml", "reader_floor_lattice.yaml"),
-                 ("rfid_localizer_wall_side.yaml", "reader_wall_side.yaml")]
+                 ("rfid_localizer_wall_side.yaml", "reader_wall_side.yaml"),
+                 ("rfid_localizer_uhf_2ant.yaml", "reader_uhf_2ant.yaml")]
 
 
 @pytest.mark.parametrize(("localizer_file", "reader_file"), SHIPPED_PAIRS)
@@ -236,6 +237,7 @@ def test_each_shipped_rfid_localizer_file_describes_its_robots_reader_as_the_rea
     from rfidnav_experiments.runners.shipped import file_parameters
     from rfidnav_localization.parameters import RfidLocalizerParameters
     from rfidnav_sim.parameters import SIDE_BEARINGS, ReaderParameters
+    from rfidnav_sim.rfid_model import reach_m
 
     fused = file_parameters(RfidLocalizerParameters, CONFIG_DIR / "params" / localizer_file, "rfid_localizer",
                             map_file="(any)")
@@ -247,7 +249,9 @@ def test_each_shipped_rfid_localizer_file_describes_its_robots_reader_as_the_rea
     facing = dict(enumerate(reader.antenna_facing, start=1))
     if fused.floor_antenna:
         assert facing[fused.floor_antenna] == "down"
-        assert fused.tag_group_read_range_m == pytest.approx(reader.antenna_max_range_m[fused.floor_antenna - 1])
+        model = reader.reader_model()     # the reach along the floor, to the millimetre
+        floor_reach = reach_m(model, model.antennas[fused.floor_antenna - 1], 0.0)
+        assert fused.tag_group_read_range_m == pytest.approx(floor_reach, abs=0.001)
     else:
         assert "down" not in reader.antenna_facing
     assert all(facing[port] == "up" for port in fused.phase_antennas)

@@ -2,18 +2,21 @@
 localizer, on the same runs, paired.
 
 Worlds: paper 003's homes (HOMES of reproduce two_tier: the in-tree flat and two of ours), the mixed floor (ours:
-every kind of tag on one floor), paper 000's field and paper 004's ring. On the homes and the mixed floor each run
-is the two-tier navigator's mission from the scenario's start to its goal, its legs planned round the map's walls,
-driven by the paper's localizer (WiFi fingerprints, then floor tag groups, dead reckoning between) with the
-scenario's reader; the fused localizers ride beside it on what the same sensors gave in each reader round (every
-antenna's reads, the location server's answers to the navigator's locate calls, the compass, the odometry). On
-paper 000's field (``partition_field``) each run is a 3 m task of the partition navigator on the paper's localizer,
-the fused localizers beside it on the same rounds (its robot has no compass and no WiFi). On paper 004's ring
-(``building_ring``) each run is one of the mission executor's missions, the fused localizers beside it on the side
-antenna's wall tags and the odometry, scored with the node the executor believes the robot is at. The fused
-settings are those of the robot's rfid_localizer parameter file (the filter's the same for every robot and world).
-Every fused localizer starts, as the paper's does, knowing only the map: global localization from its first
-evidence.
+every kind of tag on one floor), paper 000's field, paper 004's ring and paper 001's hallway. On the homes and the
+mixed floor each run is the two-tier navigator's mission from the scenario's start to its goal, its legs planned
+round the map's walls, driven by the paper's localizer (WiFi fingerprints, then floor tag groups, dead reckoning
+between) with the scenario's reader; the fused localizers ride beside it on what the same sensors gave in each
+reader round (every antenna's reads, the location server's answers to the navigator's locate calls, the compass, the
+odometry). On paper 000's field (``partition_field``) each run is a 3 m task of the partition navigator on the
+paper's localizer, the fused localizers beside it on the same rounds (its robot has no compass and no WiFi). On
+paper 004's ring (``building_ring``) each run is one of the mission executor's missions, the fused localizers beside
+it on the side antenna's wall tags and the odometry, scored with the node the executor believes the robot is at. On
+paper 001's hallway (Figs. 12/13) each run is the tag route follower's whole route under the seven ceiling tags, the
+fused localizers beside it on the two receiving antennas' phases, the floor tags under the ceiling tags and the
+odometry; the follower keeps no pose, so the robot's own idea of where it is, scored as the paper's, is its odometry
+from the known start. The fused settings are those of the robot's rfid_localizer parameter file (the filter's the
+same for every robot and world). Every fused localizer starts, as the paper's does, knowing only the map: global
+localization from its first evidence.
 
 Localizers: ``fused`` (every kind of evidence), on the mixed floor also the same filter given one kind of evidence
 and the compass (``floor_only``: lattice and tag-group reads, paper 000's and 003's tier two; ``phase_only``:
@@ -62,11 +65,13 @@ from rfidnav_experiments.runners.fused import (
     Beside,
     PartitionBeside,
     Rider,
+    RouteBeside,
     TopologicalBeside,
     Track,
 )
 from rfidnav_experiments.runners.partitions import random_task, run_navigation
 from rfidnav_experiments.runners.shipped import file_parameters
+from rfidnav_experiments.runners.tag_route import controller_parameters, run_tag_route
 from rfidnav_experiments.runners.topological import FLOORS, mission_tasks, run_mission, start_pose_before_tag
 from rfidnav_experiments.runners.two_tier import SETTINGS, run_two_tier
 from rfidnav_localization.fused.filter import FusedSettings
@@ -83,7 +88,9 @@ EVALUATION_SEED = 401
 MIXED = "mixed_floor"
 PARTITIONS = "partition_field"
 RING = "building_ring"
-WORLDS = (*HOMES, MIXED, PARTITIONS, RING)
+HALLWAY = "hallway"
+WORLDS = (*HOMES, MIXED, PARTITIONS, RING, HALLWAY)
+UHF_2ANT_LOCALIZER = CONFIG_DIR / "params" / "rfid_localizer_uhf_2ant.yaml"
 WALL_SIDE_LOCALIZER = CONFIG_DIR / "params" / "rfid_localizer_wall_side.yaml"
 # Paper 000: the partition navigator with the paper's localizer drives tasks of this length across the field (the
 # scenario's world, r = 20 cm), with this much relative odometry noise (the fused filter's motion model needs
@@ -103,6 +110,9 @@ NEES_BAND = 0.95
 
 
 def driver_of(world: str) -> str:
+    if world == HALLWAY:
+        return ("paper 001's tag route follower driving; it keeps no pose, so its 'paper' pose is the wheel "
+                "odometry from the known start")
     if world == RING:
         return "paper 004's mission executor driving; its 'paper' position is the node it believes it is at"
     return ("the partition navigator driving with paper 000's localizer" if world == PARTITIONS
@@ -251,7 +261,29 @@ def topological_run(job: tuple[str, int, int]) -> FusedRun:
     return fused_run(name, run, result.success, riders, beside.paper, result.duration_s)
 
 
+def route_run(job: tuple[str, int, int]) -> FusedRun:
+    """One run of paper 001's hallway route (Figs. 12/13): the tag route follower steering by the ceiling tags'
+    phase difference, the fused localizers beside on the same reader rounds and odometry. Their map is the
+    hallway's tag survey: the ceiling tags and the floor tags under them, within the walls' bounding box."""
+    name, run, seed = job
+    scenario = load_scenario(name)
+    world = scenario.world
+    parameters = file_parameters(RfidLocalizerParameters, UHF_2ANT_LOCALIZER, "rfid_localizer",
+                                 map_file=str(scenario.map_file))
+    fused_map = FusedMap(extent=bounding_box(world.walls),
+                         floor_tags={tag.tag_id: tag.position[:2] for tag in world.tags if tag.kind == "floor"},
+                         ceiling_tags={tag.tag_id: tag.position for tag in world.tags if tag.kind == "ceiling"})
+    riders = riders_for(name, run, seed, parameters.settings(), fused_map)
+    x, y, yaw_deg = scenario.robot
+    beside = RouteBeside(riders, parameters.ports(), (x, y, math.radians(yaw_deg)))
+    run_seed = derive_seed(seed, f"fused:{name}:{run}:route")
+    result = run_tag_route(scenario, controller_parameters(scenario, None, run_seed), run_seed, observer=beside)
+    return fused_run(name, run, result.success, riders, beside.paper, result.sim_duration_s)
+
+
 def world_run(job: tuple[str, int, int]) -> FusedRun:
+    if job[0] == HALLWAY:
+        return route_run(job)
     if job[0] == PARTITIONS:
         return partition_run(job)
     return topological_run(job) if job[0] == RING else home_run(job)

@@ -23,8 +23,10 @@ from typing import Any
 
 import numpy as np
 
+from rfidnav_common.frames import compose
 from rfidnav_common.geometry import wrap_angle
 from rfidnav_experiments.runners.partitions import IdealRobot
+from rfidnav_experiments.runners.tag_route import RouteRound
 from rfidnav_experiments.runners.topological import MissionStep
 from rfidnav_experiments.runners.two_tier import StepSeen
 from rfidnav_localization.fused.filter import Evidence, Ports, round_evidence
@@ -61,10 +63,13 @@ class Track:
         self.nees.append(float(error @ np.linalg.solve(covariance, error)))
         self.nees_dofs.append(len(error))
 
-    def add_position(self, time_s: float, position_error: tuple[float, float]) -> None:
-        """An estimate with a position only and no covariance to judge it by (no heading, no NEES)."""
+    def add_position(self, time_s: float, position_error: tuple[float, float],
+                     heading_error: float | None = None) -> None:
+        """An estimate with no covariance to judge it by (no NEES)."""
         self.times_s.append(time_s)
         self.position_errors_m.append(math.hypot(*position_error))
+        if heading_error is not None:
+            self.heading_errors_rad.append(heading_error)
 
     @property
     def fix_rate(self) -> float:
@@ -211,3 +216,25 @@ class TopologicalBeside:
         node = self.node_positions.get(step.current_node or "")
         if node is not None:
             self.paper.add_position(step.time_s, (node[0] - x, node[1] - y))
+
+
+class RouteBeside:
+    """Fused localizers fed by a paper 001 route's reader rounds (rfidnav_experiments.runners.tag_route: the two
+    receiving antennas under the ceiling tags, the floor antenna over the arrival tags, the odometry; the robot has
+    no compass). Paper 001's follower keeps no pose: what the robot knows of where it is without the fused
+    localizer is its wheel odometry from the known ``start``, scored as the paper's (no covariance, so no NEES)."""
+
+    def __init__(self, riders: dict[str, Rider], ports: Ports, start: tuple[float, float, float]) -> None:
+        self.riders = riders
+        self.ports = ports
+        self.start = start
+        self.paper = Track()
+
+    def __call__(self, seen: RouteRound) -> None:
+        evidence = round_evidence(seen.reads, self.ports, None, None)
+        for rider in self.riders.values():
+            if rider.moved(seen.time_s, seen.odom, seen.truth):
+                rider.update(seen.time_s, evidence, seen.truth)
+        self.paper.rounds += 1
+        x, y, yaw = compose(self.start, seen.odom)
+        self.paper.add_position(seen.time_s, (x - seen.truth[0], y - seen.truth[1]), wrap_angle(yaw - seen.truth[2]))

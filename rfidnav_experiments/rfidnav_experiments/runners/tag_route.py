@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 from collections import deque
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -23,7 +24,7 @@ from rfidnav_control.parameters import HeadingControllerParameters
 from rfidnav_control.tag_route import SEARCH_MODES, Command, TagRouteFollower, observe
 from rfidnav_experiments.runners.shipped import file_parameters
 from rfidnav_sim.parameters import ReaderParameters, RobotSimParameters
-from rfidnav_sim.rfid_model import ReaderSimulator
+from rfidnav_sim.rfid_model import Read, ReaderSimulator
 
 
 @dataclass(frozen=True)
@@ -37,6 +38,15 @@ class RouteRun:
     trajectory: Trajectory
     arrival_times_s: tuple[float, ...]
     search_s: float = 0.0                  # sim time spent searching for an unheard target (tag_route.SEARCH_MODES)
+
+
+@dataclass(frozen=True)
+class RouteRound:
+    """What the robot's sensors gave in one reader round (an observer's view; ``truth`` is for scoring only)."""
+    time_s: float
+    odom: tuple[float, float, float]        # the wheel odometry pose, odom frame (the start pose at 0)
+    reads: Sequence[Read]
+    truth: tuple[float, float, float]
 
 
 def role_parameters(scenario: Scenario, executable: str, seed: int):
@@ -60,11 +70,12 @@ def tag_points(scenario: Scenario, route: list[str]) -> np.ndarray:
 
 def run_tag_route(scenario: Scenario, controller: HeadingControllerParameters, seed: int,
                   reader: ReaderParameters | None = None, timeout_s: float | None = None,
-                  command_delay_s: float = 0.0) -> RouteRun:
+                  command_delay_s: float = 0.0, observer: Callable[[RouteRound], None] | None = None) -> RouteRun:
     """One run of the scenario's route, in-process and in lockstep.
 
     ``command_delay_s`` applies each command that much sim time after the round it answers: the latency of
-    reads -> controller -> /cmd_vel over DDS, which at a high RTF on a loaded machine spans several rounds."""
+    reads -> controller -> /cmd_vel over DDS, which at a high RTF on a loaded machine spans several rounds.
+    ``observer`` is shown each reader round (a localizer riding beside the follower: reproduce fused)."""
     robot: RobotSimParameters = role_parameters(scenario, "robot_sim", seed)
     reader = reader or role_parameters(scenario, "rfid_reader_sim", seed)
     world = scenario.world
@@ -95,7 +106,10 @@ def run_tag_route(scenario: Scenario, controller: HeadingControllerParameters, s
         if now + 1e-9 < next_round_s:
             continue
         next_round_s = (math.floor(now / round_period_s + 1e-6) + 1) * round_period_s
-        reads = simulator.inventory(base.truth.x, base.truth.y, base.truth.yaw, now)
+        truth = base.truth
+        reads = simulator.inventory(truth.x, truth.y, truth.yaw, now)
+        if observer is not None:
+            observer(RouteRound(now, (base.odom.x, base.odom.y, base.odom.yaw), reads, (truth.x, truth.y, truth.yaw)))
         command = follower.step(now, [o for o in map(observe, reads) if o is not None])
         if command.arrived_index is not None:
             arrivals.append(now)
