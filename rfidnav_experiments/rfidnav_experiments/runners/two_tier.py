@@ -213,6 +213,41 @@ def grid_radio_map(world: World, points: Sequence[tuple[float, float]], rng: np.
     return RadioMap(fingerprints)
 
 
+class FloorRobot:
+    """The robot of the in-process runs on a home's floor: a unicycle stepped at the control rate whose steps into a
+    wall are not made (robot_sim's round base stalls there; the step is counted in ``bumps``), its true track kept,
+    and its wheel odometry: the same motion with the distance off by ``odometry_scale_error``."""
+
+    def __init__(self, start: tuple[float, float, float], walls: np.ndarray, odometry_scale_error: float) -> None:
+        self.x, self.y, self.yaw = start
+        self.walls = walls
+        self.odometry_scale_error = odometry_scale_error
+        self.odom = (0.0, 0.0, 0.0)
+        self.bumps = 0
+        self.track = [(self.x, self.y)]
+
+    @property
+    def truth(self) -> tuple[float, float, float]:
+        return self.x, self.y, self.yaw
+
+    def step(self, linear: float, angular: float, dt: float) -> float:
+        """Drive one step of ``dt``; the speed it made (0 against a wall: it only turns)."""
+        dx, dy, dyaw = unicycle_step(self.yaw, linear, angular, dt)
+        if len(self.walls) and moves_into_wall(self.walls, (self.x, self.y), (self.x + dx, self.y + dy),
+                                               FOOTPRINT_RADIUS_M):
+            self.bumps += 1
+            linear = dx = dy = 0.0
+        self.x, self.y, self.yaw = self.x + dx, self.y + dy, self.yaw + dyaw
+        self.track.append((self.x, self.y))
+        dx, dy, dyaw = unicycle_step(self.odom[2], linear * (1.0 + self.odometry_scale_error), angular, dt)
+        self.odom = (self.odom[0] + dx, self.odom[1] + dy, self.odom[2] + dyaw)
+        return linear
+
+    def wall_crossings(self) -> int:
+        """rfidnav_bringup.metrics.wall_crossings of the true track."""
+        return wall_crossings(np.array(self.track), self.walls)
+
+
 @dataclass(frozen=True)
 class StepSeen:
     """What the robot's sensors gave in one step of a run, with the truth and the navigator's own estimate after
@@ -265,12 +300,12 @@ def run_two_tier(site: Site, start: tuple[float, float, float], target: tuple[fl
     called after every step with what the sensors gave (:class:`StepSeen`); it draws nothing.
     ``reader_parameters``: the robot's reader (the navigator reads its floor antenna's port)."""
     x, y, yaw = start
+    robot = FloorRobot(start, site.world.wall_segments(), odometry_scale_error)
     reader = reader_parameters.simulated_reader(site.world, reader_seed)
     floor_port = NAVIGATOR.floor_antenna
     positions = {tag.tag_id: tag.position for tag in site.tag_map}
     survey: list[tuple[tuple[float, float], dict[str, float]]] = []
     surveyed_at_m = -math.inf
-    odom = (0.0, 0.0, 0.0)
     navigator = TwoTierNavigator(settings, floor)
     decision = navigator.start(target, known_start)
     fix_errors: list[float] = []
@@ -278,23 +313,13 @@ def run_two_tier(site: Site, start: tuple[float, float, float], target: tuple[fl
     tier_one_errors: list[float] = []
     fixes_seen = len(navigator.progress.fixes)      # a known start is no fix of the reader's
     time_s = path_m = 0.0
-    walls, bumps = site.world.wall_segments(), 0
-    track = [(x, y)]
     located: list[tuple[tuple[float, float], float]] = []
     while not decision.finished and time_s < max_time_s:
         if decision.request is not None:
             decision = answer(site, navigator, decision.request, (x, y), rng, locate, tier_one_errors, located)
             continue
-        linear, angular = decision.command
-        dx, dy, dyaw = unicycle_step(yaw, linear, angular, STEP_S)
-        if len(walls) and moves_into_wall(walls, (x, y), (x + dx, y + dy), FOOTPRINT_RADIUS_M):
-            bumps += 1
-            linear = dx = dy = 0.0                      # stalled against the wall: it only turns
-        x, y, yaw = x + dx, y + dy, yaw + dyaw
-        track.append((x, y))
-        # Odometry: the same motion with the distance off by the scale error.
-        dx, dy, dyaw = unicycle_step(odom[2], linear * (1.0 + odometry_scale_error), angular, STEP_S)
-        odom = (odom[0] + dx, odom[1] + dy, odom[2] + dyaw)
+        linear = robot.step(*decision.command, STEP_S)
+        (x, y, yaw), odom = robot.truth, robot.odom
         path_m += abs(linear) * STEP_S
         time_s += STEP_S
         due = reader.round_at(x, y, yaw, time_s)
@@ -323,13 +348,13 @@ def run_two_tier(site: Site, start: tuple[float, float, float], target: tuple[fl
     if not decision.finished:
         decision = navigator.finish(False, f"timed out after {max_time_s:g} s")
     progress = navigator.progress
-    crossings = wall_crossings(np.array(track), walls)
+    crossings = robot.wall_crossings()
     objection = ground_truth_objection({"wall_crossings": crossings})
     return TwoTierRun(decision.success and objection is None,
                       decision.message if objection is None else f"{decision.message}; but it {objection}",
                       (x, y), target, path_m, tuple(fix_errors), tuple(tag_position_errors), tuple(tier_one_errors),
                       progress.searches, progress.search_length_m, tuple(progress.visited), time_s, tuple(survey),
-                      bumps, crossings)
+                      robot.bumps, crossings)
 
 
 def answer(site: Site, navigator: TwoTierNavigator, request: Request, true_position: tuple[float, float],
