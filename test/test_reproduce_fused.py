@@ -15,6 +15,7 @@ import pytest
 from rfidnav_common.frames import map_to_odom
 from rfidnav_experiments.reproduce.fused import (
     DEVELOPMENT_SEED,
+    DRIVING,
     HALLWAY,
     METRICS,
     MIXED,
@@ -24,6 +25,7 @@ from rfidnav_experiments.reproduce.fused import (
     WORLDS,
     home_run,
     localizers_of,
+    recovery_keys,
     world_run,
 )
 from rfidnav_localization.fused.filter import PoseEstimate, Update
@@ -87,6 +89,15 @@ def test_on_paper_001s_hallway_the_fused_localizer_beside_the_route_follower_bea
     assert run.global_s is not None and run.global_s < 30.0      # by the first floor tag under a ceiling tag
 
 
+def test_pose_navigator_driving_on_the_fused_pose_in_process_arrives_and_the_pose_it_drove_on_was_right() -> None:
+    run = world_run((DRIVING, 0, DEVELOPMENT_SEED))
+    assert run.success and set(run.figures) == {"fused"}
+    assert run.final_error_m is not None and run.final_error_m < 0.3
+    fused = run.figures["fused"]
+    assert fused.position_rmse_m is not None and fused.position_rmse_m < 0.15
+    assert run.late_global_s is None and run.kidnap_recovery_s is None     # the pose that drives is left alone
+
+
 def test_map_to_odom_composed_with_the_odometry_pose_is_the_estimated_pose() -> None:
     estimate = FusedEstimate(PoseEstimate(3.0, -1.0, 2.5, np.eye(3)), (0.7, 1.9, -0.4), Update((), (), 0))
     pose = estimate.pose
@@ -107,9 +118,12 @@ def test_the_command_prints_every_metric_for_every_world_with_both_localizers_an
     rows = json.loads(result.stdout)
     recovery = ("global_s", "late_global_s", "kidnap_recovery_s")
     assert {(row["setting"].split()[0], row["metric"]) for row in rows} == {
-        (w, m) for w in WORLDS for m in (*METRICS, *recovery)}
+        (w, m) for w in WORLDS for m in (*METRICS, *recovery_keys(w), *(("arrival",) if w == DRIVING else ()))}
     for row in rows:
         world = row["setting"].split()[0]
+        if row["metric"] == "arrival":
+            assert row["fused"]["runs"] == 2 and 0 <= row["fused"]["arrived"] <= 2
+            continue
         if row["metric"] in recovery:
             assert row["fused"]["runs"] == 2 and row["fused"]["runs_found"] == row["fused"]["n"]
             continue

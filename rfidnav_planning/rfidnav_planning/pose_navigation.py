@@ -43,6 +43,12 @@ class Pose:
     yaw: float
     sd_m: float
 
+    @classmethod
+    def of_variances(cls, x: float, y: float, yaw: float, variance_x: float, variance_y: float) -> Pose:
+        """The pose with its position's sd taken as the larger axis's: the node from a PoseWithCovariance's
+        diagonal, the in-process runner from the estimate's covariance alike."""
+        return cls(x, y, yaw, math.sqrt(max(variance_x, variance_y)))
+
 
 @dataclass(frozen=True)
 class Step:

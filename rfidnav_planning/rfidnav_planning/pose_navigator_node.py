@@ -73,7 +73,7 @@ class PoseNavigatorNode(SteppedNode):
             return
         if self.pose is not None and self.goals.running is not None:
             self.travelled_m += math.dist((x, y), (self.pose.x, self.pose.y))
-        self.pose = Pose(x, y, yaw, math.sqrt(max(variance_x, variance_y)))
+        self.pose = Pose.of_variances(x, y, yaw, variance_x, variance_y)
         self.pose_stamp_s = seconds_of(msg.header.stamp)
 
     # -------------------------------------------------------------------------------------- goals

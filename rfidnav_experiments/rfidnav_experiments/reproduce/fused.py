@@ -68,6 +68,7 @@ from rfidnav_experiments.runners.fused import (
     RouteBeside,
     TopologicalBeside,
     Track,
+    drive_on_fused,
 )
 from rfidnav_experiments.runners.partitions import random_task, run_navigation
 from rfidnav_experiments.runners.shipped import file_parameters
@@ -78,7 +79,9 @@ from rfidnav_localization.fused.filter import FusedSettings
 from rfidnav_localization.fused.localizer import FusedLocalizer
 from rfidnav_localization.fused.tag_map import FusedMap
 from rfidnav_localization.parameters import RfidLocalizerParameters
-from rfidnav_sim.parameters import ReaderParameters
+from rfidnav_planning.parameters import PoseNavigatorParameters
+from rfidnav_planning.pose_navigation import PoseNavigator
+from rfidnav_sim.parameters import ReaderParameters, WifiSimParameters
 from rfidnav_sim.world import load_world
 
 EXPERIMENT = "fused"
@@ -89,7 +92,8 @@ MIXED = "mixed_floor"
 PARTITIONS = "partition_field"
 RING = "building_ring"
 HALLWAY = "hallway"
-WORLDS = (*HOMES, MIXED, PARTITIONS, RING, HALLWAY)
+DRIVING = "mixed_floor_fused"      # the fused pose drives the robot (pose_navigator), in-process
+WORLDS = (*HOMES, MIXED, PARTITIONS, RING, HALLWAY, DRIVING)
 UHF_2ANT_LOCALIZER = CONFIG_DIR / "params" / "rfid_localizer_uhf_2ant.yaml"
 WALL_SIDE_LOCALIZER = CONFIG_DIR / "params" / "rfid_localizer_wall_side.yaml"
 # Paper 000: the partition navigator with the paper's localizer drives tasks of this length across the field (the
@@ -110,6 +114,8 @@ NEES_BAND = 0.95
 
 
 def driver_of(world: str) -> str:
+    if world == DRIVING:
+        return "pose_navigator driving on the fused localizer's pose: no other localizer, no kidnap, no late start"
     if world == HALLWAY:
         return ("paper 001's tag route follower driving; it keeps no pose, so its 'paper' pose is the wheel "
                 "odometry from the known start")
@@ -125,6 +131,8 @@ def kidnap_times_of(world: str) -> tuple[float, float]:
 
 
 def localizers_of(world: str) -> tuple[str, ...]:
+    if world == DRIVING:
+        return ("fused",)
     return ("fused", *(SINGLE_EVIDENCE if world == MIXED else ()), "paper")
 
 
@@ -167,6 +175,7 @@ class FusedRun:
     late_global_s: float | None       # the same, for one started at LATE_START_S (mid-mission) [s]
     kidnap_recovery_s: float | None   # [s] from the kidnap; None: not found again (or the run ended first)
     duration_s: float
+    final_error_m: float | None = None   # DRIVING: the true distance from the target at the end
 
 
 def _rms(values: list[float]) -> float | None:
@@ -281,7 +290,36 @@ def route_run(job: tuple[str, int, int]) -> FusedRun:
     return fused_run(name, run, result.success, riders, beside.paper, result.sim_duration_s)
 
 
+def driving_run(job: tuple[str, int, int]) -> FusedRun:
+    """One mission of ``mixed_floor_fused`` in-process: pose_navigator driving on the fused localizer's pose from
+    the scenario's start to its goal, with the scenario's reader, WiFi scan period, navigator and localizer files.
+    The localizer starts knowing only the map, as the node does."""
+    name, run, seed = job
+    place = home(name)
+    robot_map = place.scenario.route_map
+    assert robot_map is not None                       # home() refuses a home without its map
+    nodes = place.scenario.nodes
+    parameters = localizer_parameters(place)
+    rider = Rider(FusedLocalizer(parameters.settings(), FusedMap.of_route_map(robot_map, place.site.radio_map),
+                                 rng_for(seed, f"fused:{name}:{run}:fused")))
+    navigation = file_parameters(PoseNavigatorParameters, nodes["pose_navigator"].param_files[0], "pose_navigator",
+                                 map_file=str(place.scenario.map_file))
+    wifi = file_parameters(WifiSimParameters, nodes["wifi"].param_files[0], "wifi_sim",
+                           world_file=str(place.scenario.world_file))
+    x, y, yaw_deg = place.scenario.robot
+    target = place.scenario.mission.goal["target"]
+    result = drive_on_fused(place.site, (x, y, math.radians(yaw_deg)), (target["x"], target["y"]), rider,
+                            parameters.ports(), PoseNavigator(navigation.settings(), place.floor),
+                            reader_parameters(place), rng_for(seed, f"fused:{name}:{run}:sensors"),
+                            derive_seed(seed, f"fused:{name}:{run}:reader"), 1.0 / navigation.control_rate_hz,
+                            wifi.scan_period_s, place.scenario.mission.timeout_s)
+    return FusedRun(name, run, result.success, {"fused": TrackFigures.of(rider.track)},
+                    rider.track.settled_after(0.0), None, None, result.duration_s, result.final_error_m)
+
+
 def world_run(job: tuple[str, int, int]) -> FusedRun:
+    if job[0] == DRIVING:
+        return driving_run(job)
     if job[0] == HALLWAY:
         return route_run(job)
     if job[0] == PARTITIONS:
@@ -314,11 +352,17 @@ def figures(results: list[FusedRun], world: str) -> dict[str, dict[str, Interval
     return out
 
 
+def recovery_keys(world: str) -> tuple[str, ...]:
+    """The FusedRun fields of a world's recovery figures (the fused pose that drives is neither started late nor
+    kidnapped: the robot would drive off with it)."""
+    return ("global_s",) if world == DRIVING else ("global_s", "late_global_s", "kidnap_recovery_s")
+
+
 def recovery_figures(results: list[FusedRun], world: str) -> dict[str, tuple[Interval, int]]:
     """Global localization and kidnap recovery [s]: the mean over the runs where it happened, and how many did."""
     mine = [r for r in results if r.world == world]
     out = {}
-    for key in ("global_s", "late_global_s", "kidnap_recovery_s"):
+    for key in recovery_keys(world):
         found = [getattr(r, key) for r in mine if getattr(r, key) is not None]
         out[key] = (Interval.of(found), len(found))
     return out
@@ -334,11 +378,18 @@ def report_lines(results: list[FusedRun], runs: int) -> list[str]:
         rows = [[label, *(_text(world_figures[metric][name], scale, digits) for name in names)]
                 for metric, (label, scale, digits) in METRICS.items()]
         lines += table(["metric", *names], rows)
+        recovery = recovery_figures(results, world)
+        if world == DRIVING:
+            final = Interval.of([r.final_error_m for r in results if r.world == world and r.final_error_m is not None])
+            low, high = Interval.of_proportion(arrived, runs).bounds or (0.0, 0.0)
+            lines += [f"arrived {arrived}/{runs} (95 % interval {low:.0f}-{high:.0f} %); true "
+                      f"distance from the target at the end {final.text(1.0, 3)} m; global localization from the "
+                      f"start {recovery['global_s'][0].text(1.0, 1)} s in {recovery['global_s'][1]}/{runs} runs", ""]
+            continue
         rows = [[label, _text(world_figures[metric][f"{name} - fused"], scale, digits)]
                 for metric, (label, scale, digits) in METRICS.items() for name in names[1:]
                 for label in (f"{METRICS[metric][0]}: {name} - fused",)]
         lines += table(["paired difference", "mean [95 % interval]"], rows)
-        recovery = recovery_figures(results, world)
         late_s, kidnap_s = kidnap_times_of(world)
         lines += [f"global localization (error below {CONVERGED_M:g} m for {CONVERGED_FOR_S:g} s): from the start "
                   f"{recovery['global_s'][0].text(1.0, 1)} s in {recovery['global_s'][1]}/{runs} runs; started at "
@@ -362,6 +413,14 @@ def json_rows(results: list[FusedRun], seed: int) -> list[dict[str, Any]]:
             rows.append({"experiment": EXPERIMENT, "setting": f"{world} seed {seed}", "metric": key,
                          "fused": {**_interval_json(interval), "runs_found": count,
                                    "runs": sum(r.world == world for r in results)}})
+        if world == DRIVING:
+            mine = [r for r in results if r.world == world]
+            arrived = sum(r.success for r in mine)
+            rate = Interval.of_proportion(arrived, len(mine))
+            final = Interval.of([r.final_error_m for r in mine if r.final_error_m is not None])
+            rows.append({"experiment": EXPERIMENT, "setting": f"{world} seed {seed}", "metric": "arrival",
+                         "fused": {"arrived": arrived, "runs": len(mine), "rate_pct": rate.mean,
+                                   "rate_bounds_pct": rate.bounds, "final_error_m": _interval_json(final)}})
     return rows
 
 

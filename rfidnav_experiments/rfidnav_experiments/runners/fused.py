@@ -23,15 +23,21 @@ from typing import Any
 
 import numpy as np
 
+from rfidnav_bringup.metrics import ground_truth_objection
 from rfidnav_common.frames import compose
 from rfidnav_common.geometry import wrap_angle
 from rfidnav_experiments.runners.partitions import IdealRobot
 from rfidnav_experiments.runners.tag_route import RouteRound
 from rfidnav_experiments.runners.topological import MissionStep
-from rfidnav_experiments.runners.two_tier import StepSeen
+from rfidnav_experiments.runners.two_tier import COMPASS, ODOMETRY_SCALE_ERROR, FloorRobot, Site, StepSeen
+from rfidnav_localization.errors import LocateError
+from rfidnav_localization.fingerprint import LocateSettings
 from rfidnav_localization.fused.filter import Evidence, Ports, round_evidence
-from rfidnav_localization.fused.localizer import FusedLocalizer
+from rfidnav_localization.fused.localizer import FusedEstimate, FusedLocalizer
 from rfidnav_localization.partition import LocalizationEstimate
+from rfidnav_planning.pose_navigation import Pose, PoseNavigator
+from rfidnav_sim.compass_model import CompassModel
+from rfidnav_sim.parameters import ReaderParameters
 
 MIN_VARIANCE = 1e-12     # a covariance with a zero variance (a collapsed cloud) is floored, not inverted
 # The kinds a rider may be restricted to: the fields of Evidence they keep.
@@ -121,7 +127,7 @@ class Rider:
             self.localizer.set_pose(*kidnapped(truth, self.extent), np.diag([0.01, 0.01, 0.0025]))
         return True
 
-    def update(self, time_s: float, evidence: Evidence, truth: tuple[float, float, float]) -> None:
+    def update(self, time_s: float, evidence: Evidence, truth: tuple[float, float, float]) -> FusedEstimate | None:
         """One round's evidence (of the kinds it is given), its estimate scored against ``truth``."""
         estimate = self.localizer.on_round(self.evidence(evidence))
         self.track.rounds += 1
@@ -129,6 +135,7 @@ class Rider:
             pose = estimate.pose
             self.track.add(time_s, (pose.x - truth[0], pose.y - truth[1]), wrap_angle(pose.yaw - truth[2]),
                            pose.covariance)
+        return estimate
 
 
 def kidnapped(truth: tuple[float, float, float], extent: tuple[float, float, float, float]) \
@@ -238,3 +245,62 @@ class RouteBeside:
         self.paper.rounds += 1
         x, y, yaw = compose(self.start, seen.odom)
         self.paper.add_position(seen.time_s, (x - seen.truth[0], y - seen.truth[1]), wrap_angle(yaw - seen.truth[2]))
+
+
+@dataclass(frozen=True)
+class DrivingRun:
+    success: bool                      # arrived by the fused pose, and no wall crossed
+    message: str
+    final_error_m: float               # true distance from the target at the end
+    duration_s: float
+    wall_crossings: int
+
+
+def drive_on_fused(site: Site, start: tuple[float, float, float], target: tuple[float, float], rider: Rider,
+                   ports: Ports, navigator: PoseNavigator, reader_parameters: ReaderParameters,
+                   rng: np.random.Generator, reader_seed: int, step_s: float, scan_period_s: float,
+                   max_time_s: float, odometry_scale_error: float = ODOMETRY_SCALE_ERROR,
+                   compass: CompassModel = COMPASS, locate: LocateSettings = LocateSettings()) -> DrivingRun:
+    """pose_navigator driving on the fused localizer's pose, in-process: the graph of ``mixed_floor_fused`` (the
+    simulated base, reader, WiFi and compass; the location server; rfid_localizer; pose_navigator) stepped in one
+    loop at the navigator's control rate. As the node does, the localizer weighs each reader round with the
+    compass's latest heading and the location server's answer to the latest scan (one every ``scan_period_s``);
+    the navigator steers by its latest estimate. ``rider`` carries the localizer and scores it against the truth."""
+    robot = FloorRobot(start, site.world.wall_segments(), odometry_scale_error)
+    reader = reader_parameters.simulated_reader(site.world, reader_seed)
+    navigator.start(target)
+    pose: Pose | None = None
+    wifi_fix: tuple[tuple[float, float], float] | None = None
+    time_s, next_scan_s = 0.0, 0.0
+    rider.moved(time_s, robot.odom, robot.truth)
+    step = navigator.step(pose)
+    while not step.finished and time_s < max_time_s:
+        robot.step(*step.command, step_s)
+        time_s += step_s
+        truth = robot.truth
+        rider.moved(time_s, robot.odom, truth)
+        if time_s >= next_scan_s:
+            next_scan_s += scan_period_s
+            scan = {reading.bssid: reading.rssi_dbm for reading in site.wifi.scan(truth[0], truth[1], rng)}
+            try:
+                result = site.radio_map.locate(scan, locate)
+                wifi_fix = (result.position, result.uncertainty_m)
+            except LocateError:
+                pass                                           # nothing heard that the radio map knows
+        due = reader.round_at(*truth, time_s)
+        if due is not None:
+            estimate = rider.update(time_s, round_evidence(due, ports, wifi_fix, compass.measure(truth[2], rng)),
+                                    truth)
+            wifi_fix = None
+            if estimate is not None:
+                covariance = estimate.pose.covariance
+                pose = Pose.of_variances(estimate.pose.x, estimate.pose.y, estimate.pose.yaw, covariance[0, 0],
+                                         covariance[1, 1])
+        step = navigator.step(pose)
+    crossings = robot.wall_crossings()
+    message = step.message if step.finished else f"timed out after {max_time_s:g} s"
+    objection = ground_truth_objection({"wall_crossings": crossings})
+    if objection is not None:
+        message += f"; but it {objection}"
+    return DrivingRun(step.success and objection is None, message, math.dist(robot.truth[:2], target), time_s,
+                      crossings)
