@@ -261,3 +261,19 @@ def test_each_shipped_rfid_localizer_file_describes_its_robots_reader_as_the_rea
         assert fused.wall_area_depth_m == reader.antenna_max_range_m[fused.wall_antenna - 1]
     else:
         assert not any(side in reader.antenna_facing for side in SIDE_BEARINGS)
+
+
+@pytest.mark.parametrize("steps", [1, 25, 400])
+def test_the_fused_motion_noise_over_a_metre_is_the_same_however_finely_the_odometry_slices_it(steps: int) -> None:
+    settings = FusedSettings(particles=20_000, odometry_noise_m=0.05, turn_noise_fraction=0.05, heading_noise_rad=0.02,
+                             odometry_scale_sd=0.0, odometry_scale_walk=0.0)
+    fused = FusedFilter(settings, FusedMap(extent=(0.0, 0.0, 10.0, 10.0)), np.random.default_rng(steps))
+    fused.initialise_at(1.0, 5.0, 0.0, np.diag([1e-12, 1e-12, 1e-12]))
+    for _ in range(steps):
+        fused.predict(1.0 / steps, 0.0, 0.0)
+    x, y, yaw = fused.states
+    assert float(np.mean(x)) == pytest.approx(2.0, abs=0.002)
+    assert float(np.std(yaw)) == pytest.approx(0.02, rel=0.05)
+    assert float(np.std(x)) == pytest.approx(0.05, rel=0.05)
+    # Across the way its own 5 cm; the heading's drift, swung over the metre, adds about 3 % in finer slices.
+    assert float(np.std(y)) == pytest.approx(0.05, rel=0.06)

@@ -143,12 +143,11 @@ class RfidLocalizerParameters:
                                       "localization from the first evidence)", [])
     initial_sd: list[float] = param("sd of x, y, yaw about initial_pose [m, m, rad]", [0.1, 0.1, 0.05])
     particles: int = param("particles of the filter", 1000, Limits(10, 1_000_000))
-    motion_noise_fraction: float = param("odometry translation and rotation noise, relative", 0.05,
-                                         Limits(0.0, 1.0))
-    motion_noise_floor_m: float = param("translation noise added to each step that moves [m]", 0.002,
-                                        NON_NEGATIVE)
-    motion_noise_yaw_rad_per_m: float = param("heading noise per metre travelled (wheel slip) [rad/m]", 0.02,
-                                              NON_NEGATIVE)
+    odometry_noise_m: float = param("sd of the odometry's distance error over a metre travelled, growing with the "
+                                    "square root of the distance (a random walk) [m]", 0.05, NON_NEGATIVE)
+    turn_noise_fraction: float = param("sd of a turn's odometry error, relative to the turn", 0.05, Limits(0.0, 1.0))
+    heading_noise_rad: float = param("sd of the heading drift over a metre travelled (wheel slip), growing with the "
+                                     "square root of the distance [rad]", 0.02, NON_NEGATIVE)
     odometry_scale_sd: float = param("prior sd of the odometry's distance scale about 1 (per particle)", 0.05,
                                      NON_NEGATIVE)
     odometry_scale_walk: float = param("random walk of each particle's odometry scale [per sqrt(m) travelled]: it "
@@ -242,8 +241,8 @@ class RfidLocalizerParameters:
             walls[self.wall_antenna] = InductionArea((x, y), self.wall_area_bearing_rad, self.wall_area_width_m,
                                                      self.wall_area_depth_m)
         return FusedSettings(
-            particles=self.particles, motion_noise_fraction=self.motion_noise_fraction,
-            motion_noise_floor_m=self.motion_noise_floor_m, motion_noise_yaw_rad_per_m=self.motion_noise_yaw_rad_per_m,
+            particles=self.particles, odometry_noise_m=self.odometry_noise_m,
+            turn_noise_fraction=self.turn_noise_fraction, heading_noise_rad=self.heading_noise_rad,
             floor=FloorModel((floor[0], floor[1]), self.floor_softness_m, self.eps),
             tag_group_read_range_m=self.tag_group_read_range_m, phase=phase, wall_areas=walls,
             wall_softness_m=self.wall_softness_m, wifi=WifiModel(sd_floor_m=self.wifi_sd_floor_m, eps=self.eps),
