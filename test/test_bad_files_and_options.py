@@ -44,7 +44,8 @@ FILES = {
                        "params/wall_follower.yaml", "params/mission_executor.yaml"),
     "partition_field": ("scenarios/partition_field.yaml", "worlds/partition_field.yaml", "maps/partition_field.yaml",
                         "params/robot_sim.yaml", "params/reader_floor_lattice.yaml",
-                        "params/partition_localizer_paper.yaml", "params/partition_navigator.yaml"),
+                        "params/partition_localizer_paper.yaml", "params/partition_navigator.yaml",
+                        "params/rfid_localizer_floor_lattice.yaml"),
 }
 # The node name each parameter file holds (its errors name NODE.ros__parameters.KEY).
 NODE_OF = {"robot_sim": "robot_sim", "reader_uhf_2ant": "rfid_reader_sim", "reader_hf_floor": "rfid_reader_sim",
@@ -53,7 +54,7 @@ NODE_OF = {"robot_sim": "robot_sim", "reader_uhf_2ant": "rfid_reader_sim", "read
            "location_server": "location_server", "two_tier_navigator": "two_tier_navigator",
            "sonar_sim": "sonar_sim", "wall_follower": "wall_follower", "mission_executor": "mission_executor",
            "partition_localizer_paper": "partition_localizer", "partition_navigator": "partition_navigator",
-           "create_base": "create_base", "llrp_reader": "llrp_reader"}
+           "create_base": "create_base", "llrp_reader": "llrp_reader", "rfid_localizer_floor_lattice": "rfid_localizer"}
 PROFILE = "robots/create2_llrp.yaml"
 INT64_OVER = str(1 << 64)
 

@@ -1,7 +1,8 @@
 """The fused localizer over DDS, one process per node, recorded to MCAP: in ./rfidnav run mixed_floor the two-tier
 navigator drives the mission with paper 003's localizer while rfid_localizer, in its own process, weighs every kind
-of tag the floor carries, WiFi fixes from the location server and the compass, on /fused/pose; in mixed_floor_fused
-its pose drives the robot (pose_navigator) and its map -> odom is the tf tree's. Its errors come from the bag: each
+of tag the floor carries, WiFi fixes from the location server and the compass, on /fused/pose; in two_tier_flat
+(paper 003's world) the same beside it on the tag groups, WiFi and the compass; in mixed_floor_fused its pose drives
+the robot (pose_navigator) and its map -> odom is the tf tree's. Its errors come from the bag: each
 pose against the ground truth at its stamp."""
 
 from __future__ import annotations
@@ -13,11 +14,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from rfidnav_bag.bags import read_messages
-from rfidnav_bringup.metrics import position_errors
-from rfidnav_bringup.report import load_run
 from support.frames import assert_estimates_are_published_as_map_to_odom
-from support.runs import navigation_subscriptions, run_scenario
+from support.runs import evidence_used, navigation_subscriptions, pose_errors, run_scenario
 
 pytestmark = pytest.mark.tier("graph")
 
@@ -32,29 +30,39 @@ def driving_run(tmp_path_factory) -> Path:
     return run_scenario(tmp_path_factory.mktemp("runs"), "mixed_floor_fused", "--rtf", "5", "--seed", "1")
 
 
-def fused_poses(run: Path, topic: str = "/fused/pose") -> tuple[np.ndarray, np.ndarray, list[np.ndarray]]:
-    times, xy, covariances = [], [], []
-    for _, _, message in read_messages(run / "bag", [topic]):
-        times.append(message.header.stamp.sec + message.header.stamp.nanosec * 1e-9)
-        xy.append((message.pose.pose.position.x, message.pose.pose.position.y))
-        covariances.append(np.asarray(message.pose.covariance).reshape(6, 6))
-    return np.array(times), np.array(xy), covariances
+@pytest.fixture(scope="module")
+def flat_run(tmp_path_factory) -> Path:
+    # Seed 2: one the paper's navigator completes (it arrives in 80 % of runs on this flat, README; at seed 1 it
+    # stalls at a wall), so that the fused localizer rides a whole mission beside it.
+    return run_scenario(tmp_path_factory.mktemp("runs"), "two_tier_flat", "--rtf", "5", "--seed", "2")
+
+
+def rms(errors: np.ndarray) -> float:
+    return math.sqrt(float(np.mean(np.square(errors))))
 
 
 def test_the_fused_pose_beside_the_navigator_tracks_the_robot_to_a_decimetre_from_every_kind_of_evidence(
         mixed_run: Path) -> None:
     summary = json.loads((mixed_run / "summary.json").read_text())
     assert summary["success"] is True, summary["message"]
-    times, xy, covariances = fused_poses(mixed_run)
-    errors = position_errors(load_run(mixed_run).ground_truth, times, xy)
+    errors, covariances = pose_errors(mixed_run, "/fused/pose")
     assert len(errors) > 100                                    # a pose per reader round, 25 a second
-    assert math.sqrt(float(np.mean(np.square(errors)))) < 0.25
+    assert rms(errors) < 0.25
     assert all(np.allclose(c, c.T) and c[0, 0] > 0.0 and c[5, 5] > 0.0 for c in covariances)
-    used = set()
-    for _, _, status in read_messages(mixed_run / "bag", ["/fused/status"]):
-        assert status.method == "fused"
-        used.update(status.evidence_used)
-    assert used == {"lattice", "tag_group", "ceiling_phase", "ceiling_range_rate", "wall_tag", "wifi", "compass"}
+    assert evidence_used(mixed_run, "/fused/status") == {"lattice", "tag_group", "ceiling_phase",
+                                                         "ceiling_range_rate", "wall_tag", "wifi", "compass"}
+
+
+def test_on_paper_003s_flat_the_fused_localizer_rides_beside_the_two_tier_navigator_on_tag_groups_wifi_and_compass(
+        flat_run: Path) -> None:
+    summary = json.loads((flat_run / "summary.json").read_text())
+    assert summary["success"] is True, summary["message"]
+    errors, _ = pose_errors(flat_run, "/fused/pose")
+    assert len(errors) > 100
+    # reproduce fused: 0.95 +- 0.29 m on this flat over 10 runs (WiFi places it between the tag groups)
+    assert rms(errors) < 2.0 and float(np.median(errors)) < 1.0
+    assert evidence_used(flat_run, "/fused/status") == {"tag_group", "wifi", "compass"}
+    assert "/fused/pose" not in navigation_subscriptions(flat_run, ("two_tier_navigator",))["two_tier_navigator"]
 
 
 def test_the_fused_localizer_knows_neither_world_nor_ground_truth(mixed_run: Path) -> None:
@@ -66,9 +74,8 @@ def test_the_fused_pose_drives_the_robot_to_its_goal_and_is_the_tf_trees_map_to_
     summary = json.loads((driving_run / "summary.json").read_text())
     assert summary["success"] is True, summary["message"]
     assert summary["metrics"]["final_error_m"] < 0.5 and summary["metrics"]["wall_crossings"] == 0
-    times, xy, _ = fused_poses(driving_run, "/localization/pose")
-    errors = position_errors(load_run(driving_run).ground_truth, times, xy)
-    assert math.sqrt(float(np.mean(np.square(errors)))) < 0.25
+    errors, _ = pose_errors(driving_run, "/localization/pose")
+    assert rms(errors) < 0.25
     assert assert_estimates_are_published_as_map_to_odom(driving_run) > 100
     subscriptions = navigation_subscriptions(driving_run, ("rfid_localizer", "pose_navigator"))
     assert "/localization/pose" in subscriptions["pose_navigator"]

@@ -25,7 +25,8 @@ SCENARIO = "scenarios/partition_field.yaml"
 WORLD = "worlds/partition_field.yaml"
 MAP = "maps/partition_field.yaml"
 REFERENCED = (SCENARIO, WORLD, MAP, "params/robot_sim.yaml", "params/reader_floor_lattice.yaml",
-              "params/partition_localizer_paper.yaml", "params/partition_navigator.yaml")
+              "params/partition_localizer_paper.yaml", "params/partition_navigator.yaml",
+              "params/rfid_localizer_floor_lattice.yaml")
 LATTICE = "{layout: triangular, read_range_m: 0.2, area: [0.0, 0.0, 5.0, 5.0]}"
 
 

@@ -10,7 +10,12 @@ import sys
 import time
 from pathlib import Path
 
+import numpy as np
 import psutil
+
+from rfidnav_bag.bags import read_messages
+from rfidnav_bringup.metrics import position_errors
+from rfidnav_bringup.report import load_run
 
 WORKSPACE = Path(__file__).resolve().parents[2]
 
@@ -44,6 +49,26 @@ def navigation_subscriptions(run: Path, navigation_nodes: tuple[str, ...]) -> di
         assert "world_file" not in (run / "params" / f"{name}.yaml").read_text(), name
         subscriptions[name] = set(topics)
     return subscriptions
+
+
+def pose_errors(run: Path, topic: str) -> tuple[np.ndarray, list[np.ndarray]]:
+    """A localizer's PoseWithCovarianceStamped on ``topic`` in the run's bag: each one's position error against the
+    ground truth at its stamp, and each one's 6 x 6 covariance."""
+    times, xy, covariances = [], [], []
+    for _, _, message in read_messages(run / "bag", [topic]):
+        times.append(message.header.stamp.sec + message.header.stamp.nanosec * 1e-9)
+        xy.append((message.pose.pose.position.x, message.pose.pose.position.y))
+        covariances.append(np.asarray(message.pose.covariance).reshape(6, 6))
+    return position_errors(load_run(run).ground_truth, np.array(times), np.array(xy)), covariances
+
+
+def evidence_used(run: Path, topic: str) -> set[str]:
+    """Every kind of evidence the fused localizer's LocalizationStatus on ``topic`` named in the run."""
+    used: set[str] = set()
+    for _, _, status in read_messages(run / "bag", [topic]):
+        assert status.method == "fused"
+        used.update(status.evidence_used)
+    return used
 
 
 def start_cli(*args: str) -> subprocess.Popen:
