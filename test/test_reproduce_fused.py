@@ -23,11 +23,13 @@ from rfidnav_experiments.reproduce.fused import (
     RING,
     SINGLE_EVIDENCE,
     WORLDS,
+    TrackFigures,
     home_run,
     localizers_of,
     recovery_keys,
     world_run,
 )
+from rfidnav_experiments.runners.fused import Track
 from rfidnav_localization.fused.filter import PoseEstimate, Update
 from rfidnav_localization.fused.localizer import FusedEstimate
 from support.runs import WORKSPACE
@@ -110,6 +112,21 @@ def test_map_to_odom_composed_with_the_odometry_pose_is_the_estimated_pose() -> 
     assert math.remainder(tyaw + oyaw - 2.5, 2 * math.pi) == pytest.approx(0.0, abs=1e-12)
 
 
+def test_the_heading_on_the_papers_rounds_is_scored_only_on_the_rounds_where_the_paper_had_a_heading() -> None:
+    fused, paper = Track(), Track()
+    for time_s, error in ((0.0, 0.4), (1.0, 0.1), (2.0, -0.2)):
+        fused.add_position(time_s, (0.0, 0.0), error)
+    paper.add_position(0.0, (0.0, 0.0))                 # no heading yet: paper 000 has one after a straight stretch
+    paper.add_position(1.0, (0.0, 0.0), 0.3)
+    paper.add_position(2.0, (0.0, 0.0), 0.0)
+    figures = TrackFigures.of(fused, paper.heading_times_s)
+    assert figures.heading_rmse_deg == pytest.approx(math.degrees(math.sqrt((0.16 + 0.01 + 0.04) / 3)))
+    assert figures.heading_rmse_paper_rounds_deg == pytest.approx(math.degrees(math.sqrt((0.01 + 0.04) / 2)))
+    assert TrackFigures.of(paper, paper.heading_times_s).heading_rmse_paper_rounds_deg == pytest.approx(
+        TrackFigures.of(paper).heading_rmse_deg)
+    assert TrackFigures.of(fused).heading_rmse_paper_rounds_deg is None
+
+
 def test_the_command_prints_every_metric_for_every_world_with_both_localizers_and_the_paired_difference(
         tmp_path) -> None:
     result = subprocess.run([sys.executable, "-m", "rfidnav_bringup.cli", "reproduce", "fused", "--runs", "2",
@@ -130,9 +147,11 @@ def test_the_command_prints_every_metric_for_every_world_with_both_localizers_an
             continue
         names = localizers_of(world)
         assert set(row) == {"experiment", "setting", "metric", *names, *(f"{n} - fused" for n in names[1:])}
-        # The mission executor has a node, not a pose with a covariance: no heading and no NEES; paper 001's
-        # odometry has a heading but no covariance.
-        without = {RING: {("paper", "heading_rmse_deg"), ("paper", "consistent")},
-                   HALLWAY: {("paper", "consistent")}}.get(world, set())
+        # The mission executor has a node, not a pose with a covariance: no heading and no NEES, so no localizer
+        # has a heading on the paper's rounds; paper 001's odometry has a heading but no covariance; the driving
+        # world has no paper's localizer.
+        paper_rounds = {(name, "heading_rmse_paper_rounds_deg") for name in names}
+        without = {RING: {("paper", "heading_rmse_deg"), ("paper", "consistent"), *paper_rounds},
+                   HALLWAY: {("paper", "consistent")}, DRIVING: paper_rounds}.get(world, set())
         assert all(row[name]["n"] == (0 if (name, row["metric"]) in without else 2) for name in names)
     assert json.loads((tmp_path / "fused_rows.json").read_text()) == rows

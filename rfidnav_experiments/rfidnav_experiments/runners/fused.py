@@ -55,6 +55,7 @@ class Track:
     times_s: list[float] = field(default_factory=list)
     position_errors_m: list[float] = field(default_factory=list)
     heading_errors_rad: list[float] = field(default_factory=list)
+    heading_times_s: list[float] = field(default_factory=list)   # the round of each heading error
     nees: list[float] = field(default_factory=list)
     nees_dofs: list[int] = field(default_factory=list)    # each NEES's degrees of freedom: 3, or 2 without a heading
 
@@ -62,8 +63,7 @@ class Track:
             covariance: np.ndarray) -> None:
         self.times_s.append(time_s)
         self.position_errors_m.append(math.hypot(*position_error))
-        if heading_error is not None:
-            self.heading_errors_rad.append(heading_error)
+        self.add_heading(time_s, heading_error)
         error = np.array(position_error if covariance.shape[0] == 2 else (*position_error, heading_error or 0.0))
         covariance = covariance + MIN_VARIANCE * np.eye(len(error))
         self.nees.append(float(error @ np.linalg.solve(covariance, error)))
@@ -74,8 +74,18 @@ class Track:
         """An estimate with no covariance to judge it by (no NEES)."""
         self.times_s.append(time_s)
         self.position_errors_m.append(math.hypot(*position_error))
+        self.add_heading(time_s, heading_error)
+
+    def add_heading(self, time_s: float, heading_error: float | None) -> None:
         if heading_error is not None:
+            self.heading_times_s.append(time_s)
             self.heading_errors_rad.append(heading_error)
+
+    def heading_errors_at(self, times_s: Collection[float]) -> list[float]:
+        """The heading errors of the rounds at ``times_s`` (another localizer's heading rounds on the same run: a
+        like-for-like comparison with one that reports a heading only some of the time)."""
+        return [error for time_s, error in zip(self.heading_times_s, self.heading_errors_rad, strict=True)
+                if time_s in times_s]
 
     @property
     def fix_rate(self) -> float:
