@@ -277,3 +277,31 @@ def test_the_fused_motion_noise_over_a_metre_is_the_same_however_finely_the_odom
     assert float(np.std(x)) == pytest.approx(0.05, rel=0.05)
     # Across the way its own 5 cm; the heading's drift, swung over the metre, adds about 3 % in finer slices.
     assert float(np.std(y)) == pytest.approx(0.05, rel=0.06)
+
+
+def test_the_fused_status_names_the_lattice_tags_read_and_their_range_so_the_partition_navigator_can_drive_on_it(
+        ) -> None:
+    from builtin_interfaces.msg import Time
+
+    from rfidnav_experiments.bench.fused import CASES, GROUP_TAG_ID, LATTICE, PARAMETERS, fused_map
+    from rfidnav_localization.conversions import fused_status_message
+    from rfidnav_localization.fused.localizer import FusedLocalizer
+    from rfidnav_planning.conversions import estimate_from_status
+
+    (x, y, yaw), evidence_at = CASES["lattice"]
+    localizer = FusedLocalizer(PARAMETERS.settings(), fused_map(), np.random.default_rng(3))
+    localizer.on_odometry((0.0, 0.0, 0.0))
+    localizer.set_pose(x, y, yaw, np.diag(np.square(PARAMETERS.initial_sd)))
+    lattice_ids = list(evidence_at(x, y, yaw).floor_tag_ids)
+    assert lattice_ids
+    # A tag group's tag read with them is no lattice tag: not part of the partition.
+    estimate = localizer.on_round(Evidence(floor_tag_ids=[*lattice_ids, GROUP_TAG_ID]))
+    assert estimate is not None
+    assert estimate.partition_tag_ids == tuple(lattice_ids) and estimate.read_range_m == LATTICE.read_range_m
+    taken = estimate_from_status(fused_status_message(estimate, Time(), "map", 0), 1.0, None)
+    assert taken.partition_tag_ids == tuple(lattice_ids) and taken.partition_changed and taken.lattice is not None
+    assert taken.read_range_m == LATTICE.read_range_m and taken.position == (estimate.pose.x, estimate.pose.y)
+    assert taken.yaw_std == pytest.approx(math.sqrt(estimate.pose.covariance[2, 2]))
+    # A round with no lattice tag: no partition, but the lattice's range, once learnt, stays known.
+    later = localizer.on_round(Evidence())
+    assert later is not None and later.partition_tag_ids == () and later.read_range_m == LATTICE.read_range_m

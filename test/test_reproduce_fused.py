@@ -14,11 +14,13 @@ import pytest
 
 from rfidnav_common.frames import map_to_odom
 from rfidnav_experiments.reproduce.fused import (
+    ARRIVING_WORLDS,
     DEVELOPMENT_SEED,
     DRIVING,
     HALLWAY,
     METRICS,
     MIXED,
+    PARTITION_DRIVING,
     PARTITIONS,
     RING,
     SINGLE_EVIDENCE,
@@ -101,6 +103,17 @@ def test_pose_navigator_driving_on_the_fused_pose_in_process_arrives_and_the_pos
     assert run.late_global_s is None and run.kidnap_recovery_s is None     # the pose that drives is left alone
 
 
+def test_the_partition_navigator_driving_on_the_fused_localizer_arrives_with_paper_000s_localizer_beside() -> None:
+    run = world_run((PARTITION_DRIVING, 0, DEVELOPMENT_SEED))
+    assert run.success and set(run.figures) == {"fused", "paper"}
+    # Position arrival within r/4 of the goal by the estimate (r = 20 cm), so a few centimetres by the truth.
+    assert run.final_error_m is not None and run.final_error_m < 0.1
+    fused, paper = run.figures["fused"].position_rmse_m, run.figures["paper"].position_rmse_m
+    assert fused is not None and paper is not None and fused < 0.15 and fused < paper
+    assert run.global_s is not None and run.global_s < 1.0
+    assert run.late_global_s is None and run.kidnap_recovery_s is None     # the pose that drives is left alone
+
+
 def test_map_to_odom_composed_with_the_odometry_pose_is_the_estimated_pose() -> None:
     estimate = FusedEstimate(PoseEstimate(3.0, -1.0, 2.5, np.eye(3)), (0.7, 1.9, -0.4), Update((), (), 0))
     pose = estimate.pose
@@ -136,11 +149,15 @@ def test_the_command_prints_every_metric_for_every_world_with_both_localizers_an
     rows = json.loads(result.stdout)
     recovery = ("global_s", "late_global_s", "kidnap_recovery_s")
     assert {(row["setting"].split()[0], row["metric"]) for row in rows} == {
-        (w, m) for w in WORLDS for m in (*METRICS, *recovery_keys(w), *(("arrival",) if w == DRIVING else ()))}
+        (w, m) for w in WORLDS
+        for m in (*METRICS, *recovery_keys(w), *(("arrival",) if w in ARRIVING_WORLDS else ()))}
     for row in rows:
         world = row["setting"].split()[0]
-        if row["metric"] == "arrival":
-            assert row["fused"]["runs"] == 2 and 0 <= row["fused"]["arrived"] <= 2
+        if row["metric"] == "arrival":       # of the localizer the navigator drove on
+            driver = "paper" if world == PARTITIONS else "fused"
+            assert set(row) == {"experiment", "setting", "metric", driver}
+            assert row[driver]["runs"] == 2 and 0 <= row[driver]["arrived"] <= 2
+            assert row[driver]["final_error_m"]["n"] == 2
             continue
         if row["metric"] in recovery:
             assert row["fused"]["runs"] == 2 and row["fused"]["runs_found"] == row["fused"]["n"]

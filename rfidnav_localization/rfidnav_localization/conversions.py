@@ -93,10 +93,13 @@ def fused_pose_message(pose: PoseEstimate, stamp: Time, frame_id: str) -> PoseWi
 
 
 def fused_status_message(estimate: FusedEstimate, stamp: Time, frame_id: str, ignored_count: int) -> LocalizationStatus:
-    """The fused localizer's status: the evidence weighed this round and the particles redrawn from it."""
+    """The fused localizer's status: the evidence weighed this round and the particles redrawn from it, and the
+    lattice tags read (the partition, with their read range), so that the partition navigator can drive on it."""
     pose = estimate.pose
     message = LocalizationStatus(method="fused", position_valid=True, x=float(pose.x), y=float(pose.y),
                                  orientation_valid=True, yaw_rad=float(pose.yaw),
+                                 partition_tag_ids=list(estimate.partition_tag_ids),
+                                 read_range_m=float(estimate.read_range_m),
                                  evidence_used=list(estimate.update.used),
                                  particles_redrawn=int(estimate.update.injected),
                                  undecodable_count=int(ignored_count))

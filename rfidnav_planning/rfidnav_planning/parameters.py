@@ -35,6 +35,9 @@ class PartitionNavigatorParameters:
     ACTION: ClassVar[tuple[str, str]] = ("/navigate_to_point", "rfidnav_msgs/action/NavigateToPoint")   # it serves
 
     map_file: str = param("robot map YAML with the deployment_area (where the floor is tagged)", "")
+    status_topic: str = param(
+        "the LocalizationStatus it drives on: the partition localizer's, or the status_topic of the localizer the "
+        "scenario names instead (rfid_localizer's, with the lattice tags it read)", "/localization/status")
     approximation_level: int = param("partitions crossed in the localization phase (paper 000: 1-8)", 4,
                                      Limits(1, 64))
     localized_yaw_sd_rad: float = param(

@@ -1,7 +1,8 @@
 """partition_navigator: action server /navigate_to_point driving /cmd_vel from /localization/status (paper 000).
 
 A thin adapter around PartitionNavigator: each LocalizationStatus (one inventory round, from
-partition_localizer) becomes one navigator decision. "Drive on" is the forward speed; "rotate by an
+partition_localizer, or from the localizer whose ``status_topic`` the scenario names) becomes one navigator
+decision. "Drive on" is the forward speed; "rotate by an
 angle" is a turn on the spot closed on /odom (the core's TurnOnTheSpot), after which the navigator is told
 the turn is done.
 Every new plan is published on /planning/path (partition centres) and /planning/partitions (their tags).
@@ -73,7 +74,7 @@ class PartitionNavigatorNode(SteppedNode):
         self.cmd_pub = self.create_publisher(Twist, "/cmd_vel", COMMAND_QOS)
         self.path_pub = self.create_publisher(Path, "/planning/path", LATCHED_QOS)
         self.partitions_pub = self.create_publisher(PartitionPath, "/planning/partitions", LATCHED_QOS)
-        self.create_subscription(LocalizationStatus, "/localization/status", self.on_status, SENSOR_QOS)
+        self.create_subscription(LocalizationStatus, self.params.status_topic, self.on_status, SENSOR_QOS)
         self.create_subscription(Odometry, "/odom", self.on_odom, SENSOR_QOS)
         turn_settings = self.params.turn_settings()
         self.goals: SingleGoalServer[NavigationGoal] = SingleGoalServer(
@@ -81,7 +82,7 @@ class PartitionNavigatorNode(SteppedNode):
             check=self.refusal, new_goal=lambda handle: NavigationGoal(handle, TurnOnTheSpot(turn_settings)),
             started=self.on_started, result=self.result,
             stop=lambda: self.drive(0.0, 0.0), abandon=self.navigator.cancel,
-            watchdog=Watchdog(self.params.unheard_timeout_s, "/localization/status"))
+            watchdog=Watchdog(self.params.unheard_timeout_s, self.params.status_topic))
         self.get_logger().info(f"deployment area {list(robot_map.deployment_area)} m; "
                                f"approximation level {self.params.approximation_level}")
 
@@ -142,7 +143,7 @@ class PartitionNavigatorNode(SteppedNode):
             estimate = estimate_from_status(msg, seconds_of(msg.header.stamp),
                                             active.previous_partition if active is not None else None)
         except inputs.BadInput as error:
-            self.drops.drop("/localization/status", error)
+            self.drops.drop(self.params.status_topic, error)
             return
         if active is None:
             return

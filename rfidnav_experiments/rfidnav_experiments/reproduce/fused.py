@@ -14,7 +14,10 @@ it on the side antenna's wall tags and the odometry, scored with the node the ex
 paper 001's hallway (Figs. 12/13) each run is the tag route follower's whole route under the seven ceiling tags, the
 fused localizers beside it on the two receiving antennas' phases, the floor tags under the ceiling tags and the
 odometry; the follower keeps no pose, so the robot's own idea of where it is, scored as the paper's, is its odometry
-from the known start. The fused settings are those of the robot's rfid_localizer parameter file (the filter's the
+from the known start. Two worlds where the fused localizer drives: ``partition_field_fused``, the same tasks as paper
+000's field, the partition navigator driving on the fused estimate (rfid_localizer's status, through the same
+conversions as over DDS: runners.fused.FusedPartitions) with its settings for a pose estimate, paper 000's localizer
+beside; and ``mixed_floor_fused``, pose_navigator driving on it across the mixed floor. The fused settings are those of the robot's rfid_localizer parameter file (the filter's the
 same for every robot and world). Every fused localizer starts, as the paper's does, knowing only the map: global
 localization from its first evidence.
 
@@ -56,7 +59,7 @@ from rfidnav_common.robot_map import bounding_box
 from rfidnav_common.seeding import derive_seed, rng_for
 from rfidnav_common.topological_map import load_topological_map
 from rfidnav_experiments.engine import run_tasks
-from rfidnav_experiments.reproduce.partitions import PAPER, headline_level, robot_speeds
+from rfidnav_experiments.reproduce.partitions import FILTER, PAPER, headline_level, robot_speeds
 from rfidnav_experiments.reproduce.partitions import localizer_settings as partition_localizer_settings
 from rfidnav_experiments.reproduce.partitions import navigator_settings as partition_navigator_settings
 from rfidnav_experiments.reproduce.tables import Interval, paired_interval, table
@@ -65,7 +68,9 @@ from rfidnav_experiments.runners.fused import (
     CONVERGED_FOR_S,
     CONVERGED_M,
     Beside,
+    FusedPartitions,
     PartitionBeside,
+    PartitionDriving,
     Rider,
     RouteBeside,
     TopologicalBeside,
@@ -81,6 +86,7 @@ from rfidnav_localization.fused.filter import FusedSettings
 from rfidnav_localization.fused.localizer import FusedLocalizer
 from rfidnav_localization.fused.tag_map import FusedMap
 from rfidnav_localization.parameters import RfidLocalizerParameters
+from rfidnav_localization.partition import PartitionLocalizer
 from rfidnav_planning.parameters import PoseNavigatorParameters
 from rfidnav_planning.pose_navigation import PoseNavigator
 from rfidnav_sim.parameters import ReaderParameters, WifiSimParameters
@@ -95,7 +101,10 @@ PARTITIONS = "partition_field"
 RING = "building_ring"
 HALLWAY = "hallway"
 DRIVING = "mixed_floor_fused"      # the fused pose drives the robot (pose_navigator), in-process
-WORLDS = (*HOMES, MIXED, PARTITIONS, RING, HALLWAY, DRIVING)
+PARTITION_DRIVING = "partition_field_fused"   # the fused pose drives paper 000's partition navigator
+DRIVING_WORLDS = (PARTITION_DRIVING, DRIVING)   # worlds where the fused pose drives (none kidnapped nor late)
+WORLDS = (*HOMES, MIXED, PARTITIONS, RING, HALLWAY, *DRIVING_WORLDS)
+ARRIVING_WORLDS = (PARTITIONS, *DRIVING_WORLDS)   # their figures include arrival and the true final error
 UHF_2ANT_LOCALIZER = CONFIG_DIR / "params" / "rfid_localizer_uhf_2ant.yaml"
 WALL_SIDE_LOCALIZER = CONFIG_DIR / "params" / "rfid_localizer_wall_side.yaml"
 # Paper 000: the partition navigator with the paper's localizer drives tasks of this length across the field (the
@@ -118,6 +127,9 @@ NEES_BAND = 0.95
 def driver_of(world: str) -> str:
     if world == DRIVING:
         return "pose_navigator driving on the fused localizer's pose: no other localizer, no kidnap, no late start"
+    if world == PARTITION_DRIVING:
+        return ("the partition navigator driving on the fused localizer (its settings for a pose estimate) on "
+                f"{PARTITIONS}'s tasks, paper 000's localizer beside: no kidnap, no late start")
     if world == HALLWAY:
         return ("paper 001's tag route follower driving; it keeps no pose, so its 'paper' pose is the wheel "
                 "odometry from the known start")
@@ -128,7 +140,7 @@ def driver_of(world: str) -> str:
 
 
 def kidnap_times_of(world: str) -> tuple[float, float]:
-    """(late start, kidnap) [s] of the world's runs."""
+    """(late start, kidnap) [s] of the world's runs (none where the fused pose drives)."""
     return (PARTITION_LATE_START_S, PARTITION_KIDNAP_AT_S) if world == PARTITIONS else (LATE_START_S, KIDNAP_AT_S)
 
 
@@ -179,7 +191,7 @@ class FusedRun:
     late_global_s: float | None       # the same, for one started at LATE_START_S (mid-mission) [s]
     kidnap_recovery_s: float | None   # [s] from the kidnap; None: not found again (or the run ended first)
     duration_s: float
-    final_error_m: float | None = None   # DRIVING: the true distance from the target at the end
+    final_error_m: float | None = None   # ARRIVING_WORLDS: the true distance from the target at the end
 
 
 def _rms(values: list[float]) -> float | None:
@@ -256,7 +268,34 @@ def partition_run(job: tuple[str, int, int]) -> FusedRun:
                             partition_navigator_settings(PAPER, headline_level()),
                             rng_for(seed, f"fused:{name}:{run}:robot"), odometry_noise=PARTITION_ODOMETRY_NOISE,
                             speeds=robot_speeds(PAPER), observer=beside)
-    return fused_run(name, run, result.success, riders, beside.paper, result.travel_time_s)
+    return dataclasses.replace(fused_run(name, run, result.success, riders, beside.paper, result.travel_time_s),
+                               final_error_m=result.final_error_m)
+
+
+def partition_driving_run(job: tuple[str, int, int]) -> FusedRun:
+    """The same paper 000 task as partition_run's of that run number, the partition navigator driving on the fused
+    localizer (with the navigator's settings for a pose estimate, as beside paper 000's particle filter:
+    partition_navigator_filter_paper_robot.yaml) and paper 000's localizer beside it on the same rounds."""
+    name, run, seed = job
+    scenario = load_scenario(PARTITIONS)
+    assert scenario.route_map is not None and scenario.world.deployments
+    field_deployment = scenario.world.deployments[0]
+    settings = file_parameters(RfidLocalizerParameters, FLOOR_LATTICE_LOCALIZER, "rfid_localizer",
+                               map_file=str(scenario.map_file)).settings()
+    driving = FusedPartitions(FusedLocalizer(settings, FusedMap.of_route_map(scenario.route_map),
+                                             rng_for(seed, f"fused:{name}:{run}:fused")))
+    score = PartitionDriving(driving, PartitionLocalizer(partition_localizer_settings(PAPER),
+                                                         rng_for(seed, f"fused:{name}:{run}:paper")))
+    start, goal = random_task(field_deployment, PARTITION_TASK_M, rng_for(seed, f"fused:{PARTITIONS}:{run}:task"))
+    result = run_navigation(field_deployment, start, goal, partition_localizer_settings(PAPER),
+                            partition_navigator_settings(FILTER, headline_level()),
+                            rng_for(seed, f"fused:{name}:{run}:robot"), odometry_noise=PARTITION_ODOMETRY_NOISE,
+                            speeds=robot_speeds(FILTER), observer=score, driving=driving)
+    paper = score.beside.paper
+    figures = {"fused": TrackFigures.of(score.fused, paper.heading_times_s),
+               "paper": TrackFigures.of(paper, paper.heading_times_s)}
+    return FusedRun(name, run, result.success, figures, score.fused.settled_after(0.0), None, None,
+                    result.travel_time_s, result.final_error_m)
 
 
 def topological_run(job: tuple[str, int, int]) -> FusedRun:
@@ -329,6 +368,8 @@ def driving_run(job: tuple[str, int, int]) -> FusedRun:
 def world_run(job: tuple[str, int, int]) -> FusedRun:
     if job[0] == DRIVING:
         return driving_run(job)
+    if job[0] == PARTITION_DRIVING:
+        return partition_driving_run(job)
     if job[0] == HALLWAY:
         return route_run(job)
     if job[0] == PARTITIONS:
@@ -365,7 +406,7 @@ def figures(results: list[FusedRun], world: str) -> dict[str, dict[str, Interval
 def recovery_keys(world: str) -> tuple[str, ...]:
     """The FusedRun fields of a world's recovery figures (the fused pose that drives is neither started late nor
     kidnapped: the robot would drive off with it)."""
-    return ("global_s",) if world == DRIVING else ("global_s", "late_global_s", "kidnap_recovery_s")
+    return ("global_s",) if world in DRIVING_WORLDS else ("global_s", "late_global_s", "kidnap_recovery_s")
 
 
 def recovery_figures(results: list[FusedRun], world: str) -> dict[str, tuple[Interval, int]]:
@@ -388,25 +429,45 @@ def report_lines(results: list[FusedRun], runs: int) -> list[str]:
         rows = [[label, *(_text(world_figures[metric][name], scale, digits) for name in names)]
                 for metric, (label, scale, digits) in METRICS.items()]
         lines += table(["metric", *names], rows)
+        if len(names) > 1:
+            rows = [[label, _text(world_figures[metric][f"{name} - fused"], scale, digits)]
+                    for metric, (label, scale, digits) in METRICS.items() for name in names[1:]
+                    for label in (f"{METRICS[metric][0]}: {name} - fused",)]
+            lines += table(["paired difference", "mean [95 % interval]"], rows)
+        if world in ARRIVING_WORLDS:
+            arrival = Arrival.of(results, world)
+            low, high = arrival.rate.bounds or (0.0, 0.0)
+            lines += [f"arrived {arrival.arrived}/{arrival.runs} (95 % interval {low:.0f}-{high:.0f} %); true "
+                      f"distance from the target at the end {arrival.final_error_m.text(1.0, 3)} m"]
         recovery = recovery_figures(results, world)
-        if world == DRIVING:
-            final = Interval.of([r.final_error_m for r in results if r.world == world and r.final_error_m is not None])
-            low, high = Interval.of_proportion(arrived, runs).bounds or (0.0, 0.0)
-            lines += [f"arrived {arrived}/{runs} (95 % interval {low:.0f}-{high:.0f} %); true "
-                      f"distance from the target at the end {final.text(1.0, 3)} m; global localization from the "
-                      f"start {recovery['global_s'][0].text(1.0, 1)} s in {recovery['global_s'][1]}/{runs} runs", ""]
-            continue
-        rows = [[label, _text(world_figures[metric][f"{name} - fused"], scale, digits)]
-                for metric, (label, scale, digits) in METRICS.items() for name in names[1:]
-                for label in (f"{METRICS[metric][0]}: {name} - fused",)]
-        lines += table(["paired difference", "mean [95 % interval]"], rows)
-        late_s, kidnap_s = kidnap_times_of(world)
-        lines += [f"global localization (error below {CONVERGED_M:g} m for {CONVERGED_FOR_S:g} s): from the start "
-                  f"{recovery['global_s'][0].text(1.0, 1)} s in {recovery['global_s'][1]}/{runs} runs; started at "
-                  f"{late_s:g} s {recovery['late_global_s'][0].text(1.0, 1)} s in "
-                  f"{recovery['late_global_s'][1]}/{runs}; kidnapped at {kidnap_s:g} s, found again after "
-                  f"{recovery['kidnap_recovery_s'][0].text(1.0, 1)} s in {recovery['kidnap_recovery_s'][1]}/{runs}", ""]
+        found = [f"from the start {recovery['global_s'][0].text(1.0, 1)} s in {recovery['global_s'][1]}/{runs} runs"]
+        if "kidnap_recovery_s" in recovery:
+            late_s, kidnap_s = kidnap_times_of(world)
+            found += [f"started at {late_s:g} s {recovery['late_global_s'][0].text(1.0, 1)} s in "
+                      f"{recovery['late_global_s'][1]}/{runs}",
+                      f"kidnapped at {kidnap_s:g} s, found again after "
+                      f"{recovery['kidnap_recovery_s'][0].text(1.0, 1)} s in {recovery['kidnap_recovery_s'][1]}/{runs}"]
+        lines += [f"global localization (error below {CONVERGED_M:g} m for {CONVERGED_FOR_S:g} s): {'; '.join(found)}",
+                  ""]
     return lines
+
+
+@dataclass(frozen=True)
+class Arrival:
+    """How a world's missions ended: arrivals, and the true distance from the target at the end."""
+    driver: str                        # the localizer the navigator drove on
+    arrived: int
+    runs: int
+    rate: Interval                     # [%]
+    final_error_m: Interval
+
+    @classmethod
+    def of(cls, results: list[FusedRun], world: str) -> Arrival:
+        mine = [r for r in results if r.world == world]
+        arrived = sum(r.success for r in mine)
+        return cls("paper" if world == PARTITIONS else "fused", arrived, len(mine),
+                   Interval.of_proportion(arrived, len(mine)),
+                   Interval.of([r.final_error_m for r in mine if r.final_error_m is not None]))
 
 
 def _text(interval: Interval, scale: float, digits: int) -> str:
@@ -423,14 +484,12 @@ def json_rows(results: list[FusedRun], seed: int) -> list[dict[str, Any]]:
             rows.append({"experiment": EXPERIMENT, "setting": f"{world} seed {seed}", "metric": key,
                          "fused": {**_interval_json(interval), "runs_found": count,
                                    "runs": sum(r.world == world for r in results)}})
-        if world == DRIVING:
-            mine = [r for r in results if r.world == world]
-            arrived = sum(r.success for r in mine)
-            rate = Interval.of_proportion(arrived, len(mine))
-            final = Interval.of([r.final_error_m for r in mine if r.final_error_m is not None])
+        if world in ARRIVING_WORLDS:
+            arrival = Arrival.of(results, world)
             rows.append({"experiment": EXPERIMENT, "setting": f"{world} seed {seed}", "metric": "arrival",
-                         "fused": {"arrived": arrived, "runs": len(mine), "rate_pct": rate.mean,
-                                   "rate_bounds_pct": rate.bounds, "final_error_m": _interval_json(final)}})
+                         arrival.driver: {"arrived": arrival.arrived, "runs": arrival.runs,
+                                          "rate_pct": arrival.rate.mean, "rate_bounds_pct": arrival.rate.bounds,
+                                          "final_error_m": _interval_json(arrival.final_error_m)}})
     return rows
 
 

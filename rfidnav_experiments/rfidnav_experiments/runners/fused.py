@@ -17,24 +17,28 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Collection
+from collections.abc import Collection, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+from builtin_interfaces.msg import Time
 
 from rfidnav_bringup.metrics import ground_truth_objection
-from rfidnav_common.frames import compose
+from rfidnav_common.frames import MAP_FRAME, compose
 from rfidnav_common.geometry import wrap_angle
+from rfidnav_common.tag_lattice import Coordinate
 from rfidnav_experiments.runners.partitions import IdealRobot
 from rfidnav_experiments.runners.tag_route import RouteRound
 from rfidnav_experiments.runners.topological import MissionStep
 from rfidnav_experiments.runners.two_tier import COMPASS, ODOMETRY_SCALE_ERROR, FloorRobot, Site, StepSeen
+from rfidnav_localization.conversions import fused_status_message
 from rfidnav_localization.errors import LocateError
 from rfidnav_localization.fingerprint import LocateSettings
 from rfidnav_localization.fused.filter import Evidence, Ports, round_evidence
 from rfidnav_localization.fused.localizer import FusedEstimate, FusedLocalizer
-from rfidnav_localization.partition import LocalizationEstimate
+from rfidnav_localization.partition import LocalizationEstimate, PartitionLocalizer
+from rfidnav_planning.conversions import estimate_from_status
 from rfidnav_planning.pose_navigation import Pose, PoseNavigator
 from rfidnav_sim.compass_model import CompassModel
 from rfidnav_sim.parameters import ReaderParameters
@@ -255,6 +259,47 @@ class RouteBeside:
         self.paper.rounds += 1
         x, y, yaw = compose(self.start, seen.odom)
         self.paper.add_position(seen.time_s, (x - seen.truth[0], y - seen.truth[1]), wrap_angle(yaw - seen.truth[2]))
+
+
+class FusedPartitions:
+    """The fused localizer as paper 000's partition navigator drives on it (runners.partitions.PartitionEstimator):
+    each round's floor tags and odometry in, its estimate out as the navigator node takes it from rfid_localizer's
+    status over DDS: through the same two conversions (fused_status_message, then estimate_from_status), so the
+    in-process runs and the DDS graph cannot drift apart. ``last``: the fused estimate with its covariance."""
+
+    def __init__(self, localizer: FusedLocalizer) -> None:
+        self.localizer = localizer
+        self.last: FusedEstimate | None = None
+        self.partition: frozenset[Coordinate] | None = None
+
+    def update(self, stamp_s: float, tag_ids: Sequence[str], odom: tuple[float, float, float]) -> LocalizationEstimate:
+        self.localizer.on_odometry(odom)
+        self.last = self.localizer.on_round(Evidence(floor_tag_ids=tag_ids))
+        assert self.last is not None                # only before the first odometry
+        status = fused_status_message(self.last, Time(), MAP_FRAME, 0)
+        estimate = estimate_from_status(status, stamp_s, self.partition)
+        self.partition = estimate.partition or self.partition
+        return estimate
+
+
+class PartitionDriving:
+    """Scores a partition navigation driven by the fused localizer (FusedPartitions): its track, and paper 000's
+    localizer beside it on the same rounds (``paper``, fed the same tags and odometry, driving nothing)."""
+
+    def __init__(self, driving: FusedPartitions, paper: PartitionLocalizer) -> None:
+        self.driving = driving
+        self.paper_localizer = paper
+        self.fused = Track()
+        self.beside = PartitionBeside({})
+
+    def __call__(self, robot: IdealRobot, tag_ids: list[str], estimate: LocalizationEstimate) -> None:
+        truth = (robot.x, robot.y, robot.yaw)
+        self.fused.rounds += 1
+        if self.driving.last is not None:
+            pose = self.driving.last.pose
+            self.fused.add(robot.time_s, (pose.x - truth[0], pose.y - truth[1]), wrap_angle(pose.yaw - truth[2]),
+                           pose.covariance)
+        self.beside(robot, tag_ids, self.paper_localizer.update(robot.time_s, tag_ids, robot.odometry()))
 
 
 @dataclass(frozen=True)

@@ -20,8 +20,9 @@ the navigator sees estimates, exactly as over DDS.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from typing import Protocol
 
 import numpy as np
 
@@ -145,11 +146,19 @@ class IdealRobot:
 RoundObserver = Callable[[IdealRobot, list[str], LocalizationEstimate], None]
 
 
+class PartitionEstimator(Protocol):
+    """What the navigator drives on: paper 000's PartitionLocalizer, or another localizer's estimate as the partition
+    navigator takes it (runners.fused.FusedPartitions)."""
+
+    def update(self, stamp_s: float, tag_ids: Sequence[str], odom: tuple[float, float, float]) \
+            -> LocalizationEstimate: ...
+
+
 class Rounds:
     """The floor antenna's inventory rounds, each fed to the localizer and its estimate to the navigator. It
     remembers where it last read, so a round after a step that crossed no read circle reuses that partition."""
 
-    def __init__(self, deployment: Deployment, robot: IdealRobot, localizer: PartitionLocalizer,
+    def __init__(self, deployment: Deployment, robot: IdealRobot, localizer: PartitionEstimator,
                  navigator: PartitionNavigator, observer: RoundObserver | None = None) -> None:
         self.deployment = deployment
         self.robot = robot
@@ -184,13 +193,16 @@ def run_navigation(deployment: Deployment, start: tuple[float, float, float], go
                    localizer_settings: LocalizerSettings, navigator_settings: NavigatorSettings,
                    rng: np.random.Generator, round_spacing_m: float | None = None,
                    odometry_noise: float = 0.0, speeds: RobotSpeeds = NODE_DEFAULT_SPEEDS,
-                   observer: RoundObserver | None = None) -> NavigationRun:
+                   observer: RoundObserver | None = None, driving: PartitionEstimator | None = None) \
+        -> NavigationRun:
     """One navigation from ``start`` (x, y, yaw; ground truth) to ``goal``; the antenna offset is the
     localizer's (the robot is built as the localizer believes), the speeds the navigator node's. ``observer`` is
-    told of every round (it draws nothing)."""
+    told of every round (it draws nothing). The navigator drives on paper 000's localizer with
+    ``localizer_settings``, or on ``driving``."""
     robot = IdealRobot(*start, odometry_noise, rng, speeds, localizer_settings.antenna_offset_m)
     navigator = PartitionNavigator(navigator_settings, deployment.area)
-    observe = Rounds(deployment, robot, PartitionLocalizer(localizer_settings, rng), navigator, observer)
+    localizer = driving if driving is not None else PartitionLocalizer(localizer_settings, rng)
+    observe = Rounds(deployment, robot, localizer, navigator, observer)
     spacing = round_spacing_m or min(deployment.read_range_m / 2.0, DEFAULT_ROUND_SPACING_M)
     decision = navigator.start(goal)
     decision = observe()

@@ -24,6 +24,10 @@ class FusedEstimate:
     pose: PoseEstimate
     odom: Pose2D                 # the odometry pose the estimate is for: map -> odom follows from the two
     update: Update
+    # The lattice floor tags read this round (paper 000's partition) and the lattice's read range r from the ids (0
+    # before one was read): what the partition navigator needs besides the pose to drive on this estimate.
+    partition_tag_ids: tuple[str, ...] = ()
+    read_range_m: float = 0.0
 
 
 class FusedLocalizer:
@@ -49,4 +53,7 @@ class FusedLocalizer:
         if not self.filter.initialised:
             self.filter.initialise_global()
         update = self.filter.update(evidence)
-        return FusedEstimate(self.filter.estimate(), self.odom, update)
+        fused_map = self.filter.map
+        partition = tuple(tag_id for tag_id in evidence.floor_tag_ids if fused_map.lattice_position(tag_id) is not None)
+        read_range_m = fused_map.deployment.read_range_m if fused_map.deployment is not None else 0.0
+        return FusedEstimate(self.filter.estimate(), self.odom, update, partition, read_range_m)
