@@ -17,9 +17,9 @@ odometry; the follower keeps no pose, so the robot's own idea of where it is, sc
 from the known start. Two worlds where the fused localizer drives: ``partition_field_fused``, the same tasks as paper
 000's field, the partition navigator driving on the fused estimate (rfid_localizer's status, through the same
 conversions as over DDS: runners.fused.FusedPartitions) with its settings for a pose estimate, paper 000's localizer
-beside; and ``mixed_floor_fused``, pose_navigator driving on it across the mixed floor. The fused settings are those of the robot's rfid_localizer parameter file (the filter's the
-same for every robot and world). Every fused localizer starts, as the paper's does, knowing only the map: global
-localization from its first evidence.
+beside; and ``mixed_floor_fused``, pose_navigator driving on it across the mixed floor. The fused settings are
+those of the robot's rfid_localizer parameter file (the filter's the same for every robot and world). Every fused
+localizer starts, as the paper's does, knowing only the map: global localization from its first evidence.
 
 Localizers: ``fused`` (every kind of evidence), on the mixed floor also the same filter given one kind of evidence
 and the compass (``floor_only``: lattice and tag-group reads, paper 000's and 003's tier two; ``phase_only``:
