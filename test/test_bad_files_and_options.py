@@ -46,6 +46,10 @@ FILES = {
                         "params/robot_sim.yaml", "params/reader_floor_lattice.yaml",
                         "params/partition_localizer_paper.yaml", "params/partition_navigator.yaml",
                         "params/rfid_localizer_floor_lattice.yaml"),
+    "building_ring": ("scenarios/building_ring.yaml", "worlds/building_ring.yaml", "maps/building_ring.yaml",
+                      "maps/building_ring_survey.yaml", "params/robot_sim.yaml", "params/sonar_sim.yaml",
+                      "params/reader_wall_side.yaml", "params/wall_follower.yaml", "params/mission_executor.yaml",
+                      "params/rfid_localizer_wall_side.yaml"),
 }
 # The node name each parameter file holds (its errors name NODE.ros__parameters.KEY).
 NODE_OF = {"robot_sim": "robot_sim", "reader_uhf_2ant": "rfid_reader_sim", "reader_hf_floor": "rfid_reader_sim",
@@ -56,6 +60,7 @@ NODE_OF = {"robot_sim": "robot_sim", "reader_uhf_2ant": "rfid_reader_sim", "read
            "partition_localizer_paper": "partition_localizer", "partition_navigator": "partition_navigator",
            "create_base": "create_base", "llrp_reader": "llrp_reader", "rfid_localizer_floor_lattice": "rfid_localizer"}
 PROFILE = "robots/create2_llrp.yaml"
+BR, S_BR, SURVEY = "building_ring", "scenarios/building_ring.yaml", "maps/building_ring_survey.yaml"
 INT64_OVER = str(1 << 64)
 
 
@@ -271,6 +276,12 @@ FILE_CASES: dict[str, FileCase] = {
                                              S_LF, "nodes.rfid_reader.process", ("a process of its own",)),
     "parameter file not found": FileCase(LF, lambda root: (root / ROBOT).unlink(), S_LF, "nodes.robot_sim.params",
                                          ("not found",)),
+    # A role's own robot map (the fused localizer's tag survey beside paper 004's topological map).
+    "role's map not found": FileCase(BR, lambda root: (root / SURVEY).unlink(), S_BR, "nodes.rfid_localizer.map",
+                                     ("map file not found",)),
+    "role's map with a bad plate": FileCase(BR, replaced(SURVEY, "normal: [0.0, 1.0]}\n  - {id: \"2\"",
+                                                                      "normal: [0.0, 0.0]}\n  - {id: \"2\""),
+                                            SURVEY, "wall_tags[0].normal", ("must not be zero",)),
     "params a number": FileCase(LF, replaced(S_LF, "params: ../params/flc_tuned.yaml", "params: 5"), S_LF,
                                 "nodes.heading_controller.params", ("parameter file path",)),
     "overrides a list": FileCase(LF, replaced(S_LF, "overrides: {map_to_odom_at_start: true}", "overrides: [1]"),

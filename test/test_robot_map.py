@@ -1,5 +1,5 @@
-"""A robot map's surveyed ceiling_tags and wall_tags (rfidnav_common.robot_map): read as declared, and every bad
-entry one ConfigError naming the file and the field."""
+"""A robot map's surveyed ceiling_tags, floor_tags and wall_tags (rfidnav_common.robot_map): read as declared, and
+every bad entry one ConfigError naming the file and the field; the shipped surveys agree with their worlds."""
 
 from __future__ import annotations
 
@@ -17,6 +17,8 @@ name: surveyed
 extent: [0.0, 0.0, 10.0, 4.0]
 ceiling_tags:
   C1: [1.0, 2.0, 3.0]
+floor_tags:
+  F1: [1.0, 2.5]
 wall_tags:
   - {id: 8, position: [3.0, 4.0], normal: [0.0, -2.0]}
 """
@@ -28,10 +30,10 @@ def write(tmp_path: Path, text: str) -> Path:
     return path
 
 
-def test_surveyed_ceiling_and_wall_tags_are_read_with_numeric_ids_as_strings_and_normals_made_unit(
+def test_surveyed_ceiling_floor_and_wall_tags_are_read_with_numeric_ids_as_strings_and_normals_made_unit(
         tmp_path: Path) -> None:
     route_map = load_route_map(write(tmp_path, GOOD))
-    assert route_map.ceiling_tags == {"C1": (1.0, 2.0, 3.0)}
+    assert route_map.ceiling_tags == {"C1": (1.0, 2.0, 3.0)} and route_map.floor_tags == {"F1": (1.0, 2.5)}
     (tag,) = route_map.wall_tags
     assert (tag.tag_id, tag.position, tag.normal) == ("8", (3.0, 4.0), (0.0, -1.0))
 
@@ -39,6 +41,8 @@ def test_surveyed_ceiling_and_wall_tags_are_read_with_numeric_ids_as_strings_and
 @pytest.mark.parametrize(("old", "new", "field", "words"), [
     ("C1: [1.0, 2.0, 3.0]", "C1: [1.0, 2.0]", "ceiling_tags.C1", "expected 3 numbers"),
     ("C1: [1.0, 2.0, 3.0]", "C1: [1.0, .nan, 3.0]", "ceiling_tags.C1[1]", "finite"),
+    ("F1: [1.0, 2.5]", "F1: [1.0, 2.5, 0.0]", "floor_tags.F1", "expected 2 numbers"),
+    ("F1: [1.0, 2.5]", "3: [1.0, 2.5]", "floor_tags.3", "tag ids must be strings"),
     ("normal: [0.0, -2.0]", "normal: [0.0, 0.0]", "wall_tags[0].normal", "must not be zero"),
     ("{id: 8, position: [3.0, 4.0], normal: [0.0, -2.0]}",
      "{id: 8, position: [3.0, 4.0], normal: [0.0, -2.0]}\n  - {id: '8', position: [5.0, 4.0], normal: [0.0, -1.0]}",
@@ -52,3 +56,19 @@ def test_a_bad_surveyed_tag_is_one_error_naming_the_file_and_the_field(tmp_path:
     with pytest.raises(ConfigError) as raised:
         load_route_map(path)
     assert str(path) in str(raised.value) and field in str(raised.value) and words in str(raised.value)
+
+
+@pytest.mark.parametrize(("scenario", "role"), [("hallway", None), ("building_ring", "rfid_localizer")])
+def test_each_shipped_tag_survey_places_every_tag_where_its_world_has_it(scenario: str, role: str | None) -> None:
+    from rfidnav_bringup.scenario import load_scenario
+    from rfidnav_common.robot_map import bounding_box
+
+    loaded = load_scenario(scenario)
+    survey_file = loaded.map_file if role is None else loaded.nodes[role].map_file
+    assert survey_file is not None
+    survey, world = load_route_map(survey_file), loaded.world
+    assert survey.ceiling_tags == {tag.tag_id: tag.position for tag in world.tags if tag.kind == "ceiling"}
+    assert survey.floor_tags == {tag.tag_id: tag.position[:2] for tag in world.tags if tag.kind == "floor"}
+    assert {(t.tag_id, t.position, t.normal) for t in survey.wall_tags} == {
+        (t.tag_id, t.position, t.normal) for t in world.wall_tags}
+    assert survey.extent == bounding_box(world.walls)

@@ -113,6 +113,7 @@ class NodeSpec:
     max_respawns: int
     process: str | None = None               # roles with the same name share one OS process (container.py)
     stepped: bool | None = None              # take part in the stepped clock; None: ours of the loop do
+    map_file: Path | None = None             # this role's robot map (``map:``); None: the scenario's
 
 
 @dataclass(frozen=True)
@@ -304,7 +305,7 @@ def load_scenario(name_or_path: str, swaps: dict[str, str] | None = None,
 
 def _node_spec(role: str, entry: Section, base: Path) -> NodeSpec:
     entry.reject_unknown(("package", "executable", "command", "name", "params", "overrides", "sim",
-                          "clock_source", "respawn", "max_respawns", "process", "stepped"))
+                          "clock_source", "respawn", "max_respawns", "process", "stepped", "map"))
     if entry.has("command"):
         package = executable = None
         command = _program(tuple(shlex.split(entry.string("command"))), entry.source, entry.field("command"))
@@ -324,6 +325,11 @@ def _node_spec(role: str, entry: Section, base: Path) -> NodeSpec:
     overrides = entry.raw("overrides", {})
     if not isinstance(overrides, dict):
         raise entry.error("overrides", "expected a mapping of parameter names to values")
+    map_file = (base / entry.string("map")).resolve() if entry.has("map") else None
+    if map_file is not None:
+        if not map_file.is_file():
+            raise entry.error("map", f"map file not found: {map_file}")
+        _robot_map(map_file)           # a bad map is the scenario's error, before any process starts
     process = entry.raw("process", None)
     if process is not None:
         if not isinstance(process, str) or not process.isidentifier():
@@ -338,7 +344,7 @@ def _node_spec(role: str, entry: Section, base: Path) -> NodeSpec:
         param_files=files, overrides=dict(overrides), sim=entry.boolean("sim", False),
         clock_source=entry.boolean("clock_source", False), respawn=entry.boolean("respawn", False),
         max_respawns=entry.integer("max_respawns", 3, minimum=0, maximum=MAX_RESPAWNS), process=process,
-        stepped=entry.boolean("stepped", False) if entry.has("stepped") else None)
+        stepped=entry.boolean("stepped", False) if entry.has("stepped") else None, map_file=map_file)
 
 
 def _swapped(spec: NodeSpec, replacement: str) -> NodeSpec:
@@ -657,7 +663,7 @@ def injected_parameters(scenario: Scenario, spec: NodeSpec, seed: int, rtf: floa
     if spec.sim:
         injected["world_file"] = str(scenario.world_file)
     else:
-        injected["map_file"] = str(scenario.map_file)
+        injected["map_file"] = str(spec.map_file or scenario.map_file)
     if spec.clock_source:
         x, y, yaw_deg = scenario.robot
         injected.update(start_x=x, start_y=y, start_yaw_deg=yaw_deg, rtf=float(rtf) if rtf != float("inf") else 0.0,

@@ -15,9 +15,10 @@ has any of:
   rectangle the robot may drive in. The two-tier navigator plans its legs round the walls and keeps its spiral
   searches inside; a goal outside the extent is refused. Without ``extent`` it is the walls' bounding box, then
   the ``deployment_area``.
-* ``ceiling_tags`` and ``wall_tags`` (the fused localizer, rfidnav_localization.fused): surveyed positions of
-  ceiling tags (paper 001's route tags) and of wall tag plates (paper 004's, the world files' schema), as a
-  building's tag survey records them. No paper method reads them.
+* ``ceiling_tags``, ``floor_tags`` and ``wall_tags`` (the fused localizer, rfidnav_localization.fused): surveyed
+  positions of ceiling tags (paper 001's route tags), of single floor tags (paper 001's arrival tags) and of wall
+  tag plates (paper 004's, the world files' schema), as a building's tag survey records them. No paper method
+  reads them.
 
 Schema::
 
@@ -35,6 +36,8 @@ Schema::
     extent: [0.0, 0.0, 12.0, 8.0]          # x_min, y_min, x_max, y_max [m]
     ceiling_tags:          # tag id -> [x, y, z] [m], map frame
       C1: [0.0, 0.0, 3.0]
+    floor_tags:            # tag id -> [x, y] [m], map frame: single floor tags, outside any tag group
+      F1: [0.0, 0.0]
     wall_tags:             # plates on walls; normal: out of the wall into the hallway
       - {id: "8", position: [7.2, 9.0], normal: [0.0, -1.0]}
 """
@@ -66,6 +69,7 @@ class RouteMap:
     declared_extent: Rectangle | None = None
     ceiling_tags: dict[str, tuple[float, float, float]] = field(default_factory=dict)
     wall_tags: tuple[WallTag, ...] = ()
+    floor_tags: dict[str, tuple[float, float]] = field(default_factory=dict)
 
     @property
     def extent(self) -> Rectangle | None:
@@ -82,7 +86,7 @@ def load_route_map(path: Path, radio_map_may_be_missing: bool = False) -> RouteM
     """A route map; its ``radio_map`` must exist unless ``radio_map_may_be_missing`` (the survey that writes it)."""
     section = Section.from_file(Path(path))
     section.reject_unknown(("name", "description", "arrival_tags", "deployment_area", "tag_groups", "radio_map",
-                            "walls", "extent", "ceiling_tags", "wall_tags"))
+                            "walls", "extent", "ceiling_tags", "floor_tags", "wall_tags"))
     arrival = _arrival_tags(section) if section.has("arrival_tags") else {}
     area = rectangle_of(section, "deployment_area")
     extent = rectangle_of(section, "extent")
@@ -93,14 +97,15 @@ def load_route_map(path: Path, radio_map_may_be_missing: bool = False) -> RouteM
         radio_map = (Path(path).parent / section.string("radio_map")).resolve()
         if not (radio_map.is_file() or radio_map_may_be_missing and not radio_map.exists()):
             raise section.error("radio_map", f"no such file: {radio_map}")
-    ceiling_tags = ceiling_tags_of(section)
+    ceiling_tags = {tag_id: (x, y, z) for tag_id, (x, y, z) in surveyed_tags_of(section, "ceiling_tags", 3).items()}
+    floor_tags = {tag_id: (x, y) for tag_id, (x, y) in surveyed_tags_of(section, "floor_tags", 2).items()}
     wall_tags = wall_tags_of(section)
-    if not arrival and area is None and not groups and not ceiling_tags and not wall_tags:
-        raise section.error("arrival_tags", "a map needs arrival_tags, a deployment_area, tag_groups, ceiling_tags "
-                                            "or wall_tags (none given)")
+    if not arrival and area is None and not groups and not ceiling_tags and not floor_tags and not wall_tags:
+        raise section.error("arrival_tags", "a map needs arrival_tags, a deployment_area, tag_groups, ceiling_tags, "
+                                            "floor_tags or wall_tags (none given)")
     return RouteMap(name=section.string("name"), arrival_tags=arrival, deployment_area=area, tag_groups=groups,
                     radio_map_file=radio_map, walls=walls, declared_extent=extent, ceiling_tags=ceiling_tags,
-                    wall_tags=wall_tags)
+                    wall_tags=wall_tags, floor_tags=floor_tags)
 
 
 def bounding_box(walls: Sequence[Wall]) -> Rectangle:
@@ -190,17 +195,16 @@ def wall_tags_of(section: Section, seen: dict[str, str] | None = None) -> tuple[
     return tuple(wall_tags)
 
 
-def ceiling_tags_of(section: Section) -> dict[str, tuple[float, float, float]]:
-    """The optional ``ceiling_tags`` of a map: tag id -> surveyed [x, y, z] [m], map frame."""
-    if not section.has("ceiling_tags"):
+def surveyed_tags_of(section: Section, key: str, dimensions: int) -> dict[str, tuple[float, ...]]:
+    """A map's optional surveyed tags under ``key``: tag id -> its position, ``dimensions`` numbers [m], map frame."""
+    if not section.has(key):
         return {}
-    entries = section.section("ceiling_tags")
+    entries = section.section(key)
     tags = {}
     for tag_id in entries.keys():
         if not isinstance(tag_id, str):
             raise entries.error(str(tag_id), "tag ids must be strings")
-        x, y, z = entries.numbers(tag_id, length=3)
-        tags[tag_id] = (x, y, z)
+        tags[tag_id] = tuple(entries.numbers(tag_id, length=dimensions))
     return tags
 
 

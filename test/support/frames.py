@@ -67,14 +67,15 @@ def assert_same_pose(a: tuple[float, float, float], b: tuple[float, float, float
     assert abs(math.remainder(a[2] - b[2], 2 * math.pi)) <= radians, (a, b)
 
 
-def assert_estimates_are_published_as_map_to_odom(run: Path, within_s: float = 0.05) -> int:
+def assert_estimates_are_published_as_map_to_odom(run: Path, within_s: float = 0.05,
+                                                  status_topic: str = "/localization/status") -> int:
     """Each map -> odom, composed with odom -> base_link at its stamp (the odometry the localizer used), is an
-    estimate with a heading on /localization/status stamped then or up to ``within_s`` later (a localizer may
-    publish on a step timer, after the odometry it rests on). Returns how many were checked."""
+    estimate with a heading on ``status_topic`` (the localizer that drives) stamped then or up to ``within_s`` later
+    (a localizer may publish on a step timer, after the odometry it rests on). Returns how many were checked."""
     tree = frame_tree(run)
     assert tree.parents["odom"] == "map" and tree.parents["base_link"] == "odom"
     estimates = [(_stamp_ns(m.header.stamp), (m.x, m.y, m.yaw_rad))
-                 for _, _, m in read_messages(run / "bag", ["/localization/status"])
+                 for _, _, m in read_messages(run / "bag", [status_topic])
                  if m.position_valid and m.orientation_valid]
     for stamp, map_to_odom in tree.moving["odom"]:
         base = compose(map_to_odom, tree.pose_at("base_link", stamp))

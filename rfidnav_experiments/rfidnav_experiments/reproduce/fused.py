@@ -55,7 +55,7 @@ from scipy import stats
 
 from rfidnav_bringup.scenario import CONFIG_DIR, load_scenario
 from rfidnav_common.errors import ConfigError
-from rfidnav_common.robot_map import bounding_box
+from rfidnav_common.robot_map import load_route_map
 from rfidnav_common.seeding import derive_seed, rng_for
 from rfidnav_common.topological_map import load_topological_map
 from rfidnav_experiments.engine import run_tasks
@@ -301,14 +301,16 @@ def partition_driving_run(job: tuple[str, int, int]) -> FusedRun:
 def topological_run(job: tuple[str, int, int]) -> FusedRun:
     """One paper 004 mission on a generated floor (the mission executor's own task list), the fused localizers
     beside on the same control steps: the side antenna's wall tags and the odometry. Their map is the floor's tag
-    survey (every plate where the world has it) within the walls' bounding box."""
+    survey (every plate, within the walls' bounding box), the robot map the scenario gives rfid_localizer over
+    DDS."""
     name, run, seed = job
     floor = FLOORS[name]
     topological_map, world = load_topological_map(floor.map_path), load_world(floor.world_path)
+    survey = load_scenario(name).nodes["rfid_localizer"].map_file
+    assert survey is not None
     parameters = file_parameters(RfidLocalizerParameters, WALL_SIDE_LOCALIZER, "rfid_localizer",
-                                 map_file=str(floor.map_path))
-    fused_map = FusedMap(extent=bounding_box(world.walls), wall_tags={tag.tag_id: tag for tag in world.wall_tags})
-    riders = riders_for(name, run, seed, parameters.settings(), fused_map)
+                                 map_file=str(survey))
+    riders = riders_for(name, run, seed, parameters.settings(), FusedMap.of_route_map(load_route_map(survey)))
     nodes = {node_name: node.position for node_name, node in topological_map.nodes.items()
              if node.position is not None}
     beside = TopologicalBeside(riders, parameters.wall_antenna, nodes)
@@ -321,16 +323,14 @@ def topological_run(job: tuple[str, int, int]) -> FusedRun:
 def route_run(job: tuple[str, int, int]) -> FusedRun:
     """One run of paper 001's hallway route (Figs. 12/13): the tag route follower steering by the ceiling tags'
     phase difference, the fused localizers beside on the same reader rounds and odometry. Their map is the
-    hallway's tag survey: the ceiling tags and the floor tags under them, within the walls' bounding box."""
+    hallway's tag survey in the scenario's robot map, as rfid_localizer has it over DDS: the ceiling tags and the
+    floor tags under them, within the walls' bounding box."""
     name, run, seed = job
     scenario = load_scenario(name)
-    world = scenario.world
     parameters = file_parameters(RfidLocalizerParameters, UHF_2ANT_LOCALIZER, "rfid_localizer",
                                  map_file=str(scenario.map_file))
-    fused_map = FusedMap(extent=bounding_box(world.walls),
-                         floor_tags={tag.tag_id: tag.position[:2] for tag in world.tags if tag.kind == "floor"},
-                         ceiling_tags={tag.tag_id: tag.position for tag in world.tags if tag.kind == "ceiling"})
-    riders = riders_for(name, run, seed, parameters.settings(), fused_map)
+    assert scenario.route_map is not None
+    riders = riders_for(name, run, seed, parameters.settings(), FusedMap.of_route_map(scenario.route_map))
     x, y, yaw_deg = scenario.robot
     beside = RouteBeside(riders, parameters.ports(), (x, y, math.radians(yaw_deg)))
     run_seed = derive_seed(seed, f"fused:{name}:{run}:route")

@@ -2,8 +2,9 @@
 
 A robot map declares what it has (rfidnav_common.robot_map): ``tag_groups`` (their tags' positions follow from
 each group's shape), ``deployment_area`` (a lattice of self-describing floor tags: a tag's id gives its position,
-so the lattice is learned from the first id read), ``ceiling_tags`` and ``wall_tags`` (surveyed positions), a
-``radio_map`` and the ``extent``. A kind the map does not declare is evidence the localizer ignores.
+so the lattice is learned from the first id read), ``ceiling_tags``, ``floor_tags`` (single ones, outside any
+group) and ``wall_tags`` (surveyed positions), a ``radio_map`` and the ``extent``. A kind the map does not declare
+is evidence the localizer ignores.
 """
 
 from __future__ import annotations
@@ -24,7 +25,7 @@ from rfidnav_localization.partition.geometry import read_range_of
 @dataclass
 class FusedMap:
     extent: Rectangle
-    floor_tags: dict[str, tuple[float, float]] = field(default_factory=dict)     # tag groups' tags
+    floor_tags: dict[str, tuple[float, float]] = field(default_factory=dict)     # tag groups' and single ones
     ceiling_tags: dict[str, tuple[float, float, float]] = field(default_factory=dict)
     wall_tags: dict[str, WallTag] = field(default_factory=dict)
     deployment_area: Rectangle | None = None
@@ -45,6 +46,7 @@ class FusedMap:
             raise ConfigError(f"map '{route_map.name}'", "extent", "none given, and no walls or deployment_area to "
                                                                    "take it from: where may the robot be?")
         floor = {tag_id: position for group in route_map.tag_groups for tag_id, position in group.tags()}
+        floor.update(route_map.floor_tags)
         return cls(extent=extent, floor_tags=floor, ceiling_tags=dict(route_map.ceiling_tags),
                    wall_tags={tag.tag_id: tag for tag in route_map.wall_tags},
                    deployment_area=route_map.deployment_area, radio_map=radio_map)
