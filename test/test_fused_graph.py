@@ -4,8 +4,9 @@ of tag the floor carries, WiFi fixes from the location server and the compass, o
 (paper 003's world) the same beside it on the tag groups, WiFi and the compass; in mixed_floor_fused its pose drives
 the robot (pose_navigator) and its map -> odom is the tf tree's; in partition_field_fused (paper 000's field) its
 status drives the partition navigator, paper 000's localizer beside it; in hallway (paper 001) and building_ring
-(paper 004) it rides beside the route follower and the mission executor on their building's tag survey. Its errors
-come from the bag: each pose against the ground truth at its stamp."""
+(paper 004) it rides beside the route follower and the mission executor on their building's tag survey; in
+two_tier_flat_fused paper 003's navigator takes its tier one from it. Its errors come from the bag: each pose against
+the ground truth at its stamp."""
 
 from __future__ import annotations
 
@@ -16,10 +17,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from rfidnav_bag.bags import read_messages
+from rfidnav_msgs.msg import LocalizationStatus
 from support.frames import assert_estimates_are_published_as_map_to_odom
 from support.runs import evidence_used, navigation_subscriptions, pose_errors, run_scenario
 
 pytestmark = pytest.mark.tier("graph")
+
+WIFI_TIER = LocalizationStatus.TIER_WIFI      # two_tier_navigator's tier one, whatever answered it
 
 
 @pytest.fixture(scope="module")
@@ -52,6 +57,14 @@ def hallway_run(tmp_path_factory) -> Path:
 @pytest.fixture(scope="module")
 def ring_run(tmp_path_factory) -> Path:
     return run_scenario(tmp_path_factory.mktemp("runs"), "building_ring", "--rtf", "5", "--seed", "1")
+
+
+@pytest.fixture(scope="module")
+def tier_one_run(tmp_path_factory) -> Path:
+    # Paper 003's navigator may stall at a wall where its estimate is off (it arrives in 80 % of runs on this flat with
+    # its own tier one): the test asks where its tier one came from, not that it arrived.
+    return run_scenario(tmp_path_factory.mktemp("runs"), "two_tier_flat_fused", "--rtf", "5", "--seed", "1",
+                        mission_may_fail=True)
 
 
 def rms(errors: np.ndarray) -> float:
@@ -138,3 +151,18 @@ def test_on_paper_004s_ring_the_fused_localizer_rides_beside_the_executor_on_the
     # metres off between tags, placed by each plate (here 6.1 m RMSE, median 1.4 m).
     assert float(np.median(errors)) < 3.0 and rms(errors) < 10.0
     assert evidence_used(ring_run, "/fused/status") == {"wall_tag"}     # every plate read is one the survey knows
+
+
+def test_paper_003s_navigator_takes_each_tier_one_fix_from_the_fused_pose(tier_one_run: Path) -> None:
+    summary = json.loads((tier_one_run / "summary.json").read_text())
+    assert summary["metrics"]["path_length_m"] > 1.0, summary["message"]       # it drove on its tier one
+    errors, _ = pose_errors(tier_one_run, "/fused/pose")
+    assert len(errors) > 20 and rms(errors) < 2.0                # a pose per reader poll, two a second
+    subscriptions = navigation_subscriptions(tier_one_run, ("two_tier_navigator",))["two_tier_navigator"]
+    assert "/fused/pose" in subscriptions
+    # Each tier-one fix (standing still, no distance since) is, to the bit, a pose rfid_localizer published.
+    fused = {(m.pose.pose.position.x, m.pose.pose.position.y)
+             for _, _, m in read_messages(tier_one_run / "bag", ["/fused/pose"])}
+    fixes = [(m.x, m.y) for _, _, m in read_messages(tier_one_run / "bag", ["/localization/status"])
+             if m.method == "two_tier" and m.last_fix_tier == WIFI_TIER and m.distance_since_fix_m == 0.0]
+    assert fixes and all(fix in fused for fix in fixes)

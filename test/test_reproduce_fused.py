@@ -24,6 +24,7 @@ from rfidnav_experiments.reproduce.fused import (
     PARTITIONS,
     RING,
     SINGLE_EVIDENCE,
+    TIER_ONE,
     WORLDS,
     TrackFigures,
     home_run,
@@ -31,6 +32,7 @@ from rfidnav_experiments.reproduce.fused import (
     recovery_keys,
     world_run,
 )
+from rfidnav_experiments.reproduce.two_tier import HOMES
 from rfidnav_experiments.runners.fused import Track
 from rfidnav_localization.fused.filter import PoseEstimate, Update
 from rfidnav_localization.fused.localizer import FusedEstimate
@@ -114,6 +116,16 @@ def test_the_partition_navigator_driving_on_the_fused_localizer_arrives_with_pap
     assert run.late_global_s is None and run.kidnap_recovery_s is None     # the pose that drives is left alone
 
 
+def test_paper_003s_navigator_with_tier_one_from_the_fused_pose_runs_the_mission_and_both_estimates_are_scored(
+        ) -> None:
+    run = world_run(("two_tier_flat_fused", 0, DEVELOPMENT_SEED))
+    assert "two_tier_flat_fused" in TIER_ONE and set(run.figures) == {"fused", "paper"}
+    assert run.success and run.final_error_m is not None and run.final_error_m < 0.3
+    fused = run.figures["fused"].position_rmse_m
+    assert fused is not None and fused < 1.5 and run.global_s is not None
+    assert run.late_global_s is None and run.kidnap_recovery_s is None     # the pose in the loop is left alone
+
+
 def test_map_to_odom_composed_with_the_odometry_pose_is_the_estimated_pose() -> None:
     estimate = FusedEstimate(PoseEstimate(3.0, -1.0, 2.5, np.eye(3)), (0.7, 1.9, -0.4), Update((), (), 0))
     pose = estimate.pose
@@ -154,7 +166,7 @@ def test_the_command_prints_every_metric_for_every_world_with_both_localizers_an
     for row in rows:
         world = row["setting"].split()[0]
         if row["metric"] == "arrival":       # of the localizer the navigator drove on
-            driver = "paper" if world == PARTITIONS else "fused"
+            driver = "paper" if world in (*HOMES, PARTITIONS) else "fused"
             assert set(row) == {"experiment", "setting", "metric", driver}
             assert row[driver]["runs"] == 2 and 0 <= row[driver]["arrived"] <= 2
             assert row[driver]["final_error_m"]["n"] == 2

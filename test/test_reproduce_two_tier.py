@@ -10,6 +10,7 @@ import contextlib
 import dataclasses
 import io
 import json
+import math
 import subprocess
 import sys
 from pathlib import Path
@@ -207,3 +208,28 @@ def test_a_bad_run_count_is_one_clear_error_from_the_command(tmp_path: Path) -> 
     result = subprocess.run([sys.executable, "-m", "rfidnav_bringup.cli", "reproduce", "two_tier", "--runs", "-1",
                              "--out", str(tmp_path)], capture_output=True, text=True, cwd=WORKSPACE, timeout=300)
     assert result.returncode != 0 and "--runs" in result.stderr
+
+
+def test_tier_one_answered_from_a_localizers_pose_takes_the_place_of_the_location_servers_locate() -> None:
+    from rfidnav_experiments.reproduce.two_tier import SETTINGS, home
+    from rfidnav_experiments.runners.two_tier import StepSeen, run_two_tier
+
+    place = home("two_tier_flat")
+    seen: list[StepSeen] = []
+
+    def oracle() -> tuple[tuple[float, float], float] | None:
+        """A localizer that knows where the robot is (the test harness's truth), from its first step on."""
+        if not seen:
+            return None
+        return (seen[-1].truth[0], seen[-1].truth[1]), 0.05
+
+    x, y, yaw_deg = place.scenario.robot
+    target = place.scenario.mission.goal["target"]
+    run = run_two_tier(place.site, (x, y, math.radians(yaw_deg)), (target["x"], target["y"]), SETTINGS,
+                       rng_for(DEVELOPMENT_SEED, "tier one test"), 1, max_time_s=900.0, floor=place.floor,
+                       observe=seen.append, reader_parameters=FLOOR_READER, tier_one=oracle, scan_period_s=1.0)
+    assert run.success, run.message
+    # Every request was answered where the robot stood (it stands still while asking), none by fingerprints.
+    assert run.tier_one_errors_m and max(run.tier_one_errors_m) == pytest.approx(0.0, abs=1e-9)
+    # The periodic scans' answers reach the observers (a localizer beside that locates each scan).
+    assert sum(step.wifi_fix is not None for step in seen) >= run.duration_s / 1.0 - 2

@@ -7,7 +7,7 @@ import math
 from pathlib import Path
 
 import pytest
-from geometry_msgs.msg import Twist
+from geometry_msgs.msg import PoseWithCovarianceStamped, Twist
 from nav_msgs.msg import Odometry
 from rclpy.action import ActionClient
 from rclpy.parameter import Parameter
@@ -103,3 +103,44 @@ def test_a_target_that_is_not_finite_is_refused(graph: Graph) -> None:
     sent = client.send_goal_async(goal)
     graph.spin_until(sent.done, "the goal's answer")
     assert not sent.result().accepted
+
+
+def test_given_a_localizers_pose_topic_tier_one_is_that_localizers_pose_and_not_the_location_servers_locate(
+        graph: Graph, server_files: tuple[Path, Path]) -> None:
+    database, map_file = server_files
+    graph.add(LocationServerNode(context=graph.context, parameter_overrides=[
+        Parameter("database_file", value=str(database)), Parameter("map_file", value=str(map_file)),
+        Parameter("k", value=1)]))
+    navigator = graph.add(TwoTierNavigatorNode(context=graph.context, parameter_overrides=[
+        Parameter("tier_one_from", value="/fused/pose")]))
+    publish = sensors(graph)
+    pose_pub = graph.probe.create_publisher(PoseWithCovarianceStamped, "/fused/pose", SENSOR_QOS)
+    commands: list[Twist] = []
+    graph.probe.create_subscription(Twist, "/cmd_vel", commands.append, COMMAND_QOS)
+    client = ActionClient(graph.probe, NavigateToPoint, "/navigate_to_point")
+    graph.clients.append(client)
+    graph.spin_until(client.server_is_ready, "the action server")
+    publish()
+    goal = NavigateToPoint.Goal()
+    goal.target.x, goal.target.y = 2.0, 1.0
+    sent = client.send_goal_async(goal)
+    graph.spin_until(sent.done, "the goal's acceptance")
+    assert sent.result().accepted
+    # No pose yet: it waits for one standing still, though the location server could answer the scan.
+    graph.spin_until(lambda: navigator.call is not None, "the navigator's tier-one request")
+    publish()
+    assert navigator.navigator.estimate().position is None and not commands
+    pose = PoseWithCovarianceStamped()
+    pose.header.frame_id = "map"
+    pose.pose.pose.position.x, pose.pose.pose.position.y = 3.0, 1.5
+    pose.pose.pose.orientation.w = 1.0
+    pose.pose.covariance[0] = pose.pose.covariance[7] = 0.04
+
+    def driving() -> bool:
+        publish()
+        pose_pub.publish(pose)
+        return any(abs(c.angular.z) > 0.0 or c.linear.x > 0.0 for c in commands)
+    graph.spin_until(driving, "the navigator to drive towards the landmark")
+    fix = navigator.navigator.progress.fixes[0]
+    assert fix.position == pytest.approx((3.0, 1.5)) and fix.sd_m == pytest.approx(0.2)   # not the server's (1, 1)
+    assert navigator.navigator.waypoint.group_id == "G1"

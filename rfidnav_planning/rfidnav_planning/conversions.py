@@ -1,4 +1,4 @@
-"""Planning domain objects <-> ROS messages: localization status in, plans out."""
+"""Planning domain objects <-> ROS messages: localization status and poses in, plans out."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ from collections.abc import Callable
 from typing import Any
 
 from builtin_interfaces.msg import Time
-from geometry_msgs.msg import Point, PoseStamped
+from geometry_msgs.msg import Point, PoseStamped, PoseWithCovarianceStamped
 from nav_msgs.msg import Path
 
 from rfidnav_common import inputs
@@ -16,6 +16,7 @@ from rfidnav_common.tag_lattice import Coordinate, Lattice, TagIdError, decode_t
 from rfidnav_localization.partition import LocalizationEstimate
 from rfidnav_msgs.msg import LocalizationStatus, Partition, PartitionPath
 from rfidnav_planning.partition_planner import PartitionPlan
+from rfidnav_planning.pose_navigation import Pose
 
 
 def estimate_from_status(msg: LocalizationStatus, stamp_s: float,
@@ -51,6 +52,17 @@ def estimate_from_status(msg: LocalizationStatus, stamp_s: float,
         read_range_m=read_range_m if read_range_m > 0.0 else None, lattice=lattice,
         rejected_tag_ids=tuple(msg.rejected_tag_ids), rogue_count=msg.rogue_count,
         undecodable_count=msg.undecodable_count)
+
+
+def pose_from_message(msg: PoseWithCovarianceStamped, map_frame: str) -> Pose:
+    """A localizer's pose as a navigator drives on it: in ``map_frame``, planar, its position's sd from the
+    covariance's diagonal (Pose.of_variances); BadInput (rfidnav_common.inputs) for anything else."""
+    inputs.frame(msg.header.frame_id, map_frame)
+    x, y, yaw = inputs.planar_pose(msg.pose.pose, "pose.pose")
+    variance_x, variance_y = msg.pose.covariance[0], msg.pose.covariance[7]
+    if not (math.isfinite(variance_x) and math.isfinite(variance_y)) or min(variance_x, variance_y) < 0.0:
+        raise inputs.BadInput(f"pose.covariance: position variances {variance_x}, {variance_y} are no variances")
+    return Pose.of_variances(x, y, yaw, variance_x, variance_y)
 
 
 def plan_messages(plan: PartitionPlan, lattice: Lattice, replans: int, stamp: Time,

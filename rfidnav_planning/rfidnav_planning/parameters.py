@@ -29,6 +29,8 @@ from rfidnav_planning.partition_navigation import ARRIVALS, DEVIATION_CHECKS, Na
 from rfidnav_planning.pose_navigation import PoseNavigatorSettings
 from rfidnav_planning.two_tier_navigation import TwoTierSettings
 
+TIER_ONE_SERVER = "location_server"   # two_tier_navigator's tier_one_from: the paper's
+
 
 @dataclass(frozen=True)
 class PartitionNavigatorParameters:
@@ -102,6 +104,10 @@ class TwoTierNavigatorParameters:
     map_frame: str = param("frame of the published pose", "map")
     publish_tf: bool = param("publish map -> odom on /tf from each estimate with a heading (REP 105); turn it off "
                              "where another localizer's estimate drives the mission", True)
+    tier_one_from: str = param(
+        "tier one (A6, and A5's checks): 'location_server' (paper 003: its fingerprint locate of the latest scan), or "
+        "ours, the topic of a localizer's pose to take instead (a PoseWithCovarianceStamped in map_frame, e.g. "
+        "rfid_localizer's /fused/pose)", TIER_ONE_SERVER)
     landmark_spacing_m: float = param("geographic forwarding: the tolerable distance to the next landmark [m]", 4.0,
                                       POSITIVE)
     calibration_distance_m: float = param("A5: a tier-one check after driving this far without a fix [m]", 6.0,
@@ -133,7 +139,15 @@ class TwoTierNavigatorParameters:
     goal_tolerance_m: float = param("go-to: a waypoint or the target is reached within this [m]", 0.02, POSITIVE)
 
     def validate(self) -> None:
+        if self.tier_one_from != TIER_ONE_SERVER and not self.tier_one_from.startswith("/"):
+            raise ParameterError("tier_one_from", f"'{self.tier_one_from}' is neither {TIER_ONE_SERVER} nor a topic "
+                                                  "(/...)")
         self.settings().validate()
+
+    @property
+    def tier_one_pose_topic(self) -> str | None:
+        """The localizer's pose topic tier one comes from; None: the location server (paper 003)."""
+        return None if self.tier_one_from == TIER_ONE_SERVER else self.tier_one_from
 
     def antenna_ports_read(self) -> dict[str, int]:
         """The reader ports this node takes reads of, by parameter: the reader must publish each of them."""

@@ -25,7 +25,7 @@ from rfidnav_common.robot_map import load_route_map
 from rfidnav_common.ros import COMMAND_QOS, SENSOR_QOS, declare_parameters, run_node, seconds_of, twist
 from rfidnav_common.stepped_node import SteppedNode
 from rfidnav_msgs.action import NavigateToPoint
-from rfidnav_planning.conversions import point_goal_refusal
+from rfidnav_planning.conversions import point_goal_refusal, pose_from_message
 from rfidnav_planning.parameters import PoseNavigatorParameters
 from rfidnav_planning.pose_navigation import Pose, PoseNavigator, Step
 from rfidnav_planning.wall_paths import WallMap
@@ -62,18 +62,13 @@ class PoseNavigatorNode(SteppedNode):
 
     def on_pose(self, msg: PoseWithCovarianceStamped) -> None:
         try:
-            inputs.frame(msg.header.frame_id, self.params.map_frame)
-            x, y, yaw = inputs.planar_pose(msg.pose.pose, "pose.pose")
-            variance_x, variance_y = msg.pose.covariance[0], msg.pose.covariance[7]
-            if not (math.isfinite(variance_x) and math.isfinite(variance_y)) or min(variance_x, variance_y) < 0.0:
-                raise inputs.BadInput(f"pose.covariance: position variances {variance_x}, {variance_y} are no "
-                                      "variances")
+            pose = pose_from_message(msg, self.params.map_frame)
         except inputs.BadInput as error:
             self.drops.drop(self.params.pose_topic, error)
             return
         if self.pose is not None and self.goals.running is not None:
-            self.travelled_m += math.dist((x, y), (self.pose.x, self.pose.y))
-        self.pose = Pose.of_variances(x, y, yaw, variance_x, variance_y)
+            self.travelled_m += math.dist((pose.x, pose.y), (self.pose.x, self.pose.y))
+        self.pose = pose
         self.pose_stamp_s = seconds_of(msg.header.stamp)
 
     # -------------------------------------------------------------------------------------- goals

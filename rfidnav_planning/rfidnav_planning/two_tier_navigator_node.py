@@ -6,7 +6,9 @@ floor round read on the HF antenna since the last step (at the /odom pose it was
 and publishes its velocity command on /cmd_vel, the dead-reckoned pose on /localization/pose and the tier of
 the last fix on /localization/status. When the core asks the location server something, the latest
 /wifi/scan goes to /location_server/locate, or the tag-map query to /location_server/tag_map; an unanswered
-call (a server restarting, say) is sent again after ``service_timeout_s`` while the robot stands still.
+call (a server restarting, say) is sent again after ``service_timeout_s`` while the robot stands still. Given a
+topic in ``tier_one_from`` the navigator takes tier one from the localizer the scenario names instead (its latest pose
+and the pose's sd, e.g. rfid_localizer's fused estimate), waiting standing still for its first.
 One goal at a time and cancel (checked at each control step): rfidnav_common.goal_server.
 
 Every input is checked (rfidnav_common.inputs) and what fails is dropped and counted with a throttled warning:
@@ -39,8 +41,9 @@ from rfidnav_common.transforms import FrameBroadcaster
 from rfidnav_msgs.action import NavigateToPoint
 from rfidnav_msgs.msg import LocalizationStatus, TagReadArray, WifiScan
 from rfidnav_msgs.srv import GetTagMap, Locate
-from rfidnav_planning.conversions import point_goal_refusal
+from rfidnav_planning.conversions import point_goal_refusal, pose_from_message
 from rfidnav_planning.parameters import TwoTierNavigatorParameters
+from rfidnav_planning.pose_navigation import Pose
 from rfidnav_planning.two_tier_navigation import LOCATE, Decision, MapTag, Request, TwoTierNavigator
 from rfidnav_planning.wall_paths import WallMap
 
@@ -68,6 +71,7 @@ class TwoTierNavigatorNode(SteppedNode):
         self.compass_yaw: float | None = None
         self.compass_yaw_variance = UNKNOWN_YAW_VARIANCE    # from each /compass reading, where it gives one
         self.scan: WifiScan | None = None
+        self.tier_one_pose: Pose | None = None       # the latest from tier_one_from, when it names a topic
         self.reads: list[tuple[tuple[float, float, float], list[str]]] = []   # (odometry then, tag ids)
         self.cmd_pub = self.create_publisher(Twist, "/cmd_vel", COMMAND_QOS)
         self.pose_pub = self.create_publisher(PoseWithCovarianceStamped, "/localization/pose", SENSOR_QOS)
@@ -77,6 +81,10 @@ class TwoTierNavigatorNode(SteppedNode):
         self.create_subscription(Imu, "/compass", self.on_compass, SENSOR_QOS)
         self.create_subscription(TagReadArray, "/rfid/reads", self.on_reads, SENSOR_QOS)
         self.create_subscription(WifiScan, "/wifi/scan", self.on_scan, SENSOR_QOS)
+        tier_one_topic = self.params.tier_one_pose_topic
+        if tier_one_topic is not None:
+            self.create_subscription(PoseWithCovarianceStamped, tier_one_topic, self.on_tier_one_pose, SENSOR_QOS)
+            self.get_logger().info(f"tier one from the poses of {tier_one_topic}")
         self.locate_client = self.create_client(Locate, "/location_server/locate")
         self.tag_map_client = self.create_client(GetTagMap, "/location_server/tag_map")
         # Cancel is checked by control_step, before the core steps: no command follows a cancel request.
@@ -128,6 +136,12 @@ class TwoTierNavigatorNode(SteppedNode):
             return
         self.scan = msg
 
+    def on_tier_one_pose(self, msg: PoseWithCovarianceStamped) -> None:
+        try:
+            self.tier_one_pose = pose_from_message(msg, self.params.map_frame)
+        except inputs.BadInput as error:
+            self.drops.drop(self.params.tier_one_from, error)
+
     # -------------------------------------------------------------------------------------- goals
     def refusal(self, goal: NavigateToPoint.Goal) -> str | None:
         return point_goal_refusal(goal, self.navigator.refusal)
@@ -172,11 +186,20 @@ class TwoTierNavigatorNode(SteppedNode):
         if decision.request is not None:
             self.call = PendingCall(decision.request)
             self.serve(self.call)
+            if self.call is None or self.call.request is not decision.request:
+                return                         # answered at once (tier one from a pose): its decision is applied
         self.drive(*decision.command)
         self.publish_feedback(decision.phase)
 
     def serve(self, call: PendingCall) -> None:
-        """Send the call if it is not out, or again once it has gone unanswered for ``service_timeout_s``."""
+        """Send the call if it is not out, or again once it has gone unanswered for ``service_timeout_s``; a locate
+        with a topic in ``tier_one_from`` is answered by that localizer's latest pose once there is one."""
+        if call.request.kind == LOCATE and self.params.tier_one_pose_topic is not None:
+            pose = self.tier_one_pose
+            if pose is not None:
+                self.call = None
+                self.apply(self.navigator.on_located((pose.x, pose.y), pose.sd_m))
+            return
         if call.sent_s is not None and self.now_s() - call.sent_s < self.params.service_timeout_s:
             return
         if call.sent_s is not None:

@@ -102,9 +102,12 @@ RING = "building_ring"
 HALLWAY = "hallway"
 DRIVING = "mixed_floor_fused"      # the fused pose drives the robot (pose_navigator), in-process
 PARTITION_DRIVING = "partition_field_fused"   # the fused pose drives paper 000's partition navigator
-DRIVING_WORLDS = (PARTITION_DRIVING, DRIVING)   # worlds where the fused pose drives (none kidnapped nor late)
+TIER_ONE = tuple(f"{name}_fused" for name in HOMES)   # paper 003's navigator takes tier one from the fused pose
+DRIVING_WORLDS = (*TIER_ONE, PARTITION_DRIVING, DRIVING)   # the fused pose in the loop (none kidnapped nor late)
 WORLDS = (*HOMES, MIXED, PARTITIONS, RING, HALLWAY, *DRIVING_WORLDS)
-ARRIVING_WORLDS = (PARTITIONS, *DRIVING_WORLDS)   # their figures include arrival and the true final error
+# Their figures include arrival and the true final error: the paper's navigators on their own localizers, and each
+# navigator with the fused localizer in the loop, on the same missions.
+ARRIVING_WORLDS = (*HOMES, PARTITIONS, *DRIVING_WORLDS)
 UHF_2ANT_LOCALIZER = CONFIG_DIR / "params" / "rfid_localizer_uhf_2ant.yaml"
 WALL_SIDE_LOCALIZER = CONFIG_DIR / "params" / "rfid_localizer_wall_side.yaml"
 # Paper 000: the partition navigator with the paper's localizer drives tasks of this length across the field (the
@@ -130,6 +133,10 @@ def driver_of(world: str) -> str:
     if world == PARTITION_DRIVING:
         return ("the partition navigator driving on the fused localizer (its settings for a pose estimate) on "
                 f"{PARTITIONS}'s tasks, paper 000's localizer beside: no kidnap, no late start")
+    if world in TIER_ONE:
+        return ("the two-tier navigator with tier one from the fused localizer's pose, on the mission of "
+                f"{world.removesuffix('_fused')}; 'paper' is its dead reckoning between fixes: no kidnap, no late "
+                "start")
     if world == HALLWAY:
         return ("paper 001's tag route follower driving; it keeps no pose, so its 'paper' pose is the wheel "
                 "odometry from the known start")
@@ -248,7 +255,39 @@ def home_run(job: tuple[str, int, int]) -> FusedRun:
                           rng_for(seed, f"homes:{name}:{run}"), derive_seed(seed, f"homes:{name}:{run}:reader"),
                           max_time_s=place.scenario.mission.timeout_s, floor=place.floor, observe=beside,
                           reader_parameters=reader_parameters(place))
-    return fused_run(name, run, result.success, riders, beside.paper, result.duration_s)
+    return dataclasses.replace(fused_run(name, run, result.success, riders, beside.paper, result.duration_s),
+                               final_error_m=result.final_error_m)
+
+
+def tier_one_run(job: tuple[str, int, int]) -> FusedRun:
+    """One mission of a home's ``*_fused`` scenario in-process: the two-tier navigator (paper 003's legs, tier two
+    and searches) with tier one from the fused localizer's latest pose rather than the location server's
+    fingerprint locate, as two_tier_navigator's ``tier_one_from`` has it over DDS; the localizer asks the server
+    to locate each scan itself (the scenario's WiFi scan period), as rfid_localizer does. The same mission and
+    random streams' seeds as the paper's runs of that home (home_run)."""
+    name, run, seed = job
+    paper_home = name.removesuffix("_fused")
+    place = home(name)
+    robot_map = place.scenario.route_map
+    assert robot_map is not None                       # home() refuses a home without its map
+    parameters = localizer_parameters(place)
+    rider = Rider(FusedLocalizer(parameters.settings(), FusedMap.of_route_map(robot_map, place.site.radio_map),
+                                 rng_for(seed, f"fused:{name}:{run}:fused")))
+    beside = Beside({"fused": rider}, parameters.ports())
+    wifi = file_parameters(WifiSimParameters, place.scenario.nodes["wifi"].param_files[0], "wifi_sim",
+                           world_file=str(place.scenario.world_file))
+    x, y, yaw_deg = place.scenario.robot
+    target = place.scenario.mission.goal["target"]
+    result = run_two_tier(place.site, (x, y, math.radians(yaw_deg)), (target["x"], target["y"]), SETTINGS,
+                          rng_for(seed, f"homes:{paper_home}:{run}"),
+                          derive_seed(seed, f"homes:{paper_home}:{run}:reader"),
+                          max_time_s=place.scenario.mission.timeout_s, floor=place.floor, observe=beside,
+                          reader_parameters=reader_parameters(place), tier_one=rider.tier_one,
+                          scan_period_s=wifi.scan_period_s)
+    figures = {"fused": TrackFigures.of(rider.track, beside.paper.heading_times_s),
+               "paper": TrackFigures.of(beside.paper, beside.paper.heading_times_s)}
+    return FusedRun(name, run, result.success, figures, rider.track.settled_after(0.0), None, None,
+                    result.duration_s, result.final_error_m)
 
 
 def partition_run(job: tuple[str, int, int]) -> FusedRun:
@@ -370,6 +409,8 @@ def world_run(job: tuple[str, int, int]) -> FusedRun:
         return driving_run(job)
     if job[0] == PARTITION_DRIVING:
         return partition_driving_run(job)
+    if job[0] in TIER_ONE:
+        return tier_one_run(job)
     if job[0] == HALLWAY:
         return route_run(job)
     if job[0] == PARTITIONS:
@@ -465,7 +506,7 @@ class Arrival:
     def of(cls, results: list[FusedRun], world: str) -> Arrival:
         mine = [r for r in results if r.world == world]
         arrived = sum(r.success for r in mine)
-        return cls("paper" if world == PARTITIONS else "fused", arrived, len(mine),
+        return cls("paper" if world in (*HOMES, PARTITIONS) else "fused", arrived, len(mine),
                    Interval.of_proportion(arrived, len(mine)),
                    Interval.of([r.final_error_m for r in mine if r.final_error_m is not None]))
 

@@ -33,7 +33,6 @@ from rfidnav_experiments.runners.tag_route import RouteRound
 from rfidnav_experiments.runners.topological import MissionStep
 from rfidnav_experiments.runners.two_tier import COMPASS, ODOMETRY_SCALE_ERROR, FloorRobot, Site, StepSeen
 from rfidnav_localization.conversions import fused_status_message
-from rfidnav_localization.errors import LocateError
 from rfidnav_localization.fingerprint import LocateSettings
 from rfidnav_localization.fused.filter import Evidence, Ports, round_evidence
 from rfidnav_localization.fused.localizer import FusedEstimate, FusedLocalizer
@@ -123,6 +122,16 @@ class Rider:
     extent: tuple[float, float, float, float] = (0.0, 0.0, 1.0, 1.0)
     joins_at_s: float = 0.0
     track: Track = field(default_factory=Track)
+    last: FusedEstimate | None = None        # its latest estimate
+
+    def tier_one(self) -> tuple[tuple[float, float], float] | None:
+        """Its latest estimate as the two-tier navigator takes tier one from it (two_tier_navigator's
+        ``tier_one_from``): the position and its sd as pose_from_message makes them of the pose message."""
+        if self.last is None:
+            return None
+        pose = self.last.pose
+        sd_m = Pose.of_variances(pose.x, pose.y, pose.yaw, pose.covariance[0, 0], pose.covariance[1, 1]).sd_m
+        return (pose.x, pose.y), sd_m
 
     def evidence(self, evidence: Evidence) -> Evidence:
         """``evidence`` with the kinds this rider is not given left empty."""
@@ -143,7 +152,7 @@ class Rider:
 
     def update(self, time_s: float, evidence: Evidence, truth: tuple[float, float, float]) -> FusedEstimate | None:
         """One round's evidence (of the kinds it is given), its estimate scored against ``truth``."""
-        estimate = self.localizer.on_round(self.evidence(evidence))
+        estimate = self.last = self.localizer.on_round(self.evidence(evidence))
         self.track.rounds += 1
         if estimate is not None:
             pose = estimate.pose
@@ -336,12 +345,9 @@ def drive_on_fused(site: Site, start: tuple[float, float, float], target: tuple[
         rider.moved(time_s, robot.odom, truth)
         if time_s >= next_scan_s:
             next_scan_s += scan_period_s
-            scan = {reading.bssid: reading.rssi_dbm for reading in site.wifi.scan(truth[0], truth[1], rng)}
-            try:
-                result = site.radio_map.locate(scan, locate)
+            result = site.locate_scan(truth[:2], rng, locate)
+            if result is not None:
                 wifi_fix = (result.position, result.uncertainty_m)
-            except LocateError:
-                pass                                           # nothing heard that the radio map knows
         due = reader.round_at(*truth, time_s)
         if due is not None:
             estimate = rider.update(time_s, round_evidence(due, ports, wifi_fix, compass.measure(truth[2], rng)),

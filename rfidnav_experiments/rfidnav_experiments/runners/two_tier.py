@@ -37,9 +37,16 @@ from rfidnav_common.tag_groups import HF_READ_RANGE_M
 from rfidnav_experiments.runners.shipped import file_parameters, shipped_parameters
 from rfidnav_localization.dead_reckoning import TIER_TAG, DeadReckoningEstimate, Fix
 from rfidnav_localization.errors import LocateError
-from rfidnav_localization.fingerprint import Fingerprint, LocateSettings, RadioMap
+from rfidnav_localization.fingerprint import Fingerprint, LocateResult, LocateSettings, RadioMap
 from rfidnav_planning.parameters import TwoTierNavigatorParameters
-from rfidnav_planning.two_tier_navigation import LOCATE, MapTag, Request, TwoTierNavigator, TwoTierSettings
+from rfidnav_planning.two_tier_navigation import (
+    LOCATE,
+    Decision,
+    MapTag,
+    Request,
+    TwoTierNavigator,
+    TwoTierSettings,
+)
 from rfidnav_planning.wall_paths import WallMap
 from rfidnav_sim.compass_model import CompassModel
 from rfidnav_sim.kinematics import moves_into_wall, unicycle_step
@@ -76,6 +83,16 @@ class Site:
 
     def tags_near(self, centre: tuple[float, float], radius_m: float) -> list[MapTag]:
         return [tag for tag in self.tag_map if math.dist(tag.position, centre) <= radius_m]
+
+    def locate_scan(self, position: tuple[float, float], rng: np.random.Generator,
+                    locate: LocateSettings) -> LocateResult | None:
+        """The location server's answer to a scan taken at ``position`` (drawn from ``rng``), as a node gets it
+        from /location_server/locate; None when it cannot locate it (nothing heard that the radio map knows)."""
+        scan = {reading.bssid: reading.rssi_dbm for reading in self.wifi.scan(*position, rng)}
+        try:
+            return self.radio_map.locate(scan, locate)
+        except LocateError:
+            return None
 
 
 def wifi_model(world: World) -> WifiModel:
@@ -261,6 +278,10 @@ class StepSeen:
     paper: DeadReckoningEstimate
 
 
+# Tier one from a localizer's pose: its latest (position, sd [m]), None before it has one.
+TierOne = Callable[[], tuple[tuple[float, float], float] | None]
+
+
 @dataclass(frozen=True)
 class TwoTierRun:
     success: bool
@@ -290,7 +311,8 @@ def run_two_tier(site: Site, start: tuple[float, float, float], target: tuple[fl
                  locate: LocateSettings = LocateSettings(), max_time_s: float = 1800.0,
                  survey_spacing_m: float | None = None, known_start: Fix | None = None,
                  floor: WallMap = WallMap(), observe: Callable[[StepSeen], None] | None = None,
-                 reader_parameters: ReaderParameters = FLOOR_READER) -> TwoTierRun:
+                 reader_parameters: ReaderParameters = FLOOR_READER, tier_one: TierOne | None = None,
+                 scan_period_s: float | None = None) -> TwoTierRun:
     """One navigation from ``start`` (true pose) to ``target``, the compass and WiFi drawn from ``rng``, the floor
     reader's streams seeded from ``reader_seed`` (as the rfid_reader_sim node seeds them from its seed). With
     ``survey_spacing_m`` the robot also surveys (paper 003's automatic radio map construction): a scan every that
@@ -298,7 +320,11 @@ def run_two_tier(site: Site, start: tuple[float, float, float], target: tuple[fl
     believes (never the true one) and added to the site's radio map at once, as the add_fingerprint service
     does. ``floor``: the walls and extent of the robot's map, which its legs are planned round. ``observe`` is
     called after every step with what the sensors gave (:class:`StepSeen`); it draws nothing.
-    ``reader_parameters``: the robot's reader (the navigator reads its floor antenna's port)."""
+    ``reader_parameters``: the robot's reader (the navigator reads its floor antenna's port). ``tier_one``: where
+    the navigator's locate requests are answered from instead of the location server (two_tier_navigator's
+    ``tier_one_from`` naming a localizer's pose; the robot stands still until it answers). ``scan_period_s``: a
+    scan this often located by the server for the observers (a localizer that asks for every scan, as
+    rfid_localizer does), in place of the answers to the navigator's own requests."""
     x, y, yaw = start
     robot = FloorRobot(start, site.world.wall_segments(), odometry_scale_error)
     reader = reader_parameters.simulated_reader(site.world, reader_seed)
@@ -314,10 +340,19 @@ def run_two_tier(site: Site, start: tuple[float, float, float], target: tuple[fl
     fixes_seen = len(navigator.progress.fixes)      # a known start is no fix of the reader's
     time_s = path_m = 0.0
     located: list[tuple[tuple[float, float], float]] = []
+    next_scan_s = 0.0
     while not decision.finished and time_s < max_time_s:
+        waiting = None                  # a locate request tier_one cannot answer yet
         if decision.request is not None:
-            decision = answer(site, navigator, decision.request, (x, y), rng, locate, tier_one_errors, located)
-            continue
+            if tier_one is None or decision.request.kind != LOCATE:
+                decision = answer(site, navigator, decision.request, (x, y), rng, locate, tier_one_errors, located)
+                continue
+            answered = tier_one()
+            if answered is not None:
+                tier_one_errors.append(math.dist(answered[0], (x, y)))
+                decision = navigator.on_located(*answered)
+                continue
+            waiting = decision.request
         linear = robot.step(*decision.command, STEP_S)
         (x, y, yaw), odom = robot.truth, robot.odom
         path_m += abs(linear) * STEP_S
@@ -325,7 +360,13 @@ def run_two_tier(site: Site, start: tuple[float, float, float], target: tuple[fl
         due = reader.round_at(x, y, yaw, time_s)
         reads = [read.tag_id for read in due or () if read.antenna == floor_port]
         compass_yaw = compass.measure(yaw, rng)
+        if scan_period_s is not None and time_s >= next_scan_s:
+            next_scan_s += scan_period_s
+            result = site.locate_scan((x, y), rng, locate)
+            located[:] = [] if result is None else [(result.position, result.uncertainty_m)]
         decision = navigator.step(odom, compass_yaw, reads)
+        if waiting is not None and not decision.finished:
+            decision = Decision(decision.phase, (0.0, 0.0), waiting)    # still to be answered
         if observe is not None:
             observe(StepSeen(time_s, (x, y, yaw), odom, compass_yaw, None if due is None else tuple(due),
                              located.pop() if located else None, navigator.estimate()))
@@ -363,10 +404,8 @@ def answer(site: Site, navigator: TwoTierNavigator, request: Request, true_posit
     """The location server's answer to ``request``, as the node gets it over DDS (a position found is appended
     to ``located`` with its uncertainty)."""
     if request.kind == LOCATE:
-        scan = {reading.bssid: reading.rssi_dbm for reading in site.wifi.scan(*true_position, rng)}
-        try:
-            result = site.radio_map.locate(scan, locate)
-        except LocateError:
+        result = site.locate_scan(true_position, rng, locate)
+        if result is None:
             return navigator.on_located(None, 0.0)
         tier_one_errors.append(math.dist(result.position, true_position))
         if located is not None:
