@@ -182,6 +182,8 @@ NAVIGATOR_SOURCES: dict[str, tuple[str, str]] = {
     "two_tier_navigator.service_timeout_s": ("ours", "unused in-process: the server answers at once"),
     "two_tier_navigator.map_frame": ("ours", "no effect on the figures"),
     "two_tier_navigator.publish_tf": ("ours", "map -> odom on /tf over DDS; no effect on the figures"),
+    "two_tier_navigator.tier_one_from": ("paper", "the location server's fingerprint locate (reproduce fused also "
+                                                  "runs tier one from the fused localizer)"),
     "two_tier_navigator.landmark_spacing_m": ("ours", "Fig. 4's tolerable distance to the next landmark: none given"),
     "two_tier_navigator.calibration_distance_m": ("ours", "A5's 'after moving a certain distance': none given"),
     "two_tier_navigator.deviation_threshold_m": ("ours", "A5's 'a certain threshold': none given"),
