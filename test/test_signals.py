@@ -165,8 +165,12 @@ def test_sigterm_on_replay_stops_its_player_on_the_domain_it_leased(tmp_path: Pa
     assert_all_gone(players)
 
 
-def test_a_child_gets_sigint_when_the_process_that_started_it_is_sigkilled() -> None:
-    parent_code = ("import sys, time; from rfidnav_bringup.processes import start_child; "
+@pytest.mark.parametrize("sigint", ["as usual", "ignored, as in a background job of a script"])
+def test_a_child_gets_sigint_when_the_process_that_started_it_is_sigkilled(sigint: str) -> None:
+    # A non-interactive shell starts its background jobs with SIGINT ignored, and an ignored signal stays ignored
+    # across exec: start_child gives the child the default back, or the stop would never reach it.
+    ignore = "import signal; signal.signal(signal.SIGINT, signal.SIG_IGN); " if sigint != "as usual" else ""
+    parent_code = (f"{ignore}import sys, time; from rfidnav_bringup.processes import start_child; "
                    "child = start_child([sys.executable, '-c', 'import time; time.sleep(600)']); "
                    "print(child.pid, flush=True); time.sleep(600)")
     with subprocess.Popen([sys.executable, "-c", parent_code], stdout=subprocess.PIPE, text=True,

@@ -36,7 +36,10 @@ LOCK_ROOT = Path("/tmp")
 # of the dying parent (Linux reparents a child from thread to thread): nodes take repeats calmly (ros.stop_requested).
 PARENT_DEATH_SIGNAL = signal.SIGINT
 _PR_SET_PDEATHSIG = 1   # linux/prctl.h
+_SIG_DFL = 0            # signal.h
 _LIBC = ctypes.CDLL(None, use_errno=True)
+_LIBC.signal.argtypes = (ctypes.c_int, ctypes.c_void_p)
+_LIBC.signal.restype = ctypes.c_void_p
 
 
 # --discovery: a run's nodes find each other on this machine only (the default: two runs, or a run and a robot on
@@ -151,9 +154,13 @@ def open_lock_file(path: Path) -> int:
 
 def die_with_parent(parent_pid: int) -> Callable[[], None]:
     """A ``preexec_fn`` that makes the child receive PARENT_DEATH_SIGNAL when ``parent_pid`` dies (or has died
-    already, between the fork and this call). It only makes system calls: a preexec_fn must not take locks that
-    another thread of the parent may have held at the fork."""
+    already, between the fork and this call), and take it: its disposition back to the default, for an ignored
+    signal stays ignored across exec, and a background job of a non-interactive shell (``./rfidnav run ... &`` in a
+    script, a CI job) starts with SIGINT ignored, so its children's Python never installs its Ctrl-C handler and
+    the stop never reaches them. It only makes system calls: a preexec_fn must not take locks that another thread
+    of the parent may have held at the fork."""
     def set_parent_death_signal() -> None:
+        _LIBC.signal(int(PARENT_DEATH_SIGNAL), _SIG_DFL)
         _LIBC.prctl(_PR_SET_PDEATHSIG, int(PARENT_DEATH_SIGNAL), 0, 0, 0)
         if os.getppid() != parent_pid:
             os.kill(os.getpid(), PARENT_DEATH_SIGNAL)
