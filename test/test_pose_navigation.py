@@ -67,3 +67,27 @@ def test_a_target_outside_the_extent_is_refused_with_the_extent() -> None:
     assert "outside the map's extent" in navigator.refusal((7.0, 1.0))
     with pytest.raises(ValueError, match="not a finite point"):
         navigator.start((math.nan, 1.0))
+
+
+def test_a_localizers_pose_message_becomes_the_pose_a_navigator_drives_on_and_a_bad_one_is_refused() -> None:
+    from geometry_msgs.msg import PoseWithCovarianceStamped
+
+    from rfidnav_common.geometry import yaw_to_quaternion
+    from rfidnav_common.inputs import BadInput
+    from rfidnav_planning.conversions import pose_from_message
+
+    def message(x: float = 1.0, frame: str = "map", variance_y: float = 0.09) -> PoseWithCovarianceStamped:
+        msg = PoseWithCovarianceStamped()
+        msg.header.frame_id = frame
+        msg.pose.pose.position.x, msg.pose.pose.position.y = x, 2.0
+        o = msg.pose.pose.orientation
+        o.x, o.y, o.z, o.w = yaw_to_quaternion(0.5)
+        msg.pose.covariance[0], msg.pose.covariance[7] = 0.04, variance_y
+        return msg
+
+    pose = pose_from_message(message(), "map")
+    assert (pose.x, pose.y, pose.yaw, pose.sd_m) == pytest.approx((1.0, 2.0, 0.5, 0.3))   # the larger axis's sd
+    for bad, words in ((message(x=math.nan), "finite"), (message(frame="odom"), "odom"),
+                       (message(variance_y=-1.0), "no variances"), (message(variance_y=math.inf), "no variances")):
+        with pytest.raises(BadInput, match=words):
+            pose_from_message(bad, "map")
