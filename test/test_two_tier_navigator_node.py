@@ -4,6 +4,7 @@ the server comes (as after a restart mid-mission); a bad goal is refused."""
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from pathlib import Path
 
 import pytest
@@ -60,23 +61,31 @@ def sensors(graph: Graph):
     return publish
 
 
-def test_the_navigator_asks_again_until_the_location_server_answers_then_drives(
-        graph: Graph, server_files: tuple[Path, Path]) -> None:
-    navigator = graph.add(TwoTierNavigatorNode(context=graph.context, parameter_overrides=[
-        Parameter("service_timeout_s", value=0.3)]))
-    publish = sensors(graph)
+def send_goal(graph: Graph, publish: Callable[[], None], feedback: list[str] | None = None) -> list[Twist]:
+    """Send the navigator a goal at (2, 1), the sensors published once, and wait for it to be accepted; the
+    /cmd_vel commands from then on, and each feedback's phase into ``feedback``."""
     commands: list[Twist] = []
     graph.probe.create_subscription(Twist, "/cmd_vel", commands.append, COMMAND_QOS)
-    feedback: list[str] = []
     client = ActionClient(graph.probe, NavigateToPoint, "/navigate_to_point")
     graph.clients.append(client)
     graph.spin_until(client.server_is_ready, "the action server")
     publish()
     goal = NavigateToPoint.Goal()
     goal.target.x, goal.target.y = 2.0, 1.0
-    sent = client.send_goal_async(goal, feedback_callback=lambda msg: feedback.append(msg.feedback.phase))
+    phases = feedback if feedback is not None else []
+    sent = client.send_goal_async(goal, feedback_callback=lambda msg: phases.append(msg.feedback.phase))
     graph.spin_until(sent.done, "the goal's acceptance")
     assert sent.result().accepted
+    return commands
+
+
+def test_the_navigator_asks_again_until_the_location_server_answers_then_drives(
+        graph: Graph, server_files: tuple[Path, Path]) -> None:
+    navigator = graph.add(TwoTierNavigatorNode(context=graph.context, parameter_overrides=[
+        Parameter("service_timeout_s", value=0.3)]))
+    publish = sensors(graph)
+    feedback: list[str] = []
+    commands = send_goal(graph, publish, feedback)
     graph.spin_until(lambda: graph.logged("two_tier_navigator", "asking again"), "a retried locate")
     assert set(feedback) <= {"locating"} and all(c.linear.x == 0.0 for c in commands)
     database, map_file = server_files
@@ -115,17 +124,7 @@ def test_given_a_localizers_pose_topic_tier_one_is_that_localizers_pose_and_not_
         Parameter("tier_one_from", value="/fused/pose")]))
     publish = sensors(graph)
     pose_pub = graph.probe.create_publisher(PoseWithCovarianceStamped, "/fused/pose", SENSOR_QOS)
-    commands: list[Twist] = []
-    graph.probe.create_subscription(Twist, "/cmd_vel", commands.append, COMMAND_QOS)
-    client = ActionClient(graph.probe, NavigateToPoint, "/navigate_to_point")
-    graph.clients.append(client)
-    graph.spin_until(client.server_is_ready, "the action server")
-    publish()
-    goal = NavigateToPoint.Goal()
-    goal.target.x, goal.target.y = 2.0, 1.0
-    sent = client.send_goal_async(goal)
-    graph.spin_until(sent.done, "the goal's acceptance")
-    assert sent.result().accepted
+    commands = send_goal(graph, publish)
     # No pose yet: it waits for one standing still, though the location server could answer the scan.
     graph.spin_until(lambda: navigator.call is not None, "the navigator's tier-one request")
     publish()

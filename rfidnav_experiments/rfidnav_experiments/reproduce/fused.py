@@ -55,8 +55,9 @@ from scipy import stats
 
 from rfidnav_bringup.scenario import CONFIG_DIR, load_scenario
 from rfidnav_common.errors import ConfigError
-from rfidnav_common.robot_map import load_route_map
+from rfidnav_common.robot_map import RouteMap, load_route_map
 from rfidnav_common.seeding import derive_seed, rng_for
+from rfidnav_common.tag_lattice import Deployment
 from rfidnav_common.topological_map import load_topological_map
 from rfidnav_experiments.engine import run_tasks
 from rfidnav_experiments.reproduce.partitions import FILTER, PAPER, headline_level, robot_speeds
@@ -238,20 +239,50 @@ def fused_run(world: str, run: int, success: bool, riders: dict[str, Rider], pap
                     duration_s)
 
 
+def mission_of(place: Home) -> tuple[tuple[float, float, float], tuple[float, float]]:
+    """The scenario's start pose (x, y, yaw [rad]) and its point goal."""
+    x, y, yaw_deg = place.scenario.robot
+    target = place.scenario.mission.goal["target"]
+    return (x, y, math.radians(yaw_deg)), (target["x"], target["y"])
+
+
+def home_map(place: Home) -> FusedMap:
+    """What the fused localizer knows of a home: its robot map and its radio map."""
+    robot_map = place.scenario.route_map
+    assert robot_map is not None                       # home() refuses a home without its map
+    return FusedMap.of_route_map(robot_map, place.site.radio_map)
+
+
+def driving_rider(place: Home, name: str, run: int, seed: int) -> Rider:
+    """The fused localizer of a run where it is in the loop: the scenario's rfid_localizer settings, its own
+    random stream, starting knowing only the map as the node does."""
+    return Rider(FusedLocalizer(localizer_parameters(place).settings(), home_map(place),
+                                rng_for(seed, f"fused:{name}:{run}:fused")))
+
+
+def scan_period_s(place: Home) -> float:
+    """The scenario's WiFi scan period: how often the in-loop localizer asks the server to locate a scan."""
+    return file_parameters(WifiSimParameters, place.scenario.nodes["wifi"].param_files[0], "wifi_sim",
+                           world_file=str(place.scenario.world_file)).scan_period_s
+
+
+def paired_figures(fused: Track, paper: Track) -> dict[str, TrackFigures]:
+    """The figures of the fused localizer in the loop and of the paper's beside it, headings also on the paper's
+    rounds."""
+    return {"fused": TrackFigures.of(fused, paper.heading_times_s),
+            "paper": TrackFigures.of(paper, paper.heading_times_s)}
+
+
 def home_run(job: tuple[str, int, int]) -> FusedRun:
     """One two-tier mission of a world with the fused localizers beside; the same streams as reproduce two_tier's
     planned-legs run of that home and run number."""
     name, run, seed = job
     place = home(name)
-    robot_map = place.scenario.route_map
-    assert robot_map is not None                       # home() refuses a home without its map
     parameters = localizer_parameters(place)
-    riders = riders_for(name, run, seed, parameters.settings(),
-                        FusedMap.of_route_map(robot_map, place.site.radio_map))
+    riders = riders_for(name, run, seed, parameters.settings(), home_map(place))
     beside = Beside(riders, parameters.ports())
-    x, y, yaw_deg = place.scenario.robot
-    target = place.scenario.mission.goal["target"]
-    result = run_two_tier(place.site, (x, y, math.radians(yaw_deg)), (target["x"], target["y"]), SETTINGS,
+    start, target = mission_of(place)
+    result = run_two_tier(place.site, start, target, SETTINGS,
                           rng_for(seed, f"homes:{name}:{run}"), derive_seed(seed, f"homes:{name}:{run}:reader"),
                           max_time_s=place.scenario.mission.timeout_s, floor=place.floor, observe=beside,
                           reader_parameters=reader_parameters(place))
@@ -268,26 +299,42 @@ def tier_one_run(job: tuple[str, int, int]) -> FusedRun:
     name, run, seed = job
     paper_home = name.removesuffix("_fused")
     place = home(name)
-    robot_map = place.scenario.route_map
-    assert robot_map is not None                       # home() refuses a home without its map
-    parameters = localizer_parameters(place)
-    rider = Rider(FusedLocalizer(parameters.settings(), FusedMap.of_route_map(robot_map, place.site.radio_map),
-                                 rng_for(seed, f"fused:{name}:{run}:fused")))
-    beside = Beside({"fused": rider}, parameters.ports())
-    wifi = file_parameters(WifiSimParameters, place.scenario.nodes["wifi"].param_files[0], "wifi_sim",
-                           world_file=str(place.scenario.world_file))
-    x, y, yaw_deg = place.scenario.robot
-    target = place.scenario.mission.goal["target"]
-    result = run_two_tier(place.site, (x, y, math.radians(yaw_deg)), (target["x"], target["y"]), SETTINGS,
-                          rng_for(seed, f"homes:{paper_home}:{run}"),
+    rider = driving_rider(place, name, run, seed)
+    beside = Beside({"fused": rider}, localizer_parameters(place).ports())
+    start, target = mission_of(place)
+    result = run_two_tier(place.site, start, target, SETTINGS, rng_for(seed, f"homes:{paper_home}:{run}"),
                           derive_seed(seed, f"homes:{paper_home}:{run}:reader"),
                           max_time_s=place.scenario.mission.timeout_s, floor=place.floor, observe=beside,
                           reader_parameters=reader_parameters(place), tier_one=rider.tier_one,
-                          scan_period_s=wifi.scan_period_s)
-    figures = {"fused": TrackFigures.of(rider.track, beside.paper.heading_times_s),
-               "paper": TrackFigures.of(beside.paper, beside.paper.heading_times_s)}
-    return FusedRun(name, run, result.success, figures, rider.track.settled_after(0.0), None, None,
-                    result.duration_s, result.final_error_m)
+                          scan_period_s=scan_period_s(place))
+    return FusedRun(name, run, result.success, paired_figures(rider.track, beside.paper),
+                    rider.track.settled_after(0.0), None, None, result.duration_s, result.final_error_m)
+
+
+@dataclass(frozen=True)
+class PartitionTask:
+    """Run ``run``'s task on paper 000's field, the same whoever drives (partition_run, partition_driving_run): the
+    field, a start and a goal PARTITION_TASK_M apart, the fused localizer's settings for the paper's robot."""
+    route_map: RouteMap
+    deployment: Deployment
+    settings: FusedSettings
+    start: tuple[float, float, float]
+    goal: tuple[float, float]
+
+    @classmethod
+    def of(cls, run: int, seed: int) -> PartitionTask:
+        scenario = load_scenario(PARTITIONS)
+        assert scenario.route_map is not None and scenario.world.deployments
+        field_deployment = scenario.world.deployments[0]
+        settings = file_parameters(RfidLocalizerParameters, FLOOR_LATTICE_LOCALIZER, "rfid_localizer",
+                                   map_file=str(scenario.map_file)).settings()
+        start, goal = random_task(field_deployment, PARTITION_TASK_M,
+                                  rng_for(seed, f"fused:{PARTITIONS}:{run}:task"))
+        return cls(scenario.route_map, field_deployment, settings, start, goal)
+
+    def fused_map(self) -> FusedMap:
+        """A fresh map for each localizer (it learns the lattice from the first id read)."""
+        return FusedMap.of_route_map(self.route_map)
 
 
 def partition_run(job: tuple[str, int, int]) -> FusedRun:
@@ -295,15 +342,10 @@ def partition_run(job: tuple[str, int, int]) -> FusedRun:
     fused localizers beside on the same rounds (the floor antenna's tags and the odometry: the robot has nothing
     else)."""
     name, run, seed = job
-    scenario = load_scenario(name)
-    assert scenario.route_map is not None and scenario.world.deployments
-    field_deployment = scenario.world.deployments[0]
-    settings = file_parameters(RfidLocalizerParameters, FLOOR_LATTICE_LOCALIZER, "rfid_localizer",
-                               map_file=str(scenario.map_file)).settings()
-    riders = riders_for(name, run, seed, settings, FusedMap.of_route_map(scenario.route_map))
+    task = PartitionTask.of(run, seed)
+    riders = riders_for(name, run, seed, task.settings, task.fused_map())
     beside = PartitionBeside(riders)
-    start, goal = random_task(field_deployment, PARTITION_TASK_M, rng_for(seed, f"fused:{name}:{run}:task"))
-    result = run_navigation(field_deployment, start, goal, partition_localizer_settings(PAPER),
+    result = run_navigation(task.deployment, task.start, task.goal, partition_localizer_settings(PAPER),
                             partition_navigator_settings(PAPER, headline_level()),
                             rng_for(seed, f"fused:{name}:{run}:robot"), odometry_noise=PARTITION_ODOMETRY_NOISE,
                             speeds=robot_speeds(PAPER), observer=beside)
@@ -316,25 +358,17 @@ def partition_driving_run(job: tuple[str, int, int]) -> FusedRun:
     localizer (with the navigator's settings for a pose estimate, as beside paper 000's particle filter:
     partition_navigator_filter_paper_robot.yaml) and paper 000's localizer beside it on the same rounds."""
     name, run, seed = job
-    scenario = load_scenario(PARTITIONS)
-    assert scenario.route_map is not None and scenario.world.deployments
-    field_deployment = scenario.world.deployments[0]
-    settings = file_parameters(RfidLocalizerParameters, FLOOR_LATTICE_LOCALIZER, "rfid_localizer",
-                               map_file=str(scenario.map_file)).settings()
-    driving = FusedPartitions(FusedLocalizer(settings, FusedMap.of_route_map(scenario.route_map),
+    task = PartitionTask.of(run, seed)
+    driving = FusedPartitions(FusedLocalizer(task.settings, task.fused_map(),
                                              rng_for(seed, f"fused:{name}:{run}:fused")))
     score = PartitionDriving(driving, PartitionLocalizer(partition_localizer_settings(PAPER),
                                                          rng_for(seed, f"fused:{name}:{run}:paper")))
-    start, goal = random_task(field_deployment, PARTITION_TASK_M, rng_for(seed, f"fused:{PARTITIONS}:{run}:task"))
-    result = run_navigation(field_deployment, start, goal, partition_localizer_settings(PAPER),
+    result = run_navigation(task.deployment, task.start, task.goal, partition_localizer_settings(PAPER),
                             partition_navigator_settings(FILTER, headline_level()),
                             rng_for(seed, f"fused:{name}:{run}:robot"), odometry_noise=PARTITION_ODOMETRY_NOISE,
                             speeds=robot_speeds(FILTER), observer=score, driving=driving)
-    paper = score.beside.paper
-    figures = {"fused": TrackFigures.of(score.fused, paper.heading_times_s),
-               "paper": TrackFigures.of(paper, paper.heading_times_s)}
-    return FusedRun(name, run, result.success, figures, score.fused.settled_after(0.0), None, None,
-                    result.travel_time_s, result.final_error_m)
+    return FusedRun(name, run, result.success, paired_figures(score.fused, score.beside.paper),
+                    score.fused.settled_after(0.0), None, None, result.travel_time_s, result.final_error_m)
 
 
 def topological_run(job: tuple[str, int, int]) -> FusedRun:
@@ -383,23 +417,15 @@ def driving_run(job: tuple[str, int, int]) -> FusedRun:
     The localizer starts knowing only the map, as the node does."""
     name, run, seed = job
     place = home(name)
-    robot_map = place.scenario.route_map
-    assert robot_map is not None                       # home() refuses a home without its map
-    nodes = place.scenario.nodes
-    parameters = localizer_parameters(place)
-    rider = Rider(FusedLocalizer(parameters.settings(), FusedMap.of_route_map(robot_map, place.site.radio_map),
-                                 rng_for(seed, f"fused:{name}:{run}:fused")))
-    navigation = file_parameters(PoseNavigatorParameters, nodes["pose_navigator"].param_files[0], "pose_navigator",
-                                 map_file=str(place.scenario.map_file))
-    wifi = file_parameters(WifiSimParameters, nodes["wifi"].param_files[0], "wifi_sim",
-                           world_file=str(place.scenario.world_file))
-    x, y, yaw_deg = place.scenario.robot
-    target = place.scenario.mission.goal["target"]
-    result = drive_on_fused(place.site, (x, y, math.radians(yaw_deg)), (target["x"], target["y"]), rider,
-                            parameters.ports(), PoseNavigator(navigation.settings(), place.floor),
+    rider = driving_rider(place, name, run, seed)
+    navigation = file_parameters(PoseNavigatorParameters, place.scenario.nodes["pose_navigator"].param_files[0],
+                                 "pose_navigator", map_file=str(place.scenario.map_file))
+    start, target = mission_of(place)
+    result = drive_on_fused(place.site, start, target, rider, localizer_parameters(place).ports(),
+                            PoseNavigator(navigation.settings(), place.floor),
                             reader_parameters(place), rng_for(seed, f"fused:{name}:{run}:sensors"),
                             derive_seed(seed, f"fused:{name}:{run}:reader"), 1.0 / navigation.control_rate_hz,
-                            wifi.scan_period_s, place.scenario.mission.timeout_s)
+                            scan_period_s(place), place.scenario.mission.timeout_s)
     return FusedRun(name, run, result.success, {"fused": TrackFigures.of(rider.track)},
                     rider.track.settled_after(0.0), None, None, result.duration_s, result.final_error_m)
 
