@@ -189,15 +189,9 @@ def child_environment(domain_id: int, discovery: str = "localhost") -> dict[str,
     return env
 
 
-STOP_RESEND_S = 2.0   # run_supervised: how often a stop is passed on again to a child that has not ended
-
-
 def run_supervised(command: list[str], env: dict[str, str]) -> int:
     """Run one child to its end (start_child), passing any of SIGINT, SIGTERM and SIGHUP on to it as SIGINT (its
-    Ctrl-C), and return its exit code, or 128 + the first signal that came (the shell's convention). Once told to
-    stop, it passes SIGINT on again every STOP_RESEND_S until the child has ended: a Ctrl-C that reaches a Python
-    child while it is still starting can be lost (swallowed inside an import, or before rclpy's handler is in
-    place), and the player replaying in a loop then never ends."""
+    Ctrl-C), and return its exit code, or 128 + the first signal that came (the shell's convention)."""
     first: list[int] = []
     child = start_child(command, env=env)
 
@@ -209,13 +203,7 @@ def run_supervised(command: list[str], env: dict[str, str]) -> int:
     stop_signals = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
     previous = {signum: signal.signal(signum, pass_on) for signum in stop_signals}
     try:
-        while True:
-            try:
-                code = child.wait(timeout=STOP_RESEND_S)
-                break
-            except subprocess.TimeoutExpired:
-                if first and child.poll() is None:
-                    os.killpg(child.pid, signal.SIGINT)
+        code = child.wait()
     finally:
         for signum, handler in previous.items():
             signal.signal(signum, handler)
