@@ -292,6 +292,47 @@ def test_the_playback_clock_follows_play_pause_seek_and_speed() -> None:
 # ------------------------------------------------------------------------------------------- node: the bridge
 
 @pytest.mark.tier("node")
+def test_stamping_from_the_clock_the_bridge_forwards_a_watched_topic_only_once_a_clock_has_come(graph: Graph) -> None:
+    from builtin_interfaces.msg import Time
+    from rclpy.parameter import Parameter
+    from rosgraph_msgs.msg import Clock
+    from visualization_msgs.msg import Marker, MarkerArray
+
+    from rfidnav_bag.foxglove_bridge_node import FoxgloveBridgeNode
+    from rfidnav_common.ros import LATCHED_QOS, SENSOR_QOS
+
+    latched = graph.probe.create_publisher(MarkerArray, "/markers", LATCHED_QOS)
+    latched.publish(MarkerArray(markers=[Marker(ns="walls", id=7)]))
+    clock = graph.probe.create_publisher(Clock, "/clock", SENSOR_QOS)
+    port = free_port()
+    graph.add(FoxgloveBridgeNode(context=graph.context, parameter_overrides=[
+        Parameter("port", value=port), Parameter("discovery_period_s", value=0.05),
+        Parameter("stamp_from_clock_topic", value=True)]))
+
+    def subscribed(topic: str) -> bool:
+        return any(info.node_name == "foxglove_bridge" for info in graph.probe.get_subscriptions_info_by_topic(topic))
+
+    with foxglove_client(f"ws://localhost:{port}") as client:
+        frames: list[Frame] = []
+
+        def read() -> bool:
+            frame = client.next_frame(_now() + 0.01)
+            if frame is not None and frame.opcode == MESSAGE_DATA and client.subscriptions[frame.subscription] == \
+                    "/markers":
+                frames.append(frame)
+            return True
+
+        graph.spin_until(lambda: read() and {"/markers", "/clock"} <= client.channels.keys(), "both channels")
+        client.subscribe("/markers")
+        # Watched, but no /clock yet: only /clock is subscribed to, so nothing goes out stamped at time 0.
+        graph.spin_until(lambda: read() and subscribed("/clock"), "the bridge to subscribe to /clock")
+        assert not subscribed("/markers") and not frames
+        graph.spin_until(lambda: (clock.publish(Clock(clock=Time(sec=3, nanosec=500))), read())[1] and bool(frames),
+                         "the latched markers once a /clock has come")
+        assert frames[0].log_time == 3_000_000_500                       # stamped with that simulated time
+
+
+@pytest.mark.tier("node")
 def test_the_bridge_subscribes_while_watched_and_gives_a_late_client_the_latched_message(graph: Graph) -> None:
     from rclpy.parameter import Parameter
     from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy

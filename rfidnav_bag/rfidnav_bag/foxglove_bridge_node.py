@@ -12,7 +12,9 @@ A Foxglove WebSocket server (foxglove-sdk's) in a plain rclpy node:
   best effort with a bounded queue, so a bridge that falls behind drops messages and never slows a publisher;
 - with ``stamp_from_clock_topic`` (simulated runs) it reads /clock while anyone watches, stamps each message
   with the latest simulated time and broadcasts that time to the clients (the Time capability), so Foxglove's
-  clock is the simulation's; without it messages carry the node's clock (wall time on a robot).
+  clock is the simulation's; it subscribes to the watched topics only once a /clock has come (before it, a message
+  would have no time to be stamped with, and went out at time 0); without it messages carry the node's clock
+  (wall time on a robot).
 
 It is not a participant of the stepped clock (no SteppedNode, no answers on /sim/step_ack): robot_sim never
 waits for it, and what it misses is lost for the viewer only.
@@ -110,7 +112,7 @@ class FoxgloveBridgeNode(Node):
         self.msgtypes: dict[str, str] = {}
         self.unservable: set[str] = set()   # topics already reported as impossible to serve
         self.forwarding: dict[str, _Forwarding] = {}
-        self.clock_ns = 0        # latest /clock seen, when stamping from the clock topic
+        self.clock_ns: int | None = None   # latest /clock seen, when stamping from the clock topic
         self.forwarded = 0
         try:
             self.server = foxglove.start_server(
@@ -151,11 +153,13 @@ class FoxgloveBridgeNode(Node):
     # -- following the clients ------------------------------------------------------------------------
 
     def follow_demand(self) -> None:
-        """Subscribe to what the clients watch (and /clock while anything is watched), re-subscribe when the
-        publishers changed (another QoS may be needed), drop what nobody watches any more."""
-        wanted = self.demand.topics() & self.channels.keys()
-        if wanted and self.params.stamp_from_clock_topic and CLOCK_TOPIC in self.channels:
-            wanted |= {CLOCK_TOPIC}
+        """Subscribe to what the clients watch (and /clock while anything is watched; stamping from it, only /clock
+        until its first message), re-subscribe when the publishers changed (another QoS may be needed), drop what
+        nobody watches any more."""
+        wanted: set[str] = set(self.demand.topics() & self.channels.keys())
+        if wanted and self.params.stamp_from_clock_topic:
+            clock = {CLOCK_TOPIC} & self.channels.keys()
+            wanted = wanted | clock if self.clock_ns is not None else clock   # nothing to stamp with yet
         for topic in self.forwarding.keys() - wanted:
             self.destroy_subscription(self.forwarding.pop(topic).subscription)
         for topic in wanted:
@@ -182,7 +186,10 @@ class FoxgloveBridgeNode(Node):
     # -- forwarding -----------------------------------------------------------------------------------
 
     def stamp_ns(self) -> int:
-        return self.clock_ns if self.params.stamp_from_clock_topic else self.get_clock().now().nanoseconds
+        if not self.params.stamp_from_clock_topic:
+            return self.get_clock().now().nanoseconds
+        assert self.clock_ns is not None          # follow_demand forwards nothing before the first /clock
+        return self.clock_ns
 
     def forward(self, channel: foxglove.Channel, data: bytes) -> None:
         channel.log(data, log_time=self.stamp_ns())
@@ -191,9 +198,12 @@ class FoxgloveBridgeNode(Node):
     def on_clock(self, data: bytes) -> None:
         stamp = clock_stamp_ns(data)
         if stamp is not None and self.params.stamp_from_clock_topic:
-            self.clock_ns = stamp
+            first, self.clock_ns = self.clock_ns is None, stamp
             self.server.broadcast_time(stamp)
-        self.forward(self.channels[CLOCK_TOPIC], data)
+            if first:
+                self.follow_demand()               # now the watched topics can be stamped: subscribe to them
+        if self.clock_ns is not None or not self.params.stamp_from_clock_topic:
+            self.forward(self.channels[CLOCK_TOPIC], data)
 
     def destroy_node(self) -> None:
         try:
