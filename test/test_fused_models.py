@@ -10,7 +10,7 @@ import pytest
 
 from rfidnav_common.rf import wavelength_m
 from rfidnav_common.wall_tags import InductionArea, WallTag
-from rfidnav_localization.fused.filter import Evidence, FusedFilter, FusedSettings, PhaseReading
+from rfidnav_localization.fused.filter import Evidence, FusedFilter, FusedSettings, HeldWifiFix, PhaseReading
 from rfidnav_localization.fused.models import (
     CompassModel,
     FloorModel,
@@ -305,3 +305,15 @@ def test_the_fused_status_names_the_lattice_tags_read_and_their_range_so_the_par
     # A round with no lattice tag: no partition, but the lattice's range, once learnt, stays known.
     later = localizer.on_round(Evidence())
     assert later is not None and later.partition_tag_ids == () and later.read_range_m == LATTICE.read_range_m
+
+
+def test_a_wifi_fix_is_weighed_once_in_the_first_round_stamped_after_its_scan_whenever_its_answer_came() -> None:
+    held = HeldWifiFix()
+    assert held.take(1.0) is None                                  # none located yet
+    held.located(((2.0, 3.0), 1.5), scan_time_s=2.0)
+    assert held.take(2.0) is None                                  # the scan's own round: it may come first
+    assert held.take(2.5) == ((2.0, 3.0), 1.5)
+    assert held.take(3.0) is None                                  # weighed once
+    held.located(((4.0, 5.0), 1.0), scan_time_s=3.0)
+    held.located(((6.0, 7.0), 1.0), scan_time_s=3.5)               # a newer answer replaces an unweighed one
+    assert held.take(3.5) is None and held.take(4.0) == ((6.0, 7.0), 1.0)

@@ -10,11 +10,14 @@ from nav_msgs.msg import Odometry
 from rclpy.context import Context
 from rclpy.node import Node
 from rclpy.parameter import Parameter
+from rclpy.task import Future
 from std_srvs.srv import Trigger
 
 from rfidnav_bringup.errors import LaunchError
 from rfidnav_bringup.processes import DomainLease
+from rfidnav_common import stepped_node
 from rfidnav_common.ros import COMMAND_QOS, SENSOR_QOS
+from rfidnav_common.step_ledger import StepLedger
 from rfidnav_common.stepped_node import STEP_ACK_QOS, STEP_ACK_TOPIC, SteppedNode, step_report_of
 from rfidnav_msgs.msg import StepAck
 from rfidnav_sim.robot_sim_node import RobotSimNode
@@ -92,6 +95,61 @@ def test_a_stepped_node_answers_again_when_its_subscription_matches_a_publisher_
     graph.spin_until(lambda: step_report_of(received[-1]).subscribed == {"/sim/ground_truth": 1},
                      "an answer with the match")
     assert step_report_of(received[-1]).consumed == {"/sim/ground_truth": 0}
+
+
+class Caller(SteppedNode):
+    """A participant that calls a Trigger service and logs, in order, each answer it handled and what it then
+    reported."""
+
+    def __init__(self, context: Context) -> None:
+        super().__init__("caller", context=context, parameter_overrides=[Parameter("stepped_clock", value=True)])
+        self.client = self.create_client(Trigger, "/answerer")
+        self.handled: list[Future] = []
+
+    def call(self) -> Future:
+        return self.call_service(self.client, Trigger.Request(), self.handled.append)
+
+
+CALLS = "/answerer (answers to /caller)"
+
+
+def answerer(graph: Graph) -> Node:
+    """A server not spun until the test adds it to the executor: until then its answer does not come."""
+    server = Node("answerer_node", context=graph.context)
+    server.create_service(Trigger, "/answerer", lambda _request, response: response)
+    return server
+
+
+def test_a_stepped_nodes_service_call_holds_the_step_until_the_answer_has_been_handled(graph) -> None:
+    received = answers(graph)
+    caller = graph.add(Caller(graph.context))
+    server = answerer(graph)
+    graph.spin_until(lambda: caller.client.service_is_ready() and received, "the service and a first answer")
+    ledger = StepLedger(["/caller"])
+    assert ledger.report(step_report_of(received[-1])) and ledger.answered()   # nothing out yet
+    caller.call()
+    graph.spin_until(lambda: step_report_of(received[-1]).produced.get(CALLS) == 1, "the answer counting the call")
+    ledger.report(step_report_of(received[-1]))
+    assert [u.describe() for u in ledger.unanswered()] == [f"/caller on {CALLS} (1 behind)"]
+    graph.add(server)
+    graph.spin_until(lambda: step_report_of(received[-1]).consumed.get(CALLS) == 1, "the answer counting the reply")
+    assert len(caller.handled) == 1 and caller.handled[0].result() is not None   # handled before it was counted
+    ledger.report(step_report_of(received[-1]))
+    assert ledger.answered()
+
+
+def test_a_call_left_unanswered_is_cancelled_after_the_hold_and_the_step_goes_on(graph, monkeypatch) -> None:
+    monkeypatch.setattr(stepped_node, "SERVICE_HOLD_S", 0.0)
+    received = answers(graph)
+    caller = graph.add(Caller(graph.context))
+    server = answerer(graph)            # never spun: it will not answer
+    graph.spin_until(lambda: caller.client.service_is_ready() and received, "the service and a first answer")
+    future = caller.call()
+    graph.spin_until(lambda: step_report_of(received[-1]).consumed.get(CALLS) == 1, "the call to be given up")
+    assert future.cancelled() and caller.handled == [future]
+    assert step_report_of(received[-1]).produced[CALLS] == 1
+    assert graph.logged("caller", "no answer on /answerer")
+    server.destroy_node()
 
 
 def test_a_node_without_the_parameter_is_a_plain_node(graph) -> None:

@@ -13,7 +13,11 @@ lockstep without code of its own:
   ``/clock`` message's ``clock``), so it needs no ``/clock`` subscription;
 - timers on its clock (``create_timer`` without a ``clock``) fire when a handled message moves that time past
   their due time, before the message's own callback runs: a timer due at ``t`` sees the inputs of the steps
-  before ``t`` and never some of ``t``'s, whatever order the messages of one step arrive in.
+  before ``t`` and never some of ``t``'s, whatever order the messages of one step arrive in;
+- a service call made with :meth:`SteppedNode.call_service` holds the step until its answer has been handled, so
+  the answer lands in the step it was asked in, as in the in-process runners, whatever the machine's load: the
+  node counts its calls and their answers as a topic of its own that it both produces and consumes (a server
+  that never answers holds the step for ``SERVICE_HOLD_S`` of wall time at most).
 
 A node whose answers the loop does not wait on (the recorder) sets ``step_slack``: it may fall that many messages
 behind on an input before it holds a step, and it answers every ``step_slack // 2`` messages or, when idle,
@@ -33,12 +37,14 @@ from collections.abc import Callable
 from typing import Any, cast
 
 from rcl_interfaces.msg import ParameterDescriptor
+from rclpy.client import Client
 from rclpy.clock import Clock, ClockType, ROSClock
 from rclpy.event_handler import PublisherEventCallbacks, SubscriptionEventCallbacks
 from rclpy.node import Node
 from rclpy.publisher import Publisher
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.subscription import Subscription
+from rclpy.task import Future
 from rclpy.time import Time
 
 from rfidnav_common.step_ledger import StepReport
@@ -51,6 +57,9 @@ STEPPED_CLOCK_PARAMETER = "stepped_clock"
 UNCOUNTED_TOPICS = ("/rosout", "/parameter_events", STEP_ACK_TOPIC)
 ACTION_TOPIC_MARK = "/_action/"
 SLACK_ANSWER_PERIOD_S = 0.02
+# Wall seconds a step waits for a service's answer before it goes on without it (a server that died with the call
+# out, or one that is no participant): then the client's own timeout, in simulated time, can run.
+SERVICE_HOLD_S = 10.0
 # The clock owner (robot_sim) of each rclpy context, for participants in its process.
 _CLOCK_OWNERS: dict[int, SteppedNode] = {}
 # Counts are cumulative, so only a node's latest answer matters: a participant keeps one. Transient local, so
@@ -120,6 +129,8 @@ class SteppedNode(Node):
         self.counted_subscriptions: dict[str, list[Subscription]] = {}
         self.sim_timers: list[SimTimer] = []
         self.sim_time_ns = 0
+        self.calls_topics: dict[str, str] = {}          # service name -> the counted topic of its calls' answers
+        self.held_calls: dict[Future, tuple[str, float]] = {}   # a call out -> its counted topic, sent (monotonic)
         if not self.stepped:
             return
         self.incarnation = random.SystemRandom().getrandbits(63)
@@ -205,6 +216,61 @@ class SteppedNode(Node):
         self.sim_timers.append(timer)
         return timer
 
+    def create_client(self, srv_type: Any, srv_name: str, **kwargs: Any) -> Any:
+        client = super().create_client(srv_type, srv_name, **kwargs)
+        if self.stepped and client.srv_name not in self.calls_topics:
+            if not self.calls_topics:
+                super().create_timer(1.0, self.release_overdue_calls, clock=Clock(clock_type=ClockType.STEADY_TIME))
+            calls = f"{client.srv_name} (answers to {self.get_fully_qualified_name()})"
+            self.calls_topics[client.srv_name] = calls
+            self.produced_counts[calls] = self.consumed_counts[calls] = 0
+            self.changed()
+        return client
+
+    def call_service(self, client: Client, request: Any, on_answer: Callable[[Future], Any]) -> Future:
+        """Call ``client``'s service and hand the future to ``on_answer`` when the answer comes (or, with the stepped
+        clock, when it is cancelled after SERVICE_HOLD_S without one). With the stepped clock the step waits until
+        ``on_answer`` has handled it."""
+        future = client.call_async(request)
+        if not self.stepped:
+            future.add_done_callback(on_answer)
+            return future
+        calls = self.calls_topics[client.srv_name]
+        self.produced_counts[calls] += 1
+        self.held_calls[future] = (calls, time.monotonic())
+        if not self.in_callback:
+            self.changed()
+
+        def answered(done: Future) -> None:
+            outer = self.in_callback
+            self.in_callback = True
+            try:
+                on_answer(done)
+            finally:
+                self.in_callback = outer
+                self.release_call(done)
+
+        future.add_done_callback(answered)
+        return future
+
+    def release_call(self, future: Future) -> None:
+        """Count a call's answer as handled (once: an answer after SERVICE_HOLD_S was counted then)."""
+        held = self.held_calls.pop(future, None)
+        if held is None:
+            return
+        self.consumed_counts[held[0]] += 1
+        if not self.in_callback:
+            self.changed()
+
+    def release_overdue_calls(self) -> None:
+        now = time.monotonic()
+        for future, (calls, sent) in list(self.held_calls.items()):
+            if now - sent >= SERVICE_HOLD_S:
+                self.get_logger().warning(f"no answer on {calls.split(' ')[0]} in {SERVICE_HOLD_S:g} s of wall time: "
+                                          "the call is cancelled and the clock goes on")
+                future.cancel()                 # its on_answer sees future.cancelled()
+                self.release_call(future)       # (counted already, unless the answer had come meanwhile)
+
     # ------------------------------------------------------------------------------------- stepping
     def advance_time(self, stamp_ns: int) -> None:
         """Move this node's simulated time to ``stamp_ns`` (never back) and fire the timers now due."""
@@ -259,6 +325,8 @@ class SteppedNode(Node):
                    for topic, publishers in self.counted_publishers.items()}
         subscribed = {topic: min(s.get_publisher_count() for s in subscriptions)
                       for topic, subscriptions in self.counted_subscriptions.items()}
+        for calls in self.calls_topics.values():   # its own: a call goes out only to a server that is ready
+            matched[calls] = subscribed[calls] = 1
         return StepReport(self.get_fully_qualified_name(), self.incarnation, dict(self.consumed_counts),
                           dict(self.produced_counts), self.step_slack, matched, subscribed)
 

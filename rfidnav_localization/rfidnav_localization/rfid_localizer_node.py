@@ -28,12 +28,12 @@ from sensor_msgs.msg import Imu
 
 from rfidnav_common import inputs
 from rfidnav_common.robot_map import load_route_map
-from rfidnav_common.ros import COMMAND_QOS, SENSOR_QOS, declare_parameters, run_node
+from rfidnav_common.ros import COMMAND_QOS, SENSOR_QOS, declare_parameters, run_node, seconds_of
 from rfidnav_common.seeding import rng_for
 from rfidnav_common.stepped_node import SteppedNode
 from rfidnav_common.transforms import FrameBroadcaster
 from rfidnav_localization.conversions import fused_pose_message, fused_status_message, initial_pose
-from rfidnav_localization.fused.filter import round_evidence
+from rfidnav_localization.fused.filter import HeldWifiFix, round_evidence
 from rfidnav_localization.fused.localizer import FusedLocalizer
 from rfidnav_localization.fused.tag_map import FusedMap
 from rfidnav_localization.parameters import RfidLocalizerParameters
@@ -58,7 +58,7 @@ class RfidLocalizerNode(SteppedNode):
         self.drops = inputs.Drops(self.get_logger().warning)
         self.compass_yaw: float | None = None
         self.odom_stamp = Time()
-        self.wifi_fix: tuple[tuple[float, float], float] | None = None
+        self.wifi_fix = HeldWifiFix()
         self.locating: Future | None = None
         self.ignored_count = 0
         self.pose_pub = self.create_publisher(PoseWithCovarianceStamped, p.pose_topic, SENSOR_QOS)
@@ -107,17 +107,18 @@ class RfidLocalizerNode(SteppedNode):
             return
         if self.locating is not None or self.locate_client is None or not self.locate_client.service_is_ready():
             return
-        self.locating = self.locate_client.call_async(Locate.Request(scan=msg))
-        self.locating.add_done_callback(self.on_located)
+        scan_time_s = seconds_of(msg.header.stamp)
+        self.locating = self.call_service(self.locate_client, Locate.Request(scan=msg),
+                                          lambda future: self.on_located(future, scan_time_s))
 
-    def on_located(self, future: Future) -> None:
+    def on_located(self, future: Future, scan_time_s: float) -> None:
         self.locating = None
-        response = future.result()
+        response = future.result()                  # None when cancelled unanswered (the stepped clock's hold)
         if response is None or not response.success:
             return
         try:
-            self.wifi_fix = (inputs.point(response.x, response.y, "position"),
-                             inputs.length(response.uncertainty_m, "uncertainty_m"))
+            self.wifi_fix.located((inputs.point(response.x, response.y, "position"),
+                                   inputs.length(response.uncertainty_m, "uncertainty_m")), scan_time_s)
         except inputs.BadInput as error:
             self.drops.drop(self.params.locate_service, f"answer ignored: {error}")
 
@@ -137,8 +138,9 @@ class RfidLocalizerNode(SteppedNode):
         reads = inputs.round_reads(msg, self.drops, ports=set(p.antenna_ports_read().values()))
         if reads is None:
             return
-        evidence = round_evidence(reads, self.ports, self.wifi_fix, self.compass_yaw)
-        self.wifi_fix = self.compass_yaw = None           # each reading is weighed once
+        wifi_fix = self.wifi_fix.take(seconds_of(msg.header.stamp))
+        evidence = round_evidence(reads, self.ports, wifi_fix, self.compass_yaw)
+        self.compass_yaw = None                           # each reading is weighed once
         estimate = self.localizer.on_round(evidence)
         if estimate is None:
             self.get_logger().warning("no /odom yet: nothing to localize", throttle_duration_sec=5.0)

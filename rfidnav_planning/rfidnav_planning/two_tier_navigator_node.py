@@ -20,6 +20,7 @@ position beyond any map is taken as a failed locate, and its tags beyond any map
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -215,12 +216,11 @@ class TwoTierNavigatorNode(SteppedNode):
             request = GetTagMap.Request(x=float(call.request.centre[0]), y=float(call.request.centre[1]),
                                         radius_m=float(call.request.radius_m))
         call.sent_s = self.now_s()
-        call.future = client.call_async(request)
-        call.future.add_done_callback(lambda future, sent=call: self.on_answer(sent, future))
+        call.future = self.call_service(client, request, functools.partial(self.on_answer, call))
 
     def on_answer(self, call: PendingCall, future: Future) -> None:
-        if self.call is not call or self.goals.running is None:
-            return                               # a stale answer (re-sent, or the goal ended)
+        if self.call is not call or self.goals.running is None or future.cancelled():
+            return                               # a stale answer (re-sent, or the goal ended), or none: sent again
         self.call = None
         response = future.result()
         if call.request.kind == LOCATE:

@@ -119,13 +119,16 @@ class PhaseReading:
         return self.phase1_rad - self.phase2_rad
 
 
+WifiFix = tuple[tuple[float, float], float]      # the location server's answer: (position, uncertainty [m])
+
+
 @dataclass(frozen=True)
 class Evidence:
     """What one round of the sensors says; each kind is optional."""
     floor_tag_ids: Sequence[str] = ()                      # read by the downward antenna
     phase: Sequence[PhaseReading] = ()
     wall_tag_ids: Sequence[tuple[int, str]] = ()           # (side antenna port, tag id)
-    wifi_fix: tuple[tuple[float, float], float] | None = None   # (position, uncertainty [m])
+    wifi_fix: WifiFix | None = None
     compass_yaw_rad: float | None = None
 
 
@@ -154,7 +157,7 @@ class Ports:
     wall: int = 0                           # side: wall tags
 
 
-def round_evidence(reads: Sequence[RoundRead], ports: Ports, wifi_fix: tuple[tuple[float, float], float] | None,
+def round_evidence(reads: Sequence[RoundRead], ports: Ports, wifi_fix: WifiFix | None,
                    compass_yaw_rad: float | None) -> Evidence:
     """One round's evidence: the floor antenna's tags, the side antenna's wall tags, and the phases of each
     ceiling tag heard on both receiving antennas on one channel (the last read of it on each), with the
@@ -173,6 +176,26 @@ def round_evidence(reads: Sequence[RoundRead], ports: Ports, wifi_fix: tuple[tup
                     wall_tag_ids=[(read.antenna, read.tag_id) for read in reads
                                   if ports.wall and read.antenna == ports.wall],
                     wifi_fix=wifi_fix, compass_yaw_rad=compass_yaw_rad)
+
+
+@dataclass
+class HeldWifiFix:
+    """The location server's latest answer, held for the first reader round stamped after the scan it locates
+    (and weighed in that one only). Over DDS the answer comes a few milliseconds after its scan, before or after a
+    round of the scan's own step is handled; by the stamps, a stepped run weighs it in the same round either way,
+    and the in-process runners in that round too. The node and the runners both hold it here."""
+    fix: WifiFix | None = None
+    scan_time_s: float = -math.inf
+
+    def located(self, fix: WifiFix, scan_time_s: float) -> None:
+        self.fix, self.scan_time_s = fix, scan_time_s
+
+    def take(self, round_time_s: float) -> WifiFix | None:
+        """The fix to weigh in a round at ``round_time_s``: the held one if its scan came before, then no more."""
+        if self.fix is None or round_time_s <= self.scan_time_s:
+            return None
+        fix, self.fix = self.fix, None
+        return fix
 
 
 @dataclass(frozen=True)
