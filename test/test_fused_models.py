@@ -10,7 +10,7 @@ import pytest
 
 from rfidnav_common.rf import wavelength_m
 from rfidnav_common.wall_tags import InductionArea, WallTag
-from rfidnav_localization.fused.filter import Evidence, FusedFilter, FusedSettings, HeldWifiFix, PhaseReading
+from rfidnav_localization.fused.filter import Evidence, FusedFilter, FusedSettings, HeldReadings, PhaseReading
 from rfidnav_localization.fused.models import (
     CompassModel,
     FloorModel,
@@ -307,13 +307,14 @@ def test_the_fused_status_names_the_lattice_tags_read_and_their_range_so_the_par
     assert later is not None and later.partition_tag_ids == () and later.read_range_m == LATTICE.read_range_m
 
 
-def test_a_wifi_fix_is_weighed_once_in_the_first_round_stamped_after_its_scan_whenever_its_answer_came() -> None:
-    held = HeldWifiFix()
-    assert held.take(1.0) is None                                  # none located yet
-    held.located(((2.0, 3.0), 1.5), scan_time_s=2.0)
-    assert held.take(2.0) is None                                  # the scan's own round: it may come first
-    assert held.take(2.5) == ((2.0, 3.0), 1.5)
-    assert held.take(3.0) is None                                  # weighed once
-    held.located(((4.0, 5.0), 1.0), scan_time_s=3.0)
-    held.located(((6.0, 7.0), 1.0), scan_time_s=3.5)               # a newer answer replaces an unweighed one
-    assert held.take(3.5) is None and held.take(4.0) == ((6.0, 7.0), 1.0)
+def test_a_round_weighs_the_latest_reading_stamped_before_it_once_and_never_one_of_its_own_step() -> None:
+    held: HeldReadings[float] = HeldReadings()
+    assert held.take(1.0) is None                                  # none yet
+    held.hold(0.1, 1.9)
+    held.hold(0.2, 2.0)                                            # of the round's own step: it may come first
+    assert held.take(2.0) == 0.1
+    assert held.take(2.0) is None                                  # weighed once
+    assert held.take(2.5) == 0.2                                   # the next round has it
+    held.hold(0.3, 3.0)
+    held.hold(0.4, 3.5)                                            # a newer reading replaces an unweighed one
+    assert held.take(4.0) == 0.4 and held.take(5.0) is None

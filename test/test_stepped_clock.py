@@ -53,9 +53,9 @@ def test_rtf_max_and_rtf_3_give_the_same_commands_for_the_same_seed(max_run: Pat
         summary(max_run)["metrics"]["tracking_rmse_m"], rel=METRIC_TOLERANCE)
 
 
-def scenario_document() -> dict:
+def scenario_document(name: str = SCENARIO) -> dict:
     """The scenario as a mapping with absolute paths, to be changed and written elsewhere."""
-    document = yaml.safe_load((WORKSPACE / "config/scenarios" / f"{SCENARIO}.yaml").read_text())
+    document = yaml.safe_load((WORKSPACE / "config/scenarios" / f"{name}.yaml").read_text())
     base = WORKSPACE / "config/scenarios"
     for key in ("world", "map"):
         document[key] = str((base / document[key]).resolve())
@@ -94,3 +94,29 @@ def test_a_participant_that_dies_ends_the_run_naming_it_instead_of_holding_the_c
     assert returncode == 1, output
     summary = json.loads(next(out.glob("*/summary.json")).read_text())
     assert summary["success"] is False and "node heading_controller exited" in summary["message"]
+
+
+def test_a_slow_location_server_slows_the_run_but_changes_neither_commands_nor_fused_poses(tmp_path: Path) -> None:
+    """Paper 003's navigator calls the location server (locate, tag map), and so does rfid_localizer beside it
+    (locate): each call holds its step until the answer has been handled, so an answer 0.3 s of wall time late
+    (at --rtf max, seconds of simulated time) lands in the same step as a prompt one."""
+    scenario = "two_tier_flat"
+    prompt = run_scenario(tmp_path / "prompt", scenario, "--rtf", "max", "--seed", "2")
+    document = scenario_document(scenario)
+    server = document["nodes"]["location_server"]
+    document["nodes"]["location_server"] = {
+        "command": f"{sys.executable} {WORKSPACE / 'test/support/slow_location_server.py'}",
+        "name": "location_server", "stepped": True, "params": server["params"],
+        # A command role is not told the run's folder: its database goes here, not into the working directory.
+        "overrides": {**server["overrides"], "database_file": str(tmp_path / "location.db")}}
+    (tmp_path / "slow.yaml").write_text(yaml.safe_dump(document))
+    slow = run_scenario(tmp_path / "slow", str(tmp_path / "slow.yaml"), "--rtf", "max", "--seed", "2")
+    # rfid_localizer alone locates a scan a second, over a mission of a minute or more: tens of slow answers.
+    assert summary(slow)["wall_duration_s"] > summary(prompt)["wall_duration_s"] + 10 * 0.3
+    assert len(commands(prompt)) > 100 and commands(slow) == commands(prompt)
+    assert fused_poses(slow) == fused_poses(prompt)
+
+
+def fused_poses(run: Path) -> list[tuple[float, float, float]]:
+    return [(msg.pose.pose.position.x, msg.pose.pose.position.y, msg.pose.pose.orientation.z)
+            for _, _, msg in read_messages(run / "bag", ["/fused/pose"])]

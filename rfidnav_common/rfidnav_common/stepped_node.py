@@ -17,7 +17,9 @@ lockstep without code of its own:
 - a service call made with :meth:`SteppedNode.call_service` holds the step until its answer has been handled, so
   the answer lands in the step it was asked in, as in the in-process runners, whatever the machine's load: the
   node counts its calls and their answers as a topic of its own that it both produces and consumes (a server
-  that never answers holds the step for ``SERVICE_HOLD_S`` of wall time at most).
+  that never answers holds the step for ``SERVICE_HOLD_S`` of wall time at most); and a service of a participant
+  is a topic its server produces and its participant clients consume, so that the first step (and the goal)
+  waits until every client has found its server, as for a topic's publisher and subscriptions.
 
 A node whose answers the loop does not wait on (the recorder) sets ``step_slack``: it may fall that many messages
 behind on an input before it holds a step, and it answers every ``step_slack // 2`` messages or, when idle,
@@ -60,6 +62,13 @@ SLACK_ANSWER_PERIOD_S = 0.02
 # Wall seconds a step waits for a service's answer before it goes on without it (a server that died with the call
 # out, or one that is no participant): then the client's own timeout, in simulated time, can run.
 SERVICE_HOLD_S = 10.0
+SERVICE_POLL_S = 0.05     # how often a node with services or clients looks whether their matching changed
+
+
+def service_topic(service_name: str) -> str:
+    """The counted topic that stands for a service in the step ledger: its server produces it, each participant
+    client consumes it, so a step waits until the clients have found the server (unwired), as for a topic."""
+    return f"{service_name} (service)"
 # The clock owner (robot_sim) of each rclpy context, for participants in its process.
 _CLOCK_OWNERS: dict[int, SteppedNode] = {}
 # Counts are cumulative, so only a node's latest answer matters: a participant keeps one. Transient local, so
@@ -131,6 +140,10 @@ class SteppedNode(Node):
         self.sim_time_ns = 0
         self.calls_topics: dict[str, str] = {}          # service name -> the counted topic of its calls' answers
         self.held_calls: dict[Future, tuple[str, float]] = {}   # a call out -> its counted topic, sent (monotonic)
+        self.served: list[str] = []                     # services of its own
+        self.counted_clients: list[Client] = []
+        self.service_timer: Any = None
+        self.services_wired: dict[str, int] = {}      # the latest service_wiring(), as step_report reports it
         if not self.stepped:
             return
         self.incarnation = random.SystemRandom().getrandbits(63)
@@ -216,16 +229,49 @@ class SteppedNode(Node):
         self.sim_timers.append(timer)
         return timer
 
+    def create_service(self, srv_type: Any, srv_name: str, callback: Callable[..., Any], **kwargs: Any) -> Any:
+        service = super().create_service(srv_type, srv_name, callback, **kwargs)
+        if self.stepped:
+            # Produced, never counted up: it is there so that a step waits until the service's participant
+            # clients have found it (step_report: its matched is the clients it has).
+            self.served.append(service.srv_name)
+            self.produced_counts[service_topic(service.srv_name)] = 0
+            self.watch_services()
+        return service
+
     def create_client(self, srv_type: Any, srv_name: str, **kwargs: Any) -> Any:
         client = super().create_client(srv_type, srv_name, **kwargs)
         if self.stepped and client.srv_name not in self.calls_topics:
-            if not self.calls_topics:
-                super().create_timer(1.0, self.release_overdue_calls, clock=Clock(clock_type=ClockType.STEADY_TIME))
             calls = f"{client.srv_name} (answers to {self.get_fully_qualified_name()})"
             self.calls_topics[client.srv_name] = calls
             self.produced_counts[calls] = self.consumed_counts[calls] = 0
-            self.changed()
+            self.consumed_counts[service_topic(client.srv_name)] = 0
+            self.counted_clients.append(client)
+            self.watch_services()
         return client
+
+    def watch_services(self) -> None:
+        """Poll the services' matching (rclpy has no event for it, as it has for topics): answer again when a
+        client finds its server or a server gains a client; and give up calls held too long."""
+        if self.service_timer is None:
+            self.service_timer = super().create_timer(SERVICE_POLL_S, self.poll_services,
+                                                      clock=Clock(clock_type=ClockType.STEADY_TIME))
+        self.services_wired = self.service_wiring()
+        self.changed()
+
+    def poll_services(self) -> None:
+        wiring = self.service_wiring()
+        if wiring != self.services_wired:
+            self.services_wired = wiring
+            self.changed()
+        self.release_overdue_calls()
+
+    def service_wiring(self) -> dict[str, int]:
+        """Per service topic: the clients a served service has; 1 when a client's server is ready, else 0."""
+        wiring = {service_topic(name): self.count_clients(name) for name in self.served}
+        wiring.update({service_topic(client.srv_name): int(client.service_is_ready())
+                       for client in self.counted_clients})
+        return wiring
 
     def call_service(self, client: Client, request: Any, on_answer: Callable[[Future], Any]) -> Future:
         """Call ``client``'s service and hand the future to ``on_answer`` when the answer comes (or, with the stepped
@@ -325,8 +371,10 @@ class SteppedNode(Node):
                    for topic, publishers in self.counted_publishers.items()}
         subscribed = {topic: min(s.get_publisher_count() for s in subscriptions)
                       for topic, subscriptions in self.counted_subscriptions.items()}
-        for calls in self.calls_topics.values():   # its own: a call goes out only to a server that is ready
+        for calls in self.calls_topics.values():   # its own, produced and consumed: nothing to match
             matched[calls] = subscribed[calls] = 1
+        for topic, count in self.services_wired.items():
+            (matched if topic in self.produced_counts else subscribed)[topic] = count
         return StepReport(self.get_fully_qualified_name(), self.incarnation, dict(self.consumed_counts),
                           dict(self.produced_counts), self.step_slack, matched, subscribed)
 

@@ -33,7 +33,7 @@ from rfidnav_common.seeding import rng_for
 from rfidnav_common.stepped_node import SteppedNode
 from rfidnav_common.transforms import FrameBroadcaster
 from rfidnav_localization.conversions import fused_pose_message, fused_status_message, initial_pose
-from rfidnav_localization.fused.filter import HeldWifiFix, round_evidence
+from rfidnav_localization.fused.filter import HeldReadings, WifiFix, round_evidence
 from rfidnav_localization.fused.localizer import FusedLocalizer
 from rfidnav_localization.fused.tag_map import FusedMap
 from rfidnav_localization.parameters import RfidLocalizerParameters
@@ -56,9 +56,9 @@ class RfidLocalizerNode(SteppedNode):
             x, y, yaw = p.initial_pose
             self.localizer.set_pose(x, y, yaw, np.diag(np.square(p.initial_sd)))
         self.drops = inputs.Drops(self.get_logger().warning)
-        self.compass_yaw: float | None = None
+        self.compass_yaws: HeldReadings[float] = HeldReadings()
         self.odom_stamp = Time()
-        self.wifi_fix = HeldWifiFix()
+        self.wifi_fixes: HeldReadings[WifiFix] = HeldReadings()
         self.locating: Future | None = None
         self.ignored_count = 0
         self.pose_pub = self.create_publisher(PoseWithCovarianceStamped, p.pose_topic, SENSOR_QOS)
@@ -94,7 +94,7 @@ class RfidLocalizerNode(SteppedNode):
 
     def on_compass(self, msg: Imu) -> None:
         try:
-            self.compass_yaw = inputs.compass_heading(msg)
+            self.compass_yaws.hold(inputs.compass_heading(msg), seconds_of(msg.header.stamp))
         except inputs.BadInput as error:
             self.drops.drop("/compass", error)
 
@@ -117,8 +117,8 @@ class RfidLocalizerNode(SteppedNode):
         if response is None or not response.success:
             return
         try:
-            self.wifi_fix.located((inputs.point(response.x, response.y, "position"),
-                                   inputs.length(response.uncertainty_m, "uncertainty_m")), scan_time_s)
+            self.wifi_fixes.hold((inputs.point(response.x, response.y, "position"),
+                                  inputs.length(response.uncertainty_m, "uncertainty_m")), scan_time_s)
         except inputs.BadInput as error:
             self.drops.drop(self.params.locate_service, f"answer ignored: {error}")
 
@@ -138,9 +138,9 @@ class RfidLocalizerNode(SteppedNode):
         reads = inputs.round_reads(msg, self.drops, ports=set(p.antenna_ports_read().values()))
         if reads is None:
             return
-        wifi_fix = self.wifi_fix.take(seconds_of(msg.header.stamp))
-        evidence = round_evidence(reads, self.ports, wifi_fix, self.compass_yaw)
-        self.compass_yaw = None                           # each reading is weighed once
+        round_time_s = seconds_of(msg.header.stamp)
+        evidence = round_evidence(reads, self.ports, self.wifi_fixes.take(round_time_s),
+                                  self.compass_yaws.take(round_time_s))
         estimate = self.localizer.on_round(evidence)
         if estimate is None:
             self.get_logger().warning("no /odom yet: nothing to localize", throttle_duration_sec=5.0)

@@ -34,7 +34,7 @@ from rfidnav_experiments.runners.topological import MissionStep
 from rfidnav_experiments.runners.two_tier import COMPASS, ODOMETRY_SCALE_ERROR, FloorRobot, Site, StepSeen
 from rfidnav_localization.conversions import fused_status_message
 from rfidnav_localization.fingerprint import LocateSettings
-from rfidnav_localization.fused.filter import Evidence, HeldWifiFix, Ports, round_evidence
+from rfidnav_localization.fused.filter import Evidence, HeldReadings, Ports, WifiFix, round_evidence
 from rfidnav_localization.fused.localizer import FusedEstimate, FusedLocalizer
 from rfidnav_localization.partition import LocalizationEstimate, PartitionLocalizer
 from rfidnav_planning.conversions import estimate_from_status
@@ -178,15 +178,15 @@ class Beside:
         self.riders = riders
         self.ports = ports
         self.paper = Track()
-        self.wifi_fix = HeldWifiFix()
+        self.wifi_fixes: HeldReadings[WifiFix] = HeldReadings()
 
     def __call__(self, seen: StepSeen) -> None:
         riders = [rider for rider in self.riders.values() if rider.moved(seen.time_s, seen.odom, seen.truth)]
         if seen.wifi_fix is not None:
-            self.wifi_fix.located(seen.wifi_fix, seen.time_s)
+            self.wifi_fixes.hold(seen.wifi_fix, seen.time_s)
         if seen.round_reads is None:
             return                                             # the node updates once per reader round
-        wifi_fix = self.wifi_fix.take(seen.time_s)
+        wifi_fix = self.wifi_fixes.take(seen.time_s)
         evidence = round_evidence(seen.round_reads, self.ports, wifi_fix, seen.compass_yaw_rad)
         x, y, yaw = seen.truth
         for rider in riders:
@@ -335,7 +335,7 @@ def drive_on_fused(site: Site, start: tuple[float, float, float], target: tuple[
     reader = reader_parameters.simulated_reader(site.world, reader_seed)
     navigator.start(target)
     pose: Pose | None = None
-    wifi_fix = HeldWifiFix()
+    wifi_fixes: HeldReadings[WifiFix] = HeldReadings()
     time_s, next_scan_s = 0.0, 0.0
     rider.moved(time_s, robot.odom, robot.truth)
     step = navigator.step(pose)
@@ -348,10 +348,10 @@ def drive_on_fused(site: Site, start: tuple[float, float, float], target: tuple[
             next_scan_s += scan_period_s
             result = site.locate_scan(truth[:2], rng, locate)
             if result is not None:
-                wifi_fix.located((result.position, result.uncertainty_m), time_s)
+                wifi_fixes.hold((result.position, result.uncertainty_m), time_s)
         due = reader.round_at(*truth, time_s)
         if due is not None:
-            estimate = rider.update(time_s, round_evidence(due, ports, wifi_fix.take(time_s),
+            estimate = rider.update(time_s, round_evidence(due, ports, wifi_fixes.take(time_s),
                                                            compass.measure(truth[2], rng)), truth)
             if estimate is not None:
                 covariance = estimate.pose.covariance

@@ -38,7 +38,7 @@ import dataclasses
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Protocol
+from typing import Generic, Protocol, TypeVar
 
 import numpy as np
 from scipy.spatial import cKDTree
@@ -57,6 +57,7 @@ from rfidnav_localization.fused.models import (
 from rfidnav_localization.fused.tag_map import FusedMap
 from rfidnav_localization.motion_model import walked_increments
 
+Reading = TypeVar("Reading")
 EVIDENCE_KINDS = ("lattice", "tag_group", "ceiling_phase", "ceiling_range_rate", "wall_tag", "wifi", "compass")
 # The kinds that can propose poses, and how much of their running average of the likelihood a new round
 # replaces: a tag read no particle explains resets at once, a WiFi fix only after several (see the docstring).
@@ -179,23 +180,24 @@ def round_evidence(reads: Sequence[RoundRead], ports: Ports, wifi_fix: WifiFix |
 
 
 @dataclass
-class HeldWifiFix:
-    """The location server's latest answer, held for the first reader round stamped after the scan it locates
-    (and weighed in that one only). Over DDS the answer comes a few milliseconds after its scan, before or after a
-    round of the scan's own step is handled; by the stamps, a stepped run weighs it in the same round either way,
-    and the in-process runners in that round too. The node and the runners both hold it here."""
-    fix: WifiFix | None = None
-    scan_time_s: float = -math.inf
+class HeldReadings(Generic[Reading]):
+    """Readings of one kind (the compass's headings, the location server's fixes) held by their stamps for the
+    reader rounds: a round weighs the latest stamped before it, once, and never one of its own step. Over DDS the
+    messages of one step arrive in no fixed order (a round before or after that step's compass reading, or the
+    answer to that step's scan); by the stamps a stepped run weighs the same readings whichever came first, so it
+    follows its seed. The node and the in-process runners both hold WiFi fixes here."""
+    readings: list[tuple[float, Reading]] = field(default_factory=list)     # (stamp [s], reading), oldest first
 
-    def located(self, fix: WifiFix, scan_time_s: float) -> None:
-        self.fix, self.scan_time_s = fix, scan_time_s
+    def hold(self, reading: Reading, time_s: float) -> None:
+        self.readings.append((time_s, reading))
 
-    def take(self, round_time_s: float) -> WifiFix | None:
-        """The fix to weigh in a round at ``round_time_s``: the held one if its scan came before, then no more."""
-        if self.fix is None or round_time_s <= self.scan_time_s:
+    def take(self, round_time_s: float) -> Reading | None:
+        """The latest reading stamped before ``round_time_s``, or None; it and those before it are then dropped."""
+        before = [held for held in self.readings if held[0] < round_time_s]
+        if not before:
             return None
-        fix, self.fix = self.fix, None
-        return fix
+        self.readings = self.readings[len(before):]
+        return before[-1][1]
 
 
 @dataclass(frozen=True)
