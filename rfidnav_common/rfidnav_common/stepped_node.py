@@ -63,12 +63,6 @@ SLACK_ANSWER_PERIOD_S = 0.02
 # out, or one that is no participant): then the client's own timeout, in simulated time, can run.
 SERVICE_HOLD_S = 10.0
 SERVICE_POLL_S = 0.05     # how often a node with services or clients looks whether their matching changed
-
-
-def service_topic(service_name: str) -> str:
-    """The counted topic that stands for a service in the step ledger: its server produces it, each participant
-    client consumes it, so a step waits until the clients have found the server (unwired), as for a topic."""
-    return f"{service_name} (service)"
 # The clock owner (robot_sim) of each rclpy context, for participants in its process.
 _CLOCK_OWNERS: dict[int, SteppedNode] = {}
 # Counts are cumulative, so only a node's latest answer matters: a participant keeps one. Transient local, so
@@ -79,6 +73,12 @@ STEP_ACK_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1, reliability=
 # an answer of every participant at once, or one node's answer overwrites another's.
 STEP_ACK_READER_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=100,
                                  reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+
+
+def service_topic(service_name: str) -> str:
+    """The counted topic that stands for a service in the step ledger: its server produces it, each participant
+    client consumes it, so a step waits until the clients have found the server (unwired), as for a topic."""
+    return f"{service_name} (service)"
 
 
 class SimTimer:
@@ -139,11 +139,13 @@ class SteppedNode(Node):
         self.sim_timers: list[SimTimer] = []
         self.sim_time_ns = 0
         self.calls_topics: dict[str, str] = {}          # service name -> the counted topic of its calls' answers
-        self.held_calls: dict[Future, tuple[str, float]] = {}   # a call out -> its counted topic, sent (monotonic)
+        self.held_calls: dict[Future, tuple[str, float]] = {}   # a call out -> its service, sent (monotonic)
         self.served: list[str] = []                     # services of its own
         self.counted_clients: list[Client] = []
         self.service_timer: Any = None
-        self.services_wired: dict[str, int] = {}      # the latest service_wiring(), as step_report reports it
+        # The latest service_wiring(): per service topic, the clients a served one has (step_report's matched)
+        # and, for a client's, 1 once its server is ready (step_report's subscribed).
+        self.services_wired: tuple[dict[str, int], dict[str, int]] = ({}, {})
         if not self.stepped:
             return
         self.incarnation = random.SystemRandom().getrandbits(63)
@@ -266,12 +268,10 @@ class SteppedNode(Node):
             self.changed()
         self.release_overdue_calls()
 
-    def service_wiring(self) -> dict[str, int]:
-        """Per service topic: the clients a served service has; 1 when a client's server is ready, else 0."""
-        wiring = {service_topic(name): self.count_clients(name) for name in self.served}
-        wiring.update({service_topic(client.srv_name): int(client.service_is_ready())
-                       for client in self.counted_clients})
-        return wiring
+    def service_wiring(self) -> tuple[dict[str, int], dict[str, int]]:
+        """Per service topic: the clients each service of its own has, and 1 once each client's server is ready."""
+        return ({service_topic(name): self.count_clients(name) for name in self.served},
+                {service_topic(client.srv_name): int(client.service_is_ready()) for client in self.counted_clients})
 
     def call_service(self, client: Client, request: Any, on_answer: Callable[[Future], Any]) -> Future:
         """Call ``client``'s service and hand the future to ``on_answer`` when the answer comes (or, with the stepped
@@ -281,9 +281,8 @@ class SteppedNode(Node):
         if not self.stepped:
             future.add_done_callback(on_answer)
             return future
-        calls = self.calls_topics[client.srv_name]
-        self.produced_counts[calls] += 1
-        self.held_calls[future] = (calls, time.monotonic())
+        self.produced_counts[self.calls_topics[client.srv_name]] += 1
+        self.held_calls[future] = (client.srv_name, time.monotonic())
         if not self.in_callback:
             self.changed()
 
@@ -304,15 +303,15 @@ class SteppedNode(Node):
         held = self.held_calls.pop(future, None)
         if held is None:
             return
-        self.consumed_counts[held[0]] += 1
+        self.consumed_counts[self.calls_topics[held[0]]] += 1
         if not self.in_callback:
             self.changed()
 
     def release_overdue_calls(self) -> None:
         now = time.monotonic()
-        for future, (calls, sent) in list(self.held_calls.items()):
+        for future, (service, sent) in list(self.held_calls.items()):
             if now - sent >= SERVICE_HOLD_S:
-                self.get_logger().warning(f"no answer on {calls.split(' ')[0]} in {SERVICE_HOLD_S:g} s of wall time: "
+                self.get_logger().warning(f"no answer on {service} in {SERVICE_HOLD_S:g} s of wall time: "
                                           "the call is cancelled and the clock goes on")
                 future.cancel()                 # its on_answer sees future.cancelled()
                 self.release_call(future)       # (counted already, unless the answer had come meanwhile)
@@ -373,8 +372,8 @@ class SteppedNode(Node):
                       for topic, subscriptions in self.counted_subscriptions.items()}
         for calls in self.calls_topics.values():   # its own, produced and consumed: nothing to match
             matched[calls] = subscribed[calls] = 1
-        for topic, count in self.services_wired.items():
-            (matched if topic in self.produced_counts else subscribed)[topic] = count
+        matched.update(self.services_wired[0])
+        subscribed.update(self.services_wired[1])
         return StepReport(self.get_fully_qualified_name(), self.incarnation, dict(self.consumed_counts),
                           dict(self.produced_counts), self.step_slack, matched, subscribed)
 
