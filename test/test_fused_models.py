@@ -10,7 +10,14 @@ import pytest
 
 from rfidnav_common.rf import wavelength_m
 from rfidnav_common.wall_tags import InductionArea, WallTag
-from rfidnav_localization.fused.filter import Evidence, FusedFilter, FusedSettings, HeldReadings, PhaseReading
+from rfidnav_localization.fused.filter import (
+    HELD_READINGS,
+    Evidence,
+    FusedFilter,
+    FusedSettings,
+    HeldReadings,
+    PhaseReading,
+)
 from rfidnav_localization.fused.models import (
     CompassModel,
     FloorModel,
@@ -318,3 +325,11 @@ def test_a_round_weighs_the_latest_reading_stamped_before_it_once_and_never_one_
     held.hold(0.3, 3.0)
     held.hold(0.4, 3.5)                                            # a newer reading replaces an unweighed one
     assert held.take(4.0) == 0.4 and held.take(5.0) is None
+
+
+def test_readings_held_while_no_round_comes_are_bounded_to_the_latest_ones() -> None:
+    held: HeldReadings[float] = HeldReadings()
+    for index in range(10 * HELD_READINGS):                        # a reader gone quiet, the compass still going
+        held.hold(float(index), 0.1 * index)
+    assert len(held.readings) == HELD_READINGS
+    assert held.take(1e6) == float(10 * HELD_READINGS - 1)         # the next round still weighs the latest

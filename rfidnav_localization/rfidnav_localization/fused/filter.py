@@ -58,6 +58,8 @@ from rfidnav_localization.fused.tag_map import FusedMap
 from rfidnav_localization.motion_model import walked_increments
 
 Reading = TypeVar("Reading")
+# Readings of a kind held for the next round (HeldReadings): a compass at 10 Hz between rounds at 2 Hz holds 5.
+HELD_READINGS = 16
 EVIDENCE_KINDS = ("lattice", "tag_group", "ceiling_phase", "ceiling_range_rate", "wall_tag", "wifi", "compass")
 # The kinds that can propose poses, and how much of their running average of the likelihood a new round
 # replaces: a tag read no particle explains resets at once, a WiFi fix only after several (see the docstring).
@@ -185,11 +187,13 @@ class HeldReadings(Generic[Reading]):
     reader rounds: a round weighs the latest stamped before it, once, and never one of its own step. Over DDS the
     messages of one step arrive in no fixed order (a round before or after that step's compass reading, or the
     answer to that step's scan); by the stamps a stepped run weighs the same readings whichever came first, so it
-    follows its seed. The node and the in-process runners both hold WiFi fixes here."""
+    follows its seed. The node and the in-process runners both hold WiFi fixes here. It holds the latest
+    HELD_READINGS, so that a node whose reader has gone quiet does not keep every compass reading since."""
     readings: list[tuple[float, Reading]] = field(default_factory=list)     # (stamp [s], reading), oldest first
 
     def hold(self, reading: Reading, time_s: float) -> None:
         self.readings.append((time_s, reading))
+        del self.readings[:-HELD_READINGS]
 
     def take(self, round_time_s: float) -> Reading | None:
         """The latest reading stamped before ``round_time_s``, or None; it and those before it are then dropped."""
