@@ -7,7 +7,6 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -100,6 +99,9 @@ def add_reproduce(verbs: argparse._SubParsersAction) -> Handler:
     common.add_argument("--resume", action="store_true",
                         help="take the finished tasks from --out's tasks file (EXPERIMENT_tasks.jsonl) of an "
                              "interrupted run of the same experiment, arguments and code, and run only the rest")
+    common.add_argument("--publish", action="store_true",
+                        help="also write docs/results/EXPERIMENT.json (the figures the docs quote, with the command, "
+                             "commit, inputs and the pinned subset's rows) and rewrite the quoted numbers")
     flc = names.add_parser("flc", parents=[common], help="paper 001 sec. V: the fuzzy heading controller's "
                                                          "line and route experiments")
     flc.add_argument("--seeds", type=runs_value, default=10, help="seeds per setting")
@@ -115,6 +117,15 @@ def add_reproduce(verbs: argparse._SubParsersAction) -> Handler:
     fused = names.add_parser("fused", parents=[common], help="ours: the fused localizer beside each paper's own "
                                                              "localizer, same runs, paired")
     fused.add_argument("--runs", type=runs_value, help="runs per world, default 10")
+    everything = names.add_parser("all", help="every reproduction and the benchmarks the docs quote at their "
+                                              "published sizes: rewrites docs/results/ and the quoted figures")
+    everything.add_argument("--out", type=output_folder, default=RUNS_DIR / "reproduce",
+                            help="folder for the rows, tables and plots")
+    everything.add_argument("--only", type=published_names, default=None,
+                            help="comma-separated reproductions or bench_NAME benchmarks (default: all)")
+    add_engine_options(everything)
+    names.add_parser("docs", help="rewrite every figure the README and docs/ quote from docs/results/, and the "
+                                  "evaluation ledger's page; nothing runs")
     return run_reproduce
 
 
@@ -232,31 +243,74 @@ def add_bench(verbs: argparse._SubParsersAction) -> Handler:
     return run_bench
 
 
+def published_names(text: str) -> list[str]:
+    from rfidnav_experiments.results import BENCHMARKS, REPRODUCTIONS
+
+    names = [part.strip() for part in text.split(",")]
+    unknown = [name for name in names if name not in REPRODUCTIONS and name not in BENCHMARKS]
+    if unknown:
+        raise argparse.ArgumentTypeError(f"expected some of {', '.join([*REPRODUCTIONS, *BENCHMARKS])}, got {text!r}")
+    return list(dict.fromkeys(names))
+
+
 def run_reproduce(args: argparse.Namespace) -> int:
     """The reproduction on the command's engine, its tasks streamed to ``--out``/EXPERIMENT_tasks.jsonl."""
-    reproduce: Callable[..., int]
-    if args.name == "partitions":
-        from rfidnav_experiments.reproduce.partitions import RUNS_PER_CURVE, reproduce_partitions
+    from rfidnav_experiments import results
 
-        reproduce, arguments = reproduce_partitions, {"runs": args.runs or RUNS_PER_CURVE}
-    elif args.name == "topological":
-        from rfidnav_experiments.reproduce.topological import MISSIONS, reproduce_topological
-
-        reproduce, arguments = reproduce_topological, {"missions": args.runs or MISSIONS}
-    elif args.name == "two_tier":
-        from rfidnav_experiments.reproduce.two_tier import RUNS, reproduce_two_tier
-
-        reproduce, arguments = reproduce_two_tier, {"runs": args.runs or RUNS}
-    elif args.name == "fused":
-        from rfidnav_experiments.reproduce.fused import RUNS, reproduce_fused
-
-        reproduce, arguments = reproduce_fused, {"runs": args.runs or RUNS}
-    else:
-        from rfidnav_experiments.reproduce.flc import reproduce_flc
-
-        reproduce, arguments = reproduce_flc, {"seeds": args.seeds}
+    if args.name == "all":
+        return reproduce_all(args)
+    if args.name == "docs":
+        return render_docs()
+    reproduction = results.REPRODUCTIONS[args.name]
+    count = getattr(args, reproduction.count if reproduction.count == "seeds" else "runs")
+    arguments = {reproduction.count: count or reproduction.default}
     with engine(args, f"reproduce {args.name}", arguments, args.out / f"{args.name}_tasks.jsonl"):
-        return reproduce(**arguments, out_dir=args.out, as_json=args.json)
+        if not args.publish:
+            return reproduction.run(args.out, args.json, **arguments)
+        code = results.publish_reproduction(args.name, args.out, count=arguments[reproduction.count])
+    if args.json:
+        print(json.dumps(results.rows_of(args.name, args.out), indent=1))
+    return max(code, render_docs())
+
+
+def render_docs() -> int:
+    """The quoted figures and the ledger's page from docs/results/; 1 with a line per quote it could not render."""
+    from rfidnav_experiments import results
+    from rfidnav_experiments.evaluation import ledger_markdown
+
+    results.LEDGER_PAGE.parent.mkdir(parents=True, exist_ok=True)
+    results.LEDGER_PAGE.write_text(ledger_markdown())
+    problems = results.render_quotes()
+    for problem in problems:
+        print(f"rfidnav reproduce: {problem}", file=sys.stderr)
+    return 1 if problems else 0
+
+
+def reproduce_all(args: argparse.Namespace) -> int:
+    """Every reproduction and benchmark (or ``--only``'s), at its published size, then the docs."""
+    from rfidnav_common.progress import stage
+    from rfidnav_experiments import results
+
+    names = args.only or [*results.REPRODUCTIONS, *results.BENCHMARKS]
+    minutes = results.estimated_minutes(names)
+    print("reproduce all: " + ", ".join(names) + (
+        f"; the last published runs of these took {minutes:.0f} min" if minutes is not None else
+        "; no estimate (a results file is missing)"), file=sys.stderr)
+    codes = []
+    for name in names:
+        if name in results.BENCHMARKS:
+            with stage(results.BENCHMARKS[name].command()):
+                codes.append(results.publish_benchmark(name))
+            continue
+        reproduction = results.REPRODUCTIONS[name]
+        arguments = {reproduction.count: reproduction.default}
+        with engine(args, f"reproduce {name}", arguments, args.out / f"{name}_tasks.jsonl"):
+            codes.append(results.publish_reproduction(name, args.out))
+    failed = [name for name, code in zip(names, codes) if code]
+    if failed:
+        print(f"reproduce all: exit code 1 from {', '.join(failed)} (their figures are written all the same)",
+              file=sys.stderr)
+    return max([render_docs(), *(1 for _ in failed)])
 
 
 def run_survey(args: argparse.Namespace) -> int:

@@ -1,0 +1,421 @@
+"""Published figures: one committed results file per reproduction and benchmark, and the figures the docs quote.
+
+``docs/results/NAME.json`` holds what a command measured: the command, the commit, its arguments, the evaluation
+set, the wall time, the SHA-256 of every input it read (the rfidnav modules it ran and the configuration files it
+opened), the rows (a reproduction's ``{"experiment", "setting", "metric", "ours", "paper"}``) or the figures (a
+benchmark's JSON), and, for a reproduction, the rows of a small pinned subset that a slow-tier test runs again and
+compares exactly (the runs are deterministic), so a change that moves a figure fails until its file is rewritten.
+
+A figure quoted in README.md or docs/ is written with the place it comes from, as an HTML comment right after it
+(invisible once rendered)::
+
+    5.37<!--fig flc tracking_rmse_m scenario=line_follow_90 params=flc_paper x100-->
+
+that is, the one row of docs/results/flc.json with metric ``tracking_rmse_m`` whose setting has those values, its
+``ours`` field (``paper``: its paper field) times 100, rounded to the decimals shown. A benchmark's figure names a
+path into its JSON instead (``<!--fig bench_flc speedup-->``, ``<!--fig bench_rtf rows.0.speed-->``).
+``./rfidnav reproduce docs`` rewrites every quoted number from its file; ``test_results.py`` fails when one differs,
+when a file is older than the inputs it recorded, or when the ledger's page is not current.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import functools
+import hashlib
+import importlib
+import json
+import math
+import os
+import re
+import subprocess
+import sys
+import tempfile
+import time
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from rfidnav_common.errors import ConfigError
+from rfidnav_experiments.evaluation import evaluation_set_dict
+
+REPOSITORY = Path(__file__).resolve().parents[2]
+RESULTS_DIR = REPOSITORY / "docs" / "results"
+LEDGER_PAGE = RESULTS_DIR / "evaluation-ledger.md"
+QUOTING_PAGES = ("README.md", "docs/paper-000.md", "docs/paper-001.md", "docs/paper-003.md", "docs/paper-004.md",
+                 "docs/real-robot.md", "docs/formats.md")
+FORMAT = 1
+
+
+@dataclass(frozen=True)
+class Reproduction:
+    """A ``reproduce NAME`` experiment: its function, the count it takes, and its pinned subset."""
+    name: str
+    module: str
+    function: str
+    count: str                          # the function's count argument (seeds, runs, missions)
+    option: str                         # the command's option for it
+    default: int                        # the count the published figures use
+    pinned: dict[str, Any] = field(default_factory=dict)   # the subset a test runs again (<1 min)
+
+    def run(self, out_dir: Path, as_json: bool, **arguments: Any) -> int:
+        function: Callable[..., int] = getattr(importlib.import_module(self.module), self.function)
+        return function(out_dir=out_dir, as_json=as_json, **arguments)
+
+    def command(self, arguments: dict[str, Any]) -> str:
+        return f"./rfidnav reproduce {self.name} {self.option} {arguments[self.count]}"
+
+
+REPRODUCTIONS: dict[str, Reproduction] = {r.name: r for r in (
+    Reproduction("flc", "rfidnav_experiments.reproduce.flc", "reproduce_flc", "seeds", "--seeds", 10,
+                 {"seeds": 1}),
+    Reproduction("partitions", "rfidnav_experiments.reproduce.partitions", "reproduce_partitions", "runs", "--runs",
+                 250, {"runs": 5}),
+    Reproduction("two_tier", "rfidnav_experiments.reproduce.two_tier", "reproduce_two_tier", "runs", "--runs", 20,
+                 {"runs": 1}),
+    Reproduction("topological", "rfidnav_experiments.reproduce.topological", "reproduce_topological", "missions",
+                 "--runs", 100, {"missions": 1}),
+    Reproduction("fused", "rfidnav_experiments.reproduce.fused", "reproduce_fused", "runs", "--runs", 10,
+                 {"runs": 1}),
+)}
+
+
+@dataclass(frozen=True)
+class Benchmark:
+    """A ``bench NAME`` whose figures the docs quote: the command's arguments after ``bench NAME``."""
+    name: str
+    arguments: tuple[str, ...]
+
+    @property
+    def key(self) -> str:
+        return f"bench_{self.name}"
+
+    def command(self) -> str:
+        return " ".join(("./rfidnav bench", self.name, *self.arguments, "--json"))
+
+
+BENCHMARKS: dict[str, Benchmark] = {b.key: b for b in (
+    Benchmark("flc", ()),
+    Benchmark("reader", ()),
+    Benchmark("planner", ()),
+    Benchmark("fused", ()),
+    Benchmark("location_server", ()),
+    Benchmark("llrp", ()),
+)}
+
+
+class ResultsError(ConfigError):
+    """A results file or a quoted figure that cannot be used: names the file and what is wrong."""
+
+
+# ------------------------------------------------------------------------------------------- inputs
+
+@contextlib.contextmanager
+def recorded_inputs() -> Iterator[set[Path]]:
+    """The repository's files this process opens meanwhile (an audit hook: every reader of the configuration,
+    whoever calls it). Audit hooks cannot be removed, so one hook serves every use, on while a recording runs."""
+    opened: set[Path] = set()
+    _RECORDERS.append(opened)
+    try:
+        yield opened
+    finally:
+        _RECORDERS.remove(opened)
+
+
+_RECORDERS: list[set[Path]] = []
+_HOOKED = False
+
+
+def _audit(event: str, arguments: tuple[Any, ...]) -> None:
+    if event != "open" or not _RECORDERS or not isinstance(arguments[0], (str, os.PathLike)):
+        return
+    mode = arguments[1] if len(arguments) > 1 and isinstance(arguments[1], str) else "r"
+    if "r" not in mode or "+" in mode:
+        return
+    path = Path(os.fspath(arguments[0]))
+    if path.suffix in (".yaml", ".json") and REPOSITORY / "config" in Path(os.path.abspath(path)).parents:
+        for recorder in _RECORDERS:
+            recorder.add(Path(os.path.abspath(path)))
+
+
+def _install_hook() -> None:
+    global _HOOKED
+    if not _HOOKED:
+        sys.addaudithook(_audit)
+        _HOOKED = True
+
+
+def sha256_of(path: Path) -> str:
+    return hashlib.sha256(path.read_bytes()).hexdigest()
+
+
+def loaded_sources() -> set[Path]:
+    """The rfidnav modules this process has imported (the code that made the figures; a local cluster's workers
+    import the same modules, which the experiment's module imports at its top)."""
+    sources = set()
+    for module in list(sys.modules.values()):
+        file = getattr(module, "__file__", None)
+        if not file or not module.__name__.startswith("rfidnav_"):
+            continue
+        path = Path(file).resolve()
+        if REPOSITORY in path.parents and path.suffix == ".py":
+            sources.add(path)
+    return sources
+
+
+NOT_INPUTS = ("rfidnav_experiments/rfidnav_experiments/results.py", "rfidnav_experiments/rfidnav_experiments/verbs.py",
+              "rfidnav_bringup/rfidnav_bringup/cli.py")   # the wrapper and the command line: no figure depends on them
+
+
+def input_hashes(paths: set[Path]) -> dict[str, str]:
+    relative = {path.relative_to(REPOSITORY).as_posix(): path for path in paths}
+    return {name: sha256_of(path) for name, path in sorted(relative.items()) if name not in NOT_INPUTS}
+
+
+def stale_inputs(results: dict[str, Any]) -> list[str]:
+    """The recorded inputs whose file changed or went since the results were written."""
+    changed = []
+    for name, digest in results.get("inputs", {}).items():
+        path = REPOSITORY / name
+        if not path.is_file():
+            changed.append(f"{name} (gone)")
+        elif sha256_of(path) != digest:
+            changed.append(name)
+    return changed
+
+
+def commit() -> str:
+    try:
+        head = subprocess.run(["git", "-C", str(REPOSITORY), "rev-parse", "--short", "HEAD"], check=True,
+                              capture_output=True, text=True).stdout.strip()
+        dirty = subprocess.run(["git", "-C", str(REPOSITORY), "status", "--porcelain", "--untracked-files=no"],
+                               check=True, capture_output=True, text=True).stdout.strip()
+    except (OSError, subprocess.CalledProcessError):
+        return "unknown"
+    return f"{head}{' (with uncommitted changes)' if dirty else ''}"
+
+
+# -------------------------------------------------------------------------------------------- write
+
+def rows_of(name: str, out_dir: Path) -> list[dict[str, Any]]:
+    path = out_dir / f"{name}_rows.json"
+    try:
+        return json.loads(path.read_text())
+    except (OSError, json.JSONDecodeError) as error:
+        raise ResultsError(str(path), "", f"the reproduction wrote no readable rows: {error}") from error
+
+
+def pinned_rows(name: str) -> list[dict[str, Any]]:
+    """The pinned subset's rows, run now in this process (a test compares them with the file's)."""
+    reproduction = REPRODUCTIONS[name]
+    with tempfile.TemporaryDirectory(prefix=f"rfidnav-pinned-{name}-") as folder, \
+            contextlib.redirect_stdout(sys.stderr):
+        reproduction.run(Path(folder), as_json=False, **reproduction.pinned)
+        return rows_of(name, Path(folder))
+
+
+def publish_reproduction(name: str, out_dir: Path, results_dir: Path = RESULTS_DIR, count: int | None = None) -> int:
+    """Run the reproduction at its published size (or ``count``) and its pinned subset; write NAME.json."""
+    _install_hook()
+    reproduction = REPRODUCTIONS[name]
+    arguments = {reproduction.count: count or reproduction.default}
+    with recorded_inputs() as opened:
+        started = time.perf_counter()
+        code = reproduction.run(out_dir, as_json=False, **arguments)
+        wall_s = time.perf_counter() - started
+        rows = rows_of(name, out_dir)
+        pinned = pinned_rows(name)
+    write_results(results_dir / f"{name}.json", {
+        "name": name, "command": reproduction.command(arguments), "exit_code": code, "arguments": arguments,
+        "evaluation_set": evaluation_set_dict(name), "wall_s": round(wall_s, 1), "machine": machine(),
+        "rows": rows, "pinned": {"arguments": reproduction.pinned, "rows": pinned},
+    }, opened | loaded_sources())
+    return code
+
+
+def publish_benchmark(key: str, results_dir: Path = RESULTS_DIR) -> int:
+    """Run the benchmark's command in a child (its own process, as a user runs it) and write its figures."""
+    bench = BENCHMARKS[key]
+    started = time.perf_counter()
+    done = subprocess.run([sys.executable, "-m", "rfidnav_bringup.cli", "bench", bench.name, *bench.arguments,
+                           "--json"], capture_output=True, text=True, cwd=REPOSITORY)
+    wall_s = time.perf_counter() - started
+    if done.returncode not in (0, 1):
+        raise ResultsError(bench.command(), "", f"exited {done.returncode}: {done.stderr.strip()[-400:]}")
+    try:
+        figures = json.loads(done.stdout)
+    except json.JSONDecodeError as error:
+        raise ResultsError(bench.command(), "", f"printed no JSON: {error}") from error
+    write_results(results_dir / f"{key}.json", {
+        "name": key, "command": bench.command(), "exit_code": done.returncode, "wall_s": round(wall_s, 1),
+        "machine": machine(), "figures": figures}, set())
+    return done.returncode
+
+
+def machine() -> dict[str, Any]:
+    return {"cores": len(os.sched_getaffinity(0)), "load_1min": round(os.getloadavg()[0], 2),
+            "python": sys.version.split()[0]}
+
+
+def write_results(path: Path, content: dict[str, Any], inputs: set[Path]) -> None:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    document = {"format": FORMAT, **content, "commit": commit(), "inputs": input_hashes(inputs)}
+    path.write_text(json.dumps(document, indent=1, sort_keys=False) + "\n")
+
+
+def read_results(path: Path) -> dict[str, Any]:
+    try:
+        document = json.loads(path.read_text())
+    except (OSError, json.JSONDecodeError) as error:
+        raise ResultsError(str(path), "", f"not a readable results file: {error}") from error
+    if not isinstance(document, dict) or document.get("format") != FORMAT:
+        raise ResultsError(str(path), "format", f"expected results format {FORMAT}")
+    return document
+
+
+def estimated_minutes(names: list[str], results_dir: Path = RESULTS_DIR) -> float | None:
+    """The wall time the last published runs took (None where a file is missing: no honest estimate)."""
+    total = 0.0
+    for name in names:
+        path = results_dir / f"{name}.json"
+        if not path.is_file():
+            return None
+        total += float(read_results(path).get("wall_s", 0.0))
+    return total / 60.0
+
+
+# -------------------------------------------------------------------------------------------- quote
+
+# A quoted figure: a number (a sign, digits, decimals) right before its source comment.
+QUOTE = re.compile(r"(?P<number>[+\-−]?\d+(?:\.\d+)?)<!--fig (?P<spec>[^>]*?)-->")
+
+
+@dataclass(frozen=True)
+class Quote:
+    page: str
+    line: int
+    number: str
+    spec: str
+
+    @property
+    def where(self) -> str:
+        return f"{self.page}:{self.line}"
+
+
+def quotes(root: Path = REPOSITORY, pages: tuple[str, ...] = QUOTING_PAGES) -> list[Quote]:
+    found = []
+    for page in pages:
+        path = root / page
+        if not path.is_file():
+            continue
+        for number, text in enumerate(path.read_text().splitlines(), 1):
+            found += [Quote(page, number, match["number"], match["spec"].strip()) for match in QUOTE.finditer(text)]
+    return found
+
+
+def _matches(setting: Any, key: str, value: str) -> bool:
+    return isinstance(setting, dict) and key in setting and str(setting[key]) == value
+
+
+def quoted_value(spec: str, results: dict[str, dict[str, Any]], where: str) -> float:
+    """The value a quote's spec names, scaled."""
+    words = spec.split()
+    if not words:
+        raise ResultsError(where, "fig", "an empty source")
+    name, rest = words[0], words[1:]
+    if name not in results:
+        raise ResultsError(where, "fig", f"no results file docs/results/{name}.json")
+    scale = 1.0
+    column = "ours"
+    selectors: list[str] = []
+    for word in rest:
+        if re.fullmatch(r"x[0-9.e+-]+", word):
+            scale = float(word[1:])
+        elif word == "paper":
+            column = "paper"
+        else:
+            selectors.append(word)
+    document = results[name]
+    if "rows" in document:
+        if not selectors or "=" in selectors[0]:
+            raise ResultsError(where, "fig", f"{spec!r}: name a metric after {name}")
+        metric, filters = selectors[0], [word.split("=", 1) for word in selectors[1:]]
+        if any(len(pair) != 2 for pair in filters):
+            raise ResultsError(where, "fig", f"{spec!r}: expected key=value after the metric")
+        rows = [row for row in document["rows"] if row.get("metric") == metric
+                and all(_matches(row.get("setting"), key, value) for key, value in filters)]
+        if len(rows) != 1:
+            raise ResultsError(where, "fig", f"{spec!r} selects {len(rows)} rows of {name}.json, expected one")
+        value = rows[0].get(column)
+    else:
+        value = document.get("figures")
+        for step in (selectors[0].split(".") if selectors else []):
+            if isinstance(value, list) and step.isdigit() and int(step) < len(value):
+                value = value[int(step)]
+            elif isinstance(value, dict) and step in value:
+                value = value[step]
+            else:
+                raise ResultsError(where, "fig", f"{spec!r}: no {step!r} in {name}.json's figures")
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        raise ResultsError(where, "fig", f"{spec!r} is {value!r}, not a number")
+    return float(value) * scale
+
+
+def shown(value: float, like: str) -> str:
+    """``value`` written as ``like`` is: its decimals, its minus sign, a plus sign if it had one."""
+    decimals = len(like.split(".", 1)[1]) if "." in like else 0
+    text = f"{value:.{decimals}f}"
+    if text.startswith("-"):
+        text = ("−" if "−" in like else "-") + text[1:]
+        if float(text.lstrip("−-")) == 0.0:
+            text = text[1:]
+    elif like[:1] == "+":
+        text = "+" + text
+    return text
+
+
+def all_results(results_dir: Path = RESULTS_DIR) -> dict[str, dict[str, Any]]:
+    return {path.stem: read_results(path) for path in sorted(results_dir.glob("*.json"))}
+
+
+def quote_problems(root: Path = REPOSITORY, results_dir: Path = RESULTS_DIR) -> list[str]:
+    """Every quoted figure that differs from its results file or cannot be read from it, one line each."""
+    results = all_results(results_dir)
+    problems = []
+    for quote in quotes(root):
+        try:
+            expected = shown(quoted_value(quote.spec, results, quote.where), quote.number)
+        except ResultsError as error:
+            problems.append(str(error))
+            continue
+        if expected.replace("−", "-") != quote.number.replace("−", "-"):
+            problems.append(f"{quote.where}: {quote.number} but {quote.spec.split()[0]}.json gives {expected} "
+                            f"({quote.spec})")
+    return problems
+
+
+def _rendered(match: re.Match[str], results: dict[str, dict[str, Any]], where: str, problems: list[str]) -> str:
+    """A quote with its number rewritten from its file (unchanged, and its problem noted, where it cannot be)."""
+    try:
+        text = shown(quoted_value(match["spec"].strip(), results, where), match["number"])
+    except ResultsError as error:
+        problems.append(str(error))
+        return match[0]
+    return f"{text}<!--fig {match['spec']}-->"
+
+
+def render_quotes(root: Path = REPOSITORY, results_dir: Path = RESULTS_DIR) -> list[str]:
+    """Rewrite every quoted number from its file; returns the problems of the quotes it could not render."""
+    results = all_results(results_dir)
+    problems: list[str] = []
+    for page in QUOTING_PAGES:
+        path = root / page
+        if not path.is_file():
+            continue
+        lines = path.read_text().splitlines(keepends=True)
+        new = [QUOTE.sub(functools.partial(_rendered, results=results, where=f"{page}:{n}", problems=problems), line)
+               for n, line in enumerate(lines, 1)]
+        if new != lines:
+            path.write_text("".join(new))
+    return problems
