@@ -92,8 +92,15 @@ class Condition:
     """One physical setting of a reproduction: its value for each compared method and where it comes from."""
     setting: str                        # NODE.field, or world. / scenario. for what the scenario fixes
     values: dict[str, Any]              # by method or parameter set
-    source: str                         # paper | calibrated | ours
+    source: str                         # paper | calibrated | ours (| "paper, interpreted: ...")
     note: str                           # the paper's section, the fit, or why we chose it
+    sources: dict[str, str] | None = None   # by method, where the methods' values come from different places
+
+    def source_text(self) -> str:
+        """The source column: one source, or each method's where they differ."""
+        if not self.sources:
+            return self.source
+        return "; ".join(f"{method}: {source}" for method, source in self.sources.items())
 
 
 CONDITION_SOURCES = ("paper", "calibrated", "ours")
@@ -111,12 +118,14 @@ def condition_lines(rows: Sequence[Condition], methods: Sequence[str]) -> list[s
         values = [shown(row.values[methods[0]]),
                   *("same" if repr(row.values[method]) == first else shown(row.values[method])
                     for method in methods[1:])]
-        body.append([row.setting, *values, row.source, row.note])
+        body.append([row.setting, *values, row.source_text(), row.note])
     return ["conditions: every physical setting of these runs and where it comes from",
             *table(["setting", *methods, "source", "why / where"], body)]
 
 
 def condition_json_rows(experiment: str, rows: Sequence[Condition]) -> list[dict[str, Any]]:
     """The conditions as ``--json`` rows (metric "condition"), ahead of the figures."""
-    return [{"experiment": experiment, "setting": {"condition": row.setting, "source": row.source, "note": row.note},
+    return [{"experiment": experiment,
+             "setting": {"condition": row.setting, "source": row.source, "note": row.note,
+                         **({"sources": row.sources} if row.sources else {})},
              "metric": "condition", "ours": row.values, "paper": None} for row in rows]
