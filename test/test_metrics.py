@@ -9,7 +9,9 @@ import numpy as np
 import pytest
 
 from rfidnav_bringup.metrics import (
+    READ_AREA_RADIUS_M,
     Trajectory,
+    area_entries,
     ground_truth_objection,
     signed_segment_error,
     tracking_error,
@@ -20,17 +22,19 @@ from rfidnav_bringup.metrics import (
 pytestmark = pytest.mark.tier("unit")
 
 LINE_TAGS = np.array([[0.0, 0.0], [0.0, 5.0]])
+JUST_PAST_3CM = 0.0301     # a read area the offset runs below enter where their leg starts and leave where it ends
 
 
 def straight_run(offset_m: float, *, speed: float = 0.2, approach_s: float = 10.0, dt: float = 0.01):
-    """Approach along -x to the first tag's projection shifted sideways, then drive parallel to the segment
-    (0,0)->(0,5) at a constant lateral ``offset_m`` (positive = left of the direction of travel = -x)."""
+    """Approach sideways to the first tag's projection shifted by ``offset_m``, from beyond it on that side (never
+    over the tag), then drive parallel to the segment (0,0)->(0,5) at that constant lateral offset (positive = left
+    of the direction of travel = -x)."""
     approach = np.arange(0.0, approach_s, dt)
     leg_s = 5.0 / speed
     leg = np.arange(0.0, leg_s + dt / 2, dt)
     times = np.concatenate((approach, approach_s + leg))
     xy = np.concatenate((
-        np.column_stack((-offset_m - speed * (approach_s - approach), np.zeros_like(approach))),
+        np.column_stack((-offset_m - math.copysign(speed, offset_m) * (approach_s - approach), np.zeros_like(approach))),
         np.column_stack((np.full_like(leg, -offset_m), speed * leg)),
     ))
     return Trajectory(times, xy), [approach_s, approach_s + leg_s]
@@ -39,14 +43,31 @@ def straight_run(offset_m: float, *, speed: float = 0.2, approach_s: float = 10.
 @pytest.mark.parametrize("offset_m", [0.03, -0.03])
 def test_constant_offset_gives_rmse_and_max_of_the_offset(offset_m):
     trajectory, arrivals = straight_run(offset_m)
-    metrics = tracking_metrics(trajectory, LINE_TAGS, arrivals, mission_start_s=0.0, mission_end_s=arrivals[-1])
+    metrics = tracking_metrics(trajectory, LINE_TAGS, arrivals, mission_start_s=0.0, mission_end_s=arrivals[-1],
+                               read_radius_m=JUST_PAST_3CM)
     assert metrics.tracking_rmse_m == pytest.approx(0.03, abs=1e-9)
     assert metrics.tracking_max_abs_m == pytest.approx(0.03, abs=1e-9)
-    assert metrics.tags_reached == 2
-    # The approach before the first arrival does not count: it is 2 m off the line at the start.
-    errors = tracking_error(trajectory, LINE_TAGS, arrivals).xy[:, 0]
+    assert metrics.tags_reached == 2 and metrics.tags_entered == 2
+    assert metrics.approach_s == pytest.approx(10.0)     # the read area is entered where the leg starts
+    # The approach before the first read area does not count: it is 2 m off the line at the start.
+    errors = tracking_error(trajectory, LINE_TAGS, read_radius_m=JUST_PAST_3CM).xy[:, 0]
     assert errors.size > 2000
     assert np.allclose(errors, offset_m, atol=1e-9)   # positive on the left (x < 0 when travelling +y)
+
+
+def test_the_stretch_is_ground_truths_not_the_declared_arrivals():
+    """Two controllers that declare their arrivals at different times are scored over the same stretch: from the
+    entry into the first tag's read area to the entry into the last one's."""
+    trajectory, arrivals = straight_run(0.03)
+    scored = [tracking_metrics(trajectory, LINE_TAGS, declared, 0.0, arrivals[-1])
+              for declared in (arrivals, [arrivals[0] - 3.0, arrivals[1] - 2.0], [arrivals[0] + 4.0], [])]
+    assert len({(m.tracking_rmse_m, m.tracking_max_abs_m, m.approach_s, m.scored_s) for m in scored}) == 1
+    assert [m.tags_reached for m in scored] == [2, 2, 1, 0]
+    # The shipped floor antenna's read area (8.66 cm): entered 5.66 cm (0.28 s) before the leg starts.
+    first = scored[0]
+    assert first.approach_s == pytest.approx(10.0 - (READ_AREA_RADIUS_M - 0.03) / 0.2, abs=0.011)
+    assert first.tracking_max_abs_m == pytest.approx(READ_AREA_RADIUS_M, abs=0.003)   # where it enters
+    assert first.tracking_rmse_m == pytest.approx(0.03, abs=1e-3)
 
 
 def test_rmse_is_the_root_mean_square_of_a_varying_error():
@@ -54,7 +75,7 @@ def test_rmse_is_the_root_mean_square_of_a_varying_error():
     amplitude = 0.05
     lateral = amplitude * np.sin(2 * np.pi * times / 2.0)             # 5 full periods
     trajectory = Trajectory(times, np.column_stack((-lateral, 0.5 * times)))
-    metrics = tracking_metrics(trajectory, LINE_TAGS, [0.0, 10.0], 0.0, 10.0)
+    metrics = tracking_metrics(trajectory, LINE_TAGS, [0.0, 10.0], 0.0, 10.0, read_radius_m=1e-6)   # 0 to 10 s
     assert metrics.tracking_rmse_m == pytest.approx(amplitude / math.sqrt(2), rel=1e-3)
     assert metrics.tracking_max_abs_m == pytest.approx(amplitude, rel=1e-6)
 
@@ -72,45 +93,52 @@ def test_sign_is_positive_on_the_left_of_the_direction_of_travel():
     assert reverse == pytest.approx(-errors[:2])
 
 
-def test_segments_switch_at_the_arrival_times():
-    # An L route: (0,0) -> (4,0) -> (4,3). The robot drives 0.1 m left of each leg at 1 m/s, turning at (3.9, 0.1).
+def l_route_run() -> tuple[np.ndarray, Trajectory]:
+    """An L route (0,0) -> (4,0) -> (4,3); the robot drives 0.1 m left of each leg at 1 m/s, turning at (3.9, 0.1),
+    0.1414 m from the corner tag."""
     tags = np.array([[0.0, 0.0], [4.0, 0.0], [4.0, 3.0]])
     t1 = np.linspace(0.0, 3.9, 391)
     leg1 = np.column_stack((t1, np.full_like(t1, 0.1)))                # travelling +x, left is +y
     t2 = np.linspace(3.91, 6.8, 290)
     leg2 = np.column_stack((np.full_like(t2, 3.9), 0.1 + (t2 - 3.9)))  # travelling +y, left is -x
-    trajectory = Trajectory(np.concatenate((t1, t2)), np.concatenate((leg1, leg2)))
-    arrivals = [0.0, 3.9, 6.8]
-    error = tracking_error(trajectory, tags, arrivals)
+    return tags, Trajectory(np.concatenate((t1, t2)), np.concatenate((leg1, leg2)))
+
+
+def test_segments_switch_where_ground_truth_enters_the_next_read_area():
+    tags, trajectory = l_route_run()
+    radius = 0.1415                                                    # the corner's area: entered at the turn
+    assert area_entries(trajectory, tags, radius) == pytest.approx([0.0, 3.9, 6.7], abs=1e-9)
+    error = tracking_error(trajectory, tags, read_radius_m=radius)
     segment = error.xy[:, 1]
     assert set(segment) == {0.0, 1.0}
-    assert np.all(error.times_s[segment == 0.0] <= 3.9)
+    assert np.all(error.times_s[segment == 0.0] < 3.9)
     assert np.all(error.times_s[segment == 1.0] >= 3.9)
-    assert np.all(segment[error.times_s < 3.9] == 0.0)
-    assert np.all(segment[error.times_s > 3.9] == 1.0)
     assert np.all(np.diff(segment) >= 0.0)
+    assert error.times_s[-1] == pytest.approx(6.7)                     # the last area's entry ends the stretch
     # Against the wrong segment, (3.9, y) would be up to 2.9 m off the first leg; against the right one 0.1 m.
     assert np.allclose(error.xy[:, 0], 0.1, atol=1e-9)
-    metrics = tracking_metrics(trajectory, tags, arrivals, 0.0, 6.8)
-    assert metrics.tracking_max_abs_m == pytest.approx(0.1, abs=1e-9)
-    assert metrics.tracking_rmse_m == pytest.approx(0.1, abs=1e-9)
-    # Had the switch come late (at 6 s), the first leg's segment would be used far past its end.
-    late = tracking_metrics(trajectory, tags, [0.0, 6.0, 6.8], 0.0, 6.8)
-    assert late.tracking_max_abs_m > 1.0
+    for declared in ([0.0, 3.9, 6.8], [0.0, 6.0, 6.8]):               # a late declared switch changes nothing
+        metrics = tracking_metrics(trajectory, tags, declared, 0.0, 6.8, read_radius_m=radius)
+        assert metrics.tracking_max_abs_m == pytest.approx(0.1, abs=1e-9)
+        assert metrics.tracking_rmse_m == pytest.approx(0.1, abs=1e-9)
+    # A robot that never enters the corner's area (a smaller one) is scored on nothing after the first tag.
+    assert area_entries(trajectory, tags, 0.14) == [0.0]
+    assert tracking_metrics(trajectory, tags, [0.0, 3.9, 6.8], 0.0, 6.8, read_radius_m=0.14).tracking_rmse_m is None
 
 
-def test_error_stops_at_the_last_arrival_and_needs_two_arrivals():
+def test_error_stops_at_the_last_read_area_and_needs_two():
     trajectory, arrivals = straight_run(0.03)
     # After the last tag the robot wanders 1 m off: not part of e(t).
     extra_t = np.arange(arrivals[-1] + 0.01, arrivals[-1] + 5.0, 0.01)
     wandering = Trajectory(np.concatenate((trajectory.times_s, extra_t)),
                            np.concatenate((trajectory.xy, np.column_stack((np.full_like(extra_t, 1.0),
                                                                            np.full_like(extra_t, 5.0))))))
-    metrics = tracking_metrics(wandering, LINE_TAGS, arrivals, 0.0, extra_t[-1])
+    metrics = tracking_metrics(wandering, LINE_TAGS, arrivals, 0.0, extra_t[-1], read_radius_m=JUST_PAST_3CM)
     assert metrics.tracking_max_abs_m == pytest.approx(0.03, abs=1e-9)
-    only_first = tracking_metrics(trajectory, LINE_TAGS, arrivals[:1], 0.0, arrivals[-1])
+    short = trajectory.between(0.0, arrivals[-1] - 1.0)                # stops 20 cm before the last tag
+    only_first = tracking_metrics(short, LINE_TAGS, arrivals, 0.0, arrivals[-1])
     assert only_first.tracking_rmse_m is None and only_first.tracking_max_abs_m is None
-    assert only_first.tags_reached == 1
+    assert only_first.tags_reached == 2 and only_first.tags_entered == 1 and only_first.scored_s is None
 
 
 def test_time_to_first_tag_is_measured_from_the_mission_start():

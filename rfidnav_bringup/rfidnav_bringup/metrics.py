@@ -5,11 +5,14 @@ Used both on bags (``./rfidnav report``) and on in-process runs (``./rfidnav rep
 figures of the two agree by construction.
 
 * e(t): distance of the ground-truth position from the current desired segment, i.e. the segment
-  between the ground projections of the last route tag reached and the next one, from arrival at
-  the first route tag until arrival at the last; signed, positive to the left of the direction of
-  travel.
+  between the ground projections of the last route tag whose read area the robot has entered and the next
+  one, from the moment it (ground truth) enters the first tag's read area until it enters the last tag's;
+  signed, positive to the left of the direction of travel. The stretch and its segments are decided by ground
+  truth alone (:func:`area_entries`), not by the controller's declared arrivals, so every controller of a
+  comparison is scored over the same stretch by the same rule.
 * RMSE (eq. 4): sqrt(mean e(t)^2) over equally spaced samples; max |e|.
-* Time to come within 1 cm of the first tag's projection, from the mission start.
+* The approach: when the robot entered the first tag's read area, from the mission start; and the time to come
+  within 1 cm of the first tag's projection (paper 001 sec. V-A's "within 1 cm").
 * Path length from the mission start to the end.
 
 Every run with ground truth also counts its wall crossings (:func:`wall_crossings`), and ground truth has the last
@@ -27,6 +30,10 @@ import numpy as np
 from rfidnav_common.topological_map import RouteError, TopologicalMap
 
 FIRST_TAG_RADIUS_M = 0.01
+# A route tag's read area: where its floor tag is read (the arrival of paper 001's step 8). The shipped reader's floor
+# antenna (config/params/reader_uhf_2ant.yaml: 5 cm up, 10 cm slant range, 60 degree half cone) reads a floor tag
+# within sqrt(0.10^2 - 0.05^2) = 8.66 cm of it; the in-process runner passes its reader's own radius.
+READ_AREA_RADIUS_M = 0.0866
 ON_WALL_M = 1e-6           # a sample this close to a wall's line is on it: touching, neither side
 
 
@@ -102,7 +109,10 @@ class TrackingMetrics:
     tracking_max_abs_m: float | None
     time_to_first_tag_s: float | None
     path_length_m: float
-    tags_reached: int
+    tags_reached: int                       # the controller's declared arrivals
+    approach_s: float | None = None         # entered the first tag's read area (ground truth), from mission start
+    scored_s: float | None = None           # the scored stretch's length in time: first read area to the last
+    tags_entered: int = 0                   # route tags whose read area the robot entered, in order (ground truth)
 
     def as_dict(self) -> dict[str, float | int | None]:
         return dict(self.__dict__)
@@ -121,32 +131,63 @@ def signed_segment_error(points: np.ndarray, start: np.ndarray, end: np.ndarray)
     return np.where(side == 0.0, 1.0, side) * distance
 
 
-def tracking_error(trajectory: Trajectory, tag_points: np.ndarray, arrival_times_s: list[float]) -> Trajectory:
-    """e(t) samples (as a Trajectory whose xy[:, 0] is e and xy[:, 1] the segment index)."""
-    times, errors, segments = [], [], []
-    for k in range(min(len(arrival_times_s), len(tag_points)) - 1):
-        if k + 1 >= len(arrival_times_s):
+def area_entries(trajectory: Trajectory, tag_points: np.ndarray,
+                 read_radius_m: float = READ_AREA_RADIUS_M) -> list[float]:
+    """When the ground truth entered each route tag's read area (within ``read_radius_m`` of its ground
+    projection), in route order: tag k's entry is the first sample inside its area at or after tag k-1's. The list
+    ends at the first tag whose area was never entered after its predecessor's."""
+    entries: list[float] = []
+    after = -math.inf
+    for point in np.asarray(tag_points, dtype=float).reshape(-1, 2):
+        inside = np.flatnonzero((np.linalg.norm(trajectory.xy - point, axis=1) <= read_radius_m)
+                                & (trajectory.times_s >= after))
+        if not inside.size:
             break
-        part = trajectory.between(arrival_times_s[k], arrival_times_s[k + 1])
-        times.append(part.times_s)
-        errors.append(signed_segment_error(part.xy, tag_points[k], tag_points[k + 1]))
-        segments.append(np.full(part.times_s.shape, k, dtype=float))
+        after = float(trajectory.times_s[inside[0]])
+        entries.append(after)
+    return entries
+
+
+def tracking_error(trajectory: Trajectory, tag_points: np.ndarray, arrival_times_s: list[float] | None = None,
+                   read_radius_m: float = READ_AREA_RADIUS_M) -> Trajectory:
+    """e(t) samples (as a Trajectory whose xy[:, 0] is e and xy[:, 1] the segment index) over the stretch ground
+    truth decides (:func:`area_entries`): segment k from the entry into tag k's read area up to (not including) the
+    entry into tag k+1's, the last segment up to and including the entry into the last area reached.
+
+    ``arrival_times_s`` (the controller's declared arrivals) is not used: it is accepted so that callers of the
+    former signature, which scored between them, keep working."""
+    del arrival_times_s
+    entries = area_entries(trajectory, tag_points, read_radius_m)
+    times, errors, segments = [], [], []
+    for k in range(len(entries) - 1):
+        last = k == len(entries) - 2
+        keep = (trajectory.times_s >= entries[k]) & ((trajectory.times_s <= entries[k + 1]) if last
+                                                     else (trajectory.times_s < entries[k + 1]))
+        times.append(trajectory.times_s[keep])
+        errors.append(signed_segment_error(trajectory.xy[keep], tag_points[k], tag_points[k + 1]))
+        segments.append(np.full(int(keep.sum()), k, dtype=float))
     if not times:
         return Trajectory(np.empty(0), np.empty((0, 2)))
     return Trajectory(np.concatenate(times), np.column_stack((np.concatenate(errors), np.concatenate(segments))))
 
 
 def tracking_metrics(trajectory: Trajectory, tag_points: np.ndarray, arrival_times_s: list[float],
-                     mission_start_s: float, mission_end_s: float) -> TrackingMetrics:
-    """Metrics of one run; ``arrival_times_s[k]`` is when route tag k was reached."""
+                     mission_start_s: float, mission_end_s: float,
+                     read_radius_m: float = READ_AREA_RADIUS_M) -> TrackingMetrics:
+    """Metrics of one run; ``arrival_times_s[k]`` is when the controller declared route tag k reached (counted as
+    tags_reached; the scored stretch is ground truth's, :func:`tracking_error`)."""
     run = trajectory.between(mission_start_s, mission_end_s)
-    error = tracking_error(run, tag_points, arrival_times_s).xy[:, 0]
+    error = tracking_error(run, tag_points, read_radius_m=read_radius_m).xy[:, 0]
     rmse = float(np.sqrt(np.mean(error ** 2))) if error.size else None
     max_abs = float(np.max(np.abs(error))) if error.size else None
     near_first = np.nonzero(np.linalg.norm(run.xy - tag_points[0], axis=1) <= FIRST_TAG_RADIUS_M)[0]
     time_to_first = float(run.times_s[near_first[0]] - mission_start_s) if near_first.size else None
     path_length = float(np.sum(np.linalg.norm(np.diff(run.xy, axis=0), axis=1))) if len(run.xy) > 1 else 0.0
-    return TrackingMetrics(rmse, max_abs, time_to_first, path_length, len(arrival_times_s))
+    entries = area_entries(run, tag_points, read_radius_m)
+    return TrackingMetrics(rmse, max_abs, time_to_first, path_length, len(arrival_times_s),
+                           approach_s=entries[0] - mission_start_s if entries else None,
+                           scored_s=entries[-1] - entries[0] if len(entries) > 1 else None,
+                           tags_entered=len(entries))
 
 
 @dataclass(frozen=True)

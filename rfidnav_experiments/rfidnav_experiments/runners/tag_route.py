@@ -4,10 +4,21 @@ It uses the same world, map, parameter files, seeds and core classes (DiffDriveB
 ReaderSimulator, TagRouteFollower, FuzzyHeadingController) as the node graph, and the same timing
 rules (inventory rounds taken on the ground-truth samples), so a run here differs from ``./rfidnav
 run`` only by the DDS graph's latency. ``./rfidnav reproduce flc`` runs hundreds of these.
+
+Scoring (rfidnav_bringup.metrics): the stretch from the robot's entry (ground truth) into the first tag's read area
+to its entry into the last one's, the read area being where the reader's floor antenna reads a floor tag
+(:func:`floor_read_radius_m`), so two controllers in the same conditions are scored over the same stretch.
+
+One open setting of paper 001 lives here, in-process only: how its eq. 3 (theta_new = theta_old + dtheta) becomes a
+command (``heading_update``). ``rate``, the heading_controller node's: the yaw rate that turns the robot by dtheta
+over the round, clipped at max_yaw_rate_radps. ``setpoint``: dtheta moves a heading reference, theta_ref +=
+dtheta, and the base turns towards it (the wheel odometry's heading) at up to max_yaw_rate_radps, so a turn the
+cap holds back is still made later (the reference winds up). The node has no such mode.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections import deque
 from collections.abc import Callable, Sequence
@@ -18,13 +29,14 @@ import numpy as np
 
 from rfidnav_bringup.metrics import TrackingMetrics, Trajectory, tracking_metrics
 from rfidnav_bringup.scenario import Scenario, node_parameters
+from rfidnav_common.geometry import wrap_angle
 from rfidnav_common.seeding import rng_for
 from rfidnav_control.fuzzy import FuzzyHeadingController
 from rfidnav_control.parameters import HeadingControllerParameters
 from rfidnav_control.tag_route import SEARCH_MODES, Command, TagRouteFollower, observe
 from rfidnav_experiments.runners.shipped import file_parameters
 from rfidnav_sim.parameters import ReaderParameters, RobotSimParameters
-from rfidnav_sim.rfid_model import Read, ReaderSimulator
+from rfidnav_sim.rfid_model import Read, ReaderSimulator, reach_m
 
 
 @dataclass(frozen=True)
@@ -63,6 +75,15 @@ def controller_parameters(scenario: Scenario, params_file: Path | None, seed: in
                            map_file=str(scenario.map_file))
 
 
+HEADING_UPDATES = ("rate", "setpoint")
+
+
+def floor_read_radius_m(reader: ReaderParameters, controller: HeadingControllerParameters) -> float:
+    """How far from a floor tag (on the floor) the controller's floor antenna reads it: a route tag's read area."""
+    model = reader.reader_model()
+    return reach_m(model, model.antennas[controller.floor_antenna - 1], 0.0)
+
+
 def tag_points(scenario: Scenario, route: list[str]) -> np.ndarray:
     """Ground projections of the route's tags (ground truth: for metrics only)."""
     return np.array([scenario.world.tag(tag_id).position[:2] for tag_id in route], dtype=float)
@@ -70,12 +91,16 @@ def tag_points(scenario: Scenario, route: list[str]) -> np.ndarray:
 
 def run_tag_route(scenario: Scenario, controller: HeadingControllerParameters, seed: int,
                   reader: ReaderParameters | None = None, timeout_s: float | None = None,
-                  command_delay_s: float = 0.0, observer: Callable[[RouteRound], None] | None = None) -> RouteRun:
+                  command_delay_s: float = 0.0, observer: Callable[[RouteRound], None] | None = None,
+                  heading_update: str = "rate") -> RouteRun:
     """One run of the scenario's route, in-process and in lockstep.
 
     ``command_delay_s`` applies each command that much sim time after the round it answers: the latency of
     reads -> controller -> /cmd_vel over DDS, which at a high RTF on a loaded machine spans several rounds.
-    ``observer`` is shown each reader round (a localizer riding beside the follower: reproduce fused)."""
+    ``observer`` is shown each reader round (a localizer riding beside the follower: reproduce fused).
+    ``heading_update``: how dtheta becomes a yaw rate (module docstring; ``rate`` is the node's)."""
+    if heading_update not in HEADING_UPDATES:
+        raise ValueError(f"heading_update '{heading_update}' is not one of {', '.join(HEADING_UPDATES)}")
     robot: RobotSimParameters = role_parameters(scenario, "robot_sim", seed)
     reader = reader or role_parameters(scenario, "rfid_reader_sim", seed)
     world = scenario.world
@@ -92,6 +117,8 @@ def run_tag_route(scenario: Scenario, controller: HeadingControllerParameters, s
     times, positions, arrivals = [0.0], [(base.truth.x, base.truth.y)], []
     pending: deque[tuple[float, Command]] = deque()
     success, message, step, now, search_s = False, "timeout", 0, 0.0, 0.0
+    reference: float | None = None          # heading_update "setpoint": theta_ref of eq. 3, unwrapped [rad]
+    heading, last_yaw = 0.0, base.odom.yaw  # the odometry's heading, unwrapped [rad]
     while now < limit_s:
         while pending and pending[0][0] <= step * robot.step_s + 1e-9:
             delayed = pending.popleft()[1]
@@ -115,6 +142,15 @@ def run_tag_route(scenario: Scenario, controller: HeadingControllerParameters, s
             arrivals.append(now)
         if command.mode in SEARCH_MODES:
             search_s += round_period_s
+        if heading_update == "setpoint":
+            heading, last_yaw = heading + wrap_angle(base.odom.yaw - last_yaw), base.odom.yaw
+            if command.mode == "seeking":
+                reference = (heading if reference is None else reference) + command.heading_change_rad
+                cap = controller.max_yaw_rate_radps
+                turn = min(max((reference - heading) / round_period_s, -cap), cap)
+                command = dataclasses.replace(command, angular_radps=turn)
+            else:
+                reference = None
         pending.append((now + command_delay_s, command))
         if command.failure:
             message = command.failure
@@ -123,5 +159,6 @@ def run_tag_route(scenario: Scenario, controller: HeadingControllerParameters, s
             success, message = True, f"reached all {len(route)} tags"
             break
     trajectory = Trajectory(np.array(times), np.array(positions))
-    metrics = tracking_metrics(trajectory, tag_points(scenario, route), arrivals, 0.0, now)
+    metrics = tracking_metrics(trajectory, tag_points(scenario, route), arrivals, 0.0, now,
+                               read_radius_m=floor_read_radius_m(reader, controller))
     return RouteRun(scenario.name, seed, success, message, now, metrics, trajectory, tuple(arrivals), search_s)
