@@ -33,8 +33,9 @@ def straight_run(offset_m: float, *, speed: float = 0.2, approach_s: float = 10.
     leg_s = 5.0 / speed
     leg = np.arange(0.0, leg_s + dt / 2, dt)
     times = np.concatenate((approach, approach_s + leg))
+    side = math.copysign(speed, offset_m)
     xy = np.concatenate((
-        np.column_stack((-offset_m - math.copysign(speed, offset_m) * (approach_s - approach), np.zeros_like(approach))),
+        np.column_stack((-offset_m - side * (approach_s - approach), np.zeros_like(approach))),
         np.column_stack((np.full_like(leg, -offset_m), speed * leg)),
     ))
     return Trajectory(times, xy), [approach_s, approach_s + leg_s]
