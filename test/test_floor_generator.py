@@ -72,7 +72,7 @@ def test_the_tags_sit_on_the_arriving_robots_left_wall_a_metre_before_the_juncti
     topological_map = floor.topological_map
     tags = {tag.tag_id: tag for tag in floor.world.wall_tags}
     for node in topological_map.nodes.values():
-        for side, hallway in node.hallways.items():
+        for hallway in node.hallways.values():
             tag = tags[hallway.tags[0]]
             out = math.dist(tag.position, node.position)
             assert out == pytest.approx(math.hypot(0.8 + 1.0, 0.8))      # 1 m before the square, on the wall
