@@ -89,14 +89,14 @@ def test_random_missions_without_misses_all_succeed_near_the_shortest_path():
 
 @pytest.mark.tier("slow")
 def test_seeded_missions_with_the_simulator_cores_of_249c210_swapped_back_in_run_the_same_to_the_bit(monkeypatch):
-    # The evaluation floor's missions 7-9 at 20 % misses (a tag missed and recovered, a replan), both methods:
+    # The hand-drawn floor's missions 7-9 at 20 % misses (a tag missed and recovered, a replan), both methods:
     # every MissionRun field (path length, duration, final position, turns, bumps, ...) as the sonar, base and
     # wall-tag reader of commit 249c210 (support.reference_cores) give it, compared by repr (NaN stays NaN).
-    from rfidnav_experiments.reproduce.topological import EVALUATION, SEEDS
+    from rfidnav_experiments.reproduce.topological import HAND_DRAWN, SEEDS
 
     def missions() -> list[str]:
         return [repr(run) for method in METHODS.values()
-                for run in random_missions(3, 0.2, SEEDS[EVALUATION], FLOORS[EVALUATION], method, first=7)]
+                for run in random_missions(3, 0.2, SEEDS[HAND_DRAWN], FLOORS[HAND_DRAWN], method, first=7)]
 
     faster = missions()
     monkeypatch.setattr(DiffDriveBase, "step", ReferenceBase.step)
@@ -188,3 +188,20 @@ def test_on_the_evaluation_floor_ours_takes_no_unmapped_door_for_its_next_juncti
     runs = random_missions(4, 0.0, seed=1001, floor=FLOORS["building_eval"], method=METHODS["ours"])
     assert sum(run.success for run in runs) >= 3, [run.message for run in runs]
     assert all(run.tags_missed == 0 for run in runs)     # no door or gap assumed to be a node whose tag was missed
+
+
+def test_a_generated_floor_runs_by_its_name_and_a_run_records_what_its_failure_would_be_classified_by():
+    # generated_3: a development seed of rfidnav_sim.floor_generator, drawn again from its name wherever it runs.
+    runs = random_missions(2, 0.0, 3, "generated_3", METHODS["ours"])
+    assert all(run.success and run.stopped for run in runs), [run.message for run in runs]
+    assert all(run.nearest_node == run.goal_node == run.believed_node for run in runs)
+    assert all(run.passages_missed == 0 and not run.bumped_at_end for run in runs)
+    assert all(0.0 < run.still_s < 10.0 for run in runs)                  # it stopped just before the end
+
+
+def test_passages_missed_are_the_ground_truths_whether_the_executor_noticed_them_or_not():
+    # The paper's loop notices no missed tag (it follows on to the next one); the reader's truth counts them all.
+    paper = random_missions(4, 0.3, 3, "generated_3", METHODS["paper"])
+    assert sum(run.passages_missed for run in paper) >= 1 and all(run.tags_missed == 0 for run in paper)
+    ours = random_missions(4, 0.3, 3, "generated_3", METHODS["ours"])
+    assert all(run.tags_missed <= run.passages_missed for run in ours)

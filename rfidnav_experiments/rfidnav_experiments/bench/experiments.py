@@ -1,6 +1,6 @@
 """``./rfidnav bench topological`` and ``bench scaling``: how fast the reproductions' tasks go on the engine.
 
-``topological``: paper 004's missions on the evaluation floor, both loops at the four miss rates (what
+``topological``: paper 004's missions on the evaluation floors, both loops at the four miss rates (what
 ``reproduce topological`` runs there), on the command's engine: missions per second, each loop's success as a check
 that the figures are the reproduction's. ``scaling``: one slice of a reproduction on local clusters of 1, 2, ...
 workers, each cluster started before its clock starts: wall time, tasks per second, the speed-up over the fewest
@@ -16,7 +16,7 @@ from typing import Any
 from rfidnav_experiments.engine import Engine, EngineOptions, engine_workers, machine_cores
 from rfidnav_experiments.reproduce.partitions import FILTER, LEVELS, PAPER, navigation_jobs, run_navigation_job
 from rfidnav_experiments.reproduce.topological import (
-    EVALUATION,
+    EVALUATION_FLOORS,
     METHODS,
     MISS_RATES,
     mission_jobs,
@@ -28,15 +28,15 @@ from rfidnav_experiments.task_rows import canonical
 
 def topological_benchmark(runs: int) -> dict[str, Any]:
     started = time.perf_counter()
-    results = run_all(runs, (EVALUATION,), "bench topological")
+    results = run_all(runs, EVALUATION_FLOORS, "bench topological")
     wall = time.perf_counter() - started
     missions = sum(len(missions) for missions in results.values())
 
     def success_pct(method: str, rate: float) -> float:
-        at_rate = results[(EVALUATION, method, rate)]
+        at_rate = [run for floor in EVALUATION_FLOORS for run in results[(floor, method, rate)]]
         return round(100.0 * sum(run.success for run in at_rate) / len(at_rate), 1)
 
-    return {"floor": EVALUATION, "runs": runs, "missions": missions, "workers": engine_workers(),
+    return {"floors": list(EVALUATION_FLOORS), "runs": runs, "missions": missions, "workers": engine_workers(),
             "wall_s": round(wall, 2), "missions_per_s": round(missions / wall, 3),
             "success_pct": {method: {f"{rate:g}": success_pct(method, rate) for rate in MISS_RATES}
                             for method in METHODS}}
@@ -44,10 +44,10 @@ def topological_benchmark(runs: int) -> dict[str, Any]:
 
 def scaling_slice(experiment: str, runs: int) -> tuple[Callable[[Any], Any], list[Any], str]:
     """(task, jobs, unit) of the slice: the whole Figs. 12-14 grid of both paper 000 methods at ``runs`` per
-    point, or the evaluation floor's missions of both paper 004 loops."""
+    point, or the evaluation floors' missions of both paper 004 loops."""
     if experiment == "partitions":
         return run_navigation_job, navigation_jobs(runs, methods=(PAPER, FILTER), levels=LEVELS), "navigations"
-    return missions_chunk, mission_jobs(runs, (EVALUATION,)), "mission chunks"
+    return missions_chunk, mission_jobs(runs, EVALUATION_FLOORS), "mission chunks"
 
 
 def scaling_benchmark(experiment: str, worker_counts: list[int] | None, runs: int) -> list[dict[str, Any]]:

@@ -53,6 +53,7 @@ from rfidnav_control.wall_following import (
 )
 from rfidnav_experiments.runners.shipped import shipped_parameters
 from rfidnav_planning.mission_executor import STOP, TURNS, Decision, MissionExecutor
+from rfidnav_sim.floor_generator import generated_floor
 from rfidnav_sim.parameters import RobotSimParameters, SonarParameters
 from rfidnav_sim.sonar_model import SonarModel
 from rfidnav_sim.wall_tag_model import WallTagReader
@@ -71,6 +72,7 @@ FOLLOWER = shipped_parameters(WallFollowerParameters, "wall_follower")   # its s
 ROBOT = shipped_parameters(RobotSimParameters, "robot_sim", world_file="-")   # the base: limits, odometry drift
 SONAR = shipped_parameters(SonarParameters, "sonar_sim", world_file="-")     # noise, rays, specular loss
 START_BEFORE_TAG_M = 1.2                # a mission starts this far before its first tag
+STILL_M = 0.5                           # MissionRun.still_s: within this of the final position
 
 
 @dataclass(frozen=True)
@@ -101,6 +103,14 @@ class MissionRun:
     arrived: bool = False                  # the executor's success, wherever the robot stopped
     goal_distance_m: float = math.nan      # from where it stopped to the goal node's position
     wall_crossings: int = 0                # rfidnav_bringup.metrics.wall_crossings of the true track
+    # What a failure is classified by (reproduce topological's failure taxonomy):
+    stopped: bool = False                  # the follower stopped (else the mission ran out of time)
+    believed_node: str | None = None       # where the executor last took the robot to be
+    nearest_node: str | None = None        # the map node nearest to where it stopped (its position, ground truth)
+    still_s: float = 0.0                   # how long before the end the robot stayed within STILL_M of its end
+    bumped_at_end: bool = False            # the bumper was pressed when the mission ended
+    goal_node: str | None = None
+    passages_missed: int = 0               # ground truth: tag passages (in reach, then out) with no read at all
 
 
 def follower_offsets(parameters: WallFollowerParameters = FOLLOWER) -> dict[str, float]:
@@ -181,13 +191,24 @@ def run_mission(world: World, topological_map: TopologicalMap, start_pose: tuple
             follower.command_turn(command.action)
 
     track = []
+    tag_ids = [tag.tag_id for tag in reader.tags]
+    in_passage = np.zeros(len(tag_ids), dtype=bool)
+    read_in_passage = np.zeros(len(tag_ids), dtype=bool)
+    passages_missed = 0
     for _ in range(int(round(max_time_s * FOLLOWER.control_rate_hz))):
         truth, odom = base.truth, base.odom
         track.append((truth.x, truth.y))
         at_dead_end = executor.on_odometry(odom.x, odom.y)
         if at_dead_end is not None:
             apply(at_dead_end, False)
+        reach = reader.in_reach(truth.x, truth.y, truth.yaw)
         reads = reader.read(truth.x, truth.y, truth.yaw, rng)
+        ended = in_passage & ~reach
+        passages_missed += int(np.count_nonzero(ended & ~read_in_passage))
+        read_in_passage[~reach] = False
+        for tag_id in reads:
+            read_in_passage[tag_ids.index(tag_id)] = True
+        in_passage = reach
         for decision in executor.on_reads(reads):
             apply(decision, False)
         if observer is not None:
@@ -224,9 +245,15 @@ def run_mission(world: World, topological_map: TopologicalMap, start_pose: tuple
     shortest = (topological_shortest_m(executor.map, start_pose[:2], *state.first_arrival, goal_node)
                 if state.first_arrival is not None else math.nan)
     arrived = bool(outcome is not None and outcome.success)
+    positions = {name: node.position for name, node in topological_map.nodes.items() if node.position is not None}
+    nearest = min(positions, key=lambda name: math.dist((x, y), positions[name]), default=None)
+    away = [index for index, point in enumerate(track) if math.dist(point, (x, y)) > STILL_M]
+    still_s = (len(track) - 1 - (away[-1] + 1 if away else 0)) * steps_per_control * robot.step_s
     return MissionRun(success, message, base.distance_travelled_m, shortest, state.tags_missed, state.replans,
                       tuple(state.nodes_visited), t, (x, y), tuple(turns), first_node, base.bumps, arrived,
-                      math.dist((x, y), goal_xy) if goal_xy is not None else math.nan, crossings)
+                      math.dist((x, y), goal_xy) if goal_xy is not None else math.nan, crossings, finished,
+                      state.current_node, nearest, still_s, bool(base.bumped), goal_node,
+                      passages_missed)
 
 
 @dataclass(frozen=True)
@@ -248,6 +275,23 @@ class Floor:
 
 FLOORS = {"building_large": Floor(LARGE_MAP, LARGE_WORLD), "building_eval": Floor(EVAL_MAP, EVAL_WORLD),
           "building_ring": Floor(RING_MAP, RING_WORLD)}
+GENERATED_PREFIX = "generated_"         # a floor named generated_SEED is rfidnav_sim.floor_generator's of SEED
+
+
+def generated_name(seed: int) -> str:
+    return f"{GENERATED_PREFIX}{seed}"
+
+
+@functools.lru_cache(maxsize=16)
+def load_floor(floor: Floor | str) -> tuple[TopologicalMap, World]:
+    """The map and world of a floor: an in-tree one (a :class:`Floor`, or its name in FLOORS), or a generated one
+    by its name (``generated_SEED``: drawn again from the seed wherever it runs, so a worker needs no file)."""
+    if isinstance(floor, str):
+        if floor.startswith(GENERATED_PREFIX) and floor not in FLOORS:
+            generated = generated_floor(int(floor.removeprefix(GENERATED_PREFIX)))
+            return generated.topological_map, generated.world
+        floor = FLOORS[floor]
+    return load_topological_map(floor.map_path), load_world(floor.world_path)
 
 
 def paper_run(rng: np.random.Generator, miss_probability: float = 0.0, method: Method = METHODS["ours"]) \
@@ -272,12 +316,12 @@ def mission_tasks(topological_map: TopologicalMap, count: int, seed: int) -> lis
     return tasks
 
 
-def random_missions(count: int, miss_probability: float, seed: int, floor: Floor = FLOORS["building_large"],
+def random_missions(count: int, miss_probability: float, seed: int, floor: Floor | str = FLOORS["building_large"],
                     method: Method = METHODS["ours"], first: int = 0) -> list[MissionRun]:
     """Missions ``first`` .. ``first + count - 1`` of the floor's seeded task list (so a pool can share them out),
-    each with its own generator: every method and miss rate meets the same starts, goals and sensor draws."""
-    topological_map = load_topological_map(floor.map_path)
-    world = load_world(floor.world_path)
+    each with its own generator: every method and miss rate meets the same starts, goals and sensor draws.
+    ``floor``: a :class:`Floor` or a name (:func:`load_floor`)."""
+    topological_map, world = load_floor(floor)
     tasks = mission_tasks(topological_map, first + count, seed)
     return [run_mission(world, topological_map, start_pose_before_tag(world, tag), goal,
                         np.random.default_rng([seed, index + 1]), miss_probability, weight=method.weight,
