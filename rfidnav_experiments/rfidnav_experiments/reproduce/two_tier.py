@@ -12,8 +12,11 @@ robot passes between two polls is never read and a fix is known only when a poll
   navigator's search speed) on the SAME placements (seed -> bearing, group rotation, start heading, the
   reader's polls and failures), each point with its n and 95 % interval, the paired difference with its
   interval, and the paper's two figures at its distances: about 120 cm at 40 cm ("less than 40 cm: no more
-  than one spiral"), about 300 cm at 50 cm ("larger than 40 cm: two spirals"). Beside it Theorem 1 against
-  simulated searches from a Gaussian start, with the continuous reader the theorem assumes.
+  than one spiral"), about 300 cm at 50 cm ("larger than 40 cm: two spirals"). Its sensitivity, on the same
+  placements: the initial distance measured to the group's centre or to its nearest tag (the paper does not say),
+  and the reader's 500-600 ms taken as the time between two polls (the main figure) or as the latency of each
+  result of a reader polled at its base rate. Beside it Theorem 1 against simulated searches from a Gaussian
+  start, with the continuous reader the theorem assumes.
 * Fig. 11: direct moving (dead reckoning all the way) against indirect moving (through intermediate landmarks
   by geographic forwarding): the accumulated error at the target.
 * Fig. 12: at each turning point of two routes, the error of WiFi fingerprinting alone against the two-tier
@@ -28,8 +31,10 @@ robot passes between two polls is never read and a fix is known only when a poll
   how many arrive, the final error, the path length and the steps the walls stopped (bumps).
 
 Development and evaluation apart: every random draw comes from ``rng_for(seed, stream)``. The code was developed
-and its settings chosen on DEVELOPMENT_SEED; the command reports EVALUATION_SEED (EVALUATION_SEED_BASE + 1),
-chosen once and never used to tune anything.
+and its settings chosen on DEVELOPMENT_SEED; the command reports EVALUATION_SEED, the seed of the evaluation set
+the ledger (rfidnav_experiments.evaluation) holds for two_tier, never used to tune anything; seed 301, the set
+reported before issue 31, is a development set since the navigator was redesigned after its figures were seen.
+The report and the conditions' ``runs.seed`` row say which set the seed belongs to.
 
 With ``--json`` the rows ``{"experiment", "setting", "metric", "ours", "paper"}`` (DESIGN.md), the conditions
 first; where the paper gives no number "paper" is null. Plots: ``two_tier_figs10_12.png`` in the output folder.
@@ -58,7 +63,7 @@ from scipy import stats  # noqa: E402
 
 from rfidnav_bringup.scenario import CONFIG_DIR, Scenario, load_scenario  # noqa: E402
 from rfidnav_common.errors import ConfigError  # noqa: E402
-from rfidnav_common.polling import PollClock  # noqa: E402
+from rfidnav_common.polling import PollClock, Polling  # noqa: E402
 from rfidnav_common.robot_map import load_route_map  # noqa: E402
 from rfidnav_common.seeding import derive_seed, rng_for  # noqa: E402
 from rfidnav_common.tag_groups import TagGroup  # noqa: E402
@@ -68,6 +73,7 @@ from rfidnav_control.spiral import (  # noqa: E402
     separation_for_group,
     simulate_search,
 )
+from rfidnav_experiments import evaluation  # noqa: E402
 from rfidnav_experiments.engine import run_tasks  # noqa: E402
 from rfidnav_experiments.reproduce.tables import (  # noqa: E402
     Condition,
@@ -81,10 +87,14 @@ from rfidnav_experiments.reproduce.tables import (  # noqa: E402
 from rfidnav_experiments.runners.shipped import shipped_parameters  # noqa: E402
 from rfidnav_experiments.runners.two_tier import (  # noqa: E402
     FLOOR_READER,
+    FOOTPRINT_RADIUS_M,
+    LOCATE_SETTINGS,
+    LOCATION_SERVER,
     NAVIGATOR,
     ODOMETRY_SCALE_ERROR,
     SETTINGS,
     STEP_S,
+    SURVEY_FRESH_M,
     Site,
     floor_extent,
     grid_radio_map,
@@ -95,15 +105,15 @@ from rfidnav_experiments.runners.two_tier import (  # noqa: E402
 from rfidnav_localization.fingerprint import RadioMap  # noqa: E402
 from rfidnav_localization.radio_map_file import load_radio_map  # noqa: E402
 from rfidnav_planning.wall_paths import WallMap  # noqa: E402
-from rfidnav_sim.parameters import CompassParameters, WifiSimParameters  # noqa: E402
+from rfidnav_sim.parameters import CompassParameters, ReaderParameters, WifiSimParameters  # noqa: E402
 from rfidnav_sim.world import World, load_world  # noqa: E402
 
 EXPERIMENT = "two_tier"
 METHODS = ("paper", "ours")
 PAPER, OURS = METHODS
 DEVELOPMENT_SEED = 1                    # every figure looked at while the code and its settings were chosen
-EVALUATION_SEED_BASE = 300
-EVALUATION_SEED = EVALUATION_SEED_BASE + 1   # the reported runs: chosen once, never used to tune
+EVALUATION = evaluation.current(EXPERIMENT)   # the ledger's one evaluation set of this reproduction...
+EVALUATION_SEED = EVALUATION.seeds[0]         # ...its seed: what the command reports, never used to tune
 
 WORLD_FILE = CONFIG_DIR / "worlds" / "two_tier_home.yaml"
 MAP_FILE = CONFIG_DIR / "maps" / "two_tier_home.yaml"       # the landmarks as the robot knows them: its goals
@@ -113,6 +123,13 @@ FIG10_DISTANCES_M = tuple(round(0.1 * k, 1) for k in range(11))
 FIG10_RUNS = 200
 FIG10_BEYOND_M = 0.5                    # a search ends this far beyond the group's distance: its turns have passed it
 PAPER_FIG10_M = {0.4: 1.20, 0.5: 3.00}  # sec. 4.2: ~120 cm within 40 cm, a jump to ~300 cm beyond
+# Fig. 10's sensitivity, on the same placements: the initial distance measured to the group's centre (the main
+# figure) or to its nearest tag; and the reader's 500-600 ms taken as the time between two polls (the main figure:
+# the tags read where the reply comes) or as the latency of each result of a reader polled at its base rate (the
+# tags read where the poll was, the robot told 500-600 ms later, having driven on).
+CENTRE, NEAREST = DISTANCES_TO = ("group_centre", "nearest_tag")
+PERIOD, LATENCY = DELAYS = ("period", "latency")
+LATENCY_POLL_RATE_HZ = ReaderParameters().rate_hz      # the reader's base rate: its parameter's default
 THEOREM_SIGMAS_M = (0.25, 0.5, 1.0)
 ROUTES = {"route 1": ((1.0, 1.0, 0.3), ("T1", "T2", "T3", "T4", "T5")),
           "route 2": ((1.5, 2.0, 1.2), ("R1", "R2", "R3"))}
@@ -123,6 +140,7 @@ FIG11_SPACINGS_M = {"direct": 0.1, "indirect": 4.0}    # geographic forwarding's
 RUNS = 20
 GRID_SPACING_M = 1.0
 GRID_SCANS_PER_POINT = 3
+ROBOT_SURVEY_SPACING_M = 0.5            # the robot's own survey: a scan this often while fresh from a tag fix
 TEST_POINTS = 300
 TARGET_FIX_ERROR_M = 0.03               # ours: median tag-fix error at the turning points
 HOMES = ("two_tier_home", "two_tier_flat", "two_tier_corridor")    # scenarios: start, goal, world, map, radio map
@@ -151,13 +169,17 @@ def spiral_methods() -> dict[str, SpiralMethod]:
 
 # ---------------------------------------------------------------------------------------- conditions
 
-# Where every physical setting of the reproduction comes from. The files the runs use (the floor reader, the
-# navigator, the compass, the WiFi receiver, the world's WiFi) are listed key by key: a key added to one of them
-# without a row here fails test_reproduce_two_tier.
+# Where every physical setting of the reproduction comes from. The parameters of the nodes the runs use (the floor
+# reader, the navigator, the compass, the WiFi receiver, the location server's matcher, the base's footprint, the
+# world's WiFi) are listed field by field: a field of their parameter classes with neither a row here nor a reason
+# in NOT_READ fails test_reproduce_two_tier.
+DELAY_AS_PERIOD = "paper, interpreted: the 500-600 ms delay as the poll period"
 READER_SOURCES: dict[str, tuple[str, str]] = {
-    "rfid_reader_sim.rate_hz": ("paper", "sec. 4.1 item 1: polled over RS-232 at 19,200 bps, a reply every "
-                                         "500-600 ms: at most 2 polls/s"),
-    "rfid_reader_sim.round_jitter_s": ("paper", "sec. 4.1 item 1: 500-600 ms (uniform between: ours)"),
+    "rfid_reader_sim.rate_hz": (DELAY_AS_PERIOD, "sec. 4.1 item 1's 'communication delay' of 500-600 ms over RS-232 "
+                                                 "at 19,200 bps taken as the time between two polls, the tags read "
+                                                 "where the reply comes: at most 2 polls/s (Fig. 10 sensitivity: "
+                                                 "the delay as a latency instead)"),
+    "rfid_reader_sim.round_jitter_s": (DELAY_AS_PERIOD, "sec. 4.1 item 1: 500-600 ms (uniform between: ours)"),
     "rfid_reader_sim.round_failure_probability": ("ours", "sec. 4.1 item 3: negotiations with a tag fail, no rate "
                                                           "given; one poll in ten reads nothing"),
     "rfid_reader_sim.frame_id": ("ours", "the robot's frame; no effect on the figures"),
@@ -225,7 +247,17 @@ SENSOR_SOURCES: dict[str, tuple[str, str]] = {
     "world.wifi.shadowing_sd_db": ("ours", "typical indoor shadowing"),
     "world.wifi.shadowing_correlation_m": ("ours", "as above"),
     "world.wifi.shadowing_seed": ("ours", "one fixed building"),
+    "world.wifi.reference_loss_db": ("ours", "Friis at each AP's frequency at 1 m (null: computed)"),
+    "world.wifi.min_distance_m": ("ours", "standing under an AP does not give infinite RSS"),
     "world.access_points": ("ours", "four APs in a 12 x 8 m flat: the paper's field is not given in numbers"),
+    "location_server.k": ("ours", "the fingerprint matcher: weighted k nearest neighbours in signal space (RADAR); "
+                                  "the paper names fingerprinting, no matcher"),
+    "location_server.missing_rss_dbm": ("ours", "an AP heard on one side only (scan or fingerprint) counts as this: "
+                                                "below the receiver's sensitivity"),
+    "location_server.min_common_aps": ("ours", "a fingerprint sharing fewer APs with the scan is no candidate"),
+    "location_server.weighting": ("ours", "neighbours weighted by 1 / signal distance (RADAR)"),
+    "robot_sim.footprint_radius_m": ("ours", "a round base 34 cm across (the Create's): the walls stop it this far "
+                                             "off; the paper gives no size"),
 }
 WORLD_SOURCES: dict[str, tuple[str, str]] = {
     "world.tag_groups": ("paper", "sec. 4.1: 30 x 30 cm crosses at the turning points (Fig. 12); the tags 5 cm "
@@ -245,12 +277,58 @@ WORLD_SOURCES: dict[str, tuple[str, str]] = {
                                "reads); ours: within range of them, out of range of their neighbours"),
     "fig12.routes": ("ours", "the paper's Fig. 12 paths are not given in numbers"),
     "radio_map.grid": ("ours", "a 1 m grid, each fingerprint the mean of 3 scans"),
+    "radio_map.robot_survey": ("paper", "the paper's automatic radio map construction (scans at the robot's tier-two "
+                                        "positions); ours: a scan every 0.5 m while within 2 m of a tag fix, at the "
+                                        "position it believes, docked at the first landmark"),
+    "radio_map.test_points": ("ours", "tier one's error at random points of the flat, 20 cm inside its extent"),
+    "fig10.delay": ("ours", "the main figure reads at the poll's reply (rate_hz, round_jitter_s); the sensitivity "
+                            "also polls at the reader's base rate with the 500-600 ms as each result's latency"),
+    "fig10.sensitivity_distance_to": ("ours", "the sensitivity also measures the distance to the group's nearest tag "
+                                              "(same bearing, rotation, heading and reader seed)"),
+    "fig11.route": ("ours", "the paper's Fig. 11 route is not given in numbers: 10 m through the x = 6 door"),
+    "fig11.landmark_spacing_m": ("ours", "direct: no landmark within reach (dead reckoning all the way), indirect: "
+                                         "the navigator's; no tier-one check on the way in either"),
+    "homes.worlds": ("ours", "the homes of HOMES: their worlds, APs, groups and radio maps (fingerprints)"),
+    "homes.legs": ("paper", "the paper's robot drives straight to each landmark; ours plans round the map's walls"),
+    "runs.seed": ("ours", "the seed every stream of the runs derives from, and the ledger's set it belongs to"),
 }
 SOURCES = {**READER_SOURCES, **NAVIGATOR_SOURCES, **SENSOR_SOURCES, **WORLD_SOURCES}
+# Where the two methods' values come from different places: the source of each (the row's own source is the
+# paper method's).
+METHOD_SOURCES: dict[str, dict[str, str]] = {
+    "fig10.spiral_d_m": {PAPER: "paper (sec. 3.3)", OURS: "ours"},
+    "fig12.tag_fix": {PAPER: "paper (sec. 3.2 A7)", OURS: "ours"},
+    "homes.legs": {PAPER: "paper (straight legs)", OURS: "ours (planned round the walls)"},
+}
+# The fields of those nodes' parameter classes that no in-process run reads, and why: with SOURCES they cover every
+# field (test_reproduce_two_tier).
+NOT_READ: dict[str, str] = {
+    "rfid_reader_sim.world_file": "the experiment's world",
+    "rfid_reader_sim.seed": "each run's reader seed derives from runs.seed",
+    "rfid_reader_sim.side_area_width_m": "side antennas: the floor reader has none",
+    "rfid_reader_sim.passage_miss_probability": "side antennas: the floor reader has none",
+    "rfid_reader_sim.unreadable_tags": "side antennas: the floor reader has none",
+    "two_tier_navigator.map_file": "the experiment's map (MAP_FILE, each home's)",
+    "compass_sim.seed": "the compass stream derives from runs.seed",
+    "wifi_sim.world_file": "the experiment's world",
+    "wifi_sim.seed": "the scan stream derives from runs.seed",
+    "world.wifi.scan_noise_sd_db": "the receiver's: wifi_sim.scan_noise_sd_db",
+    "world.wifi.sensitivity_dbm": "the receiver's: wifi_sim.sensitivity_dbm",
+    "location_server.database_file": "in-process the radio map and the tag map are held in memory",
+    "location_server.run_dir": "as above",
+    "location_server.create_database": "as above",
+    "location_server.map_file": "the experiment's map",
+    **{f"robot_sim.{name}": "in-process the robot is an ideal unicycle (robot.motion) whose odometry is off by "
+                            "robot.odometry_scale_error (the scenario's robot_sim: a test checks it)"
+       for name in ("world_file", "start_x", "start_y", "start_yaw_deg", "step_s", "rtf", "step_participants",
+                    "start_paused", "map_to_odom_at_start", "odom_rate_hz", "seed", "track_width_m",
+                    "max_wheel_speed_mps", "max_wheel_accel_mps2", "command_timeout_s", "odom_left_scale_error",
+                    "odom_right_scale_error", "odom_track_scale_error", "odom_slip_std", "walls_stop_base")},
+}
 
 
-def conditions(world: World | None = None) -> list[Condition]:
-    """The table's rows, their values read from the settings the runs use."""
+def conditions(world: World | None = None, seed: int = EVALUATION_SEED) -> list[Condition]:
+    """The table's rows, their values read from the settings the runs use (``seed``: the runs')."""
     world = world or load_world(WORLD_FILE)
     compass = shipped_parameters(CompassParameters, "compass_sim")
     receiver = shipped_parameters(WifiSimParameters, "wifi_sim", world_file="unused")
@@ -261,6 +339,7 @@ def conditions(world: World | None = None) -> list[Condition]:
         "world.access_points": len(world.access_points),
         "world.tag_groups": f"{len(world.tag_groups)} x " + ", ".join(f"{shape} {size:g} m, tags {spacing:g} m apart"
                                                                       for shape, size, spacing in groups),
+        "robot_sim.footprint_radius_m": FOOTPRINT_RADIUS_M,
         "robot.odometry_scale_error": ODOMETRY_SCALE_ERROR,
         "robot.motion": f"unicycle, {STEP_S:g} s steps",
         "fig10.group": f"cross {FIG10_SIZE_M:g} m",
@@ -268,15 +347,26 @@ def conditions(world: World | None = None) -> list[Condition]:
         "fig10.distance_to": "group centre",
         "fig10.placements": f"{FIG10_RUNS} per distance",
         "fig10.max_radius": f"distance + {FIG10_BEYOND_M:g} m",
+        "fig10.delay": {delay: delay_text(delay) for delay in DELAYS},
+        "fig10.sensitivity_distance_to": list(DISTANCES_TO),
         "theorem1.reader": "continuous",
+        "fig11.route": f"{LONG_ROUTE[0][:2]} -> {LONG_ROUTE[1]}",
+        "fig11.landmark_spacing_m": dict(FIG11_SPACINGS_M),
         "fig12.routes": {name: list(points) for name, (_, points) in ROUTES.items()},
         "radio_map.grid": f"{GRID_SPACING_M:g} m, {GRID_SCANS_PER_POINT} scans",
+        "radio_map.robot_survey": f"every {ROBOT_SURVEY_SPACING_M:g} m within {SURVEY_FRESH_M:g} m of a fix",
+        "radio_map.test_points": TEST_POINTS,
+        "homes.worlds": {name: home_world_text(name) for name in HOMES},
+        "runs.seed": f"{seed} ({seed_set(EXPERIMENT, seed, DEVELOPMENT_SEED)})",
     }
     differing: dict[str, dict[str, Any]] = {
         "fig10.spiral_d_m": {method: round(spiral.d_m, 5) for method, spiral in methods.items()},
         "fig10.speed_mps": {method: spiral.speed_mps for method, spiral in methods.items()},
         "fig12.tag_fix": {PAPER: "the tags read", OURS: "region left by the reads"},
+        "homes.legs": {PAPER: "straight", OURS: "planned"},
     }
+    nodes: dict[str, Any] = {"rfid_reader_sim": FLOOR_READER, "two_tier_navigator": NAVIGATOR, "compass_sim": compass,
+                             "wifi_sim": receiver, "location_server": LOCATION_SERVER}
     rows = []
     for key, (source, note) in SOURCES.items():
         node, field = key.split(".", 1)
@@ -284,18 +374,30 @@ def conditions(world: World | None = None) -> list[Condition]:
             values = differing[key]
         elif key in same:
             values = dict.fromkeys(METHODS, same[key])
-        elif node == "rfid_reader_sim":
-            values = dict.fromkeys(METHODS, getattr(FLOOR_READER, field))
-        elif node == "two_tier_navigator":
-            values = dict.fromkeys(METHODS, getattr(NAVIGATOR, field))
-        elif node == "compass_sim":
-            values = dict.fromkeys(METHODS, getattr(compass, field))
-        elif node == "wifi_sim":
-            values = dict.fromkeys(METHODS, getattr(receiver, field))
+        elif node in nodes:
+            values = dict.fromkeys(METHODS, getattr(nodes[node], field))
         else:                                   # world.wifi.*: the building's propagation
             values = dict.fromkeys(METHODS, getattr(world.wifi, field.removeprefix("wifi.")))
-        rows.append(Condition(key, values, source, note))
+        rows.append(Condition(key, values, source, note, METHOD_SOURCES.get(key)))
     return rows
+
+
+def home_world_text(name: str) -> str:
+    place = home(name)
+    world = place.scenario.world
+    return (f"{place.scenario.world_file.name}: {len(world.access_points)} APs, {len(world.tag_groups)} groups, "
+            f"{len(place.site.radio_map)} fingerprints")
+
+
+def seed_set(experiment: str, seed: int, development_seed: int) -> str:
+    """Which set ``seed`` is of ``experiment``'s: the ledger's (rfidnav_experiments.evaluation), or the development
+    seed."""
+    for entry in evaluation.LEDGER:
+        if entry.experiment == experiment and seed in entry.seeds:
+            return f"{entry.status} set '{entry.name}'"
+    if seed == development_seed:
+        return "the development seed: the code and its settings were chosen on it"
+    return "a seed in no set of the ledger"
 
 
 # --------------------------------------------------------------------------------------------- Fig. 10
@@ -311,9 +413,31 @@ class Placement:
     heading_rad: float
     reader_seed: int
 
-    def group(self) -> TagGroup:
-        centre = (self.distance_m * math.cos(self.bearing_rad), self.distance_m * math.sin(self.bearing_rad))
+    def group(self, distance_to: str = CENTRE) -> TagGroup:
+        """The group, its centre or (``NEAREST``) its nearest tag ``distance_m`` from the start, along the same
+        bearing and turned alike."""
+        along = self.distance_m if distance_to == CENTRE else \
+            centre_for_nearest_tag(self.distance_m, self.bearing_rad, self.rotation_rad)
+        centre = (along * math.cos(self.bearing_rad), along * math.sin(self.bearing_rad))
         return TagGroup("G", "cross", centre, FIG10_SIZE_M, self.rotation_rad)
+
+
+def centre_for_nearest_tag(distance_m: float, bearing_rad: float, rotation_rad: float) -> float:
+    """How far along ``bearing_rad`` the centre of the Fig. 10 cross (turned by ``rotation_rad``) lies when its
+    nearest tag is ``distance_m`` from the start (bisection; the cross has a tag at its centre, so 0 at 0)."""
+    offsets = TagGroup("G", "cross", (0.0, 0.0), FIG10_SIZE_M, rotation_rad).tag_positions()
+    direction = np.array([math.cos(bearing_rad), math.sin(bearing_rad)])
+
+    def nearest(along: float) -> float:
+        return float(np.min(np.linalg.norm(offsets + along * direction, axis=1)))
+
+    low, high = 0.0, distance_m + FIG10_SIZE_M            # nearest(low) <= distance_m < nearest(high)
+    if nearest(low) >= distance_m:
+        return 0.0
+    for _ in range(60):
+        middle = 0.5 * (low + high)
+        low, high = (middle, high) if nearest(middle) < distance_m else (low, middle)
+    return 0.5 * (low + high)
 
 
 def fig10_placement(seed: int, distance_m: float, index: int) -> Placement:
@@ -328,16 +452,52 @@ class Search:
     method: str
     placement: Placement
     length_m: float | None                # None: no poll read a tag before the spiral passed the group
+    distance_to: str = CENTRE             # a key of DISTANCES_TO: what the placement's distance is measured to
+    delay: str = PERIOD                   # a key of DELAYS: the reader's 500-600 ms as its period or its latency
+
+
+def latency_polling() -> Polling:
+    """The reader polled at its base rate (ReaderParameters' default rate_hz), failing as the floor reader does."""
+    return Polling(1.0 / LATENCY_POLL_RATE_HZ, 0.0, FLOOR_READER.round_failure_probability)
+
+
+def delay_text(delay: str) -> str:
+    polling = FLOOR_READER.polling()
+    delay_ms = f"{polling.interval_s * 1000:.0f}-{polling.max_interval_s * 1000:.0f} ms"
+    if delay == PERIOD:
+        return f"a poll every {delay_ms}, the tags read where its reply comes"
+    return (f"a poll every {latency_polling().interval_s * 1000:.0f} ms, each result {delay_ms} late (the robot "
+            "drives on meanwhile)")
+
+
+def spiral_search(method: str, placement: Placement, distance_to: str = CENTRE, delay: str = PERIOD) -> Search:
+    """One search of Fig. 10 with the floor reader's polls and failures: read where the poll's reply comes
+    (``PERIOD``), or polled at the base rate and told of a read 500-600 ms after its poll (``LATENCY``: the length
+    driven until the robot knows)."""
+    spiral = spiral_methods()[method]
+    group = placement.group(distance_to)
+    polling = FLOOR_READER.polling() if delay == PERIOD else latency_polling()
+    polls = SearchPolls(spiral.speed_mps, PollClock(polling, rng_for(placement.reader_seed, "polls")))
+    reach = placement.distance_m if distance_to == CENTRE else math.hypot(*group.centre)
+    length = simulate_search(group.tag_positions(), (0.0, 0.0), placement.heading_rad, spiral.d_m,
+                             floor_range_m(), reach + FIG10_BEYOND_M, polls=polls)
+    if length is not None and delay == LATENCY:
+        reader = FLOOR_READER.polling()
+        late_s = float(rng_for(placement.reader_seed, "latency").uniform(reader.interval_s, reader.max_interval_s))
+        length += spiral.speed_mps * late_s
+    return Search(method, placement, length, distance_to, delay)
 
 
 def fig10_search(job: tuple[str, Placement]) -> Search:
-    """One search of Fig. 10 with the floor reader's polls and failures (a task of the engine)."""
+    """One search of Fig. 10 (a task of the engine): the distance to the group's centre, read at each poll's
+    reply."""
     method, placement = job
-    spiral = spiral_methods()[method]
-    polls = SearchPolls(spiral.speed_mps, PollClock(FLOOR_READER.polling(), rng_for(placement.reader_seed, "polls")))
-    length = simulate_search(placement.group().tag_positions(), (0.0, 0.0), placement.heading_rad, spiral.d_m,
-                             floor_range_m(), placement.distance_m + FIG10_BEYOND_M, polls=polls)
-    return Search(method, placement, length)
+    return spiral_search(method, placement)
+
+
+def sensitivity_search(job: tuple[str, Placement, str, str]) -> Search:
+    """One search of Fig. 10's sensitivity (a task of the engine): (method, placement, distance_to, delay)."""
+    return spiral_search(*job)
 
 
 @dataclass(frozen=True)
@@ -356,6 +516,34 @@ def fig10(runs: int, seed: int) -> dict[str, dict[float, list[Search]]]:
     for search in sorted(searches, key=lambda s: s.placement.index):
         by_method[search.method][search.placement.distance_m].append(search)
     return by_method
+
+
+Variant = tuple[str, str]                 # (distance_to, delay)
+SENSITIVITY_VARIANTS: tuple[Variant, ...] = ((NEAREST, PERIOD), (CENTRE, LATENCY), (NEAREST, LATENCY))
+MAIN_VARIANT: Variant = (CENTRE, PERIOD)  # the main figure's
+
+
+def fig10_sensitivity(runs: int, seed: int) -> dict[Variant, dict[str, dict[float, list[Search]]]]:
+    """Every search of the sensitivity's variants (not the main figure's), on Fig. 10's placements: by variant,
+    method and distance, sorted by placement index."""
+    placements = [fig10_placement(seed, distance, index) for distance in FIG10_DISTANCES_M for index in range(runs)]
+    jobs = [(method, placement, *variant) for variant in SENSITIVITY_VARIANTS for placement in placements
+            for method in METHODS]
+    searches = run_tasks(sensitivity_search, jobs, "reproduce two_tier: Fig. 10 sensitivity")
+    out: dict[Variant, dict[str, dict[float, list[Search]]]] = {
+        variant: {method: {d: [] for d in FIG10_DISTANCES_M} for method in METHODS} for variant in SENSITIVITY_VARIANTS}
+    for search in sorted(searches, key=lambda s: s.placement.index):
+        out[(search.distance_to, search.delay)][search.method][search.placement.distance_m].append(search)
+    return out
+
+
+def variant_difference(variant: dict[str, dict[float, list[Search]]], main: dict[str, dict[float, list[Search]]],
+                       method: str, distance: float) -> Interval:
+    """A variant's search length less the main figure's [m], paired on the placements both found."""
+    def lengths(spiral: dict[str, dict[float, list[Search]]]) -> dict[Hashable, float | None]:
+        return {s.placement.index: s.length_m for s in spiral[method][distance]}
+
+    return paired_interval(lengths(variant), lengths(main))
 
 
 def spiral_point(searches: list[Search]) -> SpiralPoint:
@@ -433,7 +621,7 @@ def fig12_route(job: tuple[str, int, int]) -> list[Leg]:
     for point in points:
         centre = landmarks[point].centre
         scan = {r.bssid: r.rssi_dbm for r in site.wifi.scan(*centre, rng)}
-        fingerprint = math.dist(site.radio_map.locate(scan).position, centre)
+        fingerprint = math.dist(site.radio_map.locate(scan, LOCATE_SETTINGS).position, centre)
         result = run_two_tier(site, pose, centre, SETTINGS, rng, derive_seed(seed, f"fig12:{name}:{run}:{point}"),
                               floor=floor_plan())
         arrived = result.success and bool(result.fix_errors_m)
@@ -550,7 +738,7 @@ def tier_one_errors(site: Site, radio_map: RadioMap, seed: int) -> list[float]:
     for _ in range(TEST_POINTS):
         point = (float(rng.uniform(x_min + 0.2, x_max - 0.2)), float(rng.uniform(y_min + 0.2, y_max - 0.2)))
         scan = {r.bssid: r.rssi_dbm for r in site.wifi.scan(*point, rng)}
-        errors.append(math.dist(radio_map.locate(scan).position, point))
+        errors.append(math.dist(radio_map.locate(scan, LOCATE_SETTINGS).position, point))
     return errors
 
 
@@ -645,6 +833,31 @@ def fig10_lines(spiral: dict[str, dict[float, list[Search]]], runs: int) -> list
     return lines
 
 
+def sensitivity_lines(sensitivity: dict[Variant, dict[str, dict[float, list[Search]]]],
+                      main: dict[str, dict[float, list[Search]]], runs: int) -> list[str]:
+    """Fig. 10 under each distance definition and each reading of the reader's delay, the same placements."""
+    variants = (MAIN_VARIANT, *SENSITIVITY_VARIANTS)
+    lines = [f"Fig. 10 sensitivity: search length [cm], mean ± 95 % interval (n found of {runs}); the distance to the "
+             "group's centre or to its nearest tag; the reader's delay as its period (" + delay_text(PERIOD) + ") or "
+             "as a latency (" + delay_text(LATENCY) + "); the same placements (bearing, rotation, heading, reader "
+             "seed). Paired: the variant less the main figure (group_centre, period), on the placements both found"]
+    for method in METHODS:
+        rows = []
+        for distance in FIG10_DISTANCES_M:
+            paper = PAPER_FIG10_M.get(distance)
+            cells = [f"{distance * 100:g}", "-" if paper is None else f"~{paper * 100:.0f}"]
+            for variant in variants:
+                spiral = main if variant == MAIN_VARIANT else sensitivity[variant]
+                cells.append(spiral_point(spiral[method][distance]).length.text(100.0, 0))
+            cells += [variant_difference(sensitivity[variant], main, method, distance).text(100.0, 0)
+                      for variant in SENSITIVITY_VARIANTS]
+            rows.append(cells)
+        lines += [f"{method}'s search:"]
+        lines += table(["distance cm", "paper's figure", *(f"{to}, {delay}" for to, delay in variants),
+                        *(f"{to}, {delay} - main" for to, delay in SENSITIVITY_VARIANTS)], rows)
+    return lines
+
+
 def fig10_against_paper(spiral: dict[str, dict[float, list[Search]]]) -> list[str]:
     lines = ["Fig. 10 at the paper's distances (sec. 4.2):"]
     for distance, paper in PAPER_FIG10_M.items():
@@ -682,14 +895,14 @@ def fix_lines(legs: list[Leg], fixes: FixFigures) -> list[str]:
     return lines
 
 
-def report_lines(condition_rows: list[Condition], spiral, theorem, moving, legs: list[Leg], fixes: FixFigures,
-                 radio, crossings: Crossings, grid_count: int, survey_count: int, runs: int, fig10_runs: int,
-                 seed: int) -> list[str]:
-    role = "evaluation" if seed == EVALUATION_SEED else "development" if seed == DEVELOPMENT_SEED else "other"
-    lines = [f"reproduce two_tier: paper 003 section 4.2, in-process; seed {seed} ({role}: the settings were chosen "
-             f"on seed {DEVELOPMENT_SEED}, the evaluation seed is {EVALUATION_SEED}); {runs} runs per route",
+def report_lines(condition_rows: list[Condition], spiral, sensitivity, theorem, moving, legs: list[Leg],
+                 fixes: FixFigures, radio, crossings: Crossings, grid_count: int, survey_count: int, runs: int,
+                 fig10_runs: int, seed: int) -> list[str]:
+    lines = [f"reproduce two_tier: paper 003 section 4.2, in-process; seed {seed}: "
+             f"{seed_set(EXPERIMENT, seed, DEVELOPMENT_SEED)} (the ledger's evaluation set is '{EVALUATION.name}', "
+             f"seed {EVALUATION_SEED}; development seed {DEVELOPMENT_SEED}); {runs} runs per route",
              "", *condition_lines(condition_rows, METHODS), "", *fig10_lines(spiral, fig10_runs), "",
-             *fig10_against_paper(spiral), "",
+             *fig10_against_paper(spiral), "", *sensitivity_lines(sensitivity, spiral, fig10_runs), "",
              "Theorem 1: expected search length [cm] for a Gaussian tier-one error sd sigma (our spiral, a reader that "
              "reads continuously, as the theorem assumes)"]
     lines += table(["sigma cm", "as printed", "Rayleigh form", "simulated", "simulated / Rayleigh"],
@@ -727,6 +940,29 @@ def home_lines(results: list[HomeRun], runs: int) -> list[str]:
                          figures.path_length.text(1.0, 1), f"{figures.bumps} ({figures.runs_without_bumps})",
                          str(figures.wall_crossings)])
     return lines + table(["home", "legs", "arrived %", "final error cm", "path m", "bumps", "crossings"], rows)
+
+
+def sensitivity_json_rows(sensitivity: dict[Variant, dict[str, dict[float, list[Search]]]],
+                          main: dict[str, dict[float, list[Search]]], seed: int) -> list[dict[str, Any]]:
+    """Fig. 10's sensitivity: each variant's search length (metrics ``sensitivity_*``: the main figure's are
+    fig10_spiral's), and its difference from the main figure on the same placements."""
+    rows = []
+    for (distance_to, delay), spiral in sensitivity.items():
+        for method in METHODS:
+            for distance in FIG10_DISTANCES_M:
+                searched = spiral_point(spiral[method][distance])
+                setting = {"method": method, "distance_m": distance, "distance_to": distance_to, "delay": delay,
+                           "seed": seed, "placements": searched.found.n, "found": searched.length.n}
+                difference = variant_difference(spiral, main, method, distance)
+                against = {**setting, "against": "_".join(MAIN_VARIANT), "pairs": difference.n}
+                rows += [row("fig10_sensitivity", setting, "sensitivity_search_length_m", searched.length.mean,
+                             PAPER_FIG10_M.get(distance)),
+                         row("fig10_sensitivity", setting, "sensitivity_search_length_ci95_m",
+                             searched.length.half_width),
+                         row("fig10_sensitivity", setting, "sensitivity_found_pct", searched.found.mean),
+                         row("fig10_sensitivity", against, "sensitivity_difference_m", difference.mean),
+                         row("fig10_sensitivity", against, "sensitivity_difference_ci95_m", difference.half_width)]
+    return rows
 
 
 def home_json_rows(results: list[HomeRun], seed: int) -> list[dict[str, Any]]:
@@ -769,7 +1005,7 @@ def json_rows(condition_rows: list[Condition], spiral, theorem, moving, legs: li
                      row("fig10_spiral", setting, "found_pct", searched.found.mean)]
     for distance in FIG10_DISTANCES_M:
         difference = paired_difference(spiral, distance)
-        setting = {"method": f"{OURS} - {PAPER}", "distance_m": distance, "seed": seed, "pairs": difference.n}
+        setting = {"method": f"{OURS}-{PAPER}", "distance_m": distance, "seed": seed, "pairs": difference.n}
         rows += [row("fig10_spiral", setting, "paired_difference_m", difference.mean),
                  row("fig10_spiral", setting, "paired_difference_ci95_m", difference.half_width)]
     for sigma, printed, rayleigh, simulated in theorem:
@@ -783,21 +1019,22 @@ def json_rows(condition_rows: list[Condition], spiral, theorem, moving, legs: li
         for point in points:
             here = legs_at(legs, route, point)
             for method, values in (("fingerprinting", [leg.fingerprint_m for leg in here]),
-                                   (f"two_tier {OURS}", [leg.fix_m for leg in here if leg.fix_m is not None]),
-                                   (f"two_tier {PAPER}", [leg.tag_position_m for leg in here
+                                   (f"two_tier_{OURS}", [leg.fix_m for leg in here if leg.fix_m is not None]),
+                                   (f"two_tier_{PAPER}", [leg.tag_position_m for leg in here
                                                           if leg.tag_position_m is not None])):
                 median = Median.of(values)
-                rows.append(row("fig12_turning_points", {"route": route, "point": point, "method": method,
-                                                         "seed": seed, "n": median.n}, "median_error_m", median.value))
+                rows.append(row("fig12_turning_points", {"route": route.replace(" ", "_"), "point": point,
+                                                         "method": method, "seed": seed, "n": median.n},
+                                "median_error_m", median.value))
     for method in METHODS:
         median = fixes.at_turning_points[method]
-        rows += [row("tag_fix", {"method": method, "fixes": "at the turning points", "seed": seed, "n": median.n},
+        rows += [row("tag_fix", {"method": method, "fixes": "turning_points", "seed": seed, "n": median.n},
                      "median_error_m", median.value),      # the paper claims centimetres, no number
-                 row("tag_fix", {"method": method, "fixes": "at the turning points", "seed": seed, "n": median.n},
+                 row("tag_fix", {"method": method, "fixes": "turning_points", "seed": seed, "n": median.n},
                      "median_error_ci95_m", None if median.bounds is None else list(median.bounds)),
                  row("tag_fix", {"method": method, "fixes": "all", "seed": seed, "n": fixes.all_fixes[method].n},
                      "median_error_m", fixes.all_fixes[method].value)]
-    paired = {"method": f"{OURS} - {PAPER}", "fixes": "at the turning points", "seed": seed, "pairs": fixes.paired_m.n}
+    paired = {"method": f"{OURS}-{PAPER}", "fixes": "turning_points", "seed": seed, "pairs": fixes.paired_m.n}
     rows += [row("tag_fix", paired, "paired_difference_m", fixes.paired_m.mean),
              row("tag_fix", paired, "paired_difference_ci95_m", fixes.paired_m.half_width),
              row("tag_fix", {"method": OURS, "seed": seed, "target_m": TARGET_FIX_ERROR_M}, "target_met",
@@ -805,7 +1042,7 @@ def json_rows(condition_rows: list[Condition], spiral, theorem, moving, legs: li
     for kind, errors in radio.items():
         rows.append(row("radio_map", {"map": kind, "seed": seed, "n": len(errors)}, "median_error_m",
                         statistics.median(errors)))
-    rows.append(row("navigations", {"figures": "11, 12", "seed": seed, "n": crossings.navigations}, "wall_crossings",
+    rows.append(row("navigations", {"figures": "11,12", "seed": seed, "n": crossings.navigations}, "wall_crossings",
                     crossings.count))
     return rows
 
@@ -898,19 +1135,21 @@ def reproduce_two_tier(runs: int, out_dir: Path, as_json: bool, seed: int = EVAL
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     world = load_world(WORLD_FILE)
-    condition_rows = conditions(world)
+    condition_rows = conditions(world, seed)
     site = grid_site(seed)
     spiral = fig10(fig10_runs, seed)
+    sensitivity = fig10_sensitivity(fig10_runs, seed)
     theorem = theorem1(fig10_runs, seed)
     moving, moving_crossings = fig11(runs, seed)
     legs = fig12(runs, seed)
     fixes = fix_figures(legs)
     crossings = Crossings(2 * runs + len(legs), moving_crossings + sum(leg.wall_crossings for leg in legs))
-    survey_map = RadioMap(robot_survey(Site.of(world, RadioMap()), load_route_map(MAP_FILE), seed))
+    survey_map = RadioMap(robot_survey(Site.of(world, RadioMap()), load_route_map(MAP_FILE), seed,
+                                      ROBOT_SURVEY_SPACING_M))
     radio = {"grid": tier_one_errors(site, site.radio_map, seed), "survey": tier_one_errors(site, survey_map, seed)}
     home_runs = homes(runs, seed)
     rows = [*json_rows(condition_rows, spiral, theorem, moving, legs, fixes, radio, crossings, seed),
-            *home_json_rows(home_runs, seed)]
+            *sensitivity_json_rows(sensitivity, spiral, seed), *home_json_rows(home_runs, seed)]
     (out_dir / "two_tier_rows.json").write_text(json.dumps(rows, indent=1) + "\n")
     plot = plot_figures(spiral, moving, legs, fig10_runs, out_dir)
     # Only the JSON goes to stdout with --json, so a program can parse it whole.
@@ -918,8 +1157,8 @@ def reproduce_two_tier(runs: int, out_dir: Path, as_json: bool, seed: int = EVAL
     if as_json:
         print(json.dumps(rows, indent=1))
     else:
-        print("\n".join([*report_lines(condition_rows, spiral, theorem, moving, legs, fixes, radio, crossings,
-                                        len(site.radio_map), len(survey_map), runs, fig10_runs, seed),
+        print("\n".join([*report_lines(condition_rows, spiral, sensitivity, theorem, moving, legs, fixes, radio,
+                                        crossings, len(site.radio_map), len(survey_map), runs, fig10_runs, seed),
                          "", *home_lines(home_runs, runs)]))
     print(f"plot: {plot}; rows: {out_dir / 'two_tier_rows.json'}", file=notes)
     return 0 if fixes.target_met else 1

@@ -31,7 +31,14 @@ from rfidnav_common.tag_lattice import Coordinate
 from rfidnav_experiments.runners.partitions import IdealRobot
 from rfidnav_experiments.runners.tag_route import RouteRound
 from rfidnav_experiments.runners.topological import MissionStep
-from rfidnav_experiments.runners.two_tier import COMPASS, ODOMETRY_SCALE_ERROR, FloorRobot, Site, StepSeen
+from rfidnav_experiments.runners.two_tier import (
+    COMPASS,
+    LOCATE_SETTINGS,
+    ODOMETRY_SCALE_ERROR,
+    FloorRobot,
+    Site,
+    StepSeen,
+)
 from rfidnav_localization.conversions import fused_status_message
 from rfidnav_localization.fingerprint import LocateSettings
 from rfidnav_localization.fused.filter import Evidence, HeldReadings, Ports, WifiFix, round_evidence
@@ -325,7 +332,7 @@ def drive_on_fused(site: Site, start: tuple[float, float, float], target: tuple[
                    ports: Ports, navigator: PoseNavigator, reader_parameters: ReaderParameters,
                    rng: np.random.Generator, reader_seed: int, step_s: float, scan_period_s: float,
                    max_time_s: float, odometry_scale_error: float = ODOMETRY_SCALE_ERROR,
-                   compass: CompassModel = COMPASS, locate: LocateSettings = LocateSettings()) -> DrivingRun:
+                   compass: CompassModel = COMPASS, locate: LocateSettings = LOCATE_SETTINGS) -> DrivingRun:
     """pose_navigator driving on the fused localizer's pose, in-process: the graph of ``mixed_floor_fused`` (the
     simulated base, reader, WiFi and compass; the location server; rfid_localizer; pose_navigator) stepped in one
     loop at the navigator's control rate. As the node does, the localizer weighs each reader round with the

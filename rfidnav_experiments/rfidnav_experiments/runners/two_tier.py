@@ -38,6 +38,7 @@ from rfidnav_experiments.runners.shipped import file_parameters, shipped_paramet
 from rfidnav_localization.dead_reckoning import TIER_TAG, DeadReckoningEstimate, Fix
 from rfidnav_localization.errors import LocateError
 from rfidnav_localization.fingerprint import Fingerprint, LocateResult, LocateSettings, RadioMap
+from rfidnav_localization.parameters import LocationServerParameters
 from rfidnav_planning.parameters import TwoTierNavigatorParameters
 from rfidnav_planning.two_tier_navigation import (
     LOCATE,
@@ -64,6 +65,10 @@ COMPASS = shipped_parameters(CompassParameters, "compass_sim").model()   # the c
 FOOTPRINT_RADIUS_M = shipped_parameters(RobotSimParameters, "robot_sim", world_file="-").footprint_radius_m
 FLOOR_READER_FILE = CONFIG_DIR / "params" / "reader_hf_floor.yaml"       # two_tier_home's rfid_reader role
 FLOOR_READER = file_parameters(ReaderParameters, FLOOR_READER_FILE, "rfid_reader_sim", world_file="unused")
+# The location server's fingerprint matcher (k nearest neighbours, the RSS of an AP heard on one side only), as the
+# location_server node is shipped: the locate every in-process run asks.
+LOCATION_SERVER = shipped_parameters(LocationServerParameters, "location_server")
+LOCATE_SETTINGS = LOCATION_SERVER.locate_settings()
 
 
 @dataclass(frozen=True)
@@ -308,7 +313,7 @@ class TwoTierRun:
 def run_two_tier(site: Site, start: tuple[float, float, float], target: tuple[float, float],
                  settings: TwoTierSettings, rng: np.random.Generator, reader_seed: int,
                  odometry_scale_error: float = ODOMETRY_SCALE_ERROR, compass: CompassModel = COMPASS,
-                 locate: LocateSettings = LocateSettings(), max_time_s: float = 1800.0,
+                 locate: LocateSettings = LOCATE_SETTINGS, max_time_s: float = 1800.0,
                  survey_spacing_m: float | None = None, known_start: Fix | None = None,
                  floor: WallMap = WallMap(), observe: Callable[[StepSeen], None] | None = None,
                  reader_parameters: ReaderParameters = FLOOR_READER, tier_one: TierOne | None = None,
