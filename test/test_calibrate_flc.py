@@ -17,15 +17,20 @@ from rfidnav_experiments.calibrate.flc import (
     CALIBRATED_FILE,
     CALIBRATION_SEEDS,
     FITTED_SCENARIOS,
+    HELD_OUT_SCENARIOS,
+    OPEN_SETTINGS,
+    Opens,
     PAPER_FILE,
     Point,
     calibrated_reader,
     points_of,
     scenario_named,
     timeout_s,
+    with_opens,
 )
 from rfidnav_experiments.reproduce.flc import SOURCES, conditions, evaluation_seeds
-from rfidnav_experiments.runners.tag_route import controller_parameters, run_tag_route
+from rfidnav_experiments.runners.tag_route import RouteRun, controller_parameters, floor_read_radius_m, run_tag_route
+from rfidnav_sim.parameters import ReaderParameters, RobotSimParameters
 
 pytestmark = pytest.mark.tier("unit")
 RECORD = CALIBRATED_FILE.with_name("flc_paper_calibration.json")
@@ -69,6 +74,9 @@ def test_the_evaluation_seeds_are_never_the_calibrations() -> None:
     assert not set(evaluation_seeds(50)) & set(CALIBRATION_SEEDS)
 
 
+ROW_SOURCES = {"paper", "calibrated", "ours", "paper, interpreted"}
+
+
 def test_the_conditions_table_lists_every_setting_of_the_reader_and_base_files_with_a_source() -> None:
     for path, node in ((CONFIG_DIR / "params" / "reader_uhf_2ant.yaml", "rfid_reader_sim"),
                        (CONFIG_DIR / "params" / "robot_sim.yaml", "robot_sim")):
@@ -76,9 +84,64 @@ def test_the_conditions_table_lists_every_setting_of_the_reader_and_base_files_w
         assert {f"{node}.{key}" for key in keys} <= set(SOURCES), path
     rows = conditions()
     assert [row.setting for row in rows] == list(SOURCES)
-    assert {row.source for row in rows} <= {"paper", "calibrated", "ours"}
+    assert {row.source for row in rows} <= ROW_SOURCES
+    assert all(set(row.sources.values()) <= ROW_SOURCES for row in rows if row.sources)
     noise = next(row for row in rows if row.setting == "rfid_reader_sim.phase_noise_rad_per_m")
     assert noise.source == "calibrated" and len(set(noise.values.values())) == 1   # the same for both
+
+
+def test_every_parameter_a_run_reads_has_a_row() -> None:
+    """The reader's, the base's and the controller's parameter classes, field by field."""
+    for cls, node in ((ReaderParameters, "rfid_reader_sim"), (RobotSimParameters, "robot_sim"),
+                      (HeadingControllerParameters, "heading_controller")):
+        missing = {f"{node}.{field.name}" for field in dataclasses.fields(cls)} - set(SOURCES)
+        assert not missing, missing
+
+
+def test_a_row_whose_sets_differ_in_value_and_origin_gives_one_source_per_set() -> None:
+    rows = {row.setting: row for row in conditions()}
+    for key in ("heading_controller.turn_speed_fraction", "heading_controller.approach_speed_fraction",
+                "heading_controller.arrival", "heading_controller.filter_rounds",
+                "heading_controller.receding_detection"):
+        row = rows[key]
+        assert row.values["flc_paper"] != row.values["flc_tuned"], key
+        assert row.sources is not None and row.sources["flc_tuned"] == "ours", key
+        assert row.sources["flc_paper"] in {"paper", "paper, interpreted"}, key
+    assert rows["heading_controller.output_range_rad"].sources == {"flc_paper": "calibrated", "flc_tuned": "ours"}
+
+
+def test_the_calibrations_best_point_is_inside_its_grid_and_its_held_out_spread_recorded() -> None:
+    record = json.loads(RECORD.read_text())
+    assert record["interior"] is True
+    chosen, grid = record["chosen"], record["grid"]
+    assert min(grid["phase_noise_rad_per_m"]) < chosen["phase_noise_rad_per_m"] < max(grid["phase_noise_rad_per_m"])
+    assert min(grid["output_scale"]) < chosen["output_scale"] < max(grid["output_scale"])
+    near = [p for p in record["points"] if p["objective"] is not None
+            and p["objective"] <= chosen["objective"] * (1 + record["held_out"]["near_best"])]
+    assert len(record["held_out"]["points"]) == len(near) >= 1
+    for name in HELD_OUT_SCENARIOS:
+        spread = record["held_out"]["spread"][name]
+        values = [p["rmse_m"][name] for p in record["held_out"]["points"] if p["rmse_m"][name] is not None]
+        assert spread["min_m"] == min(values) and spread["max_m"] == max(values)
+    swept = {name for p in record["sweep"] for name in p["open"]}
+    assert swept == {setting.name for setting in OPEN_SETTINGS}
+
+
+def test_the_open_settings_reach_the_runs_parameters() -> None:
+    scenario = scenario_named("line_follow_90")
+    controller = controller_parameters(scenario, PAPER_FILE, 1)
+    reader = calibrated_reader(scenario, 1)
+    grid = with_opens(controller, reader, ())
+    assert grid[0].max_yaw_rate_radps == 2.0 and grid[1].rate_hz == 25.0 and grid[2] == "rate"
+    assert grid[1].antenna_max_range_m == reader.antenna_max_range_m
+    swept, swept_reader, update = with_opens(controller, reader, (("max_yaw_rate_radps", 0.5),
+                                                                  ("control_period_s", 0.2),
+                                                                  ("heading_update", "setpoint"),
+                                                                  ("floor_read_radius_m", 0.01)))
+    assert swept.max_yaw_rate_radps == 0.5 and swept.nominal_round_s == 0.2 and swept_reader.rate_hz == 5.0
+    assert update == "setpoint"
+    assert floor_read_radius_m(swept_reader, swept) == pytest.approx(0.01)
+    assert floor_read_radius_m(reader, controller) == pytest.approx(0.0866, abs=1e-4)
 
 
 def test_a_point_with_a_failed_run_is_never_chosen() -> None:
@@ -90,14 +153,14 @@ def test_a_point_with_a_failed_run_is_never_chosen() -> None:
 @pytest.mark.tier("slow")
 def test_the_calibrated_file_reproduces_the_figures_it_was_fitted_to() -> None:
     chosen = json.loads(RECORD.read_text())["chosen"]
-    runs = []
+    runs: list[tuple[float, float, Opens, str, RouteRun]] = []
     for name in FITTED_SCENARIOS:
         scenario = scenario_named(name)
         for seed in CALIBRATION_SEEDS:      # as the reproduction builds its baseline, from the files
             controller = controller_parameters(scenario, CALIBRATED_FILE, seed)
             run = run_tag_route(scenario, controller, seed, reader=calibrated_reader(scenario, seed),
                                 timeout_s=timeout_s(scenario))
-            runs.append((chosen["phase_noise_rad_per_m"], chosen["output_scale"], name, run))
+            runs.append((chosen["phase_noise_rad_per_m"], chosen["output_scale"], (), name, run))
     (point,) = points_of(runs)
     assert point.failures == 0
     for name in FITTED_SCENARIOS:

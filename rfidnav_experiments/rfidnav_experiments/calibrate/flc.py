@@ -207,7 +207,7 @@ class Calibration:
         """Per held-out route: the smallest and largest mean RMSE over the near-best points, and the paper's."""
         spread = {}
         for name in HELD_OUT_SCENARIOS:
-            values = [h.rmse_m[name] for h in self.held_out if h.rmse_m[name] is not None]
+            values = [value for h in self.held_out if (value := h.rmse_m[name]) is not None]
             spread[name] = {"min_m": min(values, default=None), "max_m": max(values, default=None),
                             "paper_m": PAPER_HELD_OUT_RMSE_M[name], "points": len(self.held_out)}
         return spread

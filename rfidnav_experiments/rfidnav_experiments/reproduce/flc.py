@@ -2,24 +2,31 @@
 
 The paper-faithful controller (flc_paper: the paper's method on the paper's robot, with the two settings the
 paper leaves open fitted by ``./rfidnav calibrate flc`` to the line experiments alone, in
-config/params/flc_paper_calibrated.yaml) and ours (flc_tuned.yaml) run on the four experiments of the paper
-(a line from 90 and from 0 degrees, the acute-angle path, the hallway) in the same conditions (the calibrated
-phase noise for both) on the evaluation seeds, which the calibration never saw, with
-:func:`rfidnav_experiments.runners.tag_route.run_tag_route` (no DDS, so hundreds of runs take minutes). Reports:
+config/params/flc_paper_calibrated.yaml) and ours (flc_tuned.yaml) run in the same conditions (the calibrated
+phase noise for both) on the four experiments of the paper (a line from 90 and from 0 degrees, the acute-angle
+path, the hallway; evaluation seeds 101, 102, ..., which the calibration never saw) and on fresh seeded random
+routes (runners.random_routes, the ledger's evaluation set ``current("flc")``), with
+:func:`rfidnav_experiments.runners.tag_route.run_tag_route` (no DDS, so hundreds of runs take minutes). For flc_paper
+the lines are fitted and the acute path and the hallway held out; flc_tuned was developed on all four, so for it
+they are development routes and only the random routes are fresh. Every run is scored over the stretch ground truth
+decides (rfidnav_bringup.metrics). Reports:
 
-* the conditions: every physical setting that shapes the figures, with where it comes from (``paper``, with the
-  section; ``calibrated``, by which command, to which figures; ``ours``, and why);
+* the conditions: every setting a run reads, with where it comes from, per parameter set where they differ
+  (``paper``, with the section; ``paper, interpreted``; ``calibrated``, by which command, to which figures;
+  ``ours``, and why);
 * per experiment: the paper's RMSE, both controllers' mean with its 95 % interval over the successful runs, and
-  the paired difference (ours minus the baseline, on the same seeds) with its interval; the held-out experiments
-  against the paper within +-25 %, the fitted ones within +-10 %; our target, at most half the baseline's;
-  max |e| beside the paper's error envelope; success rates; the approach time on line_follow_90;
-* with ``--json``, rows ``{"experiment", "setting", "metric", "ours", "paper"}`` (DESIGN.md), the conditions too;
+  the paired difference (ours minus the baseline, on the same seeds) with its interval; the baseline against the
+  paper within +-25 %; our target, at most half the baseline's; max |e| beside the paper's error envelope; success
+  rates; the approach on line_follow_90; both on the random routes; the calibration's held-out spread (from
+  flc_paper_calibration.json);
+* with ``--json``, rows ``{"experiment", "setting", "metric", "ours", "paper"}`` (DESIGN.md), the conditions too,
+  also written to ``OUT/flc_rows.json``;
 * plots ``flc_<scenario>.png`` in the output folder: the first evaluation seed's trajectories of both over the
   desired path (equal aspect) and e(t) below, like paper 001 Figs. 9, 11 and 13.
 
 Nothing here asserts the targets: the command reports, the person reads. The exit code is 0 when every
 flc_tuned run reached all its tags and 1 otherwise; the paper-faithful set may fail without changing it (a
-failure is the method's result, reported).
+failure is the method's result, reported). The pinned configuration (a test's): ``reproduce_flc(seeds=1, ...)``.
 """
 
 from __future__ import annotations
