@@ -4,6 +4,7 @@ the estimated pose)."""
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 import subprocess
@@ -13,32 +14,86 @@ import numpy as np
 import pytest
 
 from rfidnav_common.frames import map_to_odom
+from rfidnav_experiments import evaluation
 from rfidnav_experiments.reproduce.fused import (
     ARRIVING_WORLDS,
     DEVELOPMENT_SEED,
     DRIVING,
+    EVALUATION_SEED,
+    EXPERIMENT,
     HALLWAY,
+    LOCALIZER_FILES,
+    LOCALIZER_NOT_READ,
+    LOCALIZER_SOURCES,
     METRICS,
     MIXED,
     PARTITION_DRIVING,
     PARTITIONS,
+    POSE_NAVIGATOR_NOT_READ,
+    POSE_NAVIGATOR_SOURCES,
+    READER_FILES,
+    READER_NOT_READ,
     RING,
     SINGLE_EVIDENCE,
     TIER_ONE,
     WORLDS,
     TrackFigures,
+    all_condition_rows,
+    conditions,
     home_run,
+    localizer_file,
     localizers_of,
+    reader_file,
     recovery_keys,
     world_run,
 )
+from rfidnav_experiments.reproduce.tables import CONDITION_SOURCES
 from rfidnav_experiments.reproduce.two_tier import HOMES
 from rfidnav_experiments.runners.fused import Track
 from rfidnav_localization.fused.filter import PoseEstimate, Update
 from rfidnav_localization.fused.localizer import FusedEstimate
+from rfidnav_localization.parameters import RfidLocalizerParameters
+from rfidnav_planning.parameters import PoseNavigatorParameters
+from rfidnav_sim.parameters import ReaderParameters
 from support.runs import WORKSPACE
 
 pytestmark = pytest.mark.tier("slow")
+
+
+def field_names(cls: type) -> set[str]:
+    return {field.name for field in dataclasses.fields(cls)}
+
+
+def test_every_parameter_a_run_reads_has_a_row_and_every_other_field_a_reason() -> None:
+    rows = {row.setting: row for row in all_condition_rows(conditions(DEVELOPMENT_SEED, 1))}
+    for prefix, cls, not_read in (("rfid_localizer", RfidLocalizerParameters, LOCALIZER_NOT_READ),
+                                  ("reader", ReaderParameters, READER_NOT_READ),
+                                  ("pose_navigator", PoseNavigatorParameters, POSE_NAVIGATOR_NOT_READ)):
+        listed = {key.removeprefix(f"{prefix}.") for key in rows if key.startswith(f"{prefix}.")}
+        assert field_names(cls) - set(not_read) <= listed, f"{prefix}: fields without a row"
+        assert not listed & set(not_read) and set(not_read) <= field_names(cls)
+    assert set(LOCALIZER_SOURCES) | set(LOCALIZER_NOT_READ) == field_names(RfidLocalizerParameters)
+    assert set(POSE_NAVIGATOR_SOURCES) | set(POSE_NAVIGATOR_NOT_READ) == field_names(PoseNavigatorParameters)
+    # Every world's localizer and reader file is a column of the table; paper 003's robot's rows are two_tier's.
+    assert {localizer_file(world).name for world in WORLDS} == {path.name for path in LOCALIZER_FILES.values()}
+    assert {path.name for world in WORLDS if (path := reader_file(world)) is not None} == \
+        {path.name for path in READER_FILES.values()}
+    assert {f"world.{world}" for world in WORLDS} <= set(rows)
+    for key in ("two_tier_navigator.search_speed_mps", "location_server.k", "robot_sim.footprint_radius_m",
+                "compass_sim.noise_sd_deg", "wifi_sim.scan_noise_sd_db"):
+        assert key in rows
+    assert all(row.source in CONDITION_SOURCES or row.source.startswith("paper, interpreted: ")
+               for row in rows.values())
+    assert rows["reader.rate_hz"].sources is not None and rows["reader.rate_hz"].sources["hf_floor"].startswith(
+        "paper, interpreted: ")
+
+
+def test_the_evaluation_seed_is_the_ledgers_and_the_conditions_name_the_set() -> None:
+    assert EVALUATION_SEED == evaluation.current(EXPERIMENT).seeds[0] != 401
+    seed = {row.setting: row for row in all_condition_rows(conditions(EVALUATION_SEED, 1))}["runs.seed"]
+    assert seed.values["value"].startswith(f"{EVALUATION_SEED} (evaluation set ")
+    old = {row.setting: row for row in all_condition_rows(conditions(401, 1))}["runs.seed"]
+    assert "development set" in old.values["value"]
 
 
 @pytest.mark.parametrize("world", ["two_tier_flat", "two_tier_corridor"])
@@ -159,28 +214,52 @@ def test_the_command_prints_every_metric_for_every_world_with_both_localizers_an
                             capture_output=True, text=True, timeout=900)
     assert result.returncode == 0, result.stderr
     rows = json.loads(result.stdout)
+    assert json.loads((tmp_path / "fused_rows.json").read_text()) == rows
+    assert all(set(row) == {"experiment", "setting", "metric", "ours", "paper"} for row in rows)
+    conditions_end = max(i for i, row in enumerate(rows) if row["metric"] == "condition") + 1
+    assert all(row["metric"] == "condition" for row in rows[:conditions_end])
+    figures = rows[conditions_end:]
+    # Quoted in the docs as <!--fig fused METRIC world=... localizer=...-->: single-word values, one row each.
+    assert all(" " not in str(value) for row in figures for value in row["setting"].values())
+    keys = [(row["metric"], json.dumps(row["setting"], sort_keys=True)) for row in figures]
+    assert len(keys) == len(set(keys))
     recovery = ("global_s", "late_global_s", "kidnap_recovery_s")
-    assert {(row["setting"].split()[0], row["metric"]) for row in rows} == {
+    arrival = ("arrived", "arrived_pct", "arrived_pct_low", "arrived_pct_high", "final_error_m", "final_error_m_ci95")
+    assert {(row["setting"]["world"], row["metric"]) for row in figures} == {
         (w, m) for w in WORLDS
-        for m in (*METRICS, *recovery_keys(w), *(("arrival",) if w in ARRIVING_WORLDS else ()))}
-    for row in rows:
-        world = row["setting"].split()[0]
-        if row["metric"] == "arrival":       # of the localizer the navigator drove on
-            driver = "paper" if world in (*HOMES, PARTITIONS) else "fused"
-            assert set(row) == {"experiment", "setting", "metric", driver}
-            assert row[driver]["runs"] == 2 and 0 <= row[driver]["arrived"] <= 2
-            assert row[driver]["final_error_m"]["n"] == 2
+        for m in (*METRICS, *(f"{m}_ci95" for m in METRICS),
+                  *(f"{k}{suffix}" for k in recovery_keys(w) for suffix in ("", "_ci95", "_runs_found")),
+                  *(arrival if w in ARRIVING_WORLDS else ()))}
+    for row in figures:
+        world, name, metric = row["setting"]["world"], row["setting"]["localizer"], row["metric"]
+        assert row["setting"]["runs"] == 2 and row["paper"] is None
+        if metric in arrival:           # of the localizer the navigator drove on
+            assert name == ("paper" if world in (*HOMES, PARTITIONS) else "fused")
+            if metric == "arrived":
+                assert 0 <= row["ours"] <= 2
             continue
-        if row["metric"] in recovery:
-            assert row["fused"]["runs"] == 2 and row["fused"]["runs_found"] == row["fused"]["n"]
+        if metric.removesuffix("_ci95").removesuffix("_runs_found") in recovery:
+            assert name == "fused"
             continue
         names = localizers_of(world)
-        assert set(row) == {"experiment", "setting", "metric", *names, *(f"{n} - fused" for n in names[1:])}
+        assert name in (*names, *(f"{n}-fused" for n in names[1:]))
+        if name not in names or metric.endswith("_ci95"):
+            continue
         # The mission executor has a node, not a pose with a covariance: no heading and no NEES, so no localizer
         # has a heading on the paper's rounds; paper 001's odometry has a heading but no covariance; the driving
         # world has no paper's localizer.
-        paper_rounds = {(name, "heading_rmse_paper_rounds_deg") for name in names}
+        paper_rounds = {(n, "heading_rmse_paper_rounds_deg") for n in names}
         without = {RING: {("paper", "heading_rmse_deg"), ("paper", "consistent"), *paper_rounds},
                    HALLWAY: {("paper", "consistent")}, DRIVING: paper_rounds}.get(world, set())
-        assert all(row[name]["n"] == (0 if (name, row["metric"]) in without else 2) for name in names)
-    assert json.loads((tmp_path / "fused_rows.json").read_text()) == rows
+        assert row["setting"]["n"] == (0 if (name, metric) in without else 2), (world, name, metric)
+    # The figures the docs quote: the fused localizer on the mixed floor beats every single kind of evidence.
+    def value(metric: str, **setting) -> float:
+        found = [row["ours"] for row in figures if row["metric"] == metric
+                 and all(row["setting"].get(k) == v for k, v in setting.items())]
+        assert len(found) == 1, (metric, setting)
+        return found[0]
+
+    fused = value("position_rmse_m", world=MIXED, localizer="fused")
+    assert all(fused < value("position_rmse_m", world=MIXED, localizer=name) for name in SINGLE_EVIDENCE)
+    assert fused < value("position_rmse_m", world=MIXED, localizer="paper") and fused < 0.1
+    assert value("heading_rmse_deg", world=MIXED, localizer="fused") < 2.0

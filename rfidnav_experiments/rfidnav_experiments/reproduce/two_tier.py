@@ -971,7 +971,9 @@ def home_json_rows(results: list[HomeRun], seed: int) -> list[dict[str, Any]]:
         for legs in LEGS:
             figures = home_figures(results, home, legs)
             setting = {"home": home, "legs": legs, "seed": seed, "runs": figures.arrived.n}
+            low, high = figures.arrived.bounds or (None, None)
             rows += [row("homes", setting, "arrived_pct", figures.arrived.mean),
+                     row("homes", setting, "arrived_pct_low", low), row("homes", setting, "arrived_pct_high", high),
                      row("homes", {**setting, "n": figures.final_error.n}, "final_error_median_m",
                          figures.final_error.value),
                      row("homes", setting, "path_length_median_m", figures.path_length.value),
@@ -989,6 +991,13 @@ def done(errors: dict[int, float | None]) -> list[float]:
 
 def row(experiment: str, setting: dict[str, Any], metric: str, ours: Any, paper: Any = None) -> dict[str, Any]:
     return {"experiment": experiment, "setting": setting, "metric": metric, "ours": ours, "paper": paper}
+
+
+def median_rows(experiment: str, setting: dict[str, Any], metric: str, median: Median) -> list[dict[str, Any]]:
+    """A median and the bounds of its 95 % interval (``METRIC_low``, ``METRIC_high``; null below 6 values)."""
+    low, high = median.bounds or (None, None)
+    return [row(experiment, setting, metric, median.value), row(experiment, setting, f"{metric}_low", low),
+            row(experiment, setting, f"{metric}_high", high)]
 
 
 def json_rows(condition_rows: list[Condition], spiral, theorem, moving, legs: list[Leg], fixes: FixFigures,
@@ -1013,8 +1022,14 @@ def json_rows(condition_rows: list[Condition], spiral, theorem, moving, legs: li
                  row("theorem1", {"sigma_m": sigma, "seed": seed}, "rayleigh_expectation_m", rayleigh)]
     for kind, errors in moving.items():
         median = Median.of(done(errors))
-        rows.append(row("fig11_moving", {"moving": kind, "seed": seed, "n": median.n}, "median_error_m",
-                        median.value))
+        rows += median_rows("fig11_moving", {"moving": kind, "seed": seed, "n": median.n}, "median_error_m", median)
+    moved = paired_interval(moving["indirect"], moving["direct"])
+    setting = {"moving": "indirect-direct", "seed": seed, "pairs": moved.n}
+    rows += [row("fig11_moving", setting, "paired_difference_m", moved.mean),
+             row("fig11_moving", setting, "paired_difference_ci95_m", moved.half_width)]
+    everywhere = Median.of([leg.fingerprint_m for leg in legs])
+    rows += median_rows("fig12_turning_points", {"route": "all", "point": "all", "method": "fingerprinting",
+                                                 "seed": seed, "n": everywhere.n}, "median_error_m", everywhere)
     for route, (_, points) in ROUTES.items():
         for point in points:
             here = legs_at(legs, route, point)
@@ -1028,20 +1043,21 @@ def json_rows(condition_rows: list[Condition], spiral, theorem, moving, legs: li
                                 "median_error_m", median.value))
     for method in METHODS:
         median = fixes.at_turning_points[method]
-        rows += [row("tag_fix", {"method": method, "fixes": "turning_points", "seed": seed, "n": median.n},
-                     "median_error_m", median.value),      # the paper claims centimetres, no number
+        # the paper claims centimetres, no number
+        rows += [*median_rows("tag_fix", {"method": method, "fixes": "turning_points", "seed": seed, "n": median.n},
+                              "median_error_m", median),
                  row("tag_fix", {"method": method, "fixes": "turning_points", "seed": seed, "n": median.n},
                      "median_error_ci95_m", None if median.bounds is None else list(median.bounds)),
-                 row("tag_fix", {"method": method, "fixes": "all", "seed": seed, "n": fixes.all_fixes[method].n},
-                     "median_error_m", fixes.all_fixes[method].value)]
+                 *median_rows("tag_fix", {"method": method, "fixes": "all", "seed": seed,
+                                          "n": fixes.all_fixes[method].n}, "median_error_m", fixes.all_fixes[method])]
     paired = {"method": f"{OURS}-{PAPER}", "fixes": "turning_points", "seed": seed, "pairs": fixes.paired_m.n}
     rows += [row("tag_fix", paired, "paired_difference_m", fixes.paired_m.mean),
              row("tag_fix", paired, "paired_difference_ci95_m", fixes.paired_m.half_width),
              row("tag_fix", {"method": OURS, "seed": seed, "target_m": TARGET_FIX_ERROR_M}, "target_met",
                  fixes.target_met)]
     for kind, errors in radio.items():
-        rows.append(row("radio_map", {"map": kind, "seed": seed, "n": len(errors)}, "median_error_m",
-                        statistics.median(errors)))
+        rows += median_rows("radio_map", {"map": kind, "seed": seed, "n": len(errors)}, "median_error_m",
+                            Median.of(errors))
     rows.append(row("navigations", {"figures": "11,12", "seed": seed, "n": crossings.navigations}, "wall_crossings",
                     crossings.count))
     return rows
