@@ -25,7 +25,7 @@ BENCH = {"format": results.FORMAT, "figures": {"speedup": 7012.4, "rows": [{"spe
 
 
 def rerun_hint(name: str) -> str:
-    if name in results.BENCHMARKS:
+    if name in results.COMMANDS:
         return f"./rfidnav reproduce all --only {name}"
     return f"./rfidnav reproduce {name} --publish"
 
@@ -35,6 +35,9 @@ def test_a_quote_names_one_row_by_metric_and_setting_scaled_and_rounded_as_shown
     assert results.shown(results.quoted_value("x rmse_m params=a x100", documents, "here"), "5.37") == "5.37"
     assert results.shown(results.quoted_value("x rmse_m params=a x100 paper", documents, "here"), "3.4") == "3.4"
     assert results.shown(results.quoted_value("x rmse_m params=b x100", documents, "here"), "−2.5") == "−2.5"
+    assert results.shown(results.quoted_value("x rmse_m experiment=x !params", {"x": {"rows": [
+        *ROWS["rows"], {"experiment": "x", "setting": {"scenario": "line"}, "metric": "rmse_m", "ours": 0.07,
+                        "paper": None}]}}, "here"), "0.07") == "0.07"
     assert results.shown(results.quoted_value("bench_y speedup", documents, "here"), "7000") == "7012"
     assert results.shown(results.quoted_value("bench_y rows.0.speed", documents, "here"), "8.7") == "8.7"
 
@@ -75,7 +78,7 @@ def test_every_figure_the_readme_and_docs_quote_equals_its_results_file() -> Non
 
 def test_every_reproduction_and_quoted_benchmark_has_a_results_file_no_older_than_its_inputs() -> None:
     stale = {}
-    for name in [*results.REPRODUCTIONS, *results.BENCHMARKS]:
+    for name in [*results.REPRODUCTIONS, *results.COMMANDS]:
         path = results.RESULTS_DIR / f"{name}.json"
         assert path.is_file(), f"{path} missing: run {rerun_hint(name)}"
         document = results.read_results(path)

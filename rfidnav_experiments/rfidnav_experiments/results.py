@@ -11,9 +11,10 @@ A figure quoted in README.md or docs/ is written with the place it comes from, a
 
     5.37<!--fig flc tracking_rmse_m scenario=line_follow_90 params=flc_paper x100-->
 
-that is, the one row of docs/results/flc.json with metric ``tracking_rmse_m`` whose setting has those values, its
+that is, the one row of docs/results/flc.json with metric ``tracking_rmse_m`` whose setting has those values
+(``experiment=`` matches the row's experiment field instead; ``!key``: a setting without that key), its
 ``ours`` field (``paper``: its paper field) times 100, rounded to the decimals shown. A benchmark's figure names a
-path into its JSON instead (``<!--fig bench_flc speedup-->``, ``<!--fig bench_rtf rows.0.speed-->``).
+path into its JSON instead (``<!--fig bench_flc speedup-->``, ``<!--fig run_hallway metrics.rmse_m-->``).
 ``./rfidnav reproduce docs`` rewrites every quoted number from its file; ``test_results.py`` fails when one differs,
 when a file is older than the inputs it recorded, or when the ledger's page is not current.
 """
@@ -35,7 +36,7 @@ import time
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal
 
 from rfidnav_common.errors import ConfigError
 from rfidnav_experiments.evaluation import evaluation_set_dict
@@ -82,26 +83,28 @@ REPRODUCTIONS: dict[str, Reproduction] = {r.name: r for r in (
 
 
 @dataclass(frozen=True)
-class Benchmark:
-    """A ``bench NAME`` whose figures the docs quote: the command's arguments after ``bench NAME``."""
-    name: str
-    arguments: tuple[str, ...]
-
-    @property
-    def key(self) -> str:
-        return f"bench_{self.name}"
+class Command:
+    """A command other than a reproduction whose figures the docs quote: a benchmark (its ``--json`` output) or a
+    mission over DDS (its run's summary.json)."""
+    key: str                            # the results file's name
+    argv: tuple[str, ...]               # after ./rfidnav
+    output: Literal["json", "summary"]  # where its figures are: stdout's JSON, or the run's summary.json
 
     def command(self) -> str:
-        return " ".join(("./rfidnav bench", self.name, *self.arguments, "--json"))
+        return " ".join(("./rfidnav", *self.argv))
 
 
-BENCHMARKS: dict[str, Benchmark] = {b.key: b for b in (
-    Benchmark("flc", ()),
-    Benchmark("reader", ()),
-    Benchmark("planner", ()),
-    Benchmark("fused", ()),
-    Benchmark("location_server", ()),
-    Benchmark("llrp", ()),
+def _bench(name: str, *arguments: str) -> Command:
+    return Command(f"bench_{name}", ("bench", name, *arguments, "--json"), "json")
+
+
+def _run(label: str, scenario: str, *arguments: str) -> Command:
+    return Command(f"run_{label}", ("run", scenario, *arguments, "--quiet"), "summary")
+
+
+COMMANDS: dict[str, Command] = {c.key: c for c in (
+    _bench("flc"), _bench("reader"), _bench("planner"), _bench("fused"), _bench("location_server"), _bench("llrp"),
+    _bench("routes", "--seeds", "3"),
 )}
 
 
@@ -134,9 +137,11 @@ def _audit(event: str, arguments: tuple[Any, ...]) -> None:
     if "r" not in mode or "+" in mode:
         return
     path = Path(os.fspath(arguments[0]))
-    if path.suffix in (".yaml", ".json") and REPOSITORY / "config" in Path(os.path.abspath(path)).parents:
-        for recorder in _RECORDERS:
-            recorder.add(Path(os.path.abspath(path)))
+    if path.suffix in (".yaml", ".json"):
+        path = path.resolve()           # the configuration is read through the venv's share/ links
+        if REPOSITORY / "config" in path.parents:
+            for recorder in _RECORDERS:
+                recorder.add(path)
 
 
 def _install_hook() -> None:
@@ -234,23 +239,36 @@ def publish_reproduction(name: str, out_dir: Path, results_dir: Path = RESULTS_D
     return code
 
 
-def publish_benchmark(key: str, results_dir: Path = RESULTS_DIR) -> int:
-    """Run the benchmark's command in a child (its own process, as a user runs it) and write its figures."""
-    bench = BENCHMARKS[key]
-    started = time.perf_counter()
-    done = subprocess.run([sys.executable, "-m", "rfidnav_bringup.cli", "bench", bench.name, *bench.arguments,
-                           "--json"], capture_output=True, text=True, cwd=REPOSITORY)
-    wall_s = time.perf_counter() - started
-    if done.returncode not in (0, 1):
-        raise ResultsError(bench.command(), "", f"exited {done.returncode}: {done.stderr.strip()[-400:]}")
-    try:
-        figures = json.loads(done.stdout)
-    except json.JSONDecodeError as error:
-        raise ResultsError(bench.command(), "", f"printed no JSON: {error}") from error
+def publish_command(key: str, results_dir: Path = RESULTS_DIR) -> int:
+    """Run the command in a child (its own process, as a user runs it) and write its figures."""
+    published = COMMANDS[key]
+    with tempfile.TemporaryDirectory(prefix=f"rfidnav-{key}-") as folder:
+        argv = [*published.argv, *(("--out", folder) if published.output == "summary" else ())]
+        started = time.perf_counter()
+        done = subprocess.run([sys.executable, "-m", "rfidnav_bringup.cli", *argv], capture_output=True, text=True,
+                              cwd=REPOSITORY)
+        wall_s = time.perf_counter() - started
+        if done.returncode not in (0, 1):
+            raise ResultsError(published.command(), "", f"exited {done.returncode}: {done.stderr.strip()[-400:]}")
+        figures = _figures(published, done.stdout, Path(folder))
     write_results(results_dir / f"{key}.json", {
-        "name": key, "command": bench.command(), "exit_code": done.returncode, "wall_s": round(wall_s, 1),
+        "name": key, "command": published.command(), "exit_code": done.returncode, "wall_s": round(wall_s, 1),
         "machine": machine(), "figures": figures}, set())
     return done.returncode
+
+
+def _figures(published: Command, stdout: str, out_dir: Path) -> Any:
+    if published.output == "summary":
+        summaries = sorted(out_dir.glob("*/summary.json"))
+        if len(summaries) != 1:
+            raise ResultsError(published.command(), "", f"wrote {len(summaries)} summary.json files, expected one")
+        text, source = summaries[0].read_text(), str(summaries[0])
+    else:
+        text, source = stdout, "its standard output"
+    try:
+        return json.loads(text)
+    except json.JSONDecodeError as error:
+        raise ResultsError(published.command(), "", f"no JSON in {source}: {error}") from error
 
 
 def machine() -> dict[str, Any]:
@@ -287,8 +305,9 @@ def estimated_minutes(names: list[str], results_dir: Path = RESULTS_DIR) -> floa
 
 # -------------------------------------------------------------------------------------------- quote
 
-# A quoted figure: a number (a sign, digits, decimals) right before its source comment.
-QUOTE = re.compile(r"(?P<number>[+\-−]?\d+(?:\.\d+)?)<!--fig (?P<spec>[^>]*?)-->")
+# A quoted figure: a number (a sign, digits, decimals) right before its source comment; not an example of one in
+# code (a backtick before it).
+QUOTE = re.compile(r"(?<![`\d.])(?P<number>[+\-−]?\d+(?:\.\d+)?)<!--fig (?P<spec>[^>]*?)-->")
 
 
 @dataclass(frozen=True)
@@ -340,11 +359,15 @@ def quoted_value(spec: str, results: dict[str, dict[str, Any]], where: str) -> f
     if "rows" in document:
         if not selectors or "=" in selectors[0]:
             raise ResultsError(where, "fig", f"{spec!r}: name a metric after {name}")
-        metric, filters = selectors[0], [word.split("=", 1) for word in selectors[1:]]
+        metric = selectors[0]
+        absent = [word[1:] for word in selectors[1:] if word.startswith("!")]
+        filters = [word.split("=", 1) for word in selectors[1:] if not word.startswith("!")]
         if any(len(pair) != 2 for pair in filters):
-            raise ResultsError(where, "fig", f"{spec!r}: expected key=value after the metric")
+            raise ResultsError(where, "fig", f"{spec!r}: expected key=value or !key after the metric")
         rows = [row for row in document["rows"] if row.get("metric") == metric
-                and all(_matches(row.get("setting"), key, value) for key, value in filters)]
+                and all(str(row.get("experiment")) == value if key == "experiment" else
+                        _matches(row.get("setting"), key, value) for key, value in filters)
+                and not any(key in (row.get("setting") or {}) for key in absent)]
         if len(rows) != 1:
             raise ResultsError(where, "fig", f"{spec!r} selects {len(rows)} rows of {name}.json, expected one")
         value = rows[0].get(column)

@@ -117,12 +117,13 @@ def add_reproduce(verbs: argparse._SubParsersAction) -> Handler:
     fused = names.add_parser("fused", parents=[common], help="ours: the fused localizer beside each paper's own "
                                                              "localizer, same runs, paired")
     fused.add_argument("--runs", type=runs_value, help="runs per world, default 10")
-    everything = names.add_parser("all", help="every reproduction and the benchmarks the docs quote at their "
-                                              "published sizes: rewrites docs/results/ and the quoted figures")
+    everything = names.add_parser("all", help="every reproduction, benchmark and mission the docs quote at "
+                                              "its published size: rewrites docs/results/ and the quoted figures")
     everything.add_argument("--out", type=output_folder, default=RUNS_DIR / "reproduce",
                             help="folder for the rows, tables and plots")
     everything.add_argument("--only", type=published_names, default=None,
-                            help="comma-separated reproductions or bench_NAME benchmarks (default: all)")
+                            help="comma-separated reproductions, bench_NAME benchmarks or run_NAME missions "
+                                 "(default: all)")
     add_engine_options(everything)
     names.add_parser("docs", help="rewrite every figure the README and docs/ quote from docs/results/, and the "
                                   "evaluation ledger's page; nothing runs")
@@ -244,12 +245,12 @@ def add_bench(verbs: argparse._SubParsersAction) -> Handler:
 
 
 def published_names(text: str) -> list[str]:
-    from rfidnav_experiments.results import BENCHMARKS, REPRODUCTIONS
+    from rfidnav_experiments.results import COMMANDS, REPRODUCTIONS
 
     names = [part.strip() for part in text.split(",")]
-    unknown = [name for name in names if name not in REPRODUCTIONS and name not in BENCHMARKS]
+    unknown = [name for name in names if name not in REPRODUCTIONS and name not in COMMANDS]
     if unknown:
-        raise argparse.ArgumentTypeError(f"expected some of {', '.join([*REPRODUCTIONS, *BENCHMARKS])}, got {text!r}")
+        raise argparse.ArgumentTypeError(f"expected some of {', '.join([*REPRODUCTIONS, *COMMANDS])}, got {text!r}")
     return list(dict.fromkeys(names))
 
 
@@ -291,16 +292,16 @@ def reproduce_all(args: argparse.Namespace) -> int:
     from rfidnav_common.progress import stage
     from rfidnav_experiments import results
 
-    names = args.only or [*results.REPRODUCTIONS, *results.BENCHMARKS]
+    names = args.only or [*results.REPRODUCTIONS, *results.COMMANDS]
     minutes = results.estimated_minutes(names)
     print("reproduce all: " + ", ".join(names) + (
         f"; the last published runs of these took {minutes:.0f} min" if minutes is not None else
         "; no estimate (a results file is missing)"), file=sys.stderr)
     codes = []
     for name in names:
-        if name in results.BENCHMARKS:
-            with stage(results.BENCHMARKS[name].command()):
-                codes.append(results.publish_benchmark(name))
+        if name in results.COMMANDS:
+            with stage(results.COMMANDS[name].command()):
+                codes.append(results.publish_command(name))
             continue
         reproduction = results.REPRODUCTIONS[name]
         arguments = {reproduction.count: reproduction.default}
