@@ -191,14 +191,21 @@ def test_a_small_run_reports_every_floor_consistently_and_its_figures_are_pinned
     low_high = [row["ours"] for row in rows if row["metric"] in ("success_ci95_pct", "success_within_ci95_pct")]
     assert all(low <= high for low, high in low_high)
     # Every failed evaluation mission has one cause.
-    for method in METHODS:
-        failures = sum(row["ours"] for row in rows if row["metric"] == "failures"
-                       and row["setting"]["method"] == method)
-        pooled = [success[(POOLED, method, rate)] for rate in MISS_RATES]
-        assert failures == round(sum((100.0 - row["ours"]) * row["setting"]["missions"] / 100.0 for row in pooled))
-        causes = {row["setting"]["cause"] for row in rows if row["metric"] == "failures"
-                  and row["setting"]["method"] == method}
-        assert causes == set(CAUSES)
+    for name in ("evaluation", "building_eval", "building_ring", "building_large"):
+        for method in METHODS:
+            mine = [row for row in rows if row["experiment"] == "failures" and row["setting"]["set"] == name
+                    and row["setting"]["method"] == method]
+            by_cause = {row["setting"]["cause"]: row["ours"] for row in mine if row["metric"] == "failures"}
+            total = next(row["ours"] for row in mine if row["metric"] == "failures_total")
+            assert set(by_cause) == set(CAUSES) and sum(by_cause.values()) == total
+            floor = POOLED if name == "evaluation" else name
+            at_rates = [row for key, row in success.items() if key[:2] == (floor, method)]
+            assert total == round(sum((100.0 - row["ours"]) * row["setting"]["missions"] / 100.0
+                                      for row in at_rates))
+            assert next(row["ours"] for row in mine if row["metric"] == "missions") == \
+                sum(row["setting"]["missions"] for row in at_rates)
+    floors = {row["setting"]["floor"] for row in rows if row["experiment"] == "floors"}
+    assert floors == set(FLOOR_ORDER)
     assert all(row["ours"] == 0 for row in rows if row["metric"] == "wall_crossings")
     for (experiment, metric, *selectors), value in PINNED_FIGURES.items():
         if experiment == "paper_run":

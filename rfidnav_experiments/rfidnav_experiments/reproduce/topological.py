@@ -54,6 +54,7 @@ import numpy as np  # noqa: E402
 from rfidnav_bringup.metrics import GOAL_RADIUS_M  # noqa: E402
 from rfidnav_common.errors import ConfigError  # noqa: E402
 from rfidnav_common.floor_plan import HALLWAY_WIDTH_M, TAG_SETBACK_M  # noqa: E402
+from rfidnav_common.topological_map import UNKNOWN  # noqa: E402
 from rfidnav_common.wall_tags import InductionArea  # noqa: E402
 from rfidnav_experiments.engine import run_tasks  # noqa: E402
 from rfidnav_experiments.evaluation import current  # noqa: E402
@@ -346,16 +347,21 @@ def paired(results: dict[tuple[str, str, float], list[MissionRun]], floor: str, 
 
 # ------------------------------------------------------------------------------------- failure causes
 
-WRONG_JUNCTION = "arrived by its account at the wrong junction"
-NEAR_GOAL = f"arrived, stopped {GOAL_RADIUS_M:g}-{max(RADII_M):g} m from the goal node"
-FAR_FROM_GOAL = f"arrived, stopped beyond {max(RADII_M):g} m of the goal node, nearest to it"
-GAVE_UP = "stopped, the executor giving up (no mapped route)"
-HELD_AT_WALL = "timed out, held at a wall (bumper pressed at the end)"
-STANDING = "timed out, standing still (no bumper)"
-LOST = "timed out, driving on, lost (believed elsewhere than the nearest node)"
-DRIVING = "timed out, driving on"
-CROSSED_WALL = "crossed a wall (ground truth)"
-CAUSES = (WRONG_JUNCTION, NEAR_GOAL, FAR_FROM_GOAL, GAVE_UP, HELD_AT_WALL, STANDING, LOST, DRIVING, CROSSED_WALL)
+# The causes, by the code the rows carry (a quoted figure selects a row by it), and what each means.
+WRONG_JUNCTION, NEAR_GOAL, FAR_FROM_GOAL, GAVE_UP = "wrong_junction", "near_goal", "far_from_goal", "gave_up"
+HELD_AT_WALL, STANDING, LOST, DRIVING, CROSSED_WALL = "held_at_wall", "standing", "lost", "driving", "crossed_wall"
+CAUSE_TEXT = {
+    WRONG_JUNCTION: "arrived by its account at the wrong junction",
+    NEAR_GOAL: f"arrived, stopped {GOAL_RADIUS_M:g}-{max(RADII_M):g} m from the goal node",
+    FAR_FROM_GOAL: f"arrived, stopped beyond {max(RADII_M):g} m of the goal node, nearest to it",
+    GAVE_UP: "stopped, the executor giving up (no mapped route)",
+    HELD_AT_WALL: "timed out, held at a wall (bumper pressed at the end)",
+    STANDING: "timed out, standing still (no bumper)",
+    LOST: "timed out, driving on, lost (believed elsewhere than the nearest node)",
+    DRIVING: "timed out, driving on",
+    CROSSED_WALL: "crossed a wall (ground truth)",
+}
+CAUSES = tuple(CAUSE_TEXT)
 STANDING_S = 60.0                       # a timed-out robot within STILL_M of its end for this long stood still
 
 
@@ -438,7 +444,7 @@ def floor_table(floor: str, summaries: list[RateSummary],
 
 
 def failure_lines(counts: dict[str, dict[str, tuple[int, int]]], missions: dict[str, int]) -> list[str]:
-    rows = [[cause, *(f"{counts[method][cause][0]} ({counts[method][cause][1]})" for method in METHODS)]
+    rows = [[CAUSE_TEXT[cause], *(f"{counts[method][cause][0]} ({counts[method][cause][1]})" for method in METHODS)]
             for cause in CAUSES]
     rows.append(["all failures", *(f"{sum(c for c, _ in counts[method].values())} of {missions[method]}"
                                    for method in METHODS)])
@@ -478,7 +484,10 @@ def json_rows(paper: MissionRun, summaries: list[RateSummary], results,
                    "seed": list(EVALUATION_SET.seeds) if s.floor == POOLED else SEEDS[s.floor], "method": s.method,
                    "miss_rate": s.miss_rate, "missions": s.missions}
         figures: list[tuple[str, Any]] = [
+            ("missions", s.missions),
             ("success_pct", s.success.mean), ("success_ci95_pct", list(s.success.bounds or ())),
+            ("success_ci95_low_pct", s.success.bounds[0] if s.success.bounds else None),
+            ("success_ci95_high_pct", s.success.bounds[1] if s.success.bounds else None),
             ("path_over_shortest", s.path_ratio.mean), ("path_over_shortest_ci95", s.path_ratio.half_width),
             ("mean_duration_s", s.duration_s.mean), ("mean_tags_missed", s.mean_tags_missed),
             ("mean_passages_missed", s.mean_passages_missed),
@@ -495,12 +504,51 @@ def json_rows(paper: MissionRun, summaries: list[RateSummary], results,
             rows += [{"experiment": "success_radius", "setting": {**setting, "radius_m": radius}, "metric": metric,
                       "ours": value, "paper": None}
                      for metric, value in (("success_within_pct", success.mean),
-                                           ("success_within_ci95_pct", list(success.bounds or ())))]
-    for method, causes in failure_counts(results, EVALUATION_FLOORS).items():
-        for cause, (count, missed) in causes.items():
-            setting = {"set": "evaluation", "method": method, "cause": cause}
-            rows += [{"experiment": "failures", "setting": dict(setting), "metric": metric, "ours": value,
-                      "paper": None} for metric, value in (("failures", count), ("failures_with_missed_tag", missed))]
+                                           ("success_within_ci95_pct", list(success.bounds or ())),
+                                           ("success_within_ci95_low_pct",
+                                            success.bounds[0] if success.bounds else None),
+                                           ("success_within_ci95_high_pct",
+                                            success.bounds[1] if success.bounds else None))]
+    # The failures by cause: over the evaluation (set "evaluation"), and on each development floor apart.
+    for name, floors in (("evaluation", EVALUATION_FLOORS), *((floor, (floor,)) for floor in DEVELOPMENT_FLOORS)):
+        for method, causes in failure_counts(results, floors).items():
+            for cause, (count, missed) in causes.items():
+                setting = {"set": name, "method": method, "cause": cause, "means": CAUSE_TEXT[cause]}
+                rows += [{"experiment": "failures", "setting": dict(setting), "metric": metric, "ours": value,
+                          "paper": None}
+                         for metric, value in (("failures", count), ("failures_with_missed_tag", missed))]
+            missions = [run for key, runs in results.items() if key[0] in floors and key[1] == method
+                        for run in runs]
+            rows += [{"experiment": "failures", "setting": {"set": name, "method": method}, "metric": metric,
+                      "ours": value, "paper": None}
+                     for metric, value in (("missions", len(missions)),
+                                           ("failures_total", sum(not run.success for run in missions)))]
+    rows += floor_rows()
+    return rows
+
+
+def floor_rows() -> list[dict[str, Any]]:
+    """What each floor is: junctions, hallways, mapped dead ends (junctions with one hallway), '?' dead ends,
+    nodes with no side opening (hallways only ahead and behind), tags, and the hallways' length."""
+    rows = []
+    for floor in FLOOR_ORDER:
+        robot_map, world = load_floor(floor)
+        mapped = {name: [side for side, hallway in node.hallways.items() if hallway.neighbour != UNKNOWN]
+                  for name, node in robot_map.nodes.items()}
+        figures = {"junctions": len(robot_map.nodes), "hallways": len(robot_map.edges()),
+                   "dead_end_nodes": sum(len(sides) == 1 for sides in mapped.values()),
+                   "unknown_sides": sum(hallway.neighbour == UNKNOWN for node in robot_map.nodes.values()
+                                        for hallway in node.hallways.values()),
+                   "straight_through_nodes": sum(len(node.hallways) == 2 and set(node.hallways) in ({"N", "S"},
+                                                                                                  {"E", "W"})
+                                                 for node in robot_map.nodes.values()),
+                   "wall_tags": len(world.wall_tags),
+                   "hallway_length_m": sum(robot_map.hallway_length_m(edge.node_a, edge.side_a)
+                                           for edge in robot_map.edges()),
+                   "north_deg": robot_map.north_deg}
+        setting = {"floor": floor, "role": ROLES[floor], "seed": SEEDS[floor]}
+        rows += [{"experiment": "floors", "setting": dict(setting), "metric": metric, "ours": value, "paper": None}
+                 for metric, value in figures.items()]
     return rows
 
 
