@@ -18,6 +18,13 @@ into a wall stalls there with its bumper pressed (counted in ``MissionRun.bumps`
 its true track crossed all the same (``MissionRun.wall_crossings``, sampled every control step) make the mission no
 success.
 
+Floors are the in-tree ones (``FLOORS``: a map file and a world file) or generated ones by name
+(``generated_SEED``: rfidnav_sim.floor_generator's floor of SEED, drawn again in whichever process runs the
+mission). Besides the figures, a run records what classifies a failure (reproduce topological's taxonomy): whether
+the follower stopped, where the executor believed the robot was, the map node nearest to where it ended, how long it
+stood still before the end, whether the bumper was pressed at the end, and the tag passages the reader missed
+(ground truth: in reach, then out of it, with no read), noticed by the executor or not.
+
 Missions start where a robot would be put down: ``before_m`` before one of the floor's wall tags, at the
 follower's set distance from the wall the tag is on, heading along it — taken from the world (the simulator's
 ground truth, which the navigation never sees), so a floor whose corridors are not the map's grid places the
