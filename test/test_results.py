@@ -40,6 +40,10 @@ def test_a_quote_names_one_row_by_metric_and_setting_scaled_and_rounded_as_shown
                         "paper": None}]}}, "here"), "0.07") == "0.07"
     assert results.shown(results.quoted_value("bench_y speedup", documents, "here"), "7000") == "7012"
     assert results.shown(results.quoted_value("bench_y rows.0.speed", documents, "here"), "8.7") == "8.7"
+    listed = {"bench_z": {"figures": [{"scenario": "a", "rmse_m": 0.1}, {"scenario": "b", "rmse_m": 0.2}]}}
+    assert results.quoted_value("bench_z rmse_m scenario=b", listed, "here") == 0.2
+    with pytest.raises(results.ResultsError, match="selects 2 rows"):
+        results.quoted_value("bench_z rmse_m", listed, "here")
 
 
 @pytest.mark.parametrize("spec, problem", [

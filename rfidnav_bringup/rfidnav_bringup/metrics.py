@@ -148,15 +148,12 @@ def area_entries(trajectory: Trajectory, tag_points: np.ndarray,
     return entries
 
 
-def tracking_error(trajectory: Trajectory, tag_points: np.ndarray, arrival_times_s: list[float] | None = None,
+def tracking_error(trajectory: Trajectory, tag_points: np.ndarray,
                    read_radius_m: float = READ_AREA_RADIUS_M) -> Trajectory:
     """e(t) samples (as a Trajectory whose xy[:, 0] is e and xy[:, 1] the segment index) over the stretch ground
     truth decides (:func:`area_entries`): segment k from the entry into tag k's read area up to (not including) the
-    entry into tag k+1's, the last segment up to and including the entry into the last area reached.
-
-    ``arrival_times_s`` (the controller's declared arrivals) is not used: it is accepted so that callers of the
-    former signature, which scored between them, keep working."""
-    del arrival_times_s
+    entry into tag k+1's, the last segment up to and including the entry into the last area reached: the same
+    stretch for every controller, whenever each declares its arrivals."""
     entries = area_entries(trajectory, tag_points, read_radius_m)
     times, errors, segments = [], [], []
     for k in range(len(entries) - 1):

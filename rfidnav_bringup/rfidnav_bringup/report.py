@@ -278,7 +278,7 @@ def write_report(path: Path) -> tuple[dict[str, float | int | None], list[Path]]
         return metrics, [trajectory_png]
     points = route_points(record.world, record.route)
 
-    error = tracking_error(run, points, record.arrival_times_s)
+    error = tracking_error(run, points)
     figure, axes = plt.subplots(figsize=(8, 3.5))
     axes.plot(error.times_s - record.mission_start_s, error.xy[:, 0] * 100.0, color="tab:red")
     axes.axhline(0.0, color="0.5", linewidth=0.8)

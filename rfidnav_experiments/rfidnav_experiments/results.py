@@ -14,7 +14,9 @@ A figure quoted in README.md or docs/ is written with the place it comes from, a
 that is, the one row of docs/results/flc.json with metric ``tracking_rmse_m`` whose setting has those values
 (``experiment=`` matches the row's experiment field instead; ``!key``: a setting without that key), its
 ``ours`` field (``paper``: its paper field) times 100, rounded to the decimals shown. A benchmark's figure names a
-path into its JSON instead (``<!--fig bench_flc speedup-->``, ``<!--fig run_hallway metrics.rmse_m-->``).
+path into its JSON instead (``<!--fig bench_flc speedup-->``, ``<!--fig run_hallway metrics.rmse_m-->``), or, where
+its JSON is a list of rows, a field of the one row with the given values (``<!--fig bench_routes search_s
+scenario=long_legs params=flc_paper-->``).
 ``./rfidnav reproduce docs`` rewrites every quoted number from its file; ``test_results.py`` fails when one differs,
 when a file is older than the inputs it recorded, or when the ledger's page is not current.
 """
@@ -104,7 +106,8 @@ def _run(label: str, scenario: str, *arguments: str) -> Command:
 
 COMMANDS: dict[str, Command] = {c.key: c for c in (
     _bench("flc"), _bench("reader"), _bench("planner"), _bench("fused"), _bench("location_server"), _bench("llrp"),
-    _bench("routes", "--seeds", "3"),
+    _bench("routes", "--seeds", "3"), _bench("scaling", "--runs", "3"),
+    _run("long_legs", "long_legs", "--rtf", "max", "--seed", "1"),
 )}
 
 
@@ -371,6 +374,14 @@ def quoted_value(spec: str, results: dict[str, dict[str, Any]], where: str) -> f
         if len(rows) != 1:
             raise ResultsError(where, "fig", f"{spec!r} selects {len(rows)} rows of {name}.json, expected one")
         value = rows[0].get(column)
+    elif isinstance(document.get("figures"), list):       # a benchmark's rows: a field of the one row matching
+        field_name, filters = selectors[0] if selectors else "", [word.split("=", 1) for word in selectors[1:]]
+        rows = [row for row in document["figures"] if isinstance(row, dict)
+                and all(len(pair) == 2 and str(row.get(pair[0])) == pair[1] for pair in filters)]
+        if len(rows) != 1 or field_name not in rows[0]:
+            raise ResultsError(where, "fig", f"{spec!r} selects {len(rows)} rows of {name}.json with a "
+                                             f"{field_name!r}, expected one")
+        value = rows[0][field_name]
     else:
         value = document.get("figures")
         for step in (selectors[0].split(".") if selectors else []):
