@@ -236,7 +236,8 @@ SENSOR_SOURCES: dict[str, tuple[str, str]] = {
     "compass_sim.frame_id": ("ours", "no effect on the figures"),
     "compass_sim.noise_sd_deg": ("ours", "an e-compass's jitter: the paper gives none"),
     "compass_sim.bias_deg": ("ours", "an uncorrected declination: the paper gives none"),
-    "wifi_sim.scan_period_s": ("ours", "unused in-process: a scan whenever tier one asks"),
+    "wifi_sim.scan_period_s": ("ours", "unused here (a scan whenever tier one asks); reproduce fused's *_fused runs "
+                                       "locate a scan this often"),
     "wifi_sim.frame_id": ("ours", "no effect on the figures"),
     "wifi_sim.interface": ("ours", "no effect on the figures"),
     "wifi_sim.scan_noise_sd_db": ("ours", "RSS at a fixed spot varies by 2-6 dB from scan to scan: mid-range"),
