@@ -99,6 +99,16 @@ def current(experiment: str) -> EvaluationSet:
     return sets[0]
 
 
+def seed_set(experiment: str, seed: int, development_seed: int) -> str:
+    """Which set ``seed`` is of ``experiment``'s, in words: a set of the ledger, or the development seed."""
+    for entry in LEDGER:
+        if entry.experiment == experiment and seed in entry.seeds:
+            return f"{entry.status} set '{entry.name}'"
+    if seed == development_seed:
+        return "the development seed: the code and its settings were chosen on it"
+    return "a seed in no set of the ledger"
+
+
 def evaluation_set_dict(experiment: str) -> dict[str, Any] | None:
     """The experiment's evaluation set as a results file records it (JSON's lists for tuples)."""
     try:

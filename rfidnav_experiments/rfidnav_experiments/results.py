@@ -76,11 +76,12 @@ REPRODUCTIONS: dict[str, Reproduction] = {r.name: r for r in (
     Reproduction("partitions", "rfidnav_experiments.reproduce.partitions", "reproduce_partitions", "runs", "--runs",
                  250, {"runs": 5}),
     Reproduction("two_tier", "rfidnav_experiments.reproduce.two_tier", "reproduce_two_tier", "runs", "--runs", 20,
-                 {"runs": 1}),
+                 {"runs": 1, "fig10_runs": 2, "seed": 1}),
     Reproduction("topological", "rfidnav_experiments.reproduce.topological", "reproduce_topological", "missions",
                  "--runs", 100, {"missions": 1}),
     Reproduction("fused", "rfidnav_experiments.reproduce.fused", "reproduce_fused", "runs", "--runs", 10,
-                 {"runs": 1}),
+                 {"runs": 1, "seed": 1, "worlds": ["mixed_floor", "partition_field", "partition_field_fused",
+                                                   "mixed_floor_fused"]}),
 )}
 
 

@@ -86,7 +86,7 @@ from rfidnav_experiments.reproduce.tables import (
     paired_interval,
     table,
 )
-from rfidnav_experiments.reproduce.two_tier import HOMES, Home, home, seed_set
+from rfidnav_experiments.reproduce.two_tier import HOMES, Home, home
 from rfidnav_experiments.runners.fused import (
     CONVERGED_FOR_S,
     CONVERGED_M,
@@ -304,7 +304,7 @@ def conditions(seed: int = EVALUATION_SEED, runs: int = RUNS) -> dict[str, list[
     same_rows += [Condition(f"pose_navigator.{name}", {"value": getattr(navigation, name)}, source, note)
                   for name, (source, note) in POSE_NAVIGATOR_SOURCES.items()]
     run_values: dict[str, Any] = {
-        "runs.seed": f"{seed} ({seed_set(EXPERIMENT, seed, DEVELOPMENT_SEED)})",
+        "runs.seed": f"{seed} ({evaluation.seed_set(EXPERIMENT, seed, DEVELOPMENT_SEED)})",
         "runs.per_world": runs,
         "runs.single_evidence": {label: list(kinds) for label, kinds in SINGLE_EVIDENCE.items()},
         "runs.kidnap_at_s": {"default": KIDNAP_AT_S, PARTITIONS: PARTITION_KIDNAP_AT_S},
@@ -810,7 +810,8 @@ def reproduce_fused(runs: int, out_dir: Path, as_json: bool, seed: int = EVALUAT
     if as_json:
         print(json.dumps(rows, indent=1))
     else:
-        print("\n".join([f"reproduce fused: seed {seed}: {seed_set(EXPERIMENT, seed, DEVELOPMENT_SEED)} (the "
+        which = evaluation.seed_set(EXPERIMENT, seed, DEVELOPMENT_SEED)
+        print("\n".join([f"reproduce fused: seed {seed}: {which} (the "
                           f"ledger's evaluation set is '{EVALUATION.name}', seed {EVALUATION_SEED}; development seed "
                           f"{DEVELOPMENT_SEED})", "", *conditions_report(parts), *report_lines(results, runs)]))
     print(f"rows: {out_dir / 'fused_rows.json'}", file=sys.stderr if as_json else sys.stdout)

@@ -358,7 +358,7 @@ def conditions(world: World | None = None, seed: int = EVALUATION_SEED) -> list[
         "radio_map.robot_survey": f"every {ROBOT_SURVEY_SPACING_M:g} m within {SURVEY_FRESH_M:g} m of a fix",
         "radio_map.test_points": TEST_POINTS,
         "homes.worlds": {name: home_world_text(name) for name in HOMES},
-        "runs.seed": f"{seed} ({seed_set(EXPERIMENT, seed, DEVELOPMENT_SEED)})",
+        "runs.seed": f"{seed} ({evaluation.seed_set(EXPERIMENT, seed, DEVELOPMENT_SEED)})",
     }
     differing: dict[str, dict[str, Any]] = {
         "fig10.spiral_d_m": {method: round(spiral.d_m, 5) for method, spiral in methods.items()},
@@ -388,17 +388,6 @@ def home_world_text(name: str) -> str:
     world = place.scenario.world
     return (f"{place.scenario.world_file.name}: {len(world.access_points)} APs, {len(world.tag_groups)} groups, "
             f"{len(place.site.radio_map)} fingerprints")
-
-
-def seed_set(experiment: str, seed: int, development_seed: int) -> str:
-    """Which set ``seed`` is of ``experiment``'s: the ledger's (rfidnav_experiments.evaluation), or the development
-    seed."""
-    for entry in evaluation.LEDGER:
-        if entry.experiment == experiment and seed in entry.seeds:
-            return f"{entry.status} set '{entry.name}'"
-    if seed == development_seed:
-        return "the development seed: the code and its settings were chosen on it"
-    return "a seed in no set of the ledger"
 
 
 # --------------------------------------------------------------------------------------------- Fig. 10
@@ -900,7 +889,8 @@ def report_lines(condition_rows: list[Condition], spiral, sensitivity, theorem, 
                  fixes: FixFigures, radio, crossings: Crossings, grid_count: int, survey_count: int, runs: int,
                  fig10_runs: int, seed: int) -> list[str]:
     lines = [f"reproduce two_tier: paper 003 section 4.2, in-process; seed {seed}: "
-             f"{seed_set(EXPERIMENT, seed, DEVELOPMENT_SEED)} (the ledger's evaluation set is '{EVALUATION.name}', "
+             f"{evaluation.seed_set(EXPERIMENT, seed, DEVELOPMENT_SEED)} "
+             f"(the ledger's evaluation set is '{EVALUATION.name}', "
              f"seed {EVALUATION_SEED}; development seed {DEVELOPMENT_SEED}); {runs} runs per route",
              "", *condition_lines(condition_rows, METHODS), "", *fig10_lines(spiral, fig10_runs), "",
              *fig10_against_paper(spiral), "", *sensitivity_lines(sensitivity, spiral, fig10_runs), "",
