@@ -109,6 +109,9 @@ COMMANDS: dict[str, Command] = {c.key: c for c in (
     _bench("flc"), _bench("reader"), _bench("planner"), _bench("fused"), _bench("location_server"), _bench("llrp"),
     _bench("routes", "--seeds", "3"), _bench("scaling", "--runs", "3"),
     _run("long_legs", "long_legs", "--rtf", "max", "--seed", "1"),
+    _run("mixed_floor_fused", "mixed_floor_fused", "--rtf", "max", "--seed", "1"),
+    _run("partition_field_fused", "partition_field_fused", "--rtf", "max", "--seed", "1"),
+    _run("partition_field", "partition_field", "--rtf", "max", "--seed", "1"),
 )}
 
 
