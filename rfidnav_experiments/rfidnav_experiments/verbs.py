@@ -113,7 +113,8 @@ def add_reproduce(verbs: argparse._SubParsersAction) -> Handler:
     two_tier.add_argument("--runs", type=runs_value, help="runs per route, default 20")
     topological = names.add_parser("topological", parents=[common], help="paper 004 sec. 5: topological "
                                                                          "missions under read failures")
-    topological.add_argument("--runs", type=runs_value, help="missions per miss rate, default 100")
+    topological.add_argument("--runs", type=runs_value, help="missions per evaluation floor, method and miss "
+                                                            "rate, default 100 (development floors fewer)")
     fused = names.add_parser("fused", parents=[common], help="ours: the fused localizer beside each paper's own "
                                                              "localizer, same runs, paired")
     fused.add_argument("--runs", type=runs_value, help="runs per world, default 10")
@@ -220,7 +221,7 @@ def add_bench(verbs: argparse._SubParsersAction) -> Handler:
                                  "filter_boom_spin), each over the whole grid; default paper,filter")
     add_engine_options(partitions)
     topological = names.add_parser("topological", parents=[common], help="paper 004: missions on the evaluation "
-                                                                         "floor at 0/10/20/30 %% misses, both loops")
+                                                                         "floors at 0/10/20/30 %% misses, both loops")
     topological.add_argument("--runs", type=runs_value, default=100, help="missions per (loop, miss rate)")
     add_engine_options(topological)
     scaling = names.add_parser("scaling", parents=[common], help="the same slice of a reproduction on local "
