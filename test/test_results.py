@@ -38,6 +38,8 @@ def test_a_quote_names_one_row_by_metric_and_setting_scaled_and_rounded_as_shown
     assert results.shown(results.quoted_value("x rmse_m experiment=x !params", {"x": {"rows": [
         *ROWS["rows"], {"experiment": "x", "setting": {"scenario": "line"}, "metric": "rmse_m", "ours": 0.07,
                         "paper": None}]}}, "here"), "0.07") == "0.07"
+    assert results.shown(results.quoted_value("x ok params=b", documents, "here"), "0") == "1"
+    assert results.quoted_value("x @wall_s x0.5", {"x": {**ROWS, "wall_s": 60.0}}, "here") == 30.0
     assert results.shown(results.quoted_value("bench_y speedup", documents, "here"), "7000") == "7012"
     assert results.shown(results.quoted_value("bench_y rows.0.speed", documents, "here"), "8.7") == "8.7"
     listed = {"bench_z": {"figures": [{"scenario": "a", "rmse_m": 0.1}, {"scenario": "b", "rmse_m": 0.2}]}}
@@ -49,7 +51,6 @@ def test_a_quote_names_one_row_by_metric_and_setting_scaled_and_rounded_as_shown
 @pytest.mark.parametrize("spec, problem", [
     ("x rmse_m", "selects 2 rows"),
     ("x rmse_m params=c", "selects 0 rows"),
-    ("x ok params=b", "not a number"),
     ("x rmse_m params=b paper", "not a number"),
     ("nothing rmse_m", "no results file"),
     ("bench_y rows.3.speed", "no '3'"),

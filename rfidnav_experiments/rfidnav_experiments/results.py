@@ -16,7 +16,7 @@ that is, the one row of docs/results/flc.json with metric ``tracking_rmse_m`` wh
 ``ours`` field (``paper``: its paper field) times 100, rounded to the decimals shown. A benchmark's figure names a
 path into its JSON instead (``<!--fig bench_flc speedup-->``, ``<!--fig run_hallway metrics.rmse_m-->``), or, where
 its JSON is a list of rows, a field of the one row with the given values (``<!--fig bench_routes search_s
-scenario=long_legs params=flc_paper-->``).
+scenario=long_legs params=flc_paper-->``); ``@KEY`` names the file's own record (``<!--fig flc @wall_s-->``).
 ``./rfidnav reproduce docs`` rewrites every quoted number from its file; ``test_results.py`` fails when one differs,
 when a file is older than the inputs it recorded, or when the ledger's page is not current.
 """
@@ -105,13 +105,29 @@ def _run(label: str, scenario: str, *arguments: str) -> Command:
     return Command(f"run_{label}", ("run", scenario, *arguments, "--quiet"), "summary")
 
 
+FILTER_PARAMS = ("--params", "partition_localizer=config/params/partition_localizer_filter.yaml",
+                 "--params", "partition_navigator=config/params/partition_navigator_filter.yaml")
+
+
+def _seeded_runs(scenario: str, *arguments: str, label: str = "", seeds: tuple[int, ...] = (1, 2, 3)) -> list[Command]:
+    """A scenario over DDS at ``--rtf max`` on several seeds: ``run_SCENARIO[_LABEL]_sN``."""
+    return [_run(f"{scenario}{'_' + label if label else ''}_s{seed}", scenario, "--rtf", "max", "--seed", str(seed),
+                 *arguments) for seed in seeds]
+
+
 COMMANDS: dict[str, Command] = {c.key: c for c in (
     _bench("flc"), _bench("reader"), _bench("planner"), _bench("fused"), _bench("location_server"), _bench("llrp"),
     _bench("routes", "--seeds", "3"), _bench("scaling", "--runs", "3"),
+    Command("bench_rtf_hallway", ("bench", "rtf", "--scenario", "hallway", "--clock", "stepped", "--rtfs", "max",
+                                  "--seeds", "1", "--json"), "json"),
+    Command("bench_rtf_building_large", ("bench", "rtf", "--scenario", "building_large", "--clock", "stepped",
+                                         "--rtfs", "max", "--seeds", "1", "--json"), "json"),
     _run("long_legs", "long_legs", "--rtf", "max", "--seed", "1"),
     _run("mixed_floor_fused", "mixed_floor_fused", "--rtf", "max", "--seed", "1"),
     _run("partition_field_fused", "partition_field_fused", "--rtf", "max", "--seed", "1"),
-    _run("partition_field", "partition_field", "--rtf", "max", "--seed", "1"),
+    *_seeded_runs("partition_field"), *_seeded_runs("partition_field", *FILTER_PARAMS, label="filter"),
+    *_seeded_runs("partition_corridor"), *_seeded_runs("partition_corridor", *FILTER_PARAMS, label="filter"),
+    *_seeded_runs("two_tier_home"), *_seeded_runs("two_tier_flat"), *_seeded_runs("two_tier_corridor"),
 )}
 
 
@@ -363,7 +379,13 @@ def quoted_value(spec: str, results: dict[str, dict[str, Any]], where: str) -> f
         else:
             selectors.append(word)
     document = results[name]
-    if "rows" in document:
+    if selectors and selectors[0].startswith("@"):      # the file's own record: @wall_s, @machine.load_1min
+        value: Any = document
+        for step in selectors[0][1:].split("."):
+            if not isinstance(value, dict) or step not in value:
+                raise ResultsError(where, "fig", f"{spec!r}: no {step!r} in {name}.json")
+            value = value[step]
+    elif "rows" in document:
         if not selectors or "=" in selectors[0]:
             raise ResultsError(where, "fig", f"{spec!r}: name a metric after {name}")
         metric = selectors[0]
@@ -395,7 +417,9 @@ def quoted_value(spec: str, results: dict[str, dict[str, Any]], where: str) -> f
                 value = value[step]
             else:
                 raise ResultsError(where, "fig", f"{spec!r}: no {step!r} in {name}.json's figures")
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+    if isinstance(value, bool):
+        value = int(value)              # a success quoted as 1 or 0
+    if not isinstance(value, (int, float)) or not math.isfinite(value):
         raise ResultsError(where, "fig", f"{spec!r} is {value!r}, not a number")
     return float(value) * scale
 
