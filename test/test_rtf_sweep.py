@@ -34,3 +34,10 @@ def test_report_names_the_highest_rtf_and_its_cpu():
     assert document["highest_rtf"] == 2 and document["graph_cpu_percent_of_one_core_there"] == pytest.approx(80.0)
     text = report("hallway", rows, 0.10, as_json=False)
     assert "highest RTF within 10% of the RTF 1 RMSE: 2, graph CPU 80.0% of one core" in text
+
+
+def test_an_unbounded_rtf_is_written_max_so_the_json_is_strict() -> None:
+    unbounded = SweepRow(float("inf"), True, 0.02, 150.0, 30.0, ("run",))
+    document = json.loads(report("hallway", [unbounded], 0.10, as_json=True),
+                          parse_constant=lambda name: pytest.fail(f"{name} is not JSON"))
+    assert document["highest_rtf"] == "max" and document["rows"][0]["rtf"] == "max"

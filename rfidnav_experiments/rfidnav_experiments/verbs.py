@@ -301,8 +301,12 @@ def reproduce_all(args: argparse.Namespace) -> int:
     codes = []
     for name in names:
         if name in results.COMMANDS:
-            with stage(results.COMMANDS[name].command()):
-                codes.append(results.publish_command(name))
+            try:
+                with stage(results.COMMANDS[name].command()):
+                    codes.append(results.publish_command(name))
+            except results.ResultsError as error:     # one command's failure: said, and the others still run
+                print(f"rfidnav reproduce: {error}", file=sys.stderr)
+                codes.append(1)
             continue
         reproduction = results.REPRODUCTIONS[name]
         arguments = {reproduction.count: reproduction.default}

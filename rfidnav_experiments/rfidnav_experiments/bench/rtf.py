@@ -20,7 +20,7 @@ import statistics
 import subprocess
 import sys
 from collections.abc import Iterator
-from contextlib import contextmanager
+from contextlib import contextmanager, redirect_stdout
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -86,7 +86,8 @@ def sweep(scenario: Scenario, rtfs: list[float], seeds: list[int], out_dir: Path
             for seed in seeds:
                 orchestrator = Orchestrator(scenario, RunOptions(rtf=rtf, clock=clock, seed=seed, out_dir=out_dir,
                                                                  quiet=True))
-                summary = orchestrator.run()
+                with redirect_stdout(sys.stderr):    # the run's own lines; stdout carries the figures
+                    summary = orchestrator.run()
                 if orchestrator.interrupted:   # Ctrl-C stops the sweep, not just the run in progress
                     raise KeyboardInterrupt
                 documents.append(summary.document)
@@ -125,7 +126,7 @@ def report(scenario: str, rows: list[SweepRow], tolerance: float, as_json: bool)
     if as_json:
         document: dict[str, Any] = {
             "scenario": scenario, "tolerance": tolerance,
-            "highest_rtf": best.rtf if best else None,
+            "highest_rtf": (best.rtf if math.isfinite(best.rtf) else "max") if best else None,
             "graph_cpu_percent_of_one_core_there": best.cpu_percent_of_one_core if best else None,
             "rows": [{**row.__dict__, "rtf": row.rtf if math.isfinite(row.rtf) else "max",
                       "run_dirs": list(row.run_dirs)} for row in rows]}
