@@ -737,9 +737,11 @@ def test_player_start_offset_clock_and_pacing(ros: Ros, processes: Processes, sy
          lambda: len(inbox.received["/odom"]) >= 20)
     xs = [m.pose.pose.position.x for m in inbox.received["/odom"]]
     assert xs == pytest.approx([0.1 * i for i in range(10, 30)]), "start_s did not skip the first second"
-    # 1.9 s of bag at rate 2: the first and last message are ~0.95 s apart on the wall, never much less.
+    # 1.9 s of bag at rate 2: the player sends the first and last message ~0.95 s apart. A loaded machine only
+    # delays arrivals, the first one too (0.785 s apart was seen beside two busy DDS graphs), so the bound is
+    # half of that; a player that does not pace sends all 20 within milliseconds.
     spread = inbox.arrival["/odom"][-1] - inbox.arrival["/odom"][0]
-    assert spread > 0.8, f"not paced: 20 messages within {spread:.3f} s"
+    assert spread > 0.5, f"not paced: 20 messages within {spread:.3f} s"
     clocks = [c.clock.sec * 1_000_000_000 + c.clock.nanosec for c in inbox.received["/clock"]]
     assert len(clocks) >= 10, "clock:=true published no /clock"
     assert clocks == sorted(clocks), "/clock went backwards"
