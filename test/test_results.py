@@ -103,7 +103,6 @@ def test_a_results_file_is_stale_once_an_input_it_recorded_changes(tmp_path: Pat
     source = tmp_path / "config" / "robot.yaml"
     source.write_text("a: 1\n")
     with results.recorded_inputs() as opened:
-        results._install_hook()
         source.read_text()
     assert opened == {source}
     document = {"inputs": results.input_hashes(opened)}

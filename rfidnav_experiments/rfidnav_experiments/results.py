@@ -141,6 +141,7 @@ class ResultsError(ConfigError):
 def recorded_inputs() -> Iterator[set[Path]]:
     """The repository's files this process opens meanwhile (an audit hook: every reader of the configuration,
     whoever calls it). Audit hooks cannot be removed, so one hook serves every use, on while a recording runs."""
+    _install_hook()
     opened: set[Path] = set()
     _RECORDERS.append(opened)
     try:
@@ -247,7 +248,6 @@ def pinned_rows(name: str) -> list[dict[str, Any]]:
 
 def publish_reproduction(name: str, out_dir: Path, results_dir: Path = RESULTS_DIR, count: int | None = None) -> int:
     """Run the reproduction at its published size (or ``count``) and its pinned subset; write NAME.json."""
-    _install_hook()
     reproduction = REPRODUCTIONS[name]
     arguments = {reproduction.count: count or reproduction.default}
     with recorded_inputs() as opened:
@@ -405,7 +405,7 @@ def quoted_value(spec: str, results: dict[str, dict[str, Any]], where: str) -> f
     elif isinstance(document.get("figures"), list):       # a benchmark's rows: a field of the one row matching
         field_name, filters = selectors[0] if selectors else "", [word.split("=", 1) for word in selectors[1:]]
         rows = [row for row in document["figures"] if isinstance(row, dict)
-                and all(len(pair) == 2 and str(row.get(pair[0])) == pair[1] for pair in filters)]
+                and all(len(pair) == 2 and _matches(row, *pair) for pair in filters)]
         if len(rows) != 1 or field_name not in rows[0]:
             raise ResultsError(where, "fig", f"{spec!r} selects {len(rows)} rows of {name}.json with a "
                                              f"{field_name!r}, expected one")

@@ -264,7 +264,7 @@ def run_reproduce(args: argparse.Namespace) -> int:
     if args.name == "docs":
         return render_docs()
     reproduction = results.REPRODUCTIONS[args.name]
-    count = getattr(args, reproduction.count if reproduction.count == "seeds" else "runs")
+    count = getattr(args, reproduction.option.removeprefix("--"))
     arguments = {reproduction.count: count or reproduction.default}
     with engine(args, f"reproduce {args.name}", arguments, args.out / f"{args.name}_tasks.jsonl"):
         if not args.publish:
