@@ -28,7 +28,8 @@ from rfidnav_experiments.calibrate.flc import (
     timeout_s,
     with_opens,
 )
-from rfidnav_experiments.reproduce.flc import SOURCES, conditions, evaluation_seeds
+from rfidnav_experiments.reproduce.flc import SOURCES, conditions, evaluation_seeds, sweep_rows
+from rfidnav_experiments.reproduce.tables import INTERPRETED, is_condition_source, rowless_fields
 from rfidnav_experiments.runners.tag_route import RouteRun, controller_parameters, floor_read_radius_m, run_tag_route
 from rfidnav_sim.parameters import ReaderParameters, RobotSimParameters
 
@@ -74,9 +75,6 @@ def test_the_evaluation_seeds_are_never_the_calibrations() -> None:
     assert not set(evaluation_seeds(50)) & set(CALIBRATION_SEEDS)
 
 
-ROW_SOURCES = {"paper", "calibrated", "ours", "paper, interpreted"}
-
-
 def test_the_conditions_table_lists_every_setting_of_the_reader_and_base_files_with_a_source() -> None:
     for path, node in ((CONFIG_DIR / "params" / "reader_uhf_2ant.yaml", "rfid_reader_sim"),
                        (CONFIG_DIR / "params" / "robot_sim.yaml", "robot_sim")):
@@ -84,18 +82,17 @@ def test_the_conditions_table_lists_every_setting_of_the_reader_and_base_files_w
         assert {f"{node}.{key}" for key in keys} <= set(SOURCES), path
     rows = conditions()
     assert [row.setting for row in rows] == list(SOURCES)
-    assert {row.source for row in rows} <= ROW_SOURCES
-    assert all(set(row.sources.values()) <= ROW_SOURCES for row in rows if row.sources)
+    assert all(is_condition_source(row.source) for row in rows)
+    assert all(is_condition_source(source) for row in rows if row.sources for source in row.sources.values())
     noise = next(row for row in rows if row.setting == "rfid_reader_sim.phase_noise_rad_per_m")
     assert noise.source == "calibrated" and len(set(noise.values.values())) == 1   # the same for both
 
 
 def test_every_parameter_a_run_reads_has_a_row() -> None:
     """The reader's, the base's and the controller's parameter classes, field by field."""
-    for cls, node in ((ReaderParameters, "rfid_reader_sim"), (RobotSimParameters, "robot_sim"),
-                      (HeadingControllerParameters, "heading_controller")):
-        missing = {f"{node}.{field.name}" for field in dataclasses.fields(cls)} - set(SOURCES)
-        assert not missing, missing
+    missing = rowless_fields(SOURCES, {"rfid_reader_sim": ReaderParameters, "robot_sim": RobotSimParameters,
+                                       "heading_controller": HeadingControllerParameters})
+    assert not missing, missing
 
 
 def test_a_row_whose_sets_differ_in_value_and_origin_gives_one_source_per_set() -> None:
@@ -106,7 +103,7 @@ def test_a_row_whose_sets_differ_in_value_and_origin_gives_one_source_per_set() 
         row = rows[key]
         assert row.values["flc_paper"] != row.values["flc_tuned"], key
         assert row.sources is not None and row.sources["flc_tuned"] == "ours", key
-        assert row.sources["flc_paper"] in {"paper", "paper, interpreted"}, key
+        assert row.sources["flc_paper"] in {"paper", INTERPRETED}, key
     assert rows["heading_controller.output_range_rad"].sources == {"flc_paper": "calibrated", "flc_tuned": "ours"}
 
 
@@ -125,6 +122,23 @@ def test_the_calibrations_best_point_is_inside_its_grid_and_its_held_out_spread_
         assert spread["min_m"] == min(values) and spread["max_m"] == max(values)
     swept = {name for p in record["sweep"] for name in p["open"]}
     assert swept == {setting.name for setting in OPEN_SETTINGS}
+
+
+def test_the_reproductions_sweep_rows_give_each_swept_value_its_recorded_figures_beside_the_papers() -> None:
+    record = json.loads(RECORD.read_text())
+    rows = sweep_rows(record)
+    assert len(rows) == sum(len(point["rmse_m"]) + 2 for point in record["sweep"])
+    for point in record["sweep"]:
+        (name, value), = point["open"].items()
+        mine = [row for row in rows if (row["setting"]["open_setting"], row["setting"]["value"]) == (name, value)]
+        rmse = {row["setting"]["scenario"]: (row["ours"], row["paper"]) for row in mine
+                if row["metric"] == "sweep_rmse_m"}
+        assert rmse == {scenario: (value_m, record["fitted_to"]["rmse_m"][scenario])
+                        for scenario, value_m in point["rmse_m"].items()}
+        approach, = (row for row in mine if row["metric"] == "sweep_approach_s")
+        assert (approach["ours"], approach["paper"]) == (point["approach_s"], 110.0)
+        failures, = (row for row in mine if row["metric"] == "sweep_failures")
+        assert failures["ours"] == point["failures"]
 
 
 def test_the_open_settings_reach_the_runs_parameters() -> None:

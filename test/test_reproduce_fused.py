@@ -47,7 +47,7 @@ from rfidnav_experiments.reproduce.fused import (
     recovery_keys,
     world_run,
 )
-from rfidnav_experiments.reproduce.tables import CONDITION_SOURCES
+from rfidnav_experiments.reproduce.tables import interpreted, is_condition_source
 from rfidnav_experiments.reproduce.two_tier import HOMES
 from rfidnav_experiments.runners.fused import Track
 from rfidnav_localization.fused.filter import PoseEstimate, Update
@@ -82,10 +82,9 @@ def test_every_parameter_a_run_reads_has_a_row_and_every_other_field_a_reason() 
     for key in ("two_tier_navigator.search_speed_mps", "location_server.k", "robot_sim.footprint_radius_m",
                 "compass_sim.noise_sd_deg", "wifi_sim.scan_noise_sd_db"):
         assert key in rows
-    assert all(row.source in CONDITION_SOURCES or row.source.startswith("paper, interpreted: ")
-               for row in rows.values())
+    assert all(is_condition_source(row.source) for row in rows.values())
     assert rows["reader.rate_hz"].sources is not None and rows["reader.rate_hz"].sources["hf_floor"].startswith(
-        "paper, interpreted: ")
+        interpreted(""))
 
 
 def test_the_evaluation_seed_is_the_ledgers_and_the_conditions_name_the_set() -> None:

@@ -17,7 +17,7 @@ from rfidnav_common.errors import ConfigError
 from rfidnav_common.wall_tags import InductionArea
 from rfidnav_control.parameters import WallFollowerParameters
 from rfidnav_experiments.evaluation import LEDGER, current
-from rfidnav_experiments.reproduce.tables import CONDITION_SOURCES
+from rfidnav_experiments.reproduce.tables import interpreted, is_condition_source, rowless_fields
 from rfidnav_experiments.reproduce.topological import (
     CAUSES,
     CROSSED_WALL,
@@ -27,7 +27,6 @@ from rfidnav_experiments.reproduce.topological import (
     FLOOR_ORDER,
     GAVE_UP,
     HELD_AT_WALL,
-    INTERPRETED,
     LOST,
     MISS_RATES,
     NEAR_GOAL,
@@ -60,15 +59,10 @@ READER_ROWS = {"width_m": "wall_tag_reader.induction_area_m", "depth_m": "wall_t
                "tags": "world.floors", "area": "wall_tag_reader.induction_area_m"}
 
 
-def valid_source(source: str) -> bool:
-    return source in CONDITION_SOURCES or (source.startswith(INTERPRETED) and len(source) > len(INTERPRETED) + 10)
-
-
 @pytest.mark.tier("unit")
 def test_every_parameter_a_run_reads_has_a_row_with_a_source() -> None:
-    for prefix, parameters in NODE_PARAMETERS.items():
-        for field in dataclasses.fields(parameters):
-            assert f"{prefix}.{field.name}" in SOURCES, f"{prefix}.{field.name} has no row in the conditions table"
+    missing = rowless_fields(SOURCES, NODE_PARAMETERS)
+    assert not missing, f"parameters without a row in the conditions table: {missing}"
     for name in [field.name for field in dataclasses.fields(InductionArea)] + \
             [name for name in inspect.signature(WallTagReader).parameters]:
         assert READER_ROWS[name] in SOURCES, name
@@ -78,7 +72,7 @@ def test_every_parameter_a_run_reads_has_a_row_with_a_source() -> None:
             assert f"{node}.{key}" in SOURCES, f"{node}.{key} has no row in the conditions table"
     rows = {row.setting: row for row in conditions(10)}
     assert set(rows) == set(SOURCES)
-    assert all(valid_source(row.source) and row.note for row in rows.values())
+    assert all(is_condition_source(row.source) and row.note for row in rows.values())
     assert all(row.values.keys() == METHODS.keys() for row in rows.values())
 
 
@@ -92,11 +86,11 @@ def test_the_sources_say_what_the_paper_gives_and_what_it_does_not() -> None:
     assert rows["missions.success_radius_m"].values["ours"] == GOAL_RADIUS_M == 0.5
     assert rows["missions.reported_radii_m"].values["ours"] == [0.25, 0.5, 0.75, 1.0]
     assert rows["robot_sim.footprint_radius_m"].values["ours"] == 0.17
-    assert rows["wall_follower.junction_half_width_m"].source.startswith(INTERPRETED)
+    assert rows["wall_follower.junction_half_width_m"].source.startswith(interpreted(""))
     weight = rows["mission_executor.weight"]
     assert weight.values == {"paper": "edges", "ours": "length"}       # the paper's robot knows no lengths
-    assert weight.sources is not None and weight.sources["paper"].startswith(INTERPRETED)
-    assert all(valid_source(source.split(" (")[0]) for row in rows.values() if row.sources
+    assert weight.sources is not None and weight.sources["paper"].startswith(interpreted(""))
+    assert all(is_condition_source(source.split(" (")[0]) for row in rows.values() if row.sources
                for source in row.sources.values())
 
 

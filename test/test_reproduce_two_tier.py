@@ -25,7 +25,7 @@ from rfidnav_common.errors import ConfigError
 from rfidnav_common.polling import PollClock
 from rfidnav_common.seeding import rng_for
 from rfidnav_experiments import evaluation
-from rfidnav_experiments.reproduce.tables import CONDITION_SOURCES, condition_json_rows
+from rfidnav_experiments.reproduce.tables import condition_json_rows, interpreted, is_condition_source, rowless_fields
 from rfidnav_experiments.reproduce.two_tier import (
     CENTRE,
     DELAYS,
@@ -81,15 +81,11 @@ PARAMETER_CLASSES = {"rfid_reader_sim": ReaderParameters, "two_tier_navigator": 
                      "world.wifi": PropagationSettings}
 
 
-def is_source(source: str) -> bool:
-    return source in CONDITION_SOURCES or source.startswith("paper, interpreted: ")
-
-
 @pytest.mark.tier("unit")
 def test_every_parameter_a_run_reads_has_a_row_and_every_other_field_a_reason() -> None:
     fields = {f"{prefix}.{field.name}" for prefix, cls in PARAMETER_CLASSES.items()
               for field in dataclasses.fields(cls)}
-    missing = fields - set(SOURCES) - set(NOT_READ)
+    missing = rowless_fields(SOURCES, PARAMETER_CLASSES) - set(NOT_READ)
     assert not missing, f"parameters without a row in the conditions table (or a reason in NOT_READ): {missing}"
     assert not set(SOURCES) & set(NOT_READ)
     assert set(NOT_READ) <= fields                  # a reason for a field that no longer exists is stale
@@ -104,13 +100,13 @@ def test_every_parameter_a_run_reads_has_a_row_and_every_other_field_a_reason() 
 def test_the_conditions_table_gives_each_row_its_value_and_source_and_says_where_it_interprets_the_paper() -> None:
     rows = conditions()
     assert [row.setting for row in rows] == list(SOURCES)
-    assert all(is_source(row.source) and set(row.values) == set(METHODS) for row in rows)
+    assert all(is_condition_source(row.source) and set(row.values) == set(METHODS) for row in rows)
     by_setting = {row.setting: row for row in rows}
     assert by_setting["rfid_reader_sim.round_failure_probability"].values["ours"] == 0.1
     assert by_setting["rfid_reader_sim.round_failure_probability"].source == "ours"
     # The paper's 500-600 ms communication delay is used as the poll period: an interpretation, said so.
     for key in ("rfid_reader_sim.rate_hz", "rfid_reader_sim.round_jitter_s"):
-        assert by_setting[key].source.startswith("paper, interpreted: ")
+        assert by_setting[key].source.startswith(interpreted(""))
     # The matcher and the footprint the runs use are the shipped nodes' and are listed.
     assert LOCATE_SETTINGS == file_locate_settings()
     assert by_setting["location_server.k"].values["paper"] == 3

@@ -118,8 +118,10 @@ def _seeded_runs(scenario: str, *arguments: str, label: str = "", seeds: tuple[i
 COMMANDS: dict[str, Command] = {c.key: c for c in (
     _bench("flc"), _bench("reader"), _bench("planner"), _bench("fused"), _bench("location_server"), _bench("llrp"),
     _bench("routes", "--seeds", "3"), _bench("scaling", "--runs", "3"),
-    Command("bench_rtf_hallway", ("bench", "rtf", "--scenario", "hallway", "--clock", "stepped", "--rtfs", "max",
+    Command("bench_rtf_hallway", ("bench", "rtf", "--scenario", "hallway", "--clock", "stepped", "--rtfs", "5,max",
                                   "--seeds", "1", "--json"), "json"),
+    Command("bench_rtf_hallway_loaded", ("bench", "rtf", "--scenario", "hallway", "--clock", "stepped", "--rtfs",
+                                         "5,max", "--hogs", "2", "--seeds", "1", "--json"), "json"),
     Command("bench_rtf_building_large", ("bench", "rtf", "--scenario", "building_large", "--clock", "stepped",
                                          "--rtfs", "max", "--seeds", "1", "--json"), "json"),
     _run("long_legs", "long_legs", "--rtf", "max", "--seed", "1"),

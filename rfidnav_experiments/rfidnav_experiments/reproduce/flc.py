@@ -61,6 +61,7 @@ from rfidnav_experiments.calibrate.flc import scenario_named as paper_scenario  
 from rfidnav_experiments.engine import run_tasks  # noqa: E402
 from rfidnav_experiments.evaluation import current  # noqa: E402
 from rfidnav_experiments.reproduce.tables import (  # noqa: E402
+    INTERPRETED,
     Condition,
     Interval,
     condition_json_rows,
@@ -175,7 +176,6 @@ class Summary:
 # source is one for both parameter sets, or one per set (a dict) where they differ; "paper, interpreted" where the
 # paper says something we had to read as a number or a rule.
 Source = str | dict[str, str]
-INTERPRETED = "paper, interpreted"
 PER_SET_OURS = {"flc_paper": "paper", "flc_tuned": "ours"}
 SOURCES: dict[str, tuple[Source, str]] = {
     "rfid_reader_sim.world_file": ("ours", "the scenario's world (ground truth); no effect beyond the tags"),
@@ -431,6 +431,25 @@ def calibration_rows(record: dict[str, Any]) -> list[dict[str, Any]]:
     if "interior" in record:
         rows.append({"experiment": EXPERIMENT, "setting": {"params": BASELINE, "source": "calibration"},
                      "metric": "calibration_interior", "ours": bool(record["interior"]), "paper": None})
+    return rows + sweep_rows(record)
+
+
+def sweep_rows(record: dict[str, Any]) -> list[dict[str, Any]]:
+    """The open-settings sweep around the best grid point (calibration seeds): each swept value's fitted figures
+    beside the paper's targets, and its failed runs."""
+    targets = record.get("fitted_to", {})
+    rows = []
+    for point in record.get("sweep", []):
+        (name, value), = point["open"].items()
+        setting = {"params": BASELINE, "source": "calibration", "open_setting": name, "value": value}
+        rows += [{"experiment": EXPERIMENT, "setting": {**setting, "scenario": scenario}, "metric": "sweep_rmse_m",
+                  "ours": rmse, "paper": targets.get("rmse_m", {}).get(scenario)}
+                 for scenario, rmse in point["rmse_m"].items()]
+        rows += [{"experiment": EXPERIMENT, "setting": {**setting, "scenario": TIME_SCENARIO},
+                  "metric": "sweep_approach_s", "ours": point["approach_s"],
+                  "paper": targets.get("approach_s", {}).get(TIME_SCENARIO)},
+                 {"experiment": EXPERIMENT, "setting": dict(setting), "metric": "sweep_failures",
+                  "ours": point["failures"], "paper": None}]
     return rows
 
 

@@ -6,8 +6,8 @@ from __future__ import annotations
 
 import math
 import statistics
-from collections.abc import Hashable, Mapping, Sequence
-from dataclasses import dataclass
+from collections.abc import Hashable, Iterable, Mapping, Sequence
+from dataclasses import dataclass, fields
 from pathlib import Path
 from typing import Any, TypeVar
 
@@ -16,6 +16,8 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 from scipy import stats  # noqa: E402
+
+from rfidnav_bringup.scenario import CONFIG_DIR  # noqa: E402
 
 Key = TypeVar("Key", bound=Hashable)   # what pairs two methods' values: a seed, a placement, a mission
 
@@ -104,6 +106,36 @@ class Condition:
 
 
 CONDITION_SOURCES = ("paper", "calibrated", "ours")
+CONFIG_ROOT = CONFIG_DIR.resolve()    # where a scenario's resolved paths point, on this clone
+INTERPRETED = "paper, interpreted"   # a reading of the paper's text where it gives no number
+
+
+def interpreted(reading: str) -> str:
+    """The source of a setting the paper implies: the reading follows the label."""
+    return f"{INTERPRETED}: {reading}"
+
+
+def is_condition_source(source: str) -> bool:
+    """One of the sources, or the paper interpreted (the reading in the source, or in the row's note)."""
+    return source in CONDITION_SOURCES or source == INTERPRETED or source.startswith(INTERPRETED + ": ")
+
+
+def rowless_fields(settings: Iterable[str], parameters: Mapping[str, type]) -> set[str]:
+    """``NODE.field`` of every field of the nodes' parameter classes that has no row among ``settings``."""
+    named = set(settings)
+    return {f"{node}.{field.name}" for node, cls in parameters.items() for field in fields(cls)} - named
+
+
+def portable(value: Any) -> Any:
+    """A value written alike on every clone: a path into the configuration is written from ``config/``."""
+    if isinstance(value, str) and value.startswith(f"{CONFIG_ROOT}/"):
+        return "config/" + value.removeprefix(f"{CONFIG_ROOT}/")
+    if isinstance(value, dict):
+        return {key: portable(item) for key, item in value.items()}
+    if isinstance(value, (list, tuple)):
+        return type(value)(portable(item) for item in value)
+    return value
+
 
 
 def condition_lines(rows: Sequence[Condition], methods: Sequence[str]) -> list[str]:
@@ -114,9 +146,10 @@ def condition_lines(rows: Sequence[Condition], methods: Sequence[str]) -> list[s
 
     body = []
     for row in rows:
-        first = repr(row.values[methods[0]])
-        values = [shown(row.values[methods[0]]),
-                  *("same" if repr(row.values[method]) == first else shown(row.values[method])
+        row_values = portable(row.values)
+        first = repr(row_values[methods[0]])
+        values = [shown(row_values[methods[0]]),
+                  *("same" if repr(row_values[method]) == first else shown(row_values[method])
                     for method in methods[1:])]
         body.append([row.setting, *values, row.source_text(), row.note])
     return ["conditions: every physical setting of these runs and where it comes from",
@@ -128,4 +161,4 @@ def condition_json_rows(experiment: str, rows: Sequence[Condition]) -> list[dict
     return [{"experiment": experiment,
              "setting": {"condition": row.setting, "source": row.source, "note": row.note,
                          **({"sources": row.sources} if row.sources else {})},
-             "metric": "condition", "ours": row.values, "paper": None} for row in rows]
+             "metric": "condition", "ours": portable(row.values), "paper": None} for row in rows]

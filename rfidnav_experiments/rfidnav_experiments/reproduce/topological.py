@@ -63,6 +63,7 @@ from rfidnav_experiments.reproduce.tables import (  # noqa: E402
     Interval,
     condition_json_rows,
     condition_lines,
+    interpreted,
     paired_interval,
     save,
     table,
@@ -136,7 +137,6 @@ class RateSummary:
 
 # ---------------------------------------------------------------------------------------- conditions
 
-INTERPRETED = "paper, interpreted: "
 # Where every setting the runs read comes from: every field of the parameters of the nodes the runs use (the base,
 # the sonar, the follower, the executor; test_reproduce_topological checks each has a row), the wall-tag reader's
 # model, the floors and the missions. (source, note); a source of None is given per method in PER_METHOD.
@@ -152,8 +152,8 @@ SOURCES: dict[str, tuple[str, str]] = {
                                                "1.6-2.4 m in fact on the hand-drawn floor"),
     "mission_executor.map_file": ("ours", "each floor's topological map (world.floors)"),
     "wall_tag_reader.induction_area_m": ("paper", "Fig. 3: the reader's 40 x 100 cm induction area"),
-    "wall_tag_reader.antenna": (INTERPRETED + "the area reaches 1 m from the robot's centre, to its left (the "
-                                "followed wall)", "sec. 4: 'the robot must move along the wall at a distance of "
+    "wall_tag_reader.antenna": (interpreted("the area reaches 1 m from the robot's centre, to its left (the "
+                                "followed wall)"), "sec. 4: 'the robot must move along the wall at a distance of "
                                 "less than 1 m'; [x m, y m, bearing rad] in base_link"),
     "wall_tag_reader.miss_model": ("ours", "paper 004 does not mention read failures: a tag missed for its whole "
                                            "passage (drawn when it comes into reach), with missions.miss_rates"),
@@ -203,8 +203,8 @@ SOURCES: dict[str, tuple[str, str]] = {
     "wall_follower.stop_distance_m": ("ours", "emergency stop"),
     "wall_follower.diagonal_stop_distance_m": ("ours", "emergency stop, diagonal sonars"),
     "wall_follower.opening_threshold_m": ("ours", "a side reading beyond this is an opening"),
-    "wall_follower.junction_half_width_m": (INTERPRETED + "half the 1.6 m passage of sec. 5 taken as every "
-                                            "junction's half width", "sec. 5 gives one passage's width"),
+    "wall_follower.junction_half_width_m": (interpreted("half the 1.6 m passage of sec. 5 taken as every "
+                                            "junction's half width"), "sec. 5 gives one passage's width"),
     "wall_follower.turn_rate_radps": ("ours", "the base's yaw rate"),
     "wall_follower.heading_gain_per_s": ("ours", "heading hold"),
     "wall_follower.distance_gain": ("ours", "approach to the set distance"),
@@ -215,8 +215,8 @@ SOURCES: dict[str, tuple[str, str]] = {
     "world.generator": ("ours", "rfidnav_sim.floor_generator's rules: an irregular grid, a random spanning tree and "
                                 "loops, '?' dead ends, tags as paper 004 places them (sec. 4, Fig. 4)"),
     "world.hallway_width_m": ("paper", "sec. 5: a 1.6 m-wide passage (the generated floors' every hallway)"),
-    "world.tag_setback_m": (INTERPRETED + "sec. 4's tags 'near the junction' placed 1 m before its square, on the "
-                            "arriving robot's left wall", "generated floors; Fig. 4"),
+    "world.tag_setback_m": (interpreted("sec. 4's tags 'near the junction' placed 1 m before its square, on the "
+                            "arriving robot's left wall"), "generated floors; Fig. 4"),
     "missions.per_rate": ("ours", "the same missions for every rate and method; the development floors at a "
                                   "fifth (building_large a tenth) of the evaluation floors'"),
     "missions.seed": ("ours", "evaluation: the ledger's drawn seeds (the floor and its missions); development: "
@@ -230,8 +230,8 @@ SOURCES: dict[str, tuple[str, str]] = {
     "missions.reported_radii_m": ("ours", "success within each of these radii, from the same missions"),
 }
 # Rows whose methods' values come from different places.
-PER_METHOD = {"mission_executor.weight": {"paper": INTERPRETED + "fewest hallways, as the paper's map has no lengths "
-                                                               "(sec. 3)", "ours": "ours"},
+PER_METHOD = {"mission_executor.weight": {"paper": interpreted("fewest hallways, as the paper's map has no lengths "
+                                                               "(sec. 3)"), "ours": "ours"},
               "mission_executor.recover_missed_tags": {"paper": "paper (sec. 3)", "ours": "ours"},
               "mission_executor.early_margin": {"paper": "paper (none)", "ours": "ours"}}
 FILES = {"robot_sim": ROBOT, "sonar_sim": SONAR, "wall_follower": FOLLOWER}

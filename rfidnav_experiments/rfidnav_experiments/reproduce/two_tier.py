@@ -80,6 +80,7 @@ from rfidnav_experiments.reproduce.tables import (  # noqa: E402
     Interval,
     condition_json_rows,
     condition_lines,
+    interpreted,
     paired_interval,
     save,
     table,
@@ -173,7 +174,7 @@ def spiral_methods() -> dict[str, SpiralMethod]:
 # reader, the navigator, the compass, the WiFi receiver, the location server's matcher, the base's footprint, the
 # world's WiFi) are listed field by field: a field of their parameter classes with neither a row here nor a reason
 # in NOT_READ fails test_reproduce_two_tier.
-DELAY_AS_PERIOD = "paper, interpreted: the 500-600 ms delay as the poll period"
+DELAY_AS_PERIOD = interpreted("the 500-600 ms delay as the poll period")
 READER_SOURCES: dict[str, tuple[str, str]] = {
     "rfid_reader_sim.rate_hz": (DELAY_AS_PERIOD, "sec. 4.1 item 1's 'communication delay' of 500-600 ms over RS-232 "
                                                  "at 19,200 bps taken as the time between two polls, the tags read "
