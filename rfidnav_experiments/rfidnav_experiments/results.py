@@ -46,8 +46,6 @@ from rfidnav_experiments.evaluation import evaluation_set_dict
 REPOSITORY = Path(__file__).resolve().parents[2]
 RESULTS_DIR = REPOSITORY / "docs" / "results"
 LEDGER_PAGE = RESULTS_DIR / "evaluation-ledger.md"
-QUOTING_PAGES = ("README.md", "docs/paper-000.md", "docs/paper-001.md", "docs/paper-003.md", "docs/paper-004.md",
-                 "docs/real-robot.md", "docs/formats.md")
 FORMAT = 1
 
 
@@ -349,9 +347,14 @@ class Quote:
         return f"{self.page}:{self.line}"
 
 
-def quotes(root: Path = REPOSITORY, pages: tuple[str, ...] = QUOTING_PAGES) -> list[Quote]:
+def quoting_pages(root: Path = REPOSITORY) -> list[str]:
+    """The pages that may quote a figure: the README and every page of docs/ (a new page needs no registering)."""
+    return ["README.md", *(path.relative_to(root).as_posix() for path in sorted((root / "docs").glob("*.md")))]
+
+
+def quotes(root: Path = REPOSITORY, pages: list[str] | None = None) -> list[Quote]:
     found = []
-    for page in pages:
+    for page in quoting_pages(root) if pages is None else pages:
         path = root / page
         if not path.is_file():
             continue
@@ -475,7 +478,7 @@ def render_quotes(root: Path = REPOSITORY, results_dir: Path = RESULTS_DIR) -> l
     """Rewrite every quoted number from its file; returns the problems of the quotes it could not render."""
     results = all_results(results_dir)
     problems: list[str] = []
-    for page in QUOTING_PAGES:
+    for page in quoting_pages(root):
         path = root / page
         if not path.is_file():
             continue
