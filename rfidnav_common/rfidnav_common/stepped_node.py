@@ -49,6 +49,7 @@ from rclpy.subscription import Subscription
 from rclpy.task import Future
 from rclpy.time import Time
 
+from rfidnav_common.rclpy_compat import drive_ros_time_without_clock_topic
 from rfidnav_common.step_ledger import StepReport
 from rfidnav_msgs.msg import StepAck  # type: ignore[attr-defined]  # generated
 
@@ -117,6 +118,17 @@ def message_stamp_ns(message: Any) -> int | None:
     return stamp.sec * 1_000_000_000 + stamp.nanosec
 
 
+class CountedPublisher(Publisher):
+    """A publisher that tells its stepped node of each message it sent (rclpy's ``publisher_class`` hook)."""
+
+    on_published: Callable[[], None] | None = None
+
+    def publish(self, msg: Any) -> None:
+        super().publish(msg)
+        if self.on_published is not None:
+            self.on_published()
+
+
 class SteppedNode(Node):
     """An rclpy Node that answers the stepped simulation clock when its ``stepped_clock`` parameter is true."""
 
@@ -150,9 +162,9 @@ class SteppedNode(Node):
             return
         self.incarnation = random.SystemRandom().getrandbits(63)
         # Simulated time without a /clock subscription: the clock reads what the adapter sets from the stamps
-        # it handles (rclpy's TimeSource does the same from /clock; this is its private switch).
+        # it handles.
         clock = cast(ROSClock, self.get_clock())   # a ROS-time clock: the node's own
-        clock._set_ros_time_is_active(True)
+        drive_ros_time_without_clock_topic(clock)
         clock.set_ros_time_override(Time(nanoseconds=0, clock_type=clock.clock_type))
         self.in_callback = False
         self.unanswered_changes = 0
@@ -206,19 +218,18 @@ class SteppedNode(Node):
         events = kwargs.pop("event_callbacks", None) or PublisherEventCallbacks()
         if events.matched is None:
             events.matched = lambda _status: self.changed()
-        publisher = super().create_publisher(msg_type, topic, qos_profile, event_callbacks=events, **kwargs)
+        publisher = cast(CountedPublisher, super().create_publisher(
+            msg_type, topic, qos_profile, event_callbacks=events, publisher_class=CountedPublisher, **kwargs))
         resolved = publisher.topic_name
         self.produced_counts.setdefault(resolved, 0)
         self.counted_publishers.setdefault(resolved, []).append(publisher)
-        publish = publisher.publish
 
-        def counted(message: Any) -> None:
-            publish(message)
+        def counted() -> None:
             self.produced_counts[resolved] += 1
             if not self.in_callback:   # within a callback the answer after it counts this too
                 self.changed()
 
-        publisher.publish = counted  # type: ignore[method-assign, assignment]  # the counting adapter
+        publisher.on_published = counted
         return publisher
 
     def create_timer(self, timer_period_sec: float, callback: Callable[[], Any], callback_group: Any = None,
