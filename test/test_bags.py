@@ -528,7 +528,16 @@ def test_a_stalled_clock_keeps_nothing_in_memory_past_a_checkpoint(ros: Ros, pro
     def on_disk() -> int:
         return scan_file(bag / "bag_0.mcap").message_count
 
-    record_clock_then_kill(ros, processes, bag, checkpoint_period_s=0.5, until=lambda: on_disk() == ROUNDS)
+    def in_metadata() -> int | None:
+        try:
+            return yaml.safe_load((bag / "metadata.yaml").read_text())["rosbag2_bagfile_information"]["message_count"]
+        except (OSError, yaml.YAMLError, TypeError, KeyError):   # not written yet, or caught mid-write
+            return None
+
+    # A checkpoint writes the chunk, then metadata.yaml: the kill waits for both (a loaded machine can put it
+    # between them), and a checkpoint that never writes the metadata still fails below.
+    record_clock_then_kill(ros, processes, bag, checkpoint_period_s=0.5,
+                           until=lambda: on_disk() == ROUNDS and in_metadata() == ROUNDS)
     assert [t for _, t, _ in read_messages(bag)] == [i * CLOCK_STEP_NS for i in range(ROUNDS)]
     metadata = yaml.safe_load((bag / "metadata.yaml").read_text())["rosbag2_bagfile_information"]
     assert metadata["message_count"] == ROUNDS, "metadata.yaml not kept current"
