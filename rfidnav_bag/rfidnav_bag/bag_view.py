@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import math
 import queue
+import signal
 import sys
 import threading
 import time
@@ -294,10 +295,16 @@ def serve_bag(bag: Path, port: int, host: str = DEFAULT_HOST, speed: float = 1.0
         raise BagError(f"cannot serve {bag} on {host}:{port}: {error}") from error
     announce(f"serving {bag} ({len(channels)} topics, {info.duration_s:.1f} s) at {ws_url(host, server.port)} "
              "(Foxglove: Open connection -> Foxglove WebSocket); Ctrl-C to stop")
+    stop = stop or threading.Event()
+    # Ctrl-C sets the event the loop looks at between messages (at least every IDLE_WAIT_S) instead of raising
+    # wherever the main thread is: an interrupt inside a request hand-over or the SDK's call could leave the
+    # server's callback thread waiting, and server.stop() with it (a view that would not end after SIGINT).
+    interrupted = signal.signal(signal.SIGINT, lambda _signum, _frame: stop.set()) \
+        if threading.current_thread() is threading.main_thread() else None
     try:
-        player.run(server, stop or threading.Event())
-    except KeyboardInterrupt:
-        pass
+        player.run(server, stop)
     finally:
+        if interrupted is not None:
+            signal.signal(signal.SIGINT, interrupted)
         server.stop()
     return 0
