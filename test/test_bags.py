@@ -519,6 +519,11 @@ def test_a_sigkilled_recorder_leaves_a_bag_readable_up_to_the_chunk_in_progress(
     assert bag_info(recovery.output).notes == ()
 
 
+def bag_metadata(bag: Path) -> dict:
+    """The bag's metadata.yaml, its rosbag2_bagfile_information."""
+    return yaml.safe_load((bag / "metadata.yaml").read_text())["rosbag2_bagfile_information"]
+
+
 def test_a_stalled_clock_keeps_nothing_in_memory_past_a_checkpoint(ros: Ros, processes: Processes,
                                                                    tmp_path: Path) -> None:
     """/clock stops (a paused or stalled simulation): within a checkpoint period (wall time) the chunk in
@@ -530,7 +535,7 @@ def test_a_stalled_clock_keeps_nothing_in_memory_past_a_checkpoint(ros: Ros, pro
 
     def in_metadata() -> int | None:
         try:
-            return yaml.safe_load((bag / "metadata.yaml").read_text())["rosbag2_bagfile_information"]["message_count"]
+            return bag_metadata(bag)["message_count"]
         except (OSError, yaml.YAMLError, TypeError, KeyError):   # not written yet, or caught mid-write
             return None
 
@@ -539,8 +544,7 @@ def test_a_stalled_clock_keeps_nothing_in_memory_past_a_checkpoint(ros: Ros, pro
     record_clock_then_kill(ros, processes, bag, checkpoint_period_s=0.5,
                            until=lambda: on_disk() == ROUNDS and in_metadata() == ROUNDS)
     assert [t for _, t, _ in read_messages(bag)] == [i * CLOCK_STEP_NS for i in range(ROUNDS)]
-    metadata = yaml.safe_load((bag / "metadata.yaml").read_text())["rosbag2_bagfile_information"]
-    assert metadata["message_count"] == ROUNDS, "metadata.yaml not kept current"
+    assert bag_metadata(bag)["message_count"] == ROUNDS, "metadata.yaml not kept current"
 
 
 def test_a_recorder_whose_disk_is_full_stops_with_one_error_and_exit_3(ros: Ros, processes: Processes,
@@ -565,8 +569,8 @@ def test_a_recorder_whose_disk_is_full_stops_with_one_error_and_exit_3(ros: Ros,
     assert len(errors) == 1 and "File too large; recording stopped with" in errors[0], log
     assert "Traceback" not in log
     info = bag_info(tmp_path / "bag")
-    metadata = yaml.safe_load((tmp_path / "bag" / "metadata.yaml").read_text())["rosbag2_bagfile_information"]
-    assert info.message_count == metadata["message_count"] > 0, "metadata.yaml does not say what is on disk"
+    assert info.message_count == bag_metadata(tmp_path / "bag")["message_count"] > 0, \
+        "metadata.yaml does not say what is on disk"
     assert f"with {info.message_count:,} messages on disk" in errors[0]
     assert all(len(m.readings) == 400 for _, _, m in read_messages(tmp_path / "bag", ["/rfid/reads"]))
 

@@ -352,9 +352,9 @@ def quoting_pages(root: Path = REPOSITORY) -> list[str]:
     return ["README.md", *(path.relative_to(root).as_posix() for path in sorted((root / "docs").glob("*.md")))]
 
 
-def quotes(root: Path = REPOSITORY, pages: list[str] | None = None) -> list[Quote]:
+def quotes(root: Path = REPOSITORY) -> list[Quote]:
     found = []
-    for page in quoting_pages(root) if pages is None else pages:
+    for page in quoting_pages(root):
         path = root / page
         if not path.is_file():
             continue
