@@ -20,5 +20,8 @@ setup(
     entry_points={"console_scripts": [
         "heading_controller = rfidnav_control.heading_controller_node:main",
         "wall_follower = rfidnav_control.wall_follower_node:main",
+    ], "rfidnav.nodes": [
+        "heading_controller = rfidnav_control.parameters:HEADING_CONTROLLER",
+        "wall_follower = rfidnav_control.parameters:WALL_FOLLOWER",
     ]},
 )

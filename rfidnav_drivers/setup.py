@@ -20,5 +20,9 @@ setup(
         "llrp_reader = rfidnav_drivers.llrp_reader_node:main",
         "create_base = rfidnav_drivers.create_base_node:main",
         "wifi_scanner = rfidnav_drivers.wifi_scanner_node:main",
+    ], "rfidnav.nodes": [
+        "llrp_reader = rfidnav_drivers.parameters:LLRP_READER",
+        "create_base = rfidnav_drivers.parameters:CREATE_BASE",
+        "wifi_scanner = rfidnav_drivers.parameters:WIFI_SCANNER",
     ]},
 )

@@ -21,5 +21,9 @@ setup(
         "partition_localizer = rfidnav_localization.partition_localizer_node:main",
         "location_server = rfidnav_localization.location_server_node:main",
         "rfid_localizer = rfidnav_localization.rfid_localizer_node:main",
+    ], "rfidnav.nodes": [
+        "partition_localizer = rfidnav_localization.parameters:PARTITION_LOCALIZER",
+        "location_server = rfidnav_localization.parameters:LOCATION_SERVER",
+        "rfid_localizer = rfidnav_localization.parameters:RFID_LOCALIZER",
     ]},
 )

@@ -22,5 +22,10 @@ setup(
         "two_tier_navigator = rfidnav_planning.two_tier_navigator_node:main",
         "pose_navigator = rfidnav_planning.pose_navigator_node:main",
         "mission_executor = rfidnav_planning.mission_executor_node:main",
+    ], "rfidnav.nodes": [
+        "partition_navigator = rfidnav_planning.parameters:PARTITION_NAVIGATOR",
+        "two_tier_navigator = rfidnav_planning.parameters:TWO_TIER_NAVIGATOR",
+        "pose_navigator = rfidnav_planning.parameters:POSE_NAVIGATOR",
+        "mission_executor = rfidnav_planning.parameters:MISSION_EXECUTOR",
     ]},
 )

@@ -23,5 +23,11 @@ setup(
         "compass_sim = rfidnav_sim.compass_sim_node:main",
         "wifi_sim = rfidnav_sim.wifi_sim_node:main",
         "sonar_sim = rfidnav_sim.sonar_sim_node:main",
+    ], "rfidnav.nodes": [
+        "robot_sim = rfidnav_sim.parameters:ROBOT_SIM",
+        "rfid_reader_sim = rfidnav_sim.parameters:RFID_READER_SIM",
+        "compass_sim = rfidnav_sim.parameters:COMPASS_SIM",
+        "wifi_sim = rfidnav_sim.parameters:WIFI_SIM",
+        "sonar_sim = rfidnav_sim.parameters:SONAR_SIM",
     ]},
 )

@@ -14,7 +14,7 @@ from pathlib import Path
 import pytest
 import yaml
 
-from rfidnav_bringup.processes import install_prefixes
+from rfidnav_common.install import install_prefixes
 from support.packages import (
     ROSDEP_FRAGMENT,
     TESTS,
@@ -39,6 +39,7 @@ LEVELS: tuple[tuple[str, ...], ...] = (
     ("rfidnav_common",),
     ("rfidnav_sim", "rfidnav_control", "rfidnav_localization", "rfidnav_drivers", "rfidnav_bag"),
     ("rfidnav_planning",),
+    ("rfidnav_scenario",),
     ("rfidnav_bringup",),
     ("rfidnav_experiments",),
 )
@@ -139,6 +140,13 @@ def test_no_package_imports_one_on_its_level_or_above() -> None:
 def test_the_nodes_packages_never_import_the_bags_the_orchestration_or_the_experiments() -> None:
     for package in NODE_PACKAGES:
         assert not imported_packages(package) & {"rfidnav_bag", "rfidnav_bringup", "rfidnav_experiments"}, package
+
+
+def test_the_experiments_use_nothing_of_the_orchestration_but_its_public_run_api() -> None:
+    trees = [ast.parse(path.read_text(), str(path))
+             for path in (WORKSPACE / "rfidnav_experiments" / "rfidnav_experiments").rglob("*.py")]
+    used = {module for tree in trees for module in imported_modules(tree) if module.split(".")[0] == "rfidnav_bringup"}
+    assert used == {"rfidnav_bringup.api"}
 
 
 def test_the_readme_draws_the_import_graph_the_code_has() -> None:

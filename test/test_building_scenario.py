@@ -7,8 +7,8 @@ from pathlib import Path
 
 import pytest
 
-from rfidnav_bringup.scenario import load_scenario
 from rfidnav_common.errors import ConfigError
+from rfidnav_scenario.scenario import load_scenario
 from support.runs import WORKSPACE
 
 pytestmark = pytest.mark.tier("unit")

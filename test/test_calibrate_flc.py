@@ -10,7 +10,6 @@ import json
 import pytest
 import yaml
 
-from rfidnav_bringup.scenario import CONFIG_DIR
 from rfidnav_common.config import node_parameter_values
 from rfidnav_control.parameters import HeadingControllerParameters
 from rfidnav_experiments.calibrate.flc import (
@@ -31,6 +30,7 @@ from rfidnav_experiments.calibrate.flc import (
 from rfidnav_experiments.reproduce.flc import SOURCES, conditions, evaluation_seeds, sweep_rows
 from rfidnav_experiments.reproduce.tables import INTERPRETED, is_condition_source, rowless_fields
 from rfidnav_experiments.runners.tag_route import RouteRun, controller_parameters, floor_read_radius_m, run_tag_route
+from rfidnav_scenario.scenario import CONFIG_DIR
 from rfidnav_sim.parameters import ReaderParameters, RobotSimParameters
 
 pytestmark = pytest.mark.tier("unit")

@@ -111,7 +111,7 @@ def test_each_package_is_on_the_installs_ament_index_with_its_manifest(workspace
 
 
 def test_the_configuration_and_the_code_come_from_the_install_once_it_is_sourced(workspace: Workspace) -> None:
-    result = workspace.sourced(f"{sys.executable} -c 'import rfidnav_bringup.scenario as s, rfidnav_sim; "
+    result = workspace.sourced(f"{sys.executable} -c 'import rfidnav_scenario.scenario as s, rfidnav_sim; "
                                "print(s.CONFIG_DIR); print(s.__file__); print(rfidnav_sim.__file__); "
                                f"print(s.load_scenario(\"{SCENARIO}\").path)'")
     assert result.returncode == 0, output(result)

@@ -16,10 +16,9 @@ from pathlib import Path
 
 import pytest
 
-from rfidnav_bringup.errors import LaunchError
-from rfidnav_bringup.processes import package_share, resolve_executable
-from rfidnav_bringup.scenario import CONFIG_DIR, load_scenario
-from rfidnav_common.errors import ConfigError
+from rfidnav_common.errors import ConfigError, UnknownExecutableError
+from rfidnav_common.install import package_share, resolve_executable
+from rfidnav_scenario.scenario import CONFIG_DIR, load_scenario
 from support.config_files import copy_config, edit
 from support.runs import WORKSPACE
 
@@ -189,25 +188,26 @@ def test_nan_is_rejected_by_name_not_by_python(config: Path):
 
 # ------------------------------------------------------------------------------------ unknown package/executable
 
-def test_the_config_is_found_in_the_share_directory_of_rfidnav_bringup_on_the_ament_index():
-    share = package_share("rfidnav_bringup")
+def test_the_config_is_found_in_the_share_directory_of_rfidnav_scenario_on_the_ament_index():
+    share = package_share("rfidnav_scenario")
     assert CONFIG_DIR == share / "config"
     assert (CONFIG_DIR / SCENARIO).samefile(WORKSPACE / "config" / SCENARIO)   # linked from the sources by set-up
-    assert (share / "package.xml").samefile(WORKSPACE / "rfidnav_bringup" / "package.xml")
+    assert (share / "package.xml").samefile(WORKSPACE / "rfidnav_scenario" / "package.xml")
 
 
-def test_a_package_on_no_ament_index_is_a_launch_error_naming_where_it_looked():
-    with pytest.raises(LaunchError, match=r"'nope_pkg' is in no ament index \(searched .*\); run ./rfidnav setup"):
+def test_a_package_on_no_ament_index_is_an_unknown_executable_error_naming_where_it_looked():
+    with pytest.raises(UnknownExecutableError,
+                       match=r"'nope_pkg' is in no ament index \(searched .*\); run ./rfidnav setup"):
         package_share("nope_pkg")
 
 
-def test_unknown_package_is_a_launch_error():
-    with pytest.raises(LaunchError, match=r"unknown package 'nope_pkg'"):
+def test_unknown_package_is_an_unknown_executable_error():
+    with pytest.raises(UnknownExecutableError, match=r"unknown package 'nope_pkg'"):
         resolve_executable("nope_pkg", "x")
 
 
-def test_unknown_executable_is_a_launch_error_listing_the_known_ones():
-    with pytest.raises(LaunchError) as raised:
+def test_unknown_executable_is_an_unknown_executable_error_listing_the_known_ones():
+    with pytest.raises(UnknownExecutableError) as raised:
         resolve_executable("rfidnav_sim", "nope")
     message = str(raised.value)
     assert "'rfidnav_sim'" in message and "'nope'" in message
@@ -345,14 +345,15 @@ def test_limits_are_declared_with_the_field_and_checked_item_by_item() -> None:
 
 
 def test_every_shipped_scenario_with_every_robot_profile_and_every_parameter_file_is_within_its_ranges() -> None:
-    from rfidnav_bringup.scenario import KNOWN_NODES, ROBOT_DIR, SCENARIO_DIR
     from rfidnav_common.config import Section, node_parameter_section, parameters_from_mapping
+    from rfidnav_common.node_registry import registered_nodes
+    from rfidnav_scenario.scenario import ROBOT_DIR, SCENARIO_DIR
 
     for scenario in sorted(SCENARIO_DIR.glob("*.yaml")):
         load_scenario(str(scenario))
     for profile in sorted(ROBOT_DIR.glob("*.yaml")):
         load_scenario("line_follow_90", robot_profile_name=str(profile))
-    classes = dict(KNOWN_NODES.values())
+    classes = {registration.node_name: registration.parameters for registration in registered_nodes().values()}
     required = {"world_file": "w.yaml", "map_file": "m.yaml"}
     checked = 0
     for file in sorted((CONFIG_DIR / "params").glob("*.yaml")):

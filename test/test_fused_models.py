@@ -240,9 +240,9 @@ SHIPPED_PAIRS = [("rfid_localizer_mixed.yaml", "reader_mixed.yaml"),
 @pytest.mark.parametrize(("localizer_file", "reader_file"), SHIPPED_PAIRS)
 def test_each_shipped_rfid_localizer_file_describes_its_robots_reader_as_the_reader_file_does(
         localizer_file: str, reader_file: str) -> None:
-    from rfidnav_bringup.scenario import CONFIG_DIR
     from rfidnav_experiments.runners.shipped import file_parameters
     from rfidnav_localization.parameters import RfidLocalizerParameters
+    from rfidnav_scenario.scenario import CONFIG_DIR
     from rfidnav_sim.parameters import SIDE_BEARINGS, ReaderParameters
     from rfidnav_sim.rfid_model import reach_m
 

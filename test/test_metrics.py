@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from rfidnav_bringup.metrics import (
+from rfidnav_scenario.metrics import (
     READ_AREA_RADIUS_M,
     Trajectory,
     area_entries,

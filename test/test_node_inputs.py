@@ -27,8 +27,9 @@ from rclpy.node import Node
 from rclpy.parameter import Parameter
 from sensor_msgs.msg import Imu, Range
 
-from rfidnav_bringup.processes import NodeProcess, resolve_executable
+from rfidnav_bringup.processes import NodeProcess
 from rfidnav_common.geometry import yaw_to_quaternion
+from rfidnav_common.install import resolve_executable
 from rfidnav_common.ros import COMMAND_QOS, SENSOR_QOS, time_msg
 from rfidnav_common.stepped_node import STEPPED_CLOCK_PARAMETER
 from rfidnav_control.heading_controller_node import HeadingControllerNode

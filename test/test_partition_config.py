@@ -9,9 +9,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from rfidnav_bringup.scenario import load_scenario
 from rfidnav_common.errors import ConfigError
 from rfidnav_common.tag_lattice import decode_tag_id
+from rfidnav_scenario.scenario import load_scenario
 from rfidnav_sim.parameters import ReaderParameters
 from rfidnav_sim.rfid_model import ReaderSimulator
 from rfidnav_sim.world import load_world

@@ -10,12 +10,12 @@ import math
 import numpy as np
 import pytest
 
-from rfidnav_bringup.scenario import CONFIG_DIR
 from rfidnav_common.config import parameters_from_mapping
 from rfidnav_common.errors import ConfigError
 from rfidnav_common.polling import PollClock, Polling, next_on_grid
 from rfidnav_common.seeding import rng_for
 from rfidnav_experiments.runners.shipped import file_parameters
+from rfidnav_scenario.scenario import CONFIG_DIR
 from rfidnav_sim.parameters import ReaderParameters
 from rfidnav_sim.schedule import GroundTruthSchedule
 from rfidnav_sim.world import Tag, World

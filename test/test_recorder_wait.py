@@ -13,7 +13,7 @@ from rfidnav_bringup.orchestrator import (
     recordable_type,
     topics_to_record,
 )
-from rfidnav_bringup.scenario import load_scenario
+from rfidnav_scenario.scenario import load_scenario
 
 pytestmark = pytest.mark.tier("unit")
 

@@ -58,8 +58,9 @@ from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
 from std_srvs.srv import Trigger
 
 from rfidnav_bag.bags import bag_info, read_messages
-from rfidnav_bringup.processes import DomainLease, NodeProcess, resolve_executable
+from rfidnav_bringup.processes import DomainLease, NodeProcess
 from rfidnav_common.config import parameters_from_mapping
+from rfidnav_common.install import resolve_executable
 from rfidnav_common.robot_map import load_route_map
 from rfidnav_control.fuzzy import FuzzyHeadingController
 from rfidnav_control.parameters import HeadingControllerParameters

@@ -16,7 +16,6 @@ from pathlib import Path
 
 import pytest
 
-from rfidnav_bringup.scenario import load_scenario
 from rfidnav_experiments.reproduce.flc import (
     EVALUATION_SEED_BASE,
     PARAM_SETS,
@@ -30,6 +29,7 @@ from rfidnav_experiments.reproduce.flc import (
 )
 from rfidnav_experiments.reproduce.tables import is_condition_source
 from rfidnav_experiments.runners.tag_route import controller_parameters, run_tag_route
+from rfidnav_scenario.scenario import load_scenario
 
 pytestmark = pytest.mark.tier("slow")
 

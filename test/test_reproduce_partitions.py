@@ -13,11 +13,11 @@ from pathlib import Path
 import pytest
 import yaml
 
-from rfidnav_bringup.metrics import extra_time_cost_pct
 from rfidnav_common.errors import ConfigError
 from rfidnav_experiments.reproduce import partitions as rp
 from rfidnav_experiments.reproduce.tables import CONDITION_SOURCES
 from rfidnav_localization.partition import LocalizerSettings
+from rfidnav_scenario.metrics import extra_time_cost_pct
 
 pytestmark = pytest.mark.tier("unit")
 

@@ -12,7 +12,6 @@ from pathlib import Path
 import pytest
 import yaml
 
-from rfidnav_bringup.metrics import GOAL_RADIUS_M
 from rfidnav_common.errors import ConfigError
 from rfidnav_common.wall_tags import InductionArea
 from rfidnav_control.parameters import WallFollowerParameters
@@ -43,6 +42,7 @@ from rfidnav_experiments.reproduce.topological import (
 )
 from rfidnav_experiments.runners.topological import METHODS, MissionRun
 from rfidnav_planning.parameters import MissionExecutorParameters
+from rfidnav_scenario.metrics import GOAL_RADIUS_M
 from rfidnav_sim.parameters import RobotSimParameters, SonarParameters
 from rfidnav_sim.wall_tag_model import WallTagReader
 

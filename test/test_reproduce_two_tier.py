@@ -20,7 +20,6 @@ from pathlib import Path
 import pytest
 import yaml
 
-from rfidnav_bringup.scenario import CONFIG_DIR, load_scenario
 from rfidnav_common.errors import ConfigError
 from rfidnav_common.polling import PollClock
 from rfidnav_common.seeding import rng_for
@@ -64,6 +63,7 @@ from rfidnav_experiments.runners.two_tier import (
 )
 from rfidnav_localization.parameters import LocationServerParameters
 from rfidnav_planning.parameters import TwoTierNavigatorParameters
+from rfidnav_scenario.scenario import CONFIG_DIR, load_scenario
 from rfidnav_sim.parameters import CompassParameters, ReaderParameters, RobotSimParameters, WifiSimParameters
 from rfidnav_sim.wifi_model import PropagationSettings
 from support.runs import WORKSPACE

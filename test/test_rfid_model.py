@@ -459,8 +459,8 @@ def reads_of_every_tag(sim: ReaderSimulator, antenna_world: np.ndarray, frequenc
 def test_a_round_over_the_tags_the_tree_finds_equals_the_round_over_every_tag(params: str, count: int,
                                                                               half_side_m: float) -> None:
     # Ceiling and floor tags over a square, random poses on it and off it; the same noise streams.
-    from rfidnav_bringup.scenario import CONFIG_DIR
     from rfidnav_experiments.runners.shipped import file_parameters
+    from rfidnav_scenario.scenario import CONFIG_DIR
 
     model = file_parameters(ReaderParameters, CONFIG_DIR / "params" / f"{params}.yaml", "rfid_reader_sim",
                             world_file="w.yaml").reader_model()

@@ -60,8 +60,8 @@ def test_a_bad_surveyed_tag_is_one_error_naming_the_file_and_the_field(tmp_path:
 
 @pytest.mark.parametrize(("scenario", "role"), [("hallway", None), ("building_ring", "rfid_localizer")])
 def test_each_shipped_tag_survey_places_every_tag_where_its_world_has_it(scenario: str, role: str | None) -> None:
-    from rfidnav_bringup.scenario import load_scenario
     from rfidnav_common.robot_map import bounding_box
+    from rfidnav_scenario.scenario import load_scenario
 
     loaded = load_scenario(scenario)
     survey_file = loaded.map_file if role is None else loaded.nodes[role].map_file

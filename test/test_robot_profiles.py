@@ -8,8 +8,8 @@ from pathlib import Path
 
 import pytest
 
-from rfidnav_bringup.scenario import ROBOT_DIR, injected_parameters, load_scenario, node_parameters
 from rfidnav_common.errors import ConfigError
+from rfidnav_scenario.scenario import ROBOT_DIR, injected_parameters, load_scenario, node_parameters
 from support.runs import WORKSPACE, run_cli
 
 pytestmark = pytest.mark.tier("unit")

@@ -11,9 +11,9 @@ from pathlib import Path
 
 import pytest
 
-from rfidnav_bringup.scenario import SCENARIO_DIR, load_scenario
 from rfidnav_experiments.bench.routes import PARAM_SETS, ROUTES
 from rfidnav_experiments.runners.tag_route import controller_parameters, run_tag_route
+from rfidnav_scenario.scenario import SCENARIO_DIR, load_scenario
 from support.config_files import copy_config, edit
 from support.runs import WORKSPACE
 

@@ -9,7 +9,7 @@ import pytest
 
 import rfidnav_bringup.report
 from rfidnav_bringup.orchestrator import Orchestrator, RunOptions
-from rfidnav_bringup.scenario import load_scenario
+from rfidnav_scenario.scenario import load_scenario
 
 pytestmark = pytest.mark.tier("node")
 

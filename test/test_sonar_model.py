@@ -215,7 +215,7 @@ def test_readings_equal_those_of_the_model_before_the_grid_cast_at_every_wall(fl
     # The reference is the model as it was before the wall grid and the walls worked out once (commit 249c210):
     # numpy arrays cast at every wall. Poses all over the floor and beyond it, the same noise streams; equal to
     # the last bit.
-    from rfidnav_bringup.scenario import CONFIG_DIR
+    from rfidnav_scenario.scenario import CONFIG_DIR
     from rfidnav_sim.world import load_world
 
     walls = load_world(CONFIG_DIR / "worlds" / f"{floor}.yaml").wall_segments()

@@ -11,8 +11,8 @@ import pytest
 import yaml
 
 from rfidnav_bringup import cli
-from rfidnav_bringup.scenario import load_scenario
 from rfidnav_localization.radio_map_file import load_radio_map
+from rfidnav_scenario.scenario import load_scenario
 from rfidnav_sim.world import load_world
 from support.config_files import copy_config
 

@@ -10,7 +10,6 @@ from types import SimpleNamespace
 import networkx as nx
 import pytest
 
-from rfidnav_bringup.metrics import topological_shortest_m
 from rfidnav_bringup.report import draw_map, learned_map
 from rfidnav_common.errors import ConfigError, RfidnavError
 from rfidnav_common.topological_map import (
@@ -28,6 +27,7 @@ from rfidnav_common.topological_map import (
     parse_hallway_text,
     turn,
 )
+from rfidnav_scenario.metrics import topological_shortest_m
 
 pytestmark = pytest.mark.tier("unit")
 

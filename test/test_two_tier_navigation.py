@@ -10,7 +10,6 @@ import math
 import numpy as np
 import pytest
 
-from rfidnav_bringup.scenario import CONFIG_DIR
 from rfidnav_common.tag_groups import TagGroup
 from rfidnav_control.go_to import GoToSettings, go_to_command
 from rfidnav_experiments.runners.two_tier import SETTINGS, Site, grid_radio_map, run_two_tier, survey_grid
@@ -27,6 +26,7 @@ from rfidnav_planning.two_tier_navigation import (
     TwoTierNavigator,
     TwoTierSettings,
 )
+from rfidnav_scenario.scenario import CONFIG_DIR
 from rfidnav_sim.world import load_world
 
 pytestmark = pytest.mark.tier("unit")

@@ -8,7 +8,6 @@ import math
 import numpy as np
 import pytest
 
-from rfidnav_bringup.scenario import CONFIG_DIR, load_scenario
 from rfidnav_common.errors import ConfigError
 from rfidnav_common.robot_map import load_route_map
 from rfidnav_common.tag_groups import TagGroup
@@ -27,6 +26,7 @@ from rfidnav_planning.two_tier_navigation import (
     TwoTierSettings,
 )
 from rfidnav_planning.wall_paths import WallMap, WallPlanner, segment_distances
+from rfidnav_scenario.scenario import CONFIG_DIR, load_scenario
 from rfidnav_sim.kinematics import unicycle_step
 from rfidnav_sim.world import load_world
 

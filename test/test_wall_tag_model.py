@@ -131,7 +131,7 @@ def test_reads_along_a_floor_equal_those_of_the_reader_that_tests_every_tag(floo
     # The reference is the reader of commit 249c210 (numpy arrays over every tag). A random walk past the floor's
     # tags and off the floor, miss probabilities of both kinds and an unreadable tag, one noise stream each:
     # the same reads, round by round, and the same draws consumed.
-    from rfidnav_bringup.scenario import CONFIG_DIR
+    from rfidnav_scenario.scenario import CONFIG_DIR
     from rfidnav_sim.world import load_world
 
     tags = load_world(CONFIG_DIR / "worlds" / f"{floor}.yaml").wall_tags

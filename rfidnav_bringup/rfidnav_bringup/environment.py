@@ -9,7 +9,7 @@ Steps: (1) create ``.venv``; (2) install ``requirements.txt`` under ``constraint
 wheels from PyPI and everything else, transitive pins included); (3) build and install the
 ``rfidnav_msgs`` interface package with CMake into the venv; (4) install the ament_python packages
 in editable mode; (5) list them in the venv's ament resource index and link their share files (package.xml,
-and rfidnav_bringup's ``config``) from the sources, as ``colcon build --symlink-install`` does, so that code
+and rfidnav_scenario's ``config``) from the sources, as ``colcon build --symlink-install`` does, so that code
 finds its configuration the same way in this workspace and in a colcon install.
 """
 
@@ -24,7 +24,8 @@ import sysconfig
 from pathlib import Path
 
 PYTHON_PACKAGES = ("rfidnav_common", "rfidnav_sim", "rfidnav_control", "rfidnav_localization", "rfidnav_planning",
-                   "rfidnav_drivers", "rfidnav_bag", "rfidnav_bringup", "rfidnav_experiments")   # bottom up
+                   "rfidnav_drivers", "rfidnav_bag", "rfidnav_scenario", "rfidnav_bringup",
+                   "rfidnav_experiments")   # bottom up
 INTERFACE_PACKAGE = "rfidnav_msgs"
 # Standard interface packages the Jazzy wheels on PyPI lack, vendored (with the standard definitions) and built
 # only where nothing provides them: tf2_msgs for /tf and /tf_static.
@@ -179,7 +180,7 @@ def ensure_packages(workspace: Path, stamps: Stamps, env: dict[str, str], say) -
     stamps.record("packages", value)
 
 
-SHARED_FILES = {"rfidnav_bringup": ("config",)}    # beyond package.xml: what a package installs to share/
+SHARED_FILES = {"rfidnav_scenario": ("config",)}    # beyond package.xml: what a package installs to share/
 
 
 def link_shares(workspace: Path) -> None:

@@ -53,22 +53,22 @@ from std_srvs.srv import Trigger
 from rfidnav_bag.errors import BagError
 from rfidnav_bag.recorder_node import recordable_definition
 from rfidnav_bringup.errors import NodeExitedError, ReadinessError
-from rfidnav_bringup.metrics import ground_truth_objection
-from rfidnav_bringup.processes import DomainLease, NodeProcess, child_environment, reach_text, resolve_executable
-from rfidnav_bringup.scenario import (
-    KNOWN_NODES,
+from rfidnav_bringup.processes import DomainLease, NodeProcess, child_environment, reach_text
+from rfidnav_common.errors import ConfigError, RfidnavError
+from rfidnav_common.files import write_atomically
+from rfidnav_common.install import resolve_executable
+from rfidnav_common.progress import StatusLine
+from rfidnav_common.ros import events_executor, fill_message, interface_class
+from rfidnav_common.step_ledger import CLOCKS
+from rfidnav_common.stepped_node import STEP_ACK_TOPIC
+from rfidnav_scenario.metrics import ground_truth_objection
+from rfidnav_scenario.scenario import (
     NodeSpec,
     Scenario,
     dump_parameters,
     injected_parameters,
     node_parameters,
 )
-from rfidnav_common.errors import ConfigError, RfidnavError
-from rfidnav_common.files import write_atomically
-from rfidnav_common.progress import StatusLine
-from rfidnav_common.ros import events_executor, fill_message, interface_class
-from rfidnav_common.step_ledger import CLOCKS
-from rfidnav_common.stepped_node import STEP_ACK_TOPIC
 
 READY_TIMEOUT_S = 90.0
 STOP_GRACE_S = 5.0
@@ -218,8 +218,8 @@ class Orchestrator:
                                      self.stepped_with)
         injected = injected_parameters(self.scenario, spec, self.options.seed, self.options.rtf,
                                        stepped_with=self.stepped_with)
-        if parameters is not None:
-            node_name = KNOWN_NODES[(spec.package, spec.executable)][0]
+        if parameters is not None and spec.registration is not None:
+            node_name = spec.registration.node_name
             values = dict(parameters.__dict__)
             values.update({k: v for k, v in injected.items() if k not in values})
             file = params_dir / f"{spec.role}.yaml"

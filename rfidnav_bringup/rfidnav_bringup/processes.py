@@ -1,4 +1,4 @@
-"""Node processes: resolving ``package executable`` like ``ros2 run``, starting with logs, stopping politely, and
+"""Node processes: starting with logs, stopping politely, and
 never outliving the process that started them (Linux's parent-death signal).
 
 Also hands out DDS domain ids: each run holds an exclusive lock on one id for its lifetime, so
@@ -19,7 +19,6 @@ import sys
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from importlib import metadata
 from pathlib import Path
 from typing import Any
 
@@ -208,63 +207,6 @@ def run_supervised(command: list[str], env: dict[str, str]) -> int:
         for signum, handler in previous.items():
             signal.signal(signum, handler)
     return 128 + first[0] if first else code
-
-
-class UnknownExecutableError(LaunchError):
-    """``field`` is ``package`` (not installed) or ``executable`` (the package has no such executable)."""
-
-    def __init__(self, field: str, message: str) -> None:
-        super().__init__(message)
-        self.field = field
-
-
-def install_prefixes() -> list[Path]:
-    """Where installed packages are looked up, as ``ros2 run`` does: each AMENT_PREFIX_PATH entry (a colcon
-    install), then this Python's prefix (the workspace's .venv)."""
-    return [Path(p) for p in os.environ.get("AMENT_PREFIX_PATH", "").split(os.pathsep) if p] + [Path(sys.prefix)]
-
-
-def package_share(package: str) -> Path:
-    """``<prefix>/share/<package>`` of the first prefix whose ament resource index (REP 122) lists the package:
-    a colcon install, or the workspace's .venv where ``./rfidnav setup`` links the sources' share files.
-    An unknown package is an :class:`UnknownExecutableError` naming the prefixes searched."""
-    prefixes = install_prefixes()
-    for prefix in prefixes:
-        if (prefix / "share" / "ament_index" / "resource_index" / "packages" / package).is_file():
-            return prefix / "share" / package
-    raise UnknownExecutableError("package", f"package '{package}' is in no ament index (searched "
-                                 f"{', '.join(map(str, prefixes))}); run ./rfidnav setup")
-
-
-def resolve_executable(package: str, executable: str) -> list[str]:
-    """The command for a node executable: ``<prefix>/lib/<package>/<executable>`` on any install prefix
-    (a colcon install), else the package's console_scripts entry point (an editable install).
-    An unknown package or executable is an :class:`UnknownExecutableError`."""
-    for prefix in install_prefixes():
-        candidate = prefix / "lib" / package / executable
-        if candidate.is_file() and os.access(candidate, os.X_OK):
-            return [str(candidate)]
-    entry_point = console_script(package, executable)
-    script = Path(sys.prefix) / "bin" / executable
-    if script.is_file():
-        return [str(script)]
-    module, function = entry_point.value.split(":")
-    return [sys.executable, "-c", f"import sys; from {module} import {function}; sys.exit({function}())"]
-
-
-def console_script(package: str, executable: str) -> metadata.EntryPoint:
-    """The console_scripts entry point ``executable`` of installed package ``package``; an unknown package or
-    executable is an :class:`UnknownExecutableError`."""
-    try:
-        distribution = metadata.distribution(package)
-    except metadata.PackageNotFoundError:
-        raise UnknownExecutableError("package",
-                                     f"unknown package '{package}' (not installed in {sys.prefix})") from None
-    scripts = {ep.name: ep for ep in distribution.entry_points if ep.group == "console_scripts"}
-    if executable not in scripts:
-        raise UnknownExecutableError("executable", f"package '{package}' has no executable '{executable}' "
-                                     f"(it has: {', '.join(sorted(scripts)) or 'none'})")
-    return scripts[executable]
 
 
 @dataclass

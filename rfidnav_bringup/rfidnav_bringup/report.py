@@ -28,7 +28,13 @@ from matplotlib.figure import Figure  # noqa: E402
 
 from rfidnav_bag.bags import bag_info, is_bag_directory, read_messages  # noqa: E402
 from rfidnav_bag.errors import BagError  # noqa: E402
-from rfidnav_bringup.metrics import (  # noqa: E402
+from rfidnav_common.topological_map import (  # noqa: E402
+    UNKNOWN,
+    TopologicalMap,
+    load_topological_map,
+    parse_hallway_text,
+)
+from rfidnav_scenario.metrics import (  # noqa: E402
     Fix,
     Trajectory,
     partition_metrics,
@@ -37,12 +43,6 @@ from rfidnav_bringup.metrics import (  # noqa: E402
     tracking_metrics,
     two_tier_metrics,
     wall_crossings,
-)
-from rfidnav_common.topological_map import (  # noqa: E402
-    UNKNOWN,
-    TopologicalMap,
-    load_topological_map,
-    parse_hallway_text,
 )
 from rfidnav_sim.world import World, load_world  # noqa: E402
 

@@ -21,6 +21,15 @@ class ConfigError(RfidnavError):
         super().__init__(f"{where}: {problem}")
 
 
+class UnknownExecutableError(RfidnavError):
+    """A package or executable that is not installed. ``field`` is ``package`` (not installed) or ``executable``
+    (the package has no such executable)."""
+
+    def __init__(self, field: str, message: str) -> None:
+        super().__init__(message)
+        self.field = field
+
+
 class ParameterError(ValueError):
     """A parameter or settings class's ``validate()`` found a value it cannot work with.
 

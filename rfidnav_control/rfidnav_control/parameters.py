@@ -10,7 +10,6 @@ from __future__ import annotations
 import dataclasses
 import math
 from dataclasses import dataclass
-from typing import ClassVar
 
 from rfidnav_common.config import (
     AT_LEAST_ONE,
@@ -27,6 +26,7 @@ from rfidnav_common.config import (
     param,
 )
 from rfidnav_common.errors import ParameterError
+from rfidnav_common.node_registry import CommandsSpeeds, NodeRegistration, ReadsAntennaPorts
 from rfidnav_control.errors import FuzzySpecError
 from rfidnav_control.fuzzy import FuzzyHeadingSpec
 from rfidnav_control.tag_route import ARRIVAL_MODES, FollowerSettings
@@ -36,9 +36,7 @@ HALF_TURN_RAD = Limits(0.0, math.pi, low_open=True)
 
 
 @dataclass(frozen=True)
-class HeadingControllerParameters:
-    ACTION: ClassVar[tuple[str, str]] = ("/follow_tag_route", "rfidnav_msgs/action/FollowTagRoute")   # it serves
-
+class HeadingControllerParameters(ReadsAntennaPorts, CommandsSpeeds):
     map_file: str = param("route map YAML: the floor tag that marks arrival under each ceiling tag", "")
     forward_speed_mps: float = param("constant forward speed [m/s] (paper 001: 0.2)", 0.2, SPEED_MPS)
     left_antenna: int = param("reader port of the left receiving antenna (phi1)", 1, PORT)
@@ -131,7 +129,7 @@ SONAR_FIELDS = ("front", "front_left", "front_right", "left", "right")   # the f
 
 
 @dataclass(frozen=True)
-class WallFollowerParameters:
+class WallFollowerParameters(CommandsSpeeds):
     """wall_follower (paper 004); config/params/wall_follower.yaml documents them. The follower's settings keep
     its names; the mounting offsets are those of paper 004's layout (rfidnav_sim.sonar_model.PAPER_LAYOUT)."""
 
@@ -183,3 +181,11 @@ class WallFollowerParameters:
         names = {field.name for field in dataclasses.fields(WallFollowerSettings)} & set(self.__dataclass_fields__)
         return dataclasses.replace(_WALL, **{name: getattr(self, name) for name in names},
                                    recover_after_steps=round(self.recover_after_s * self.control_rate_hz))
+
+
+# The node executables of this package, as the rfidnav.nodes entry points of its setup.py register them
+# (rfidnav_common.node_registry), with the actions they serve as (name, type).
+FOLLOW_TAG_ROUTE = ("/follow_tag_route", "rfidnav_msgs/action/FollowTagRoute")
+HEADING_CONTROLLER = NodeRegistration(
+    "heading_controller", HeadingControllerParameters, stepped=True, serves=FOLLOW_TAG_ROUTE)
+WALL_FOLLOWER = NodeRegistration("wall_follower", WallFollowerParameters, stepped=True)

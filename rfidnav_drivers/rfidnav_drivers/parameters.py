@@ -18,10 +18,11 @@ from rfidnav_common.config import (
 )
 from rfidnav_common.errors import ParameterError
 from rfidnav_common.frames import FACINGS, Frame, antenna_frames
+from rfidnav_common.node_registry import LimitsSpeed, NodeRegistration, PublishesAntennaPorts
 
 
 @dataclass(frozen=True)
-class LlrpReaderParameters:
+class LlrpReaderParameters(PublishesAntennaPorts):
     host: str = param("the reader's address (an Impinj Speedway / R700 in LLRP mode)", "192.168.1.10")
     port: int = param("LLRP TCP port", 5084, PORT)
     antennas: list[int] = param("antenna ports to inventory (empty: all the reader has); they must cover every "
@@ -82,7 +83,7 @@ OI_BAUDS = (300, 600, 1200, 2400, 4800, 9600, 14400, 19200, 28800, 38400, 57600,
 
 
 @dataclass(frozen=True)
-class CreateBaseParameters:
+class CreateBaseParameters(LimitsSpeed):
     port: str = param("serial port of the Open Interface (a USB serial cable: /dev/ttyUSB0)", "/dev/ttyUSB0")
     baud: int = param("OI baud rate (Create 2 / Roomba 600+: 115200)", 115200, Limits(choices=OI_BAUDS))
     mode: str = param("OI mode: safe (the base itself stops on cliffs and wheel drops) or full", "safe",
@@ -121,3 +122,10 @@ class WifiScannerParameters:
     def validate(self) -> None:
         if not self.interface:
             raise ParameterError("interface", "required (e.g. wlan0)")
+
+
+# The node executables of this package, as the rfidnav.nodes entry points of its setup.py register them
+# (rfidnav_common.node_registry).
+LLRP_READER = NodeRegistration("llrp_reader", LlrpReaderParameters, stepped=False)
+CREATE_BASE = NodeRegistration("create_base", CreateBaseParameters, stepped=False)
+WIFI_SCANNER = NodeRegistration("wifi_scanner", WifiScannerParameters, stepped=False)

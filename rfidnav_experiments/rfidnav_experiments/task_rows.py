@@ -32,7 +32,7 @@ from rfidnav_common.errors import ConfigError
 FORMAT = 1
 # The packages whose code makes an experiment's results (their *.py files) and the configuration they read.
 RESULT_PACKAGES = ("rfidnav_common", "rfidnav_sim", "rfidnav_control", "rfidnav_localization", "rfidnav_planning",
-                   "rfidnav_bringup", "rfidnav_experiments")
+                   "rfidnav_scenario", "rfidnav_bringup", "rfidnav_experiments")
 
 
 def encode(value: Any) -> Any:
@@ -112,7 +112,7 @@ def package_folder(package: str) -> Path:
 def code_fingerprint() -> str:
     """A digest of every Python file of the packages that make the results and of the configuration they read
     (worlds, maps, parameter files): equal on two machines only if both run the same experiments."""
-    from rfidnav_bringup.scenario import CONFIG_DIR
+    from rfidnav_scenario.scenario import CONFIG_DIR
 
     digest = hashlib.sha256()
     roots = [(package, package_folder(package)) for package in RESULT_PACKAGES]

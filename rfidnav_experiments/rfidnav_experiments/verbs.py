@@ -10,7 +10,8 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from rfidnav_bringup.cli import (
+from rfidnav_common.errors import ConfigError
+from rfidnav_scenario.cli_types import (
     RUNS_DIR,
     Handler,
     checked_number,
@@ -22,7 +23,6 @@ from rfidnav_bringup.cli import (
     rtf_value,
     seed_value,
 )
-from rfidnav_common.errors import ConfigError
 
 MAX_RUNS = 100_000          # runs, seeds, missions, plans, evaluations of one experiment
 MAX_HOGS = 64               # busy loops beside a benchmark
@@ -161,8 +161,8 @@ def add_calibrate(verbs: argparse._SubParsersAction) -> Handler:
 
 def run_calibrate(args: argparse.Namespace) -> int:
     if args.name == "phase-offset":
-        from rfidnav_bringup.scenario import CONFIG_DIR
         from rfidnav_experiments.calibrate.phase_offset import MIN_PAIRS, calibrate_phase_offset
+        from rfidnav_scenario.scenario import CONFIG_DIR
 
         args.params = args.params or CONFIG_DIR / "params" / "flc_tuned.yaml"
         if not args.params.is_file():
@@ -322,10 +322,10 @@ def reproduce_all(args: argparse.Namespace) -> int:
 def run_survey(args: argparse.Namespace) -> int:
     """The scenario loaded without its radio map if that is not written yet (this writes one), the survey planned
     (refusals in one line, the grid's unreachable points warned of on stderr), then run."""
-    from rfidnav_bringup.scenario import load_scenario
     from rfidnav_common.progress import stage
     from rfidnav_experiments.runners.two_tier import plan_survey, survey, survey_warnings
     from rfidnav_localization.radio_map_file import write_radio_map
+    from rfidnav_scenario.scenario import load_scenario
 
     scenario = load_scenario(args.scenario, radio_map_may_be_missing=True)
     if scenario.route_map is None:
@@ -443,8 +443,8 @@ def bench_partitions(args: argparse.Namespace) -> int:
 
 
 def bench_rtf(args: argparse.Namespace) -> int:
-    from rfidnav_bringup.scenario import load_scenario
     from rfidnav_experiments.bench.rtf import highest_usable_rtf, report, sweep
+    from rfidnav_scenario.scenario import load_scenario
 
     rows = sweep(load_scenario(args.scenario), args.rtfs, list(range(1, args.seeds + 1)), args.out, args.clock,
                  args.hogs)

@@ -26,6 +26,7 @@ from rfidnav_common.config import (
     param,
 )
 from rfidnav_common.errors import ParameterError
+from rfidnav_common.node_registry import NodeRegistration, ReadsAntennaPorts
 from rfidnav_common.robot_map import load_route_map
 from rfidnav_common.wall_tags import InductionArea
 from rfidnav_localization.fingerprint import WEIGHTINGS, LocateSettings
@@ -41,7 +42,7 @@ from rfidnav_localization.partition.estimate import METHODS
 
 
 @dataclass(frozen=True)
-class PartitionLocalizerParameters:
+class PartitionLocalizerParameters(ReadsAntennaPorts):
     # The orchestrator gives every non-sim node a map_file. Positions need none (they come from the tag ids); an
     # empty default cannot be declared, as parameter strings must be non-empty (rfidnav_common.config).
     map_file: str = param("robot map: its deployment_area tells the filter where tags exist ('unused': no map)",
@@ -124,7 +125,7 @@ class LocationServerParameters:
 
 
 @dataclass(frozen=True)
-class RfidLocalizerParameters:
+class RfidLocalizerParameters(ReadsAntennaPorts):
     """rfid_localizer (the fused localizer): what the robot map declares decides which evidence it weighs; the
     reader's geometry and noise are the reader's own parameters under the same names (antenna_positions,
     antenna_phase_offset_rad, phase_noise_rad_per_m: copy them from the reader's file), so one file describes
@@ -251,3 +252,10 @@ class RfidLocalizerParameters:
             odometry_scale_walk=self.odometry_scale_walk, compass_bias_walk_rad=self.compass_bias_walk_rad,
             eps=self.eps,
             reset_threshold=self.reset_threshold, resample_threshold=self.resample_threshold)
+
+
+# The node executables of this package, as the rfidnav.nodes entry points of its setup.py register them
+# (rfidnav_common.node_registry).
+PARTITION_LOCALIZER = NodeRegistration("partition_localizer", PartitionLocalizerParameters, stepped=True)
+LOCATION_SERVER = NodeRegistration("location_server", LocationServerParameters, stepped=True)
+RFID_LOCALIZER = NodeRegistration("rfid_localizer", RfidLocalizerParameters, stepped=True)

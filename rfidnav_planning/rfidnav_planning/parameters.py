@@ -8,7 +8,6 @@ from __future__ import annotations
 import dataclasses
 import math
 from dataclasses import dataclass
-from typing import ClassVar
 
 from rfidnav_common.config import (
     AT_LEAST_ONE,
@@ -23,6 +22,7 @@ from rfidnav_common.config import (
     param,
 )
 from rfidnav_common.errors import ParameterError
+from rfidnav_common.node_registry import CommandsSpeeds, NodeRegistration, ReadsAntennaPorts
 from rfidnav_common.topological_map import WEIGHTS
 from rfidnav_control.go_to import GoToSettings
 from rfidnav_planning.partition_navigation import ARRIVALS, DEVIATION_CHECKS, NavigatorSettings, TurnSettings
@@ -33,9 +33,7 @@ TIER_ONE_SERVER = "location_server"   # two_tier_navigator's tier_one_from: the 
 
 
 @dataclass(frozen=True)
-class PartitionNavigatorParameters:
-    ACTION: ClassVar[tuple[str, str]] = ("/navigate_to_point", "rfidnav_msgs/action/NavigateToPoint")   # it serves
-
+class PartitionNavigatorParameters(CommandsSpeeds):
     map_file: str = param("robot map YAML with the deployment_area (where the floor is tagged)", "")
     status_topic: str = param(
         "the LocalizationStatus it drives on: the partition localizer's, or the status_topic of the localizer the "
@@ -90,10 +88,9 @@ class PartitionNavigatorParameters:
 
 
 @dataclass(frozen=True)
-class TwoTierNavigatorParameters:
+class TwoTierNavigatorParameters(ReadsAntennaPorts, CommandsSpeeds):
     """two_tier_navigator (paper 003); config/params/two_tier_navigator.yaml documents them."""
 
-    ACTION: ClassVar[tuple[str, str]] = ("/navigate_to_point", "rfidnav_msgs/action/NavigateToPoint")   # it serves
 
     map_file: str = param("robot map: its walls and extent, when it has them (the tag map comes from the location "
                           "server); 'unused': none", "unused")
@@ -165,10 +162,9 @@ class TwoTierNavigatorParameters:
 
 
 @dataclass(frozen=True)
-class PoseNavigatorParameters:
+class PoseNavigatorParameters(CommandsSpeeds):
     """pose_navigator (ours, issue 20): to a point on a localizer's pose; config/params/pose_navigator.yaml."""
 
-    ACTION: ClassVar[tuple[str, str]] = ("/navigate_to_point", "rfidnav_msgs/action/NavigateToPoint")   # it serves
 
     map_file: str = param("robot map: its walls and extent, when it has them; 'unused': none", "unused")
     pose_topic: str = param("the localizer's PoseWithCovarianceStamped (map frame) the robot drives on",
@@ -204,7 +200,6 @@ class PoseNavigatorParameters:
 class MissionExecutorParameters:
     """mission_executor (paper 004); config/params/mission_executor.yaml documents them."""
 
-    ACTION: ClassVar[tuple[str, str]] = ("/navigate_to_node", "rfidnav_msgs/action/NavigateToNode")   # it serves
 
     map_file: str = param("topological map YAML (rfidnav_common.topological_map)", "")
     weight: str = param("routes: shortest by hallway lengths (length: length_m, else between positions, else 1 m) "
@@ -215,3 +210,16 @@ class MissionExecutorParameters:
     def validate(self) -> None:
         if not self.map_file:
             raise ParameterError("map_file", "required (the topological map)")
+
+
+# The node executables of this package, as the rfidnav.nodes entry points of its setup.py register them
+# (rfidnav_common.node_registry), with the actions they serve as (name, type).
+NAVIGATE_TO_POINT = ("/navigate_to_point", "rfidnav_msgs/action/NavigateToPoint")
+NAVIGATE_TO_NODE = ("/navigate_to_node", "rfidnav_msgs/action/NavigateToNode")
+PARTITION_NAVIGATOR = NodeRegistration(
+    "partition_navigator", PartitionNavigatorParameters, stepped=True, serves=NAVIGATE_TO_POINT)
+TWO_TIER_NAVIGATOR = NodeRegistration(
+    "two_tier_navigator", TwoTierNavigatorParameters, stepped=True, serves=NAVIGATE_TO_POINT)
+POSE_NAVIGATOR = NodeRegistration("pose_navigator", PoseNavigatorParameters, stepped=True, serves=NAVIGATE_TO_POINT)
+MISSION_EXECUTOR = NodeRegistration(
+    "mission_executor", MissionExecutorParameters, stepped=True, serves=NAVIGATE_TO_NODE)

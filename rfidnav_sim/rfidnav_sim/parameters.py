@@ -30,6 +30,7 @@ from rfidnav_common.config import (
 )
 from rfidnav_common.errors import ParameterError
 from rfidnav_common.frames import BASE_FRAME, FACINGS, MAP_FRAME, ODOM_FRAME, Frame, antenna_frames
+from rfidnav_common.node_registry import LimitsSpeed, NodeRegistration, PublishesAntennaPorts
 from rfidnav_common.polling import PollClock, Polling
 from rfidnav_common.seeding import rng_for
 from rfidnav_sim.compass_model import CompassModel
@@ -43,7 +44,7 @@ HALF_ANGLE_DEG = Limits(0.0, 180.0, low_open=True)                 # 180: all ro
 
 
 @dataclass(frozen=True)
-class RobotSimParameters:
+class RobotSimParameters(LimitsSpeed):
     world_file: str = param("world YAML (ground truth: tags, walls)", "")
     start_x: float = param("start position x in the map frame [m]", 0.0)
     start_y: float = param("start position y in the map frame [m]", 0.0)
@@ -115,7 +116,7 @@ def check_one_per_antenna(counts: dict[str, int]) -> None:
 
 
 @dataclass(frozen=True)
-class ReaderParameters:
+class ReaderParameters(PublishesAntennaPorts):
     world_file: str = param("world YAML (ground truth: tag ids and positions)", "")
     seed: int = param("run seed; the noise and miss streams derive from it", 0, SEED)
     rate_hz: float = param("inventory rounds per second [Hz, sim time]; a polled reader's fastest", 25.0, RATE_HZ)
@@ -289,3 +290,12 @@ class SonarParameters:
     def validate(self) -> None:
         if not self.world_file:
             raise ParameterError("world_file", "required (the world YAML whose walls echo)")
+
+
+# The node executables of this package, as the rfidnav.nodes entry points of its setup.py register them
+# (rfidnav_common.node_registry).
+ROBOT_SIM = NodeRegistration("robot_sim", RobotSimParameters, stepped=True)
+RFID_READER_SIM = NodeRegistration("rfid_reader_sim", ReaderParameters, stepped=True)
+COMPASS_SIM = NodeRegistration("compass_sim", CompassParameters, stepped=True)
+WIFI_SIM = NodeRegistration("wifi_sim", WifiSimParameters, stepped=True)
+SONAR_SIM = NodeRegistration("sonar_sim", SonarParameters, stepped=True)

@@ -14,8 +14,8 @@ import numpy as np
 import psutil
 
 from rfidnav_bag.bags import read_messages
-from rfidnav_bringup.metrics import position_errors
 from rfidnav_bringup.report import load_run
+from rfidnav_scenario.metrics import position_errors
 
 WORKSPACE = Path(__file__).resolve().parents[2]
 

@@ -34,8 +34,8 @@ from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
-from rfidnav_bringup.errors import ReadinessError
-from rfidnav_bringup.processes import DomainLease, NodeProcess, child_environment, resolve_executable
+from rfidnav_bringup.api import DomainLease, NodeProcess, ReadinessError, child_environment
+from rfidnav_common.install import resolve_executable
 from rfidnav_drivers.parameters import LlrpReaderParameters
 from rfidnav_msgs.msg import TagReadArray
 

@@ -20,9 +20,7 @@ from rclpy.context import Context
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 
-from rfidnav_bringup.errors import ReadinessError
-from rfidnav_bringup.processes import DomainLease, child_environment
-from rfidnav_bringup.scenario import CONFIG_DIR
+from rfidnav_bringup.api import DomainLease, ReadinessError, child_environment
 from rfidnav_common.frames import WIFI_FRAME
 from rfidnav_common.robot_map import load_route_map
 from rfidnav_experiments.runners.two_tier import floor_extent, wifi_model
@@ -30,6 +28,7 @@ from rfidnav_localization.fingerprint import RadioMap
 from rfidnav_localization.radio_map_file import load_radio_map
 from rfidnav_msgs.msg import AccessPointRss, WifiScan
 from rfidnav_msgs.srv import Locate
+from rfidnav_scenario.scenario import CONFIG_DIR
 from rfidnav_sim.world import load_world
 
 MAP_FILE = CONFIG_DIR / "maps" / "two_tier_home.yaml"

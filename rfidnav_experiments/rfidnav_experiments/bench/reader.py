@@ -8,8 +8,8 @@ import time
 
 import numpy as np
 
-from rfidnav_bringup.scenario import CONFIG_DIR
 from rfidnav_experiments.runners.shipped import file_parameters
+from rfidnav_scenario.scenario import CONFIG_DIR
 from rfidnav_sim.parameters import ReaderParameters
 from rfidnav_sim.rfid_model import ReaderSimulator
 

@@ -14,11 +14,11 @@ import json
 import statistics
 from typing import Any
 
-from rfidnav_bringup.scenario import CONFIG_DIR
 from rfidnav_experiments.calibrate.flc import scenario_named
 from rfidnav_experiments.engine import run_tasks
 from rfidnav_experiments.reproduce.tables import table
 from rfidnav_experiments.runners.tag_route import RouteRun, controller_parameters, run_tag_route
+from rfidnav_scenario.scenario import CONFIG_DIR
 
 ROUTES = ("line_follow_90", "line_follow_0", "acute_path", "hallway", "long_legs")
 PARAM_SETS = ("flc_paper", "flc_tuned")

@@ -25,10 +25,10 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from rfidnav_bringup.orchestrator import Orchestrator, RunOptions
-from rfidnav_bringup.scenario import Scenario
+from rfidnav_bringup.api import Orchestrator, RunOptions
 from rfidnav_common.errors import ConfigError
 from rfidnav_common.progress import progress
+from rfidnav_scenario.scenario import Scenario
 
 
 @dataclass(frozen=True)

@@ -10,7 +10,7 @@ point from the 90 degree start) by a seeded grid search on the calibration seeds
 The output range scales the controller's output universe and its output sets together (their shapes stay ours).
 The grid reaches past the best point on every side (an interior optimum, checked: :func:`interior`). The approach
 time is when the robot (ground truth) enters the first tag's read area, where the scored stretch begins
-(rfidnav_bringup.metrics); the objective is the sum of the squared log-ratios of the three means to the paper's
+(rfidnav_scenario.metrics); the objective is the sum of the squared log-ratios of the three means to the paper's
 figures; a setting with a failed run is out.
 
 Four more settings the paper leaves open move the approach time; they are declared (:data:`OPEN_SETTINGS`, each
@@ -40,12 +40,12 @@ from typing import Any
 
 import yaml
 
-from rfidnav_bringup.scenario import CONFIG_DIR, Scenario, load_scenario
 from rfidnav_common.config import node_parameter_values, parameters_from_mapping
 from rfidnav_control.parameters import HeadingControllerParameters
 from rfidnav_experiments.engine import run_tasks
 from rfidnav_experiments.reproduce.tables import mean_or_none, table
 from rfidnav_experiments.runners.tag_route import RouteRun, controller_parameters, role_parameters, run_tag_route
+from rfidnav_scenario.scenario import CONFIG_DIR, Scenario, load_scenario
 from rfidnav_sim.parameters import ReaderParameters
 
 PAPER_FILE = CONFIG_DIR / "params" / "flc_paper.yaml"

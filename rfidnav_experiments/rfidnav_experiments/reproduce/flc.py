@@ -9,7 +9,7 @@ routes (runners.random_routes, the ledger's evaluation set ``current("flc")``), 
 :func:`rfidnav_experiments.runners.tag_route.run_tag_route` (no DDS, so hundreds of runs take minutes). For flc_paper
 the lines are fitted and the acute path and the hallway held out; flc_tuned was developed on all four, so for it
 they are development routes and only the random routes are fresh. Every run is scored over the stretch ground truth
-decides (rfidnav_bringup.metrics). Reports:
+decides (rfidnav_scenario.metrics). Reports:
 
 * the conditions: every setting a run reads, with where it comes from, per parameter set where they differ
   (``paper``, with the section; ``paper, interpreted``; ``calibrated``, by which command, to which figures;
@@ -44,8 +44,6 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-from rfidnav_bringup.metrics import FIRST_TAG_RADIUS_M, tracking_error, wall_crossings  # noqa: E402
-from rfidnav_bringup.scenario import CONFIG_DIR, Scenario  # noqa: E402
 from rfidnav_common.errors import ConfigError  # noqa: E402
 from rfidnav_experiments.calibrate.flc import (  # noqa: E402
     CALIBRATED_FILE,
@@ -80,6 +78,8 @@ from rfidnav_experiments.runners.tag_route import (  # noqa: E402
     run_tag_route,
     tag_points,
 )
+from rfidnav_scenario.metrics import FIRST_TAG_RADIUS_M, tracking_error, wall_crossings  # noqa: E402
+from rfidnav_scenario.scenario import CONFIG_DIR, Scenario  # noqa: E402
 
 EXPERIMENT = "flc"
 PARAM_SETS = ("flc_paper", "flc_tuned")

@@ -66,7 +66,6 @@ from typing import Any
 
 from scipy import stats
 
-from rfidnav_bringup.scenario import CONFIG_DIR, load_scenario
 from rfidnav_common.errors import ConfigError
 from rfidnav_common.robot_map import RouteMap, load_route_map
 from rfidnav_common.seeding import derive_seed, rng_for
@@ -115,6 +114,7 @@ from rfidnav_localization.parameters import RfidLocalizerParameters
 from rfidnav_localization.partition import PartitionLocalizer
 from rfidnav_planning.parameters import PoseNavigatorParameters
 from rfidnav_planning.pose_navigation import PoseNavigator
+from rfidnav_scenario.scenario import CONFIG_DIR, load_scenario
 from rfidnav_sim.parameters import ReaderParameters, WifiSimParameters
 from rfidnav_sim.world import load_world
 

@@ -15,7 +15,7 @@ Reported, on the evaluation tasks (:data:`EVALUATION_SEED`; the configurations w
 * the conditions: every physical setting that shapes the figures, with where it comes from (``paper`` with the
   section, ``ours`` and why; nothing is calibrated for paper 000);
 * the headline at level N = 4 (the files' level): the paper's extra cost (l - |SD|) / |SD| and the extra cost in
-  time (turns charged at the robot's turn rate, :func:`rfidnav_bringup.metrics.extra_time_cost_pct`), each a mean
+  time (turns charged at the robot's turn rate, :func:`rfidnav_scenario.metrics.extra_time_cost_pct`), each a mean
   with its 95 % interval and number of runs; ``filter`` minus ``paper`` paired on the same tasks (common random
   numbers: every method, level and distance faces the same 250 start poses and goals per read range); the issue's
   targets, measured, met or not; the ablation beside them;
@@ -53,8 +53,6 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from matplotlib.ticker import NullFormatter, ScalarFormatter  # noqa: E402
 
-from rfidnav_bringup.metrics import extra_time_cost_pct  # noqa: E402
-from rfidnav_bringup.scenario import CONFIG_DIR  # noqa: E402
 from rfidnav_common.errors import ConfigError  # noqa: E402
 from rfidnav_common.geometry import wrap_angle  # noqa: E402
 from rfidnav_common.seeding import rng_for  # noqa: E402
@@ -83,6 +81,8 @@ from rfidnav_localization.parameters import PartitionLocalizerParameters  # noqa
 from rfidnav_localization.partition import LocalizerSettings, PartitionLocalizer, orientation_bounds  # noqa: E402
 from rfidnav_planning.parameters import PartitionNavigatorParameters  # noqa: E402
 from rfidnav_planning.partition_navigation import NavigatorSettings  # noqa: E402
+from rfidnav_scenario.metrics import extra_time_cost_pct  # noqa: E402
+from rfidnav_scenario.scenario import CONFIG_DIR  # noqa: E402
 
 EXPERIMENT = "partitions"
 FIELD = (0.0, 0.0, 5.0, 5.0)

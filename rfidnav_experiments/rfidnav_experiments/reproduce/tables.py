@@ -17,7 +17,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 from scipy import stats  # noqa: E402
 
-from rfidnav_bringup.scenario import CONFIG_DIR  # noqa: E402
+from rfidnav_scenario.scenario import CONFIG_DIR  # noqa: E402
 
 Key = TypeVar("Key", bound=Hashable)   # what pairs two methods' values: a seed, a placement, a mission
 

@@ -51,7 +51,6 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from rfidnav_bringup.metrics import GOAL_RADIUS_M  # noqa: E402
 from rfidnav_common.errors import ConfigError  # noqa: E402
 from rfidnav_common.floor_plan import HALLWAY_WIDTH_M, TAG_SETBACK_M  # noqa: E402
 from rfidnav_common.topological_map import UNKNOWN  # noqa: E402
@@ -83,6 +82,7 @@ from rfidnav_experiments.runners.topological import (  # noqa: E402
 )
 from rfidnav_planning.mission_executor import EARLY_MARGIN  # noqa: E402
 from rfidnav_planning.parameters import MissionExecutorParameters  # noqa: E402
+from rfidnav_scenario.metrics import GOAL_RADIUS_M  # noqa: E402
 from rfidnav_sim.floor_generator import RULES, write_floor  # noqa: E402
 
 EXPERIMENT = "topological"
@@ -224,7 +224,7 @@ SOURCES: dict[str, tuple[str, str]] = {
     "missions.start_before_tag_m": ("ours", "put down in the corridor, before a wall tag, at 0.8 m from its wall"),
     "missions.max_time_s": ("ours", "a mission not stopped by then failed"),
     "missions.miss_rates": ("ours", "paper 004 does not mention read failures: the rates are ours"),
-    "missions.success_radius_m": ("ours", "rfidnav_bringup.metrics.GOAL_RADIUS_M: the paper stops where the "
+    "missions.success_radius_m": ("ours", "rfidnav_scenario.metrics.GOAL_RADIUS_M: the paper stops where the "
                                           "goal's tag is read and gives no radius; stopped within this of the goal "
                                           "node's position, and the executor arrived"),
     "missions.reported_radii_m": ("ours", "success within each of these radii, from the same missions"),

@@ -61,7 +61,6 @@ import numpy as np  # noqa: E402
 from matplotlib.ticker import FixedLocator, NullLocator  # noqa: E402
 from scipy import stats  # noqa: E402
 
-from rfidnav_bringup.scenario import CONFIG_DIR, Scenario, load_scenario  # noqa: E402
 from rfidnav_common.errors import ConfigError  # noqa: E402
 from rfidnav_common.polling import PollClock, Polling  # noqa: E402
 from rfidnav_common.robot_map import load_route_map  # noqa: E402
@@ -106,6 +105,7 @@ from rfidnav_experiments.runners.two_tier import (  # noqa: E402
 from rfidnav_localization.fingerprint import RadioMap  # noqa: E402
 from rfidnav_localization.radio_map_file import load_radio_map  # noqa: E402
 from rfidnav_planning.wall_paths import WallMap  # noqa: E402
+from rfidnav_scenario.scenario import CONFIG_DIR, Scenario, load_scenario  # noqa: E402
 from rfidnav_sim.parameters import CompassParameters, ReaderParameters, WifiSimParameters  # noqa: E402
 from rfidnav_sim.world import World, load_world  # noqa: E402
 
@@ -737,7 +737,7 @@ def tier_one_errors(site: Site, radio_map: RadioMap, seed: int) -> list[float]:
 
 @dataclass(frozen=True)
 class Crossings:
-    """The wall crossings of the navigations' true tracks (rfidnav_bringup.metrics.wall_crossings), in all."""
+    """The wall crossings of the navigations' true tracks (rfidnav_scenario.metrics.wall_crossings), in all."""
     navigations: int
     count: int
 

@@ -24,7 +24,6 @@ from typing import Any
 import numpy as np
 from builtin_interfaces.msg import Time
 
-from rfidnav_bringup.metrics import ground_truth_objection
 from rfidnav_common.frames import MAP_FRAME, compose
 from rfidnav_common.geometry import wrap_angle
 from rfidnav_common.tag_lattice import Coordinate
@@ -46,6 +45,7 @@ from rfidnav_localization.fused.localizer import FusedEstimate, FusedLocalizer
 from rfidnav_localization.partition import LocalizationEstimate, PartitionLocalizer
 from rfidnav_planning.conversions import estimate_from_status
 from rfidnav_planning.pose_navigation import Pose, PoseNavigator
+from rfidnav_scenario.metrics import ground_truth_objection
 from rfidnav_sim.compass_model import CompassModel
 from rfidnav_sim.parameters import ReaderParameters
 

@@ -26,11 +26,11 @@ from typing import Protocol
 
 import numpy as np
 
-from rfidnav_bringup.metrics import extra_time_cost_pct, travel_time_s
 from rfidnav_common.tag_lattice import Coordinate, Deployment, StraightWalk, partitions_along_segment
 from rfidnav_localization.partition import LocalizationEstimate, LocalizerSettings, PartitionLocalizer
 from rfidnav_planning.parameters import PartitionNavigatorParameters
 from rfidnav_planning.partition_navigation import FORWARD, ROTATE, Decision, NavigatorSettings, PartitionNavigator
+from rfidnav_scenario.metrics import extra_time_cost_pct, travel_time_s
 
 INSIDE_M = 1e-7                 # how far past a boundary the round on entering a partition is taken
 TURN_CHORD_RAD = math.radians(2.0)
@@ -83,7 +83,7 @@ class NavigationRun:
 
     @property
     def extra_time_cost_pct(self) -> float:
-        """The extra cost in time, turns charged at the robot's turn rate (:func:`rfidnav_bringup.metrics.
+        """The extra cost in time, turns charged at the robot's turn rate (:func:`rfidnav_scenario.metrics.
         extra_time_cost_pct`)."""
         return extra_time_cost_pct(self.path_length_m, self.turned_rad, self.straight_distance_m,
                                    self.speeds.speed_mps, self.speeds.turn_rate_radps)

@@ -23,9 +23,9 @@ import math
 
 import numpy as np
 
-from rfidnav_bringup.scenario import Scenario, load_scenario
 from rfidnav_common.robot_map import RouteMap
 from rfidnav_common.seeding import rng_for
+from rfidnav_scenario.scenario import Scenario, load_scenario
 from rfidnav_sim.world import Tag, World
 
 PREFIX = "random_route_"

@@ -7,8 +7,8 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any, TypeVar
 
-from rfidnav_bringup.scenario import CONFIG_DIR
 from rfidnav_common.config import node_parameter_values, parameters_from_mapping
+from rfidnav_scenario.scenario import CONFIG_DIR
 
 Parameters = TypeVar("Parameters")
 

@@ -5,7 +5,7 @@ ReaderSimulator, TagRouteFollower, FuzzyHeadingController) as the node graph, an
 rules (inventory rounds taken on the ground-truth samples), so a run here differs from ``./rfidnav
 run`` only by the DDS graph's latency. ``./rfidnav reproduce flc`` runs hundreds of these.
 
-Scoring (rfidnav_bringup.metrics): the stretch from the robot's entry (ground truth) into the first tag's read area
+Scoring (rfidnav_scenario.metrics): the stretch from the robot's entry (ground truth) into the first tag's read area
 to its entry into the last one's, the read area being where the reader's floor antenna reads a floor tag
 (:func:`floor_read_radius_m`), so two controllers in the same conditions are scored over the same stretch.
 
@@ -27,14 +27,14 @@ from pathlib import Path
 
 import numpy as np
 
-from rfidnav_bringup.metrics import TrackingMetrics, Trajectory, tracking_metrics
-from rfidnav_bringup.scenario import Scenario, node_parameters
 from rfidnav_common.geometry import wrap_angle
 from rfidnav_common.seeding import rng_for
 from rfidnav_control.fuzzy import FuzzyHeadingController
 from rfidnav_control.parameters import HeadingControllerParameters
 from rfidnav_control.tag_route import SEARCH_MODES, Command, TagRouteFollower, observe
 from rfidnav_experiments.runners.shipped import file_parameters
+from rfidnav_scenario.metrics import TrackingMetrics, Trajectory, tracking_metrics
+from rfidnav_scenario.scenario import Scenario, node_parameters
 from rfidnav_sim.parameters import ReaderParameters, RobotSimParameters
 from rfidnav_sim.rfid_model import Read, ReaderSimulator, reach_m
 

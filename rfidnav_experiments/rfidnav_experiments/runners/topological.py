@@ -42,8 +42,6 @@ from pathlib import Path
 
 import numpy as np
 
-from rfidnav_bringup.metrics import GOAL_RADIUS_M, ground_truth_objection, topological_shortest_m, wall_crossings
-from rfidnav_bringup.scenario import CONFIG_DIR
 from rfidnav_common.topological_map import UNKNOWN, TopologicalMap, load_topological_map
 from rfidnav_common.wall_tags import InductionArea
 from rfidnav_control.parameters import SONAR_FIELDS, WallFollowerParameters
@@ -60,6 +58,8 @@ from rfidnav_control.wall_following import (
 )
 from rfidnav_experiments.runners.shipped import shipped_parameters
 from rfidnav_planning.mission_executor import STOP, TURNS, Decision, MissionExecutor
+from rfidnav_scenario.metrics import GOAL_RADIUS_M, ground_truth_objection, topological_shortest_m, wall_crossings
+from rfidnav_scenario.scenario import CONFIG_DIR
 from rfidnav_sim.floor_generator import generated_floor
 from rfidnav_sim.parameters import RobotSimParameters, SonarParameters
 from rfidnav_sim.sonar_model import SonarModel
@@ -109,7 +109,7 @@ class MissionRun:
     bumps: int = 0                         # times the base's bumper was pressed against a wall
     arrived: bool = False                  # the executor's success, wherever the robot stopped
     goal_distance_m: float = math.nan      # from where it stopped to the goal node's position
-    wall_crossings: int = 0                # rfidnav_bringup.metrics.wall_crossings of the true track
+    wall_crossings: int = 0                # rfidnav_scenario.metrics.wall_crossings of the true track
     # What a failure is classified by (reproduce topological's failure taxonomy):
     stopped: bool = False                  # the follower stopped (else the mission ran out of time)
     believed_node: str | None = None       # where the executor last took the robot to be

@@ -27,8 +27,6 @@ from pathlib import Path
 import numpy as np
 from scipy import ndimage
 
-from rfidnav_bringup.metrics import ground_truth_objection, wall_crossings
-from rfidnav_bringup.scenario import CONFIG_DIR
 from rfidnav_common.errors import ConfigError
 from rfidnav_common.geometry import point_segment_distance
 from rfidnav_common.robot_map import RouteMap, bounding_box
@@ -49,6 +47,8 @@ from rfidnav_planning.two_tier_navigation import (
     TwoTierSettings,
 )
 from rfidnav_planning.wall_paths import WallMap
+from rfidnav_scenario.metrics import ground_truth_objection, wall_crossings
+from rfidnav_scenario.scenario import CONFIG_DIR
 from rfidnav_sim.compass_model import CompassModel
 from rfidnav_sim.kinematics import moves_into_wall, unicycle_step
 from rfidnav_sim.parameters import CompassParameters, ReaderParameters, RobotSimParameters, WifiSimParameters
@@ -266,7 +266,7 @@ class FloorRobot:
         return linear
 
     def wall_crossings(self) -> int:
-        """rfidnav_bringup.metrics.wall_crossings of the true track."""
+        """rfidnav_scenario.metrics.wall_crossings of the true track."""
         return wall_crossings(np.array(self.track), self.walls)
 
 
@@ -303,7 +303,7 @@ class TwoTierRun:
     duration_s: float
     survey: tuple[tuple[tuple[float, float], dict[str, float]], ...] = ()   # (estimated position, scan)
     bumps: int = 0                         # steps refused because they drove into a wall
-    wall_crossings: int = 0                # rfidnav_bringup.metrics.wall_crossings of the true track
+    wall_crossings: int = 0                # rfidnav_scenario.metrics.wall_crossings of the true track
 
     @property
     def final_error_m(self) -> float:

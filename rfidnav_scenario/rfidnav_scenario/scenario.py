@@ -19,7 +19,6 @@ from typing import Any
 
 import yaml
 
-from rfidnav_bringup.processes import UnknownExecutableError, package_share, resolve_executable
 from rfidnav_common.config import (
     MAX_DURATION_S,
     Section,
@@ -29,62 +28,28 @@ from rfidnav_common.config import (
     type_name,
     typed_values,
 )
-from rfidnav_common.errors import ConfigError
+from rfidnav_common.errors import ConfigError, UnknownExecutableError
+from rfidnav_common.install import package_share, resolve_executable
+from rfidnav_common.node_registry import (
+    NODE_GROUP,
+    CommandsSpeeds,
+    LimitsSpeed,
+    NodeRegistration,
+    PublishesAntennaPorts,
+    ReadsAntennaPorts,
+    registered_node,
+)
 from rfidnav_common.robot_map import RouteMap, contains, load_route_map
 from rfidnav_common.topological_map import TopologicalMap, load_topological_map
-from rfidnav_control.parameters import HeadingControllerParameters, WallFollowerParameters
-from rfidnav_drivers.parameters import CreateBaseParameters, LlrpReaderParameters, WifiScannerParameters
-from rfidnav_localization.parameters import (
-    LocationServerParameters,
-    PartitionLocalizerParameters,
-    RfidLocalizerParameters,
-)
 from rfidnav_localization.radio_map_file import load_radio_map
-from rfidnav_planning.parameters import (
-    MissionExecutorParameters,
-    PartitionNavigatorParameters,
-    PoseNavigatorParameters,
-    TwoTierNavigatorParameters,
-)
 from rfidnav_planning.partition_planner import lattice_refusal
-from rfidnav_sim.parameters import (
-    CompassParameters,
-    ReaderParameters,
-    RobotSimParameters,
-    SonarParameters,
-    WifiSimParameters,
-)
 from rfidnav_sim.rfid_model import reach_m
 from rfidnav_sim.world import World, load_world
 
-CONFIG_DIR = package_share("rfidnav_bringup") / "config"   # installed with the package, or linked by set-up
+CONFIG_DIR = package_share("rfidnav_scenario") / "config"   # installed with the package, or linked by set-up
 SCENARIO_DIR = CONFIG_DIR / "scenarios"
 ROBOT_DIR = CONFIG_DIR / "robots"
 
-# Parameter classes of the nodes this suite ships, to validate parameter files before start-up.
-# Nodes not listed here (hardware drivers, user nodes) get their files passed through unchecked.
-KNOWN_NODES: dict[tuple[str, str], tuple[str, type]] = {
-    ("rfidnav_sim", "robot_sim"): ("robot_sim", RobotSimParameters),
-    ("rfidnav_sim", "rfid_reader_sim"): ("rfid_reader_sim", ReaderParameters),
-    ("rfidnav_control", "heading_controller"): ("heading_controller", HeadingControllerParameters),
-    ("rfidnav_localization", "partition_localizer"): ("partition_localizer", PartitionLocalizerParameters),
-    ("rfidnav_planning", "partition_navigator"): ("partition_navigator", PartitionNavigatorParameters),
-    ("rfidnav_sim", "compass_sim"): ("compass_sim", CompassParameters),
-    ("rfidnav_sim", "wifi_sim"): ("wifi_sim", WifiSimParameters),
-    ("rfidnav_sim", "sonar_sim"): ("sonar_sim", SonarParameters),
-    ("rfidnav_localization", "location_server"): ("location_server", LocationServerParameters),
-    ("rfidnav_localization", "rfid_localizer"): ("rfid_localizer", RfidLocalizerParameters),
-    ("rfidnav_planning", "two_tier_navigator"): ("two_tier_navigator", TwoTierNavigatorParameters),
-    ("rfidnav_planning", "pose_navigator"): ("pose_navigator", PoseNavigatorParameters),
-    ("rfidnav_control", "wall_follower"): ("wall_follower", WallFollowerParameters),
-    ("rfidnav_planning", "mission_executor"): ("mission_executor", MissionExecutorParameters),
-    ("rfidnav_drivers", "llrp_reader"): ("llrp_reader", LlrpReaderParameters),
-    ("rfidnav_drivers", "create_base"): ("create_base", CreateBaseParameters),
-    ("rfidnav_drivers", "wifi_scanner"): ("wifi_scanner", WifiScannerParameters),
-}
-# Packages whose nodes derive rfidnav_common.stepped_node.SteppedNode and so can answer the stepped clock; the
-# drivers talk to hardware on its own time and never take part.
-STEPPED_PACKAGES = ("rfidnav_sim", "rfidnav_control", "rfidnav_localization", "rfidnav_planning")
 METRIC_GROUPS = ("tracking", "partition", "two_tier", "topological")
 MAX_MISSION_S = MAX_DURATION_S          # mission.timeout_s: one day of sim time (the orchestrator's wall limit follows)
 MAX_RESPAWNS = 100
@@ -115,6 +80,12 @@ class NodeSpec:
     stepped: bool | None = None              # take part in the stepped clock; None: ours of the loop do
     map_file: Path | None = None             # this role's robot map (``map:``); None: the scenario's
 
+    @property
+    def registration(self) -> NodeRegistration | None:
+        """What the node's package registers of it (rfidnav_common.node_registry); None for a command line or a
+        node no package registers."""
+        return registered_node(self.package, self.executable) if self.package and self.executable else None
+
 
 @dataclass(frozen=True)
 class MissionSpec:
@@ -142,14 +113,14 @@ class Scenario:
     warnings: tuple[str, ...] = ()           # what loading found doubtful but runnable, one line each
 
     def step_participants(self) -> list[NodeSpec]:
-        """The roles a stepped clock waits for: our nodes of the simulated loop, not the clock source itself, not a
-        driver, not a node given as a command line (a user's own node, which runs free beside them) unless its
-        entry says ``stepped: true`` (it derives rfidnav_common.stepped_node.SteppedNode); ``stepped: false``
-        lets one of ours run free."""
+        """The roles a stepped clock waits for: the nodes registered as stepped (rfidnav_common.node_registry), not
+        the clock source itself, not a driver, not a node given as a command line (a user's own node, which runs
+        free beside them) unless its entry says ``stepped: true`` (it derives
+        rfidnav_common.stepped_node.SteppedNode); ``stepped: false`` lets one of ours run free."""
         def takes_part(spec: NodeSpec) -> bool:
             if spec.stepped is not None:
                 return spec.stepped
-            return spec.package in STEPPED_PACKAGES and (spec.package, spec.executable) in KNOWN_NODES
+            return spec.registration is not None and spec.registration.stepped
         return [spec for spec in self.nodes.values() if spec.name and not spec.clock_source and takes_part(spec)]
 
     @property
@@ -334,14 +305,24 @@ def _node_spec(role: str, entry: Section, base: Path) -> NodeSpec:
     if process is not None:
         if not isinstance(process, str) or not process.isidentifier():
             raise entry.error("process", "expected a name (letters, digits, _) shared by the roles of one process")
-        if package is None or (package, executable) not in KNOWN_NODES:
-            raise entry.error("process", "only our nodes (package and executable) can share a process")
+        if package is None or registered_node(package, executable) is None:
+            raise entry.error("process", "only registered nodes (package and executable) can share a process")
         if entry.boolean("respawn", False):
             raise entry.error("process", "a role that respawns needs a process of its own")
+    sim = entry.boolean("sim", False)
+    if sim and not entry.has("stepped"):
+        registration = registered_node(package, executable) if package is not None else None
+        if registration is None or not registration.stepped:
+            what = (f"{package}:{executable} is registered as not stepped" if registration is not None else
+                    f"no {NODE_GROUP} entry point registers {package}:{executable}" if package is not None else
+                    "a command line is not registered")
+            raise entry.error("sim", f"a simulator must take part in the stepped clock, but {what}: it would run "
+                                     "off the simulated clock and its runs would not repeat (register it as stepped, "
+                                     "docs/extending.md, or say stepped: true or false)")
     return NodeSpec(
         role=role, package=package, executable=executable, command=command,
         name=entry.string("name", executable) if package is not None else entry.raw("name", None),
-        param_files=files, overrides=dict(overrides), sim=entry.boolean("sim", False),
+        param_files=files, overrides=dict(overrides), sim=sim,
         clock_source=entry.boolean("clock_source", False), respawn=entry.boolean("respawn", False),
         max_respawns=entry.integer("max_respawns", 3, minimum=0, maximum=MAX_RESPAWNS), process=process,
         stepped=entry.boolean("stepped", False) if entry.has("stepped") else None, map_file=map_file)
@@ -553,11 +534,11 @@ def _check_antenna_ports(scenario: Scenario, parameters: dict[str, Any]) -> None
     if any(value is None for value in parameters.values()):
         return
     readers = {role: value.published_antenna_ports() for role, value in parameters.items()
-               if hasattr(value, "published_antenna_ports")}
+               if isinstance(value, PublishesAntennaPorts)}
     if not readers or any(not ports for _, ports in readers.values()):
         return
     published = {port for _, ports in readers.values() for port in ports}
-    wanted = [(role, name, port) for role, value in parameters.items() if hasattr(value, "antenna_ports_read")
+    wanted = [(role, name, port) for role, value in parameters.items() if isinstance(value, ReadsAntennaPorts)
               for name, port in value.antenna_ports_read().items() if port not in published]
     if not wanted:
         return
@@ -580,12 +561,12 @@ def _check_antenna_ports(scenario: Scenario, parameters: dict[str, Any]) -> None
 def _check_speeds(scenario: Scenario, parameters: dict[str, Any]) -> None:
     """No node commands a forward speed above what the base drives (``speed_limit()`` of the base's parameters:
     robot_sim's or create_base's ``max_wheel_speed_mps``); one error names the node's parameter and the base's."""
-    limits = [(role, value.speed_limit()) for role, value in parameters.items() if hasattr(value, "speed_limit")]
+    limits = [(role, value.speed_limit()) for role, value in parameters.items() if isinstance(value, LimitsSpeed)]
     if len(limits) != 1:
         return
     (base_role, (limit_name, limit)), = limits
     for role, value in parameters.items():
-        for name, speed in (value.commanded_speeds().items() if hasattr(value, "commanded_speeds") else ()):
+        for name, speed in (value.commanded_speeds().items() if isinstance(value, CommandsSpeeds) else ()):
             if speed > limit:
                 source, key = _origin_key(scenario, role, name)
                 raise ConfigError(source, key, f"{speed:g} m/s is faster than the base drives: {base_role}'s "
@@ -595,11 +576,10 @@ def _check_speeds(scenario: Scenario, parameters: dict[str, Any]) -> None:
 
 def _check_server(scenario: Scenario, mission: Section) -> None:
     """The role serving the mission (mission.server, else the first non-simulator role), when it is one of our
-    action servers (its parameter class's ``ACTION``), serves the mission's action name and type."""
+    action servers (its registration's ``serves``), serves the mission's action name and type."""
     role = scenario.mission.server or next((role for role, spec in scenario.nodes.items() if not spec.sim), None)
     spec = scenario.nodes.get(role or "")
-    known = KNOWN_NODES.get((spec.package or "", spec.executable or "")) if spec is not None else None
-    served = getattr(known[1], "ACTION", None) if known is not None else None
+    served = spec.registration.serves if spec is not None and spec.registration is not None else None
     if role is None or served is None:
         return
     name, action_type = served
@@ -629,7 +609,8 @@ def _origin_key(scenario: Scenario, role: str, name: str) -> tuple[str, str]:
     spec = scenario.nodes[role]
     if name in spec.overrides:
         return str(scenario.path), f"nodes.{role}.overrides.{name}"
-    node_name, _ = KNOWN_NODES[(spec.package or "", spec.executable or "")]
+    assert spec.registration is not None, role   # only registered nodes have parameters checked
+    node_name = spec.registration.node_name
     for file in reversed(spec.param_files):
         section = node_parameter_section(file, node_name)
         if section.has(name):
@@ -675,14 +656,15 @@ def injected_parameters(scenario: Scenario, spec: NodeSpec, seed: int, rtf: floa
 
 def node_parameters(scenario: Scenario, spec: NodeSpec, seed: int, rtf: float,
                     run_dir: Path | None = None, stepped_with: tuple[str, ...] | None = None) -> Any | None:
-    """Validate a known node's parameter files, overrides and injected values; None for nodes we do not know.
+    """Validate a registered node's parameter files, overrides and injected values; None for nodes no package
+    registers.
 
     Later files override earlier ones and the scenario's overrides override the files; a bad value is reported
     against the file (or the overrides) it came from."""
-    known = KNOWN_NODES.get((spec.package or "", spec.executable or ""))
-    if known is None:
+    registration = spec.registration
+    if registration is None:
         return None
-    node_name, cls = known
+    node_name, cls = registration.node_name, registration.parameters
     values: dict[str, Any] = {}
     origins: dict[str, tuple[str, str]] = {}
     layers = [node_parameter_section(file, node_name) for file in spec.param_files]

@@ -1,0 +1,11 @@
+"""The public run API of rfidnav_bringup: what packages above it (the experiments' DDS benchmarks) may use to run a
+scenario's graph or a node process of their own. Everything else in this package may change without notice."""
+
+from __future__ import annotations
+
+from rfidnav_bringup.errors import ReadinessError
+from rfidnav_bringup.orchestrator import Orchestrator, RunOptions, RunSummary
+from rfidnav_bringup.processes import DomainLease, NodeProcess, child_environment
+
+__all__ = ["DomainLease", "NodeProcess", "Orchestrator", "ReadinessError", "RunOptions", "RunSummary",
+           "child_environment"]
