@@ -17,9 +17,15 @@ setup(
     description="In-process experiments of rfidnav: runners, the papers' reproductions, benchmarks.",
     license="Apache-2.0",
     entry_points={"rfidnav.verbs": [
-        "reproduce = rfidnav_experiments.verbs:add_reproduce",
+        "reproduce = rfidnav_experiments.reproduce.driver:add_reproduce",
         "calibrate = rfidnav_experiments.verbs:add_calibrate",
         "survey = rfidnav_experiments.verbs:add_survey",
         "bench = rfidnav_experiments.verbs:add_bench",
+    ], "rfidnav.reproductions": [   # rfidnav_experiments.reproduce.driver
+        "flc = rfidnav_experiments.reproduce.entries:FLC",
+        "partitions = rfidnav_experiments.reproduce.entries:PARTITIONS",
+        "two_tier = rfidnav_experiments.reproduce.entries:TWO_TIER",
+        "topological = rfidnav_experiments.reproduce.entries:TOPOLOGICAL",
+        "fused = rfidnav_experiments.reproduce.entries:FUSED",
     ]},
 )

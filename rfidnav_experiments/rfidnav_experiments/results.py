@@ -26,7 +26,6 @@ from __future__ import annotations
 import contextlib
 import functools
 import hashlib
-import importlib
 import json
 import math
 import os
@@ -35,13 +34,14 @@ import subprocess
 import sys
 import tempfile
 import time
-from collections.abc import Callable, Iterator
-from dataclasses import dataclass, field
+from collections.abc import Iterator
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Literal
 
 from rfidnav_common.errors import ConfigError
 from rfidnav_experiments.evaluation import evaluation_set_dict
+from rfidnav_experiments.reproduce.driver import Reproduction, reproductions
 
 REPOSITORY = Path(__file__).resolve().parents[2]
 RESULTS_DIR = REPOSITORY / "docs" / "results"
@@ -49,38 +49,8 @@ LEDGER_PAGE = RESULTS_DIR / "evaluation-ledger.md"
 FORMAT = 1
 
 
-@dataclass(frozen=True)
-class Reproduction:
-    """A ``reproduce NAME`` experiment: its function, the count it takes, and its pinned subset."""
-    name: str
-    module: str
-    function: str
-    count: str                          # the function's count argument (seeds, runs, missions)
-    option: str                         # the command's option for it
-    default: int                        # the count the published figures use
-    pinned: dict[str, Any] = field(default_factory=dict)   # the subset a test runs again (<1 min)
-
-    def run(self, out_dir: Path, as_json: bool, **arguments: Any) -> int:
-        function: Callable[..., int] = getattr(importlib.import_module(self.module), self.function)
-        return function(out_dir=out_dir, as_json=as_json, **arguments)
-
-    def command(self, arguments: dict[str, Any]) -> str:
-        return f"./rfidnav reproduce {self.name} {self.option} {arguments[self.count]}"
-
-
-REPRODUCTIONS: dict[str, Reproduction] = {r.name: r for r in (
-    Reproduction("flc", "rfidnav_experiments.reproduce.flc", "reproduce_flc", "seeds", "--seeds", 10,
-                 {"seeds": 1}),
-    Reproduction("partitions", "rfidnav_experiments.reproduce.partitions", "reproduce_partitions", "runs", "--runs",
-                 250, {"runs": 5}),
-    Reproduction("two_tier", "rfidnav_experiments.reproduce.two_tier", "reproduce_two_tier", "runs", "--runs", 20,
-                 {"runs": 1, "fig10_runs": 2, "seed": 1}),
-    Reproduction("topological", "rfidnav_experiments.reproduce.topological", "reproduce_topological", "missions",
-                 "--runs", 100, {"missions": 1}),
-    Reproduction("fused", "rfidnav_experiments.reproduce.fused", "reproduce_fused", "runs", "--runs", 10,
-                 {"runs": 1, "seed": 1, "worlds": ["mixed_floor", "partition_field", "partition_field_fused",
-                                                   "mixed_floor_fused"]}),
-)}
+# The reproductions registered in the ``rfidnav.reproductions`` entry-point group (rfidnav_experiments.reproduce.driver)
+REPRODUCTIONS: dict[str, Reproduction] = reproductions()
 
 
 @dataclass(frozen=True)
@@ -193,8 +163,10 @@ def loaded_sources() -> set[Path]:
     return sources
 
 
+# the wrapper, the driver, the registrations and the command line: no figure depends on them
 NOT_INPUTS = ("rfidnav_experiments/rfidnav_experiments/results.py", "rfidnav_experiments/rfidnav_experiments/verbs.py",
-              "rfidnav_bringup/rfidnav_bringup/cli.py")   # the wrapper and the command line: no figure depends on them
+              "rfidnav_experiments/rfidnav_experiments/reproduce/driver.py",
+              "rfidnav_experiments/rfidnav_experiments/reproduce/entries.py", "rfidnav_bringup/rfidnav_bringup/cli.py")
 
 
 def input_hashes(paths: set[Path]) -> dict[str, str]:

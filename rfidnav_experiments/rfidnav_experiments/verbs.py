@@ -88,49 +88,6 @@ def engine(args: argparse.Namespace, experiment: str = "", arguments: dict | Non
                                     arguments=arguments or {}))
 
 
-def add_reproduce(verbs: argparse._SubParsersAction) -> Handler:
-    reproduce = verbs.add_parser("reproduce", help="the papers' experiments in-process, beside the papers' figures")
-    names = reproduce.add_subparsers(dest="name", required=True, metavar="EXPERIMENT")
-    common = argparse.ArgumentParser(add_help=False)
-    common.add_argument("--out", type=output_folder, default=RUNS_DIR / "reproduce",
-                        help="folder for the rows, tables and plots")
-    common.add_argument("--json", action="store_true", help="print the rows as JSON on stdout")
-    add_engine_options(common)
-    common.add_argument("--resume", action="store_true",
-                        help="take the finished tasks from --out's tasks file (EXPERIMENT_tasks.jsonl) of an "
-                             "interrupted run of the same experiment, arguments and code, and run only the rest")
-    common.add_argument("--publish", action="store_true",
-                        help="also write docs/results/EXPERIMENT.json (the figures the docs quote, with the command, "
-                             "commit, inputs and the pinned subset's rows) and rewrite the quoted numbers")
-    flc = names.add_parser("flc", parents=[common], help="paper 001 sec. V: the fuzzy heading controller's "
-                                                         "line and route experiments")
-    flc.add_argument("--seeds", type=runs_value, default=10, help="seeds per setting")
-    partitions = names.add_parser("partitions", parents=[common], help="paper 000 sec. 6: navigations by "
-                                                                       "partitions, Figs. 11-14")
-    partitions.add_argument("--runs", type=runs_value, help="runs per (read range, level, method), default 250")
-    two_tier = names.add_parser("two_tier", parents=[common], help="paper 003 sec. 4.2: WiFi fingerprints and "
-                                                                   "tag groups, Figs. 10-12")
-    two_tier.add_argument("--runs", type=runs_value, help="runs per route, default 20")
-    topological = names.add_parser("topological", parents=[common], help="paper 004 sec. 5: topological "
-                                                                         "missions under read failures")
-    topological.add_argument("--runs", type=runs_value, help="missions per evaluation floor, method and miss "
-                                                            "rate, default 100 (development floors fewer)")
-    fused = names.add_parser("fused", parents=[common], help="ours: the fused localizer beside each paper's own "
-                                                             "localizer, same runs, paired")
-    fused.add_argument("--runs", type=runs_value, help="runs per world, default 10")
-    everything = names.add_parser("all", help="every reproduction, benchmark and mission the docs quote at "
-                                              "its published size: rewrites docs/results/ and the quoted figures")
-    everything.add_argument("--out", type=output_folder, default=RUNS_DIR / "reproduce",
-                            help="folder for the rows, tables and plots")
-    everything.add_argument("--only", type=published_names, default=None,
-                            help="comma-separated reproductions, bench_NAME benchmarks or run_NAME missions "
-                                 "(default: all)")
-    add_engine_options(everything)
-    names.add_parser("docs", help="rewrite every figure the README and docs/ quote from docs/results/, and the "
-                                  "evaluation ledger's page; nothing runs")
-    return run_reproduce
-
-
 def add_calibrate(verbs: argparse._SubParsersAction) -> Handler:
     calibrate = verbs.add_parser("calibrate", help="fit a paper's unstated settings to its first experiment only; "
                                                    "measure the robot's antenna phase offset")
@@ -243,80 +200,6 @@ def add_bench(verbs: argparse._SubParsersAction) -> Handler:
     names.add_parser("llrp", parents=[common], help="the llrp_reader driver against llrpkit's LLRP emulator "
                                                     "(latency, lossless rate)")
     return run_bench
-
-
-def published_names(text: str) -> list[str]:
-    from rfidnav_experiments.results import COMMANDS, REPRODUCTIONS
-
-    names = [part.strip() for part in text.split(",")]
-    unknown = [name for name in names if name not in REPRODUCTIONS and name not in COMMANDS]
-    if unknown:
-        raise argparse.ArgumentTypeError(f"expected some of {', '.join([*REPRODUCTIONS, *COMMANDS])}, got {text!r}")
-    return list(dict.fromkeys(names))
-
-
-def run_reproduce(args: argparse.Namespace) -> int:
-    """The reproduction on the command's engine, its tasks streamed to ``--out``/EXPERIMENT_tasks.jsonl."""
-    from rfidnav_experiments import results
-
-    if args.name == "all":
-        return reproduce_all(args)
-    if args.name == "docs":
-        return render_docs()
-    reproduction = results.REPRODUCTIONS[args.name]
-    count = getattr(args, reproduction.option.removeprefix("--"))
-    arguments = {reproduction.count: count or reproduction.default}
-    with engine(args, f"reproduce {args.name}", arguments, args.out / f"{args.name}_tasks.jsonl"):
-        if not args.publish:
-            return reproduction.run(args.out, args.json, **arguments)
-        code = results.publish_reproduction(args.name, args.out, count=arguments[reproduction.count])
-    if args.json:
-        print(json.dumps(results.rows_of(args.name, args.out), indent=1))
-    return max(code, render_docs())
-
-
-def render_docs() -> int:
-    """The quoted figures and the ledger's page from docs/results/; 1 with a line per quote it could not render."""
-    from rfidnav_experiments import results
-    from rfidnav_experiments.evaluation import ledger_markdown
-
-    results.LEDGER_PAGE.parent.mkdir(parents=True, exist_ok=True)
-    results.LEDGER_PAGE.write_text(ledger_markdown())
-    problems = results.render_quotes()
-    for problem in problems:
-        print(f"rfidnav reproduce: {problem}", file=sys.stderr)
-    return 1 if problems else 0
-
-
-def reproduce_all(args: argparse.Namespace) -> int:
-    """Every reproduction and benchmark (or ``--only``'s), at its published size, then the docs."""
-    from rfidnav_common.progress import stage
-    from rfidnav_experiments import results
-
-    names = args.only or [*results.REPRODUCTIONS, *results.COMMANDS]
-    minutes = results.estimated_minutes(names)
-    print("reproduce all: " + ", ".join(names) + (
-        f"; the last published runs of these took {minutes:.0f} min" if minutes is not None else
-        "; no estimate (a results file is missing)"), file=sys.stderr)
-    codes = []
-    for name in names:
-        if name in results.COMMANDS:
-            try:
-                with stage(results.COMMANDS[name].command()):
-                    codes.append(results.publish_command(name))
-            except results.ResultsError as error:     # one command's failure: said, and the others still run
-                print(f"rfidnav reproduce: {error}", file=sys.stderr)
-                codes.append(1)
-            continue
-        reproduction = results.REPRODUCTIONS[name]
-        arguments = {reproduction.count: reproduction.default}
-        with engine(args, f"reproduce {name}", arguments, args.out / f"{name}_tasks.jsonl"):
-            codes.append(results.publish_reproduction(name, args.out))
-    failed = [name for name, code in zip(names, codes) if code]
-    if failed:
-        print(f"reproduce all: exit code 1 from {', '.join(failed)} (their figures are written all the same)",
-              file=sys.stderr)
-    return max([render_docs(), *(1 for _ in failed)])
 
 
 def run_survey(args: argparse.Namespace) -> int:
