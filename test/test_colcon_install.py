@@ -84,7 +84,7 @@ def workspace(tmp_path_factory: pytest.TempPathFactory) -> Workspace:
     return built
 
 
-def test_colcon_finds_the_ten_packages_of_the_workspace_with_their_build_types(tmp_path: Path) -> None:
+def test_colcon_finds_the_eleven_packages_of_the_workspace_with_their_build_types(tmp_path: Path) -> None:
     listed = Workspace(tmp_path).colcon("list")
     assert listed.returncode == 0, output(listed)
     found = dict(line.split("\t")[0::2] for line in listed.stdout.splitlines())
@@ -92,8 +92,8 @@ def test_colcon_finds_the_ten_packages_of_the_workspace_with_their_build_types(t
                      for package in packages()}
 
 
-def test_the_install_holds_every_configuration_file_in_rfidnav_bringups_share(workspace: Workspace) -> None:
-    installed = workspace.install / "rfidnav_bringup" / "share" / "rfidnav_bringup" / "config"
+def test_the_install_holds_every_configuration_file_in_rfidnav_scenarios_share(workspace: Workspace) -> None:
+    installed = workspace.install / "rfidnav_scenario" / "share" / "rfidnav_scenario" / "config"
     sources = sorted(path.relative_to(WORKSPACE / "config") for path in (WORKSPACE / "config").rglob("*")
                      if path.is_file())
     assert sorted(path.relative_to(installed) for path in installed.rglob("*") if path.is_file()) == sources
@@ -116,8 +116,8 @@ def test_the_configuration_and_the_code_come_from_the_install_once_it_is_sourced
                                f"print(s.load_scenario(\"{SCENARIO}\").path)'")
     assert result.returncode == 0, output(result)
     config_dir, scenario_module, sim_module, scenario_file = result.stdout.split()
-    assert Path(config_dir) == workspace.install / "rfidnav_bringup" / "share" / "rfidnav_bringup" / "config"
-    assert Path(scenario_module).is_relative_to(workspace.install / "rfidnav_bringup")
+    assert Path(config_dir) == workspace.install / "rfidnav_scenario" / "share" / "rfidnav_scenario" / "config"
+    assert Path(scenario_module).is_relative_to(workspace.install / "rfidnav_scenario")
     assert Path(sim_module).is_relative_to(workspace.install / "rfidnav_sim")
     assert Path(scenario_file) == Path(config_dir) / "scenarios" / f"{SCENARIO}.yaml"
 

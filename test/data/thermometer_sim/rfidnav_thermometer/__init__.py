@@ -1,0 +1,1 @@
+"""A simulated thermometer: the smallest sensor simulator that follows docs/extending.md."""
