@@ -344,6 +344,27 @@ def test_limits_are_declared_with_the_field_and_checked_item_by_item() -> None:
         assert (raised.value.field, raised.value.problem) == (name, problem)
 
 
+def test_only_a_field_declared_unbounded_takes_infinity_and_every_other_stays_finite() -> None:
+    import dataclasses
+    import math
+
+    from rfidnav_common.config import Limits, param, parameters_from_mapping
+
+    @dataclasses.dataclass(frozen=True)
+    class Example:
+        rtf: float = param("rtf", 1.0, Limits(0.0, low_open=True, unbounded=True))
+        rate: float = param("rate", 1.0, Limits(0.0, low_open=True))
+
+    assert parameters_from_mapping(Example, {"rtf": math.inf}, "example.yaml").rtf == math.inf
+    for data, problem in (({"rate": math.inf}, "rate: expected a finite number, got inf"),
+                          ({"rtf": -math.inf}, "rtf: expected a finite number, got -inf"),
+                          ({"rtf": math.nan}, "rtf: expected a finite number, got nan"),
+                          ({"rtf": 0.0}, "rtf: must be positive or .inf (no bound), got 0")):
+        with pytest.raises(ConfigError) as raised:
+            parameters_from_mapping(Example, data, "example.yaml")
+        assert str(raised.value) == f"example.yaml: {problem}", data
+
+
 def test_every_shipped_scenario_with_every_robot_profile_and_every_parameter_file_is_within_its_ranges() -> None:
     from rfidnav_common.config import Section, node_parameter_section, parameters_from_mapping
     from rfidnav_common.node_registry import registered_nodes

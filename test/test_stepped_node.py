@@ -3,6 +3,8 @@ private context, stepped with ``spin_once`` until a stated condition holds; and 
 
 from __future__ import annotations
 
+import math
+
 import pytest
 import rclpy
 from geometry_msgs.msg import Twist
@@ -16,6 +18,8 @@ from std_srvs.srv import Trigger
 from rfidnav_bringup.errors import LaunchError
 from rfidnav_bringup.processes import DomainLease
 from rfidnav_common import stepped_node
+from rfidnav_common.clock_source import steps_due
+from rfidnav_common.errors import ConfigError
 from rfidnav_common.ros import COMMAND_QOS, SENSOR_QOS
 from rfidnav_common.step_ledger import StepLedger
 from rfidnav_common.stepped_node import STEP_ACK_QOS, STEP_ACK_TOPIC, SteppedNode, step_report_of
@@ -164,7 +168,7 @@ def test_a_node_without_the_parameter_is_a_plain_node(graph) -> None:
 def robot_sim(graph: Graph, participants: list[str]) -> RobotSimNode:
     return graph.add(RobotSimNode(context=graph.context, parameter_overrides=[
         Parameter("world_file", value=str(WORLD)), Parameter("stepped_clock", value=True),
-        Parameter("step_participants", value=participants), Parameter("rtf", value=0.0),
+        Parameter("step_participants", value=participants), Parameter("rtf", value=math.inf),
         Parameter("start_paused", value=True)]))
 
 
@@ -175,22 +179,29 @@ def test_robot_sim_steps_only_as_far_as_its_participants_have_answered(graph) ->
     start = graph.probe.create_client(Trigger, "/robot_sim/start")
     graph.spin_until(start.service_is_ready, "the start service")
     start.call_async(Trigger.Request())
-    graph.spin_until(lambda: sim.running, "the clock to be started")
+    graph.spin_until(lambda: sim.clock.running, "the clock to be started")
     for _ in range(50):
         graph.executor.spin_once(timeout_sec=0.01)
-    assert sim.steps == 0 and [u.describe() for u in sim.ledger.unanswered()] == ["/participant (not heard from yet)"]
+    assert sim.clock.steps == 0 and [u.describe() for u in sim.clock.ledger.unanswered()] == [
+        "/participant (not heard from yet)"]
     node = graph.add(Recording(graph.context))
     # Now every ground truth is answered (with a command): time moves, one publication at a time.
-    graph.spin_until(lambda: sim.steps >= 40, "the clock to move once the participant answers")
+    graph.spin_until(lambda: sim.clock.steps >= 40, "the clock to move once the participant answers")
     truths = [entry for entry in node.seen if entry[0] == "truth"]
-    assert truths and sim.ledger.published("/sim/ground_truth") - len(truths) <= 1
+    assert truths and sim.clock.ledger.published("/sim/ground_truth") - len(truths) <= 1
 
 
-def test_robot_sim_refuses_rtf_zero_without_the_stepped_clock(graph) -> None:
-    from rfidnav_common.errors import ConfigError
-    with pytest.raises(ConfigError, match="stepped clock"):
+def test_robot_sim_refuses_an_unbounded_rtf_without_the_stepped_clock(graph) -> None:
+    with pytest.raises(ConfigError, match=r"rtf: an unbounded RTF .* needs the stepped clock"):
         RobotSimNode(context=graph.context, parameter_overrides=[
-            Parameter("world_file", value=str(WORLD)), Parameter("rtf", value=0.0)])
+            Parameter("world_file", value=str(WORLD)), Parameter("rtf", value=math.inf)])
+
+
+def test_robot_sim_refuses_an_rtf_of_zero_as_not_positive_since_unbounded_is_inf(graph) -> None:
+    with pytest.raises(ConfigError, match=r"rtf: must be positive or \.inf \(no bound\), got 0"):
+        RobotSimNode(context=graph.context, parameter_overrides=[
+            Parameter("world_file", value=str(WORLD)), Parameter("stepped_clock", value=True),
+            Parameter("rtf", value=0.0)])
 
 
 def test_a_domain_in_use_by_a_foreign_node_is_skipped_and_named() -> None:
@@ -211,3 +222,9 @@ def test_a_domain_in_use_by_a_foreign_node_is_skipped_and_named() -> None:
     finally:
         foreign.destroy_node()
         context.try_shutdown()
+
+
+def test_the_clock_source_allows_as_many_steps_as_the_rtf_gives_and_no_bound_at_an_infinite_rtf() -> None:
+    assert steps_due(1.0, 5.0, 0.01) == 500 and steps_due(0.0, 5.0, 0.01) == 0
+    assert steps_due(0.0099, 1.0, 0.01) == 0 and steps_due(0.0101, 1.0, 0.01) == 1
+    assert steps_due(1e6, math.inf, 0.01) is None

@@ -289,15 +289,18 @@ def typed_values(cls: type, data: Any, source: str, prefix: str = "") -> dict[st
     """Type-check ``data`` against the fields of parameter dataclass ``cls``; return the values given.
 
     Fields may be float, int, bool, str, list[float], list[int] or list[str] (the ROS 2 parameter types);
-    unknown fields and NaN/Inf are errors."""
+    unknown fields and NaN/Inf are errors, but for ``+inf`` in a field whose limits are ``unbounded``."""
     hints = typing.get_type_hints(cls)
+    unbounded = {field.name for field in dataclasses.fields(cls) if Limits.of(field).unbounded}
     section = Section(data if data is not None else {}, source, prefix)
     section.reject_unknown(hints)
     getters = {float: section.number, bool: section.boolean, int: section.integer, str: section.string}
     values: dict[str, Any] = {}
     for name in section.keys():
         kind = hints[name]
-        if kind in getters:
+        if name in unbounded and section.raw(name) == math.inf:
+            values[name] = math.inf
+        elif kind in getters:
             values[name] = getters[kind](name)
         elif kind == list[float]:
             values[name] = section.numbers(name)
@@ -365,25 +368,28 @@ def node_parameter_values(cls: type, path: Path, node_name: str) -> dict[str, An
 class Limits:
     """The values a parameter field may take (each item, for a list): numbers from ``low`` to ``high``, a bound left
     out when it is ``*_open`` and absent when None; or one of ``choices`` (strings, or integers such as baud rates).
-    Declared with the field (:func:`param`), as its metadata ``min``, ``max``, ``min_exclusive``, ``max_exclusive``
-    and ``choices``."""
+    ``unbounded``: the number may also be ``+inf`` (``.inf`` in YAML), a value with no bound, such as an RTF that
+    sets no ceiling; every other number is finite. Declared with the field (:func:`param`), as its metadata ``min``,
+    ``max``, ``min_exclusive``, ``max_exclusive``, ``choices`` and ``unbounded``."""
 
     low: float | None = None
     high: float | None = None
     low_open: bool = False
     high_open: bool = False
     choices: tuple[Any, ...] = ()
+    unbounded: bool = False
 
     def metadata(self) -> dict[str, Any]:
         entries = {"min": self.low, "max": self.high, "min_exclusive": self.low_open or None,
-                   "max_exclusive": self.high_open or None, "choices": self.choices or None}
+                   "max_exclusive": self.high_open or None, "choices": self.choices or None,
+                   "unbounded": self.unbounded or None}
         return {key: value for key, value in entries.items() if value is not None}
 
     @classmethod
     def of(cls, field: dataclasses.Field) -> Limits:
         meta = field.metadata
         return cls(meta.get("min"), meta.get("max"), meta.get("min_exclusive", False),
-                   meta.get("max_exclusive", False), tuple(meta.get("choices", ())))
+                   meta.get("max_exclusive", False), tuple(meta.get("choices", ())), meta.get("unbounded", False))
 
     def problem(self, value: Any) -> str | None:
         """Why ``value`` is outside these limits; None when it is inside (or of a type they do not limit)."""
@@ -404,6 +410,8 @@ class Limits:
         """The limits in words: "positive and at most 5", "in [0, 1)", "at least 1", ..."""
         low, high = _number_text(self.low), _number_text(self.high)
         below = "" if self.high is None else f"below {high}" if self.high_open else f"at most {high}"
+        if self.unbounded:
+            return f"{Limits(self.low, self.high, self.low_open, self.high_open).text()} or .inf (no bound)"
         if self.low == 0 and self.low_open:
             return "positive" + (f" and {below}" if below else "")
         if self.low is None:

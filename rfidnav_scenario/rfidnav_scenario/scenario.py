@@ -632,7 +632,7 @@ def injected_parameters(scenario: Scenario, spec: NodeSpec, seed: int, rtf: floa
 
     ``stepped_with``: the stepped clock's participants (fully qualified node names), None for the free-running
     clock. A participant takes its time from the stamps it handles; every other node runs with use_sim_time.
-    ``rtf`` may be infinite (as fast as the stepped graph answers), which the clock source reads as 0."""
+    ``rtf`` may be ``math.inf`` (as fast as the stepped graph answers): the clock source takes it as it is."""
     injected: dict[str, Any] = {"seed": seed}
     if run_dir is not None:
         injected["run_dir"] = str(run_dir)
@@ -647,7 +647,7 @@ def injected_parameters(scenario: Scenario, spec: NodeSpec, seed: int, rtf: floa
         injected["map_file"] = str(spec.map_file or scenario.map_file)
     if spec.clock_source:
         x, y, yaw_deg = scenario.robot
-        injected.update(start_x=x, start_y=y, start_yaw_deg=yaw_deg, rtf=float(rtf) if rtf != float("inf") else 0.0,
+        injected.update(start_x=x, start_y=y, start_yaw_deg=yaw_deg, rtf=float(rtf),
                         start_paused=True)
         if stepped_with is not None:
             injected.update(stepped_clock=True, step_participants=list(stepped_with))

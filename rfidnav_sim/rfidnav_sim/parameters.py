@@ -50,8 +50,9 @@ class RobotSimParameters(LimitsSpeed):
     start_y: float = param("start position y in the map frame [m]", 0.0)
     start_yaw_deg: float = param("start heading, CCW from the map's x axis [deg]", 0.0, YAW_DEG)
     step_s: float = param("fixed physics step [s]", 0.01, Limits(0.0, 1.0, low_open=True))
-    rtf: float = param("real-time factor: sim seconds per wall second; with the stepped clock a ceiling, and 0 "
-                       "as fast as the participants answer", 1.0, NON_NEGATIVE)
+    rtf: float = param("real-time factor: sim seconds per wall second; with the stepped clock a ceiling, and .inf "
+                       "(the command line's max) none: as fast as the participants answer", 1.0,
+                       Limits(0.0, low_open=True, unbounded=True))
     step_participants: list[str] = param(
         "stepped clock: the fully qualified names of the nodes whose answers on /sim/step_ack each step waits "
         "for (rfidnav_common.stepped_node); set by the orchestrator", [])
