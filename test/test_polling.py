@@ -48,7 +48,7 @@ def passage_read(parameters: ReaderParameters, reader_seed: int, lateral_m: floa
     reader = parameters.simulated_reader(one_floor_tag(), reader_seed)
     for step in range(int(0.6 / SPEED_MPS / STEP_S) + 1):
         time_s = step * STEP_S
-        reads = reader.round_at(-0.3 + SPEED_MPS * time_s, lateral_m, 0.0, time_s)
+        reads = reader.sample((-0.3 + SPEED_MPS * time_s, lateral_m, 0.0), time_s)
         if reads:
             return True
     return False
@@ -71,7 +71,7 @@ def test_a_tag_passed_between_two_polls_is_never_read() -> None:
     rounds = []
     for step in range(int(0.6 / SPEED_MPS / STEP_S) + 1):
         time_s = step * STEP_S
-        reads = reader.round_at(-0.3 + SPEED_MPS * time_s, 0.03, 0.0, time_s)
+        reads = reader.sample((-0.3 + SPEED_MPS * time_s, 0.03, 0.0), time_s)
         if reads is not None:
             rounds.append(reads)
     assert len(rounds) >= 4 and not any(rounds)                   # polls came, before and after
@@ -97,7 +97,7 @@ def test_polls_fail_at_the_given_rate(failure: float) -> None:
 
 def test_a_failed_poll_reads_nothing_even_over_a_tag() -> None:
     reader = hf_reader(round_failure_probability=0.5).simulated_reader(one_floor_tag(), 2)
-    rounds = [reader.round_at(0.0, 0.0, 0.0, k * 0.6) for k in range(1, 401)]   # each 0.6 s: a poll due
+    rounds = [reader.sample((0.0, 0.0, 0.0), k * 0.6) for k in range(1, 401)]   # each 0.6 s: a poll due
     assert all(reads is not None for reads in rounds)
     read = [bool(reads) for reads in rounds]
     assert 0.4 < np.mean(read) < 0.6                              # the tag is under the antenna every time

@@ -18,12 +18,10 @@ from rfidnav_common import inputs
 from rfidnav_common.frames import MAP_FRAME
 from rfidnav_common.geometry import yaw_to_quaternion
 from rfidnav_common.ros import SENSOR_QOS, declare_parameters, run_node, seconds_of
-from rfidnav_common.seeding import rng_for
 from rfidnav_common.stepped_node import SteppedNode
 from rfidnav_common.transforms import publish_static_frames
 from rfidnav_sim.conversions import ground_truth_pose
 from rfidnav_sim.parameters import CompassParameters
-from rfidnav_sim.schedule import GroundTruthSchedule
 
 UNKNOWN_ANGLE_VARIANCE = math.pi ** 2     # roll and pitch: not measured
 
@@ -32,10 +30,9 @@ class CompassSimNode(SteppedNode):
     def __init__(self, **node_options: Any) -> None:
         super().__init__("compass_sim", **node_options)
         self.params: CompassParameters = declare_parameters(self, CompassParameters)
-        self.model = self.params.model()
-        self.rng = rng_for(self.params.seed, "compass_sim")
+        self.noise_sd_rad = self.params.model().noise_sd_rad
+        self.compass = self.params.sensor()
         self.drops = inputs.Drops(self.get_logger().warning)
-        self.schedule = GroundTruthSchedule(1.0 / self.params.rate_hz)
         self.publisher = self.create_publisher(Imu, "/compass", SENSOR_QOS)
         publish_static_frames(self, self.params.frames())
         self.create_subscription(Odometry, "/sim/ground_truth", self.on_ground_truth, SENSOR_QOS)
@@ -44,17 +41,16 @@ class CompassSimNode(SteppedNode):
         pose = ground_truth_pose(msg, MAP_FRAME, self.drops)   # the compass needs no world: the map's frame
         if pose is None:
             return
-        now_s = seconds_of(msg.header.stamp)
-        if not self.schedule.due(now_s):
+        heading = self.compass.sample(pose, seconds_of(msg.header.stamp))
+        if heading is None:
             return
-        heading = self.model.measure(pose[2], self.rng)
         reading = Imu()
         reading.header.stamp = msg.header.stamp
         reading.header.frame_id = self.params.frame_id
         reading.orientation.x, reading.orientation.y, reading.orientation.z, reading.orientation.w = \
             yaw_to_quaternion(heading)
         reading.orientation_covariance = [UNKNOWN_ANGLE_VARIANCE, 0.0, 0.0, 0.0, UNKNOWN_ANGLE_VARIANCE, 0.0,
-                                          0.0, 0.0, max(self.model.noise_sd_rad ** 2, 1e-12)]
+                                          0.0, 0.0, max(self.noise_sd_rad ** 2, 1e-12)]
         reading.angular_velocity_covariance[0] = -1.0
         reading.linear_acceleration_covariance[0] = -1.0
         self.publisher.publish(reading)

@@ -113,6 +113,42 @@ def unicycle_step(yaw: float, linear_mps: float, angular_radps: float, dt: float
     return linear_mps * dt * math.cos(mid), linear_mps * dt * math.sin(mid), angular_radps * dt
 
 
+class IdealUnicycle:
+    """The idealised base of paper 003's in-process runs: an ideal unicycle (:func:`unicycle_step`, no wheel limits
+    or motor dynamics) whose steps into a wall are not made (robot_sim's round base stalls there; each such step
+    is counted in ``bumps``), and its wheel odometry: the same motion with the distance off by
+    ``odometry_scale_error``. Its yaw is not wrapped."""
+
+    def __init__(self, start: tuple[float, float, float], walls: np.ndarray, footprint_radius_m: float,
+                 odometry_scale_error: float) -> None:
+        self.truth = Pose2D(*start)
+        self.odom = Pose2D()
+        self.walls = walls
+        self.footprint_radius_m = footprint_radius_m
+        self.odometry_scale_error = odometry_scale_error
+        self.command = (0.0, 0.0)
+        self.bumps = 0
+        self.distance_travelled_m = 0.0
+
+    def set_command(self, linear_mps: float, angular_radps: float) -> None:
+        self.command = (linear_mps, angular_radps)
+
+    def step(self, dt: float) -> None:
+        """Drive ``dt`` at the command (against a wall it only turns)."""
+        linear, angular = self.command
+        truth = self.truth
+        dx, dy, dyaw = unicycle_step(truth.yaw, linear, angular, dt)
+        if len(self.walls) and moves_into_wall(self.walls, (truth.x, truth.y), (truth.x + dx, truth.y + dy),
+                                               self.footprint_radius_m):
+            self.bumps += 1
+            linear = dx = dy = 0.0
+        truth.x, truth.y, truth.yaw = truth.x + dx, truth.y + dy, truth.yaw + dyaw
+        self.distance_travelled_m += abs(linear) * dt
+        odom = self.odom
+        dx, dy, dyaw = unicycle_step(odom.yaw, linear * (1.0 + self.odometry_scale_error), angular, dt)
+        odom.x, odom.y, odom.yaw = odom.x + dx, odom.y + dy, odom.yaw + dyaw
+
+
 class DiffDriveBase:
     """Ground-truth motion and odometry of a differential-drive base, stepped at a fixed dt."""
 

@@ -6,6 +6,7 @@ parameter files against them before any process starts. config/params/*.yaml doc
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections import Counter
 from dataclasses import dataclass
@@ -36,7 +37,9 @@ from rfidnav_common.seeding import rng_for
 from rfidnav_sim.compass_model import CompassModel
 from rfidnav_sim.kinematics import BaseLimits, DiffDriveBase, OdometryDrift, Pose2D
 from rfidnav_sim.rfid_model import Antenna, PolledReader, ReaderModel, ReaderSimulator, budget_range_m
+from rfidnav_sim.rig import ScheduledSensor
 from rfidnav_sim.sonar_model import PAPER_LAYOUT, SonarModel
+from rfidnav_sim.wifi_model import RssReading, WifiModel
 from rfidnav_sim.world import World
 
 SCALE_ERROR = Limits(-1.0, 1.0, low_open=True, high_open=True)   # -1: a wheel (or the track) that measures nothing
@@ -242,6 +245,12 @@ class CompassParameters:
     def model(self) -> CompassModel:
         return CompassModel(noise_sd_rad=math.radians(self.noise_sd_deg), bias_rad=math.radians(self.bias_deg))
 
+    def sensor(self) -> ScheduledSensor[float]:
+        """The compass compass_sim samples (a heading [rad] every 1/rate_hz), its stream seeded from ``seed``."""
+        model = self.model()
+        return ScheduledSensor(1.0 / self.rate_hz, lambda truth, rng: model.measure(truth[2], rng),
+                               rng_for(self.seed, "compass_sim"))
+
 
 @dataclass(frozen=True)
 class WifiSimParameters:
@@ -258,6 +267,15 @@ class WifiSimParameters:
     def validate(self) -> None:
         if not self.world_file:
             raise ParameterError("world_file", "required (the world YAML to simulate)")
+
+    def sensor(self, world: World) -> ScheduledSensor[list[RssReading]]:
+        """The receiver wifi_sim samples among ``world``'s access points (a scan every scan_period_s), its noise
+        stream seeded from ``seed`` (the building's shadowing from the world's own seed)."""
+        receiver = dataclasses.replace(world.wifi, scan_noise_sd_db=self.scan_noise_sd_db,
+                                       sensitivity_dbm=self.sensitivity_dbm)
+        model = WifiModel(world.access_points, world.wall_segments(), receiver, world.wifi_seed)
+        return ScheduledSensor(self.scan_period_s, lambda truth, rng: model.scan(truth[0], truth[1], rng),
+                               rng_for(self.seed, "wifi_sim"))
 
 
 @dataclass(frozen=True)
@@ -287,6 +305,13 @@ class SonarParameters:
         in-process runner fires alike."""
         return SonarModel(PAPER_LAYOUT, walls, self.noise_sd_m, self.noise_fraction, self.rays_per_beam,
                           math.radians(self.specular_angle_deg))
+
+    def sensor(self, world: World) -> ScheduledSensor[dict[str, float]]:
+        """The sweeps sonar_sim samples among ``world``'s walls (every 1/rate_hz, each rangefinder's range by
+        name), the noise stream seeded from ``seed``."""
+        model = self.model(world.wall_segments())
+        return ScheduledSensor(1.0 / self.rate_hz, lambda truth, rng: model.ranges(*truth, rng),
+                               rng_for(self.seed, "sonar_sim"))
 
     def validate(self) -> None:
         if not self.world_file:

@@ -279,9 +279,9 @@ class PolledReader:
         self.simulator = simulator
         self.clock = clock
 
-    def round_at(self, x: float, y: float, yaw: float, now_s: float) -> list[Read] | None:
-        """The reads of the round due at ``now_s`` with the robot at (x, y, yaw), empty for a failed one; None
-        when no round is due."""
+    def sample(self, truth: tuple[float, float, float], now_s: float) -> list[Read] | None:
+        """The reads of the round due at ``now_s`` with the robot at ``truth`` (x, y, yaw), empty for a failed
+        one; None when no round is due (a sensor of rfidnav_sim.rig)."""
         if not self.clock.due(now_s):
             return None
-        return self.simulator.inventory(x, y, yaw, now_s) if self.clock.reads() else []
+        return self.simulator.inventory(*truth, now_s) if self.clock.reads() else []

@@ -50,7 +50,7 @@ class RfidReaderSimNode(SteppedNode):
         pose = ground_truth_pose(msg, self.world_frame, self.drops)
         if pose is None:
             return
-        reads = self.reader.round_at(*pose, seconds_of(msg.header.stamp))
+        reads = self.reader.sample(pose, seconds_of(msg.header.stamp))
         if reads is None:
             return
         self.reads_pub.publish(reads_message(reads, msg.header.stamp, self.params.frame_id))

@@ -36,6 +36,7 @@ from rfidnav_common.transforms import FrameBroadcaster, publish_static_frames
 from rfidnav_msgs.msg import BaseEvent
 from rfidnav_sim.conversions import base_event_message, odometry_message, world_markers
 from rfidnav_sim.parameters import RobotSimParameters
+from rfidnav_sim.rig import steps_per_sample
 from rfidnav_sim.world import load_world
 
 
@@ -50,7 +51,7 @@ class RobotSimNode(SteppedNode):
         self.world = load_world(p.world_file)
         self.base = p.base(self.world.wall_segments())
         self.drops = inputs.Drops(self.get_logger().warning)
-        self.steps_per_odom = max(1, round(1.0 / (p.odom_rate_hz * p.step_s)))
+        self.steps_per_odom = steps_per_sample(p.step_s, p.odom_rate_hz)
         # First, as the counted publishers and subscriptions made next report to it; it serves and runs once
         # everything a step publishes exists.
         self.clock = ClockSource(self, step_s=p.step_s, rtf=p.rtf, participants=p.step_participants,

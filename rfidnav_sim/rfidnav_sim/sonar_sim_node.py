@@ -14,12 +14,10 @@ from sensor_msgs.msg import Range
 
 from rfidnav_common import inputs
 from rfidnav_common.ros import SENSOR_QOS, declare_parameters, run_node, seconds_of
-from rfidnav_common.seeding import rng_for
 from rfidnav_common.stepped_node import SteppedNode
 from rfidnav_common.transforms import publish_static_frames
 from rfidnav_sim.conversions import ground_truth_pose
 from rfidnav_sim.parameters import SonarParameters
-from rfidnav_sim.schedule import GroundTruthSchedule
 from rfidnav_sim.sonar_model import PAPER_LAYOUT
 from rfidnav_sim.world import load_world
 
@@ -31,10 +29,8 @@ class SonarSimNode(SteppedNode):
         world = load_world(self.params.world_file)
         self.world_frame = world.frame_id
         self.drops = inputs.Drops(self.get_logger().warning)
-        self.model = self.params.model(world.wall_segments())
+        self.sonar = self.params.sensor(world)
         publish_static_frames(self, self.params.frames())
-        self.rng = rng_for(self.params.seed, "sonar_sim")
-        self.schedule = GroundTruthSchedule(1.0 / self.params.rate_hz)
         self.publishers_by_name = {r.name: self.create_publisher(Range, f"/sonar/{r.name}", SENSOR_QOS)
                                    for r in PAPER_LAYOUT}
         self.create_subscription(Odometry, "/sim/ground_truth", self.on_ground_truth, SENSOR_QOS)
@@ -45,10 +41,9 @@ class SonarSimNode(SteppedNode):
         pose = ground_truth_pose(msg, self.world_frame, self.drops)
         if pose is None:
             return
-        now_s = seconds_of(msg.header.stamp)
-        if not self.schedule.due(now_s):
+        readings = self.sonar.sample(pose, seconds_of(msg.header.stamp))
+        if readings is None:
             return
-        readings = self.model.ranges(*pose, self.rng)
         for rangefinder in PAPER_LAYOUT:
             reading = Range(radiation_type=Range.ULTRASOUND, field_of_view=2.0 * rangefinder.beam_half_angle_rad,
                             min_range=rangefinder.min_range_m, max_range=rangefinder.max_range_m,

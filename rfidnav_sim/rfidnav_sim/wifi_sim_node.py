@@ -8,20 +8,16 @@ taken, so scans depend on the poses and the seed only, as the RFID reader's roun
 
 from __future__ import annotations
 
-import dataclasses
 from typing import Any
 
 from nav_msgs.msg import Odometry
 
 from rfidnav_common import inputs
 from rfidnav_common.ros import SENSOR_QOS, declare_parameters, run_node, seconds_of
-from rfidnav_common.seeding import rng_for
 from rfidnav_common.stepped_node import SteppedNode
 from rfidnav_msgs.msg import WifiScan
 from rfidnav_sim.conversions import ground_truth_pose, wifi_scan_message
 from rfidnav_sim.parameters import WifiSimParameters
-from rfidnav_sim.schedule import GroundTruthSchedule
-from rfidnav_sim.wifi_model import WifiModel
 from rfidnav_sim.world import load_world
 
 
@@ -32,11 +28,7 @@ class WifiSimNode(SteppedNode):
         world = load_world(self.params.world_file)
         self.world_frame = world.frame_id
         self.drops = inputs.Drops(self.get_logger().warning)
-        receiver = dataclasses.replace(world.wifi, scan_noise_sd_db=self.params.scan_noise_sd_db,
-                                       sensitivity_dbm=self.params.sensitivity_dbm)
-        self.model = WifiModel(world.access_points, world.wall_segments(), receiver, world.wifi_seed)
-        self.rng = rng_for(self.params.seed, "wifi_sim")
-        self.schedule = GroundTruthSchedule(self.params.scan_period_s)
+        self.receiver = self.params.sensor(world)
         self.publisher = self.create_publisher(WifiScan, "/wifi/scan", SENSOR_QOS)
         self.create_subscription(Odometry, "/sim/ground_truth", self.on_ground_truth, SENSOR_QOS)
         self.get_logger().info(f"{len(world.access_points)} access points, {len(world.walls)} walls, "
@@ -46,11 +38,9 @@ class WifiSimNode(SteppedNode):
         pose = ground_truth_pose(msg, self.world_frame, self.drops)
         if pose is None:
             return
-        now_s = seconds_of(msg.header.stamp)
-        if not self.schedule.due(now_s):
+        readings = self.receiver.sample(pose, seconds_of(msg.header.stamp))
+        if readings is None:
             return
-        x, y, _ = pose
-        readings = self.model.scan(x, y, self.rng)
         self.publisher.publish(wifi_scan_message(readings, msg.header.stamp, self.params.frame_id,
                                                  self.params.interface))
 

@@ -34,9 +34,12 @@ from rfidnav_experiments.runners.two_tier import (
     COMPASS,
     LOCATE_SETTINGS,
     ODOMETRY_SCALE_ERROR,
-    FloorRobot,
+    READER,
+    WIFI,
     Site,
     StepSeen,
+    floor_rig,
+    located_scans,
 )
 from rfidnav_localization.conversions import fused_status_message
 from rfidnav_localization.fingerprint import LocateSettings
@@ -45,9 +48,10 @@ from rfidnav_localization.fused.localizer import FusedEstimate, FusedLocalizer
 from rfidnav_localization.partition import LocalizationEstimate, PartitionLocalizer
 from rfidnav_planning.conversions import estimate_from_status
 from rfidnav_planning.pose_navigation import Pose, PoseNavigator
-from rfidnav_scenario.metrics import ground_truth_objection
+from rfidnav_scenario.metrics import ground_truth_objection, wall_crossings
 from rfidnav_sim.compass_model import CompassModel
 from rfidnav_sim.parameters import ReaderParameters
+from rfidnav_sim.rig import pose_of
 
 MIN_VARIANCE = 1e-12     # a covariance with a zero variance (a collapsed cloud) is floored, not inverted
 # The kinds a rider may be restricted to: the fields of Evidence they keep.
@@ -338,26 +342,26 @@ def drive_on_fused(site: Site, start: tuple[float, float, float], target: tuple[
     loop at the navigator's control rate. As the node does, the localizer weighs each reader round with the
     compass's latest heading and the location server's answer to the latest scan (one every ``scan_period_s``);
     the navigator steers by its latest estimate. ``rider`` carries the localizer and scores it against the truth."""
-    robot = FloorRobot(start, site.world.wall_segments(), odometry_scale_error)
     reader = reader_parameters.simulated_reader(site.world, reader_seed)
+    rig = floor_rig(site, start, odometry_scale_error, step_s,
+                    {WIFI: located_scans(site, scan_period_s, rng, locate), READER: reader})
     navigator.start(target)
     pose: Pose | None = None
     wifi_fixes: HeldReadings[WifiFix] = HeldReadings()
-    time_s, next_scan_s = 0.0, 0.0
-    rider.moved(time_s, robot.odom, robot.truth)
+    robot = rig.base
+    rider.moved(0.0, pose_of(robot.odom), pose_of(robot.truth))
     step = navigator.step(pose)
-    while not step.finished and time_s < max_time_s:
-        robot.step(*step.command, step_s)
-        time_s += step_s
-        truth = robot.truth
-        rider.moved(time_s, robot.odom, truth)
-        if time_s >= next_scan_s:
-            next_scan_s += scan_period_s
-            result = site.locate_scan(truth[:2], rng, locate)
-            if result is not None:
-                wifi_fixes.hold((result.position, result.uncertainty_m), time_s)
-        due = reader.round_at(*truth, time_s)
+    while not step.finished and rig.now_s < max_time_s:
+        rig.command(*step.command, rig.now_s)
+        seen = rig.advance()
+        time_s, truth = seen.time_s, seen.truth
+        rider.moved(time_s, seen.odom, truth)
+        located = seen.readings.get(WIFI)
+        if located is not None and located.result is not None:
+            wifi_fixes.hold((located.result.position, located.result.uncertainty_m), time_s)
+        due = seen.readings.get(READER)
         if due is not None:
+            # the compass's heading at the round (rfid_localizer weighs each round with the latest one)
             estimate = rider.update(time_s, round_evidence(due, ports, wifi_fixes.take(time_s),
                                                            compass.measure(truth[2], rng)), truth)
             if estimate is not None:
@@ -365,10 +369,10 @@ def drive_on_fused(site: Site, start: tuple[float, float, float], target: tuple[
                 pose = Pose.of_variances(estimate.pose.x, estimate.pose.y, estimate.pose.yaw, covariance[0, 0],
                                          covariance[1, 1])
         step = navigator.step(pose)
-    crossings = robot.wall_crossings()
+    crossings = wall_crossings(rig.track()[1], site.world.wall_segments())
     message = step.message if step.finished else f"timed out after {max_time_s:g} s"
     objection = ground_truth_objection({"wall_crossings": crossings})
     if objection is not None:
         message += f"; but it {objection}"
-    return DrivingRun(step.success and objection is None, message, math.dist(robot.truth[:2], target), time_s,
-                      crossings)
+    final = pose_of(robot.truth)
+    return DrivingRun(step.success and objection is None, message, math.dist(final[:2], target), rig.now_s, crossings)

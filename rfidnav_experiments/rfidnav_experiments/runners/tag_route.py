@@ -19,8 +19,6 @@ cap holds back is still made later (the reference winds up). The node has no suc
 from __future__ import annotations
 
 import dataclasses
-import math
-from collections import deque
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -28,15 +26,15 @@ from pathlib import Path
 import numpy as np
 
 from rfidnav_common.geometry import wrap_angle
-from rfidnav_common.seeding import rng_for
 from rfidnav_control.fuzzy import FuzzyHeadingController
 from rfidnav_control.parameters import HeadingControllerParameters
-from rfidnav_control.tag_route import SEARCH_MODES, Command, TagRouteFollower, observe
+from rfidnav_control.tag_route import SEARCH_MODES, TagRouteFollower, observe
 from rfidnav_experiments.runners.shipped import file_parameters
 from rfidnav_scenario.metrics import TrackingMetrics, Trajectory, tracking_metrics
 from rfidnav_scenario.scenario import Scenario, node_parameters
 from rfidnav_sim.parameters import ReaderParameters, RobotSimParameters
-from rfidnav_sim.rfid_model import Read, ReaderSimulator, reach_m
+from rfidnav_sim.rfid_model import Read, reach_m
+from rfidnav_sim.rig import Rig, steps_per_sample
 
 
 @dataclass(frozen=True)
@@ -76,6 +74,7 @@ def controller_parameters(scenario: Scenario, params_file: Path | None, seed: in
 
 
 HEADING_UPDATES = ("rate", "setpoint")
+READER = "rfid_reader_sim"      # the rig's reader, named after the node it stands for
 
 
 def floor_read_radius_m(reader: ReaderParameters, controller: HeadingControllerParameters) -> float:
@@ -104,46 +103,34 @@ def run_tag_route(scenario: Scenario, controller: HeadingControllerParameters, s
     robot: RobotSimParameters = role_parameters(scenario, "robot_sim", seed)
     reader = reader or role_parameters(scenario, "rfid_reader_sim", seed)
     world = scenario.world
-    base = robot.base(world.wall_segments())
-    simulator = ReaderSimulator.for_world(reader.reader_model(), world, rng_for(seed, "rfid_reader_sim"))
+    rig = Rig(robot.base(world.wall_segments()), robot.step_s, steps_per_sample(robot.step_s, robot.odom_rate_hz),
+              {READER: reader.simulated_reader(world, seed)}, command_delay_s)
     follower = TagRouteFollower(controller.follower_settings(), FuzzyHeadingController(controller.fuzzy_spec()),
                                 scenario.route_map.arrival_tags)
     route = list(scenario.mission.goal["tag_ids"])
     follower.start(route, 0.0)
     limit_s = timeout_s if timeout_s is not None else scenario.mission.timeout_s
-    steps_per_sample = max(1, round(1.0 / (robot.odom_rate_hz * robot.step_s)))
     round_period_s = 1.0 / reader.rate_hz
-    next_round_s = 0.0
-    times, positions, arrivals = [0.0], [(base.truth.x, base.truth.y)], []
-    pending: deque[tuple[float, Command]] = deque()
-    success, message, step, now, search_s = False, "timeout", 0, 0.0, 0.0
+    arrivals: list[float] = []
+    success, message, now, search_s = False, "timeout", 0.0, 0.0
     reference: float | None = None          # heading_update "setpoint": theta_ref of eq. 3, unwrapped [rad]
-    heading, last_yaw = 0.0, base.odom.yaw  # the odometry's heading, unwrapped [rad]
+    heading, last_yaw = 0.0, rig.base.odom.yaw  # the odometry's heading, unwrapped [rad]
     while now < limit_s:
-        while pending and pending[0][0] <= step * robot.step_s + 1e-9:
-            delayed = pending.popleft()[1]
-            base.set_command(delayed.linear_mps, delayed.angular_radps)
-        base.step(robot.step_s)
-        step += 1
-        if step % steps_per_sample:
+        sample = rig.advance()
+        now = sample.time_s
+        reads = sample.readings.get(READER)
+        if reads is None:
             continue
-        now = step * robot.step_s
-        times.append(now)
-        positions.append((base.truth.x, base.truth.y))
-        if now + 1e-9 < next_round_s:
-            continue
-        next_round_s = (math.floor(now / round_period_s + 1e-6) + 1) * round_period_s
-        truth = base.truth
-        reads = simulator.inventory(truth.x, truth.y, truth.yaw, now)
         if observer is not None:
-            observer(RouteRound(now, (base.odom.x, base.odom.y, base.odom.yaw), reads, (truth.x, truth.y, truth.yaw)))
+            observer(RouteRound(now, sample.odom, reads, sample.truth))
         command = follower.step(now, [o for o in map(observe, reads) if o is not None])
         if command.arrived_index is not None:
             arrivals.append(now)
         if command.mode in SEARCH_MODES:
             search_s += round_period_s
         if heading_update == "setpoint":
-            heading, last_yaw = heading + wrap_angle(base.odom.yaw - last_yaw), base.odom.yaw
+            odom_yaw = sample.odom[2]
+            heading, last_yaw = heading + wrap_angle(odom_yaw - last_yaw), odom_yaw
             if command.mode == "seeking":
                 reference = (heading if reference is None else reference) + command.heading_change_rad
                 cap = controller.max_yaw_rate_radps
@@ -151,14 +138,14 @@ def run_tag_route(scenario: Scenario, controller: HeadingControllerParameters, s
                 command = dataclasses.replace(command, angular_radps=turn)
             else:
                 reference = None
-        pending.append((now + command_delay_s, command))
+        rig.command(command.linear_mps, command.angular_radps, now)
         if command.failure:
             message = command.failure
             break
         if follower.finished:
             success, message = True, f"reached all {len(route)} tags"
             break
-    trajectory = Trajectory(np.array(times), np.array(positions))
+    trajectory = Trajectory(*rig.track())
     metrics = tracking_metrics(trajectory, tag_points(scenario, route), arrivals, 0.0, now,
                                read_radius_m=floor_read_radius_m(reader, controller))
     return RouteRun(scenario.name, seed, success, message, now, metrics, trajectory, tuple(arrivals), search_s)

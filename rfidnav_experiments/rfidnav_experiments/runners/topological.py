@@ -62,6 +62,7 @@ from rfidnav_scenario.metrics import GOAL_RADIUS_M, ground_truth_objection, topo
 from rfidnav_scenario.scenario import CONFIG_DIR
 from rfidnav_sim.floor_generator import generated_floor
 from rfidnav_sim.parameters import RobotSimParameters, SonarParameters
+from rfidnav_sim.rig import Rig, ScheduledSensor, steps_per_sample
 from rfidnav_sim.sonar_model import SonarModel
 from rfidnav_sim.wall_tag_model import WallTagReader
 from rfidnav_sim.world import World, load_world
@@ -78,6 +79,7 @@ RING_WORLD = CONFIG_DIR / "worlds" / "building_ring.yaml"
 FOLLOWER = shipped_parameters(WallFollowerParameters, "wall_follower")   # its sonar topics, offsets, settings
 ROBOT = shipped_parameters(RobotSimParameters, "robot_sim", world_file="-")   # the base: limits, odometry drift
 SONAR = shipped_parameters(SonarParameters, "sonar_sim", world_file="-")     # noise, rays, specular loss
+WALL_TAGS, SONAR_SENSOR = "wall_tags", "sonar_sim"    # the rig's sensors
 START_BEFORE_TAG_M = 1.2                # a mission starts this far before its first tag
 STILL_M = 0.5                           # MissionRun.still_s: within this of the final position
 
@@ -177,8 +179,10 @@ def run_mission(world: World, topological_map: TopologicalMap, start_pose: tuple
     x, y, yaw = start_pose
     base = dataclasses.replace(robot, start_x=x, start_y=y, start_yaw_deg=math.degrees(yaw),
                                seed=int(rng.integers(2**31))).base(walls)
-    steps_per_control = max(1, round(1.0 / (FOLLOWER.control_rate_hz * robot.step_s)))
-    t = 0.0
+    control_period_s = 1.0 / FOLLOWER.control_rate_hz
+    rig = Rig(base, robot.step_s, steps_per_sample(robot.step_s, FOLLOWER.control_rate_hz), {
+        WALL_TAGS: ScheduledSensor(control_period_s, lambda truth, draw: reader.read(*truth, draw), rng),
+        SONAR_SENSOR: ScheduledSensor(control_period_s, lambda truth, draw: sonar_model.readings(*truth, draw), rng)})
     turns: list[tuple[str, str]] = []
     message = "timeout"
     finished = False
@@ -197,19 +201,18 @@ def run_mission(world: World, topological_map: TopologicalMap, start_pose: tuple
         else:
             follower.command_turn(command.action)
 
-    track = []
     tag_ids = [tag.tag_id for tag in reader.tags]
     in_passage = np.zeros(len(tag_ids), dtype=bool)
     read_in_passage = np.zeros(len(tag_ids), dtype=bool)
     passages_missed = 0
     for _ in range(int(round(max_time_s * FOLLOWER.control_rate_hz))):
-        truth, odom = base.truth, base.odom
-        track.append((truth.x, truth.y))
-        at_dead_end = executor.on_odometry(odom.x, odom.y)
+        seen = rig.sample()
+        truth, odom = seen.truth, seen.odom
+        at_dead_end = executor.on_odometry(odom[0], odom[1])
         if at_dead_end is not None:
             apply(at_dead_end, False)
-        reach = reader.in_reach(truth.x, truth.y, truth.yaw)
-        reads = reader.read(truth.x, truth.y, truth.yaw, rng)
+        reach = reader.in_reach(*truth)          # ground truth: the passages the reader missed
+        reads = seen.readings[WALL_TAGS]
         ended = in_passage & ~reach
         passages_missed += int(np.count_nonzero(ended & ~read_in_passage))
         read_in_passage[~reach] = False
@@ -219,27 +222,25 @@ def run_mission(world: World, topological_map: TopologicalMap, start_pose: tuple
         for decision in executor.on_reads(reads):
             apply(decision, False)
         if observer is not None:
-            observer(MissionStep(t, (truth.x, truth.y, truth.yaw), (odom.x, odom.y, odom.yaw), tuple(reads),
-                                 executor.state.current_node))
-        command = follower.step(centre_sonar(sonar_model.readings(truth.x, truth.y, truth.yaw, rng), feeds),
-                                OdomPose(odom.x, odom.y, odom.yaw))
+            observer(MissionStep(seen.time_s, truth, odom, tuple(reads), executor.state.current_node))
+        command = follower.step(centre_sonar(seen.readings[SONAR_SENSOR], feeds), OdomPose(*odom))
         if command.event == STOPPED:
             finished = True
             break
         if command.event in FOLLOWER_EVENTS:
             apply(executor.on_junction(command.event), True)
-        for _ in range(steps_per_control):
-            base.set_command(command.linear, command.angular)
-            base.step(robot.step_s)
-        t += steps_per_control * robot.step_s
+        rig.command(command.linear, command.angular, seen.time_s)
+        rig.step()
 
     x, y = base.truth.x, base.truth.y
+    t = rig.now_s
     state = executor.state
     outcome = state.outcome
     first_node = state.nodes_visited[0] if state.nodes_visited else None
     goal_xy = topological_map.nodes[goal_node].position
     near = goal_xy is not None and math.dist((x, y), goal_xy) <= GOAL_RADIUS_M
-    track.append((x, y))
+    # One position per control step, and the end's: a stop's counts twice (its control step's, and the end's).
+    track = rig.positions + [(x, y)] if finished else rig.positions
     crossings = wall_crossings(np.array(track), walls)
     success = bool(outcome is not None and outcome.success and near and crossings == 0)
     if not finished:
@@ -255,7 +256,7 @@ def run_mission(world: World, topological_map: TopologicalMap, start_pose: tuple
     positions = {name: node.position for name, node in topological_map.nodes.items() if node.position is not None}
     nearest = min(positions, key=lambda name: math.dist((x, y), positions[name]), default=None)
     away = [index for index, point in enumerate(track) if math.dist(point, (x, y)) > STILL_M]
-    still_s = (len(track) - 1 - (away[-1] + 1 if away else 0)) * steps_per_control * robot.step_s
+    still_s = (len(track) - 1 - (away[-1] + 1 if away else 0)) * rig.sample_every * robot.step_s
     return MissionRun(success, message, base.distance_travelled_m, shortest, state.tags_missed, state.replans,
                       tuple(state.nodes_visited), t, (x, y), tuple(turns), first_node, base.bumps, arrived,
                       math.dist((x, y), goal_xy) if goal_xy is not None else math.nan, crossings, finished,

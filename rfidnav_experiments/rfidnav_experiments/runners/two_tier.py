@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -50,9 +50,10 @@ from rfidnav_planning.wall_paths import WallMap
 from rfidnav_scenario.metrics import ground_truth_objection, wall_crossings
 from rfidnav_scenario.scenario import CONFIG_DIR
 from rfidnav_sim.compass_model import CompassModel
-from rfidnav_sim.kinematics import moves_into_wall, unicycle_step
+from rfidnav_sim.kinematics import IdealUnicycle
 from rfidnav_sim.parameters import CompassParameters, ReaderParameters, RobotSimParameters, WifiSimParameters
 from rfidnav_sim.rfid_model import Read
+from rfidnav_sim.rig import Rig, ScheduledSensor, Sensor
 from rfidnav_sim.wifi_model import WifiModel
 from rfidnav_sim.world import World
 
@@ -235,39 +236,28 @@ def grid_radio_map(world: World, points: Sequence[tuple[float, float]], rng: np.
     return RadioMap(fingerprints)
 
 
-class FloorRobot:
-    """The robot of the in-process runs on a home's floor: a unicycle stepped at the control rate whose steps into a
-    wall are not made (robot_sim's round base stalls there; the step is counted in ``bumps``), its true track kept,
-    and its wheel odometry: the same motion with the distance off by ``odometry_scale_error``."""
+READER, COMPASS_SENSOR, WIFI = "rfid_reader_sim", "compass_sim", "location_server"   # the rig's sensors
 
-    def __init__(self, start: tuple[float, float, float], walls: np.ndarray, odometry_scale_error: float) -> None:
-        self.x, self.y, self.yaw = start
-        self.walls = walls
-        self.odometry_scale_error = odometry_scale_error
-        self.odom = (0.0, 0.0, 0.0)
-        self.bumps = 0
-        self.track = [(self.x, self.y)]
 
-    @property
-    def truth(self) -> tuple[float, float, float]:
-        return self.x, self.y, self.yaw
+def floor_rig(site: Site, start: tuple[float, float, float], odometry_scale_error: float, step_s: float,
+              sensors: Mapping[str, Sensor]) -> Rig[IdealUnicycle]:
+    """The in-process runs' robot on a home's floor (an ideal unicycle that stalls at the walls, its odometry
+    ``odometry_scale_error`` long) among ``sensors``, sampled every ``step_s`` step (the control rate)."""
+    robot = IdealUnicycle(start, site.world.wall_segments(), FOOTPRINT_RADIUS_M, odometry_scale_error)
+    return Rig(robot, step_s, 1, sensors)
 
-    def step(self, linear: float, angular: float, dt: float) -> float:
-        """Drive one step of ``dt``; the speed it made (0 against a wall: it only turns)."""
-        dx, dy, dyaw = unicycle_step(self.yaw, linear, angular, dt)
-        if len(self.walls) and moves_into_wall(self.walls, (self.x, self.y), (self.x + dx, self.y + dy),
-                                               FOOTPRINT_RADIUS_M):
-            self.bumps += 1
-            linear = dx = dy = 0.0
-        self.x, self.y, self.yaw = self.x + dx, self.y + dy, self.yaw + dyaw
-        self.track.append((self.x, self.y))
-        dx, dy, dyaw = unicycle_step(self.odom[2], linear * (1.0 + self.odometry_scale_error), angular, dt)
-        self.odom = (self.odom[0] + dx, self.odom[1] + dy, self.odom[2] + dyaw)
-        return linear
 
-    def wall_crossings(self) -> int:
-        """rfidnav_scenario.metrics.wall_crossings of the true track."""
-        return wall_crossings(np.array(self.track), self.walls)
+@dataclass(frozen=True)
+class Located:
+    """The location server's answer to one scan: None when it cannot locate it."""
+    result: LocateResult | None
+
+
+def located_scans(site: Site, period_s: float, rng: np.random.Generator,
+                  locate: LocateSettings) -> ScheduledSensor[Located]:
+    """A WiFi scan every ``period_s`` (drawn from ``rng``) located by the location server, as a localizer that
+    asks for every scan gets it."""
+    return ScheduledSensor(period_s, lambda truth, draw: Located(site.locate_scan(truth[:2], draw, locate)), rng)
 
 
 @dataclass(frozen=True)
@@ -330,9 +320,13 @@ def run_two_tier(site: Site, start: tuple[float, float, float], target: tuple[fl
     ``tier_one_from`` naming a localizer's pose; the robot stands still until it answers). ``scan_period_s``: a
     scan this often located by the server for the observers (a localizer that asks for every scan, as
     rfid_localizer does), in place of the answers to the navigator's own requests."""
-    x, y, yaw = start
-    robot = FloorRobot(start, site.world.wall_segments(), odometry_scale_error)
-    reader = reader_parameters.simulated_reader(site.world, reader_seed)
+    sensors: dict[str, Sensor] = {
+        READER: reader_parameters.simulated_reader(site.world, reader_seed),
+        COMPASS_SENSOR: ScheduledSensor(STEP_S, lambda truth, draw: compass.measure(truth[2], draw), rng)}
+    if scan_period_s is not None:
+        sensors[WIFI] = located_scans(site, scan_period_s, rng, locate)
+    rig = floor_rig(site, start, odometry_scale_error, STEP_S, sensors)
+    x, y, _ = start
     floor_port = NAVIGATOR.floor_antenna
     positions = {tag.tag_id: tag.position for tag in site.tag_map}
     survey: list[tuple[tuple[float, float], dict[str, float]]] = []
@@ -343,10 +337,8 @@ def run_two_tier(site: Site, start: tuple[float, float, float], target: tuple[fl
     tag_position_errors: list[float] = []
     tier_one_errors: list[float] = []
     fixes_seen = len(navigator.progress.fixes)      # a known start is no fix of the reader's
-    time_s = path_m = 0.0
     located: list[tuple[tuple[float, float], float]] = []
-    next_scan_s = 0.0
-    while not decision.finished and time_s < max_time_s:
+    while not decision.finished and rig.now_s < max_time_s:
         waiting = None                  # a locate request tier_one cannot answer yet
         if decision.request is not None:
             if tier_one is None or decision.request.kind != LOCATE:
@@ -358,22 +350,20 @@ def run_two_tier(site: Site, start: tuple[float, float, float], target: tuple[fl
                 decision = navigator.on_located(*answered)
                 continue
             waiting = decision.request
-        linear = robot.step(*decision.command, STEP_S)
-        (x, y, yaw), odom = robot.truth, robot.odom
-        path_m += abs(linear) * STEP_S
-        time_s += STEP_S
-        due = reader.round_at(x, y, yaw, time_s)
+        rig.command(*decision.command, rig.now_s)
+        seen = rig.advance()
+        (x, y, _), time_s = seen.truth, seen.time_s
+        due = seen.readings.get(READER)
         reads = [read.tag_id for read in due or () if read.antenna == floor_port]
-        compass_yaw = compass.measure(yaw, rng)
-        if scan_period_s is not None and time_s >= next_scan_s:
-            next_scan_s += scan_period_s
-            result = site.locate_scan((x, y), rng, locate)
+        compass_yaw = seen.readings[COMPASS_SENSOR]
+        if WIFI in seen.readings:
+            result = seen.readings[WIFI].result      # None: scanned, not located
             located[:] = [] if result is None else [(result.position, result.uncertainty_m)]
-        decision = navigator.step(odom, compass_yaw, reads)
+        decision = navigator.step(seen.odom, compass_yaw, reads)
         if waiting is not None and not decision.finished:
             decision = Decision(decision.phase, (0.0, 0.0), waiting)    # still to be answered
         if observe is not None:
-            observe(StepSeen(time_s, (x, y, yaw), odom, compass_yaw, None if due is None else tuple(due),
+            observe(StepSeen(time_s, seen.truth, seen.odom, compass_yaw, None if due is None else tuple(due),
                              located.pop() if located else None, navigator.estimate()))
         fixes = navigator.progress.fixes
         for fix in fixes[fixes_seen:]:
@@ -394,13 +384,14 @@ def run_two_tier(site: Site, start: tuple[float, float, float], target: tuple[fl
     if not decision.finished:
         decision = navigator.finish(False, f"timed out after {max_time_s:g} s")
     progress = navigator.progress
-    crossings = robot.wall_crossings()
+    crossings = wall_crossings(rig.track()[1], site.world.wall_segments())
     objection = ground_truth_objection({"wall_crossings": crossings})
+    robot = rig.base
     return TwoTierRun(decision.success and objection is None,
                       decision.message if objection is None else f"{decision.message}; but it {objection}",
-                      (x, y), target, path_m, tuple(fix_errors), tuple(tag_position_errors), tuple(tier_one_errors),
-                      progress.searches, progress.search_length_m, tuple(progress.visited), time_s, tuple(survey),
-                      robot.bumps, crossings)
+                      (x, y), target, robot.distance_travelled_m, tuple(fix_errors), tuple(tag_position_errors),
+                      tuple(tier_one_errors), progress.searches, progress.search_length_m, tuple(progress.visited),
+                      rig.now_s, tuple(survey), robot.bumps, crossings)
 
 
 def answer(site: Site, navigator: TwoTierNavigator, request: Request, true_position: tuple[float, float],
