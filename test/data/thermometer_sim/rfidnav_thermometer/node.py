@@ -12,33 +12,30 @@ from sensor_msgs.msg import Temperature
 from rfidnav_common import inputs
 from rfidnav_common.frames import MAP_FRAME
 from rfidnav_common.ros import SENSOR_QOS, declare_parameters, run_node, seconds_of
-from rfidnav_common.seeding import rng_for
 from rfidnav_common.stepped_node import SteppedNode
 from rfidnav_sim.conversions import ground_truth_pose
-from rfidnav_sim.schedule import GroundTruthSchedule
 from rfidnav_thermometer.parameters import ThermometerParameters
-
-ROOM_C = 21.0
 
 
 class ThermometerSimNode(SteppedNode):
     def __init__(self, **node_options: Any) -> None:
         super().__init__("thermometer_sim", **node_options)
         self.params: ThermometerParameters = declare_parameters(self, ThermometerParameters)
-        self.rng = rng_for(self.params.seed, "thermometer_sim")
+        self.thermometer = self.params.sensor()
         self.drops = inputs.Drops(self.get_logger().warning)
-        self.schedule = GroundTruthSchedule(1.0 / self.params.rate_hz)
         self.publisher = self.create_publisher(Temperature, "/temperature", SENSOR_QOS)
         self.create_subscription(Odometry, "/sim/ground_truth", self.on_ground_truth, SENSOR_QOS)
 
     def on_ground_truth(self, msg: Odometry) -> None:
-        if ground_truth_pose(msg, MAP_FRAME, self.drops) is None or not self.schedule.due(seconds_of(msg.header.stamp)):
+        pose = ground_truth_pose(msg, MAP_FRAME, self.drops)
+        celsius = None if pose is None else self.thermometer.sample(pose, seconds_of(msg.header.stamp))
+        if celsius is None:
             return
         time.sleep(self.params.work_s)   # the slowness the tests ask for, not a wait for anything
         reading = Temperature()
         reading.header.stamp = msg.header.stamp
         reading.header.frame_id = "base_link"
-        reading.temperature = ROOM_C + float(self.rng.normal(0.0, self.params.noise_sd_c))
+        reading.temperature = celsius
         reading.variance = self.params.noise_sd_c ** 2
         self.publisher.publish(reading)
 
