@@ -16,7 +16,8 @@ import pytest
 
 from rfidnav_common.errors import ConfigError
 from rfidnav_experiments.engine import Engine, EngineError, EngineOptions, engine_for, run_tasks
-from rfidnav_experiments.reproduce.partitions import FILTER, PAPER, navigation_jobs, run_navigation_job
+from rfidnav_experiments.reproduce.partitions.jobs import navigation_jobs, run_navigation_job
+from rfidnav_experiments.reproduce.partitions.settings import FILTER, PAPER
 from rfidnav_experiments.reproduce.topological import EVALUATION, missions_chunk
 from rfidnav_experiments.runners.partitions import RobotSpeeds
 from rfidnav_experiments.runners.topological import MissionRun

@@ -12,7 +12,8 @@ import pytest
 
 from rfidnav_common.seeding import rng_for
 from rfidnav_common.tag_lattice import LAYOUTS, StraightWalk, make_deployment, partitions_along_segment
-from rfidnav_experiments.reproduce import partitions as rp
+from rfidnav_experiments.reproduce.partitions import settings
+from rfidnav_experiments.reproduce.partitions.jobs import NavigationJob, navigate, task_of
 from rfidnav_localization.partition import ParticleFilter
 from support import partition_walk
 
@@ -65,20 +66,20 @@ def outcome(run) -> tuple:
             run.final_position, run.trajectory.tolist())
 
 
-@pytest.mark.parametrize("method", rp.METHODS)
+@pytest.mark.parametrize("method", settings.METHODS)
 def test_the_faster_cores_navigate_exactly_as_the_step_by_step_walk_and_the_filter_before(method: str,
                                                                                          monkeypatch) -> None:
-    jobs = [rp.NavigationJob(method, r, level, index, rp.DEVELOPMENT_SEED)
-            for r in rp.NAVIGATION_RANGES_M for level in (1, 4) for index in (0, 3)]
+    jobs = [NavigationJob(method, r, level, index, settings.DEVELOPMENT_SEED)
+            for r in settings.NAVIGATION_RANGES_M for level in (1, 4) for index in (0, 3)]
     for job in jobs:
-        new = outcome(rp.navigate(job))
-        start, goal = rp.task_of(job)
+        new = outcome(navigate(job))
+        start, goal = task_of(job)
         with monkeypatch.context() as patched:   # the filter's old round arithmetic
             for name, function in partition_walk.FILTER_ROUND.items():
                 patched.setattr(ParticleFilter, name, function)
             reference = partition_walk.run_navigation(
-                rp.deployment(job.read_range_m), start, goal, rp.localizer_settings(method),
-                rp.navigator_settings(method, job.level),
+                settings.deployment(job.read_range_m), start, goal, settings.localizer_settings(method),
+                settings.navigator_settings(method, job.level),
                 rng_for(job.seed, f"run:{job.method}:{job.read_range_m}:{job.level}:{job.index}"),
-                odometry_noise=rp.ODOMETRY_NOISE, speeds=rp.robot_speeds(method))
+                odometry_noise=settings.ODOMETRY_NOISE, speeds=settings.robot_speeds(method))
         assert new == outcome(reference), job
