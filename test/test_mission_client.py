@@ -51,7 +51,7 @@ class Progress:
 
 def client(graph: Graph, stopping: bool = False) -> tuple[MissionClient, Progress]:
     progress = Progress()
-    waiter = Waiter(graph.executor, lambda: None, lambda: stopping)
+    waiter = Waiter(graph.executor, lambda: None, lambda: stopping, lambda: "")
     mission = MissionClient(graph.probe, FollowTagRoute, ACTION, waiter, progress, "hallway",
                             lambda: "\n  route_server: no map")
     graph.clients.append(mission.client)

@@ -42,7 +42,7 @@ class Waiter:
     executor: Executor
     check: Callable[[], None]               # between spins: raises NodeExitedError when a node died
     stopping: Callable[[], bool]            # the run is stopping: a wait ends without its condition
-    last_lines: Callable[[], str] = str     # every process's last log lines, for a timeout's message
+    last_lines: Callable[[], str]           # every process's last log lines, for a timeout's message
 
     def spin_until(self, condition: Callable[[], bool], timeout_s: float, what: str | Callable[[], str]) -> None:
         """Spin until ``condition()`` holds; fail naming ``what`` (a text, or a function giving it at the

@@ -40,9 +40,6 @@ class MissionClient:
         fill_message(goal, values, where)
         return goal
 
-    def server_is_ready(self) -> bool:
-        return bool(self.client.server_is_ready())
-
     def wait_for_server(self, what: str) -> None:
         self.waiter.spin_until(self.client.server_is_ready, READY_TIMEOUT_S, what)
 
