@@ -127,7 +127,7 @@ def test_a_goal_sent_as_the_run_stops_is_not_followed(graph: Graph) -> None:
     assert not mission.done and mission.result() is None
 
 
-def test_feedback_reads_as_one_line_of_fields_with_floats_to_the_millimetre() -> None:
+def test_feedback_reads_as_one_line_of_fields_with_floats_to_three_decimals() -> None:
     feedback = FollowTagRoute.Feedback(target_index=2, target_tag_id="H3", phase_difference_rad=0.12345,
                                        heading_change_rad=-1.5, mode="arriving")
     assert feedback_text(feedback) == ("target_index=2 target_tag_id=H3 phase_difference_rad=+0.123 "

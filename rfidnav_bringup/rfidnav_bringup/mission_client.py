@@ -95,7 +95,7 @@ class MissionClient:
 
 
 def feedback_text(feedback: Any) -> str:
-    """A feedback message on one line: each field as name=value, floats to the millimetre."""
+    """A feedback message on one line: each field as name=value, floats to three decimals."""
     fields = feedback.get_fields_and_field_types()
     return " ".join(f"{name}={format_value(getattr(feedback, name))}" for name in fields)
 
