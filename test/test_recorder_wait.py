@@ -7,12 +7,9 @@ from pathlib import Path
 
 import pytest
 
-from rfidnav_bringup.orchestrator import (
-    Orchestrator,
-    RunOptions,
-    recordable_type,
-    topics_to_record,
-)
+from rfidnav_bringup.graph_watch import recordable_type, topics_to_record
+from rfidnav_bringup.orchestrator import Orchestrator
+from rfidnav_bringup.run_plan import RunOptions
 from rfidnav_scenario.scenario import load_scenario
 
 pytestmark = pytest.mark.tier("unit")

@@ -8,7 +8,8 @@ from pathlib import Path
 import pytest
 
 import rfidnav_bringup.report
-from rfidnav_bringup.orchestrator import Orchestrator, RunOptions
+from rfidnav_bringup.orchestrator import Orchestrator
+from rfidnav_bringup.run_plan import RunOptions
 from rfidnav_scenario.scenario import load_scenario
 
 pytestmark = pytest.mark.tier("node")
@@ -46,7 +47,7 @@ def test_a_summary_that_cannot_be_written_is_said_in_one_line_and_the_outcome_ke
     def disk_full(*_args, **_kwargs) -> None:
         raise OSError(28, "No space left on device")
 
-    monkeypatch.setattr("rfidnav_bringup.orchestrator.write_atomically", disk_full)
+    monkeypatch.setattr("rfidnav_bringup.summary.write_atomically", disk_full)
     summary = orchestrator.write_summary()
     assert summary.success is True
     assert f"summary.json not written in {orchestrator.run_dir}: No space left on device" in capsys.readouterr().out

@@ -4,8 +4,10 @@ scenario's graph or a node process of their own. Everything else in this package
 from __future__ import annotations
 
 from rfidnav_bringup.errors import ReadinessError
-from rfidnav_bringup.orchestrator import Orchestrator, RunOptions, RunSummary
+from rfidnav_bringup.orchestrator import Orchestrator
 from rfidnav_bringup.processes import DomainLease, NodeProcess, child_environment
+from rfidnav_bringup.run_plan import RunOptions
+from rfidnav_bringup.summary import RunSummary
 
 __all__ = ["DomainLease", "NodeProcess", "Orchestrator", "ReadinessError", "RunOptions", "RunSummary",
            "child_environment"]

@@ -205,7 +205,9 @@ def verb_setup(_args) -> int:
 
 
 def verb_run(args, scenario_name: str | None = None) -> int:
-    from rfidnav_bringup.orchestrator import Orchestrator, RunOptions, print_summary
+    from rfidnav_bringup.orchestrator import Orchestrator
+    from rfidnav_bringup.run_plan import RunOptions
+    from rfidnav_bringup.summary import print_summary
     from rfidnav_common.config import load_yaml_text
     from rfidnav_scenario.scenario import load_scenario
 

@@ -27,6 +27,9 @@ from dataclasses import dataclass, field
 
 # The simulation clocks a run can have: stepped (this ledger decides each step), or free-running at a fixed RTF.
 CLOCKS = ("stepped", "free")
+# Where the participants answer each step (rfidnav_common.stepped_node); here so that pure code (the run plan, which
+# leaves it out of the bag) can name it without rclpy.
+STEP_ACK_TOPIC = "/sim/step_ack"
 
 
 @dataclass(frozen=True)

@@ -50,10 +50,9 @@ from rclpy.task import Future
 from rclpy.time import Time
 
 from rfidnav_common.rclpy_compat import drive_ros_time_without_clock_topic
-from rfidnav_common.step_ledger import StepReport
+from rfidnav_common.step_ledger import STEP_ACK_TOPIC, StepReport
 from rfidnav_msgs.msg import StepAck  # type: ignore[attr-defined]  # generated
 
-STEP_ACK_TOPIC = "/sim/step_ack"
 STEPPED_CLOCK_PARAMETER = "stepped_clock"
 # Topics no participant's publisher counts (logs, parameter events, an action's own topics): handling them
 # cannot complete a step, so they are not counted and cost no answer.

@@ -1,0 +1,261 @@
+"""The run's graph as the orchestrator's node sees it: waiting until it is ready (the nodes have joined, the recorder
+subscribes to every topic it will record, the participants of the stepped clock are wired), starting the simulation
+clock, and while the mission runs watching for a clock that stalls and for a second graph in the domain.
+
+Every wait is a :class:`Waiter`'s: it spins the executor until its condition holds, checking between spins that no
+node died and whether the run is stopping, and on timeout names what it waited for and every process's last lines.
+"""
+
+from __future__ import annotations
+
+import functools
+import json
+import time
+from collections.abc import Callable, Collection, Iterable, Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import psutil
+from rcl_interfaces.msg import Log
+from rclpy.executors import Executor
+from rclpy.node import Node
+from rclpy.task import Future
+from std_srvs.srv import Trigger
+
+from rfidnav_bag.errors import BagError
+from rfidnav_bag.recorder_node import recordable_definition
+from rfidnav_bringup.errors import NodeExitedError, ReadinessError
+from rfidnav_bringup.processes import NodeProcess
+from rfidnav_bringup.run_plan import RECORDER_ROLE, ExpectedGraph
+
+READY_TIMEOUT_S = 90.0
+RESEND_ATTEMPTS = 6
+RESEND_TIMEOUT_S = 5.0
+STALL_REPORT_S = 5.0      # wall time without sim-time progress after which the run says who holds it up
+STALL_ABORT_S = 60.0      # ... and after which it ends the mission as stalled
+RESPAWN_GRACE_S = 30.0    # a killed node stays in the graph until its DDS lease ends (Fast DDS: 20 s)
+
+
+@dataclass
+class Waiter:
+    """Spins ``executor`` until a condition holds."""
+    executor: Executor
+    check: Callable[[], None]               # between spins: raises NodeExitedError when a node died
+    stopping: Callable[[], bool]            # the run is stopping: a wait ends without its condition
+    last_lines: Callable[[], str]           # every process's last log lines, for a timeout's message
+
+    def spin_until(self, condition: Callable[[], bool], timeout_s: float, what: str | Callable[[], str]) -> None:
+        """Spin until ``condition()`` holds; fail naming ``what`` (a text, or a function giving it at the
+        timeout) and any node that died meanwhile."""
+        deadline = time.monotonic() + timeout_s
+        while not condition():
+            self.check()
+            if self.stopping():
+                return
+            if time.monotonic() > deadline:
+                waited_for = what() if callable(what) else what
+                raise ReadinessError(f"timed out after {timeout_s:.0f} s waiting for {waited_for}\n"
+                                     f"{self.last_lines()}")
+            self.executor.spin_once(timeout_sec=0.05)
+
+
+@dataclass
+class StallWatch:
+    """When sim time last advanced (wall clock), and whether the present stall has been reported."""
+    sim_s: float
+    since_wall_s: float
+    reported: bool = False
+
+    def advanced(self, sim_s: float, wall_s: float) -> bool:
+        if sim_s > self.sim_s:
+            self.sim_s, self.since_wall_s, self.reported = sim_s, wall_s, False
+            return True
+        return False
+
+
+@dataclass
+class GraphWatch:
+    node: Node                              # the orchestrator's node: the graph as it sees it
+    waiter: Waiter
+    expected: ExpectedGraph
+    domain_id: int
+    say: Callable[[str], None]              # what the run tells at once (a stall)
+    clock_source_says: str = ""             # the clock source's last warning on /rosout
+    # Nodes of a respawned process, and until when (wall): the dead one stays in the graph until its DDS lease
+    # ends, so two of the name are expected for that long.
+    respawned_until: dict[str, float] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        self.node.create_subscription(Log, "/rosout", self.on_log, 100)
+
+    def on_log(self, message: Log) -> None:
+        if message.name == self.expected.clock_source and message.level >= Log.WARN:
+            self.clock_source_says = message.msg
+
+    def sim_seconds(self) -> float:
+        return self.node.get_clock().now().nanoseconds * 1e-9
+
+    # ----------------------------------------------------------------- readiness
+    def wait_for_nodes(self, names: Collection[str], what: str) -> None:
+        self.waiter.spin_until(lambda: set(names) <= set(self.node.get_node_names()), READY_TIMEOUT_S, what)
+
+    def wait_for_live_view(self, process: NodeProcess, port: int) -> None:
+        """Wait until the live view (``process``) listens on ``port``, then say where to connect."""
+        from rfidnav_bag.live_view import DEFAULT_HOST, ws_url  # only with --live: it loads foxglove (~0.25 s)
+
+        self.waiter.spin_until(lambda: listens(process, port), READY_TIMEOUT_S,
+                               f"the live view to listen on port {port}")
+        self.say(f"live view: {ws_url(DEFAULT_HOST, port)} (Foxglove: Open connection -> Foxglove WebSocket)")
+
+    def wait_for_recording(self) -> None:
+        self.waiter.spin_until(lambda: not self.unrecorded_topics(), READY_TIMEOUT_S,
+                               lambda: f"the recorder to subscribe to {', '.join(self.unrecorded_topics())}")
+
+    def unrecorded_topics(self) -> list[str]:
+        """Published topics the recorder will record but does not subscribe to yet."""
+        node = self.node
+        published = [(topic, types) for topic, types in node.get_topic_names_and_types()
+                     if node.get_publishers_info_by_topic(topic)]
+        return [topic for topic in topics_to_record(published, self.expected.record_exclude, recordable_type)
+                if not any(info.node_name == RECORDER_ROLE for info in node.get_subscriptions_info_by_topic(topic))]
+
+    def wait_for_wiring(self) -> None:
+        """Before the goal, which the mission's server answers at once (with the stepped clock, before the clock
+        starts): the clock source's ledger has every participant's report and every publisher and subscription of
+        theirs matched with the participants on the other side of its topic (``~/wired``). A message sent before
+        both sides have matched is lost, and its consumer would hold the clock for ever."""
+        wired = self.node.create_client(Trigger, f"/{self.expected.clock_source}/wired")
+        answer: dict[str, str] = {}
+        pending: list[Future] = []
+
+        def ask() -> bool:
+            if pending and pending[0].done():
+                result = pending.pop().result()
+                if result is not None and result.success:
+                    return True
+                answer["waiting"] = result.message if result is not None else "no answer"
+            if not pending and wired.service_is_ready():
+                pending.append(wired.call_async(Trigger.Request()))
+            return False
+
+        try:
+            self.waiter.spin_until(ask, READY_TIMEOUT_S,
+                                   lambda: f"the participants' publishers and subscriptions to match: "
+                                           f"{answer.get('waiting', 'no answer yet from the clock source')}")
+        finally:
+            self.node.destroy_client(wired)
+
+    def start_clock(self) -> None:
+        if self.expected.clock_source is None:
+            return
+        start = self.node.create_client(Trigger, f"/{self.expected.clock_source}/start")
+        self.waiter.spin_until(start.service_is_ready, READY_TIMEOUT_S, "the simulation clock service")
+        # ~/start is idempotent: ask again if the request or its answer was lost (Fast DDS can drop a
+        # service exchange right after service_is_ready()). The clock running is the answer that counts.
+        for attempt in range(RESEND_ATTEMPTS):
+            start.call_async(Trigger.Request())
+            try:
+                self.waiter.spin_until(lambda: self.node.get_clock().now().nanoseconds > 0, RESEND_TIMEOUT_S,
+                                       "the simulation clock to start (the first /clock message)")
+                break
+            except NodeExitedError:   # final: asking again would swallow it (its process is forgotten)
+                raise
+            except ReadinessError:
+                if attempt == RESEND_ATTEMPTS - 1:
+                    raise
+
+    def write_graph(self, path: Path) -> None:
+        """graph.json: who publishes and subscribes what once the graph is ready (checked by the tests:
+        no navigation node may subscribe to /sim/*)."""
+        node = self.node
+        graph: dict[str, dict[str, list[str]]] = {}
+        for name, namespace in node.get_node_names_and_namespaces():
+            if name == node.get_name():
+                continue
+            graph[name] = {
+                "subscriptions": sorted(t for t, _ in node.get_subscriber_names_and_types_by_node(name, namespace)),
+                "publishers": sorted(t for t, _ in node.get_publisher_names_and_types_by_node(name, namespace))}
+        path.write_text(json.dumps({"simulator_nodes": list(self.expected.simulators), "nodes": graph},
+                                   indent=2) + "\n")
+
+    # ----------------------------------------------------------------- while the mission runs
+    def respawned(self, names: Iterable[str]) -> None:
+        """``names`` (with their leading slash) were restarted: two of each are expected for RESPAWN_GRACE_S."""
+        self.respawned_until.update({name: time.monotonic() + RESPAWN_GRACE_S for name in names})
+
+    def check_stall(self, watch: StallWatch, sim_s: float, wall_s: float,
+                    processes: Mapping[str, NodeProcess]) -> str:
+        """Say once per stall, after STALL_REPORT_S, who holds the clock up; the reason once the stall has lasted
+        STALL_ABORT_S (the mission then ends), else "". A run in real time (hardware) has no clock to watch: only
+        stopped processes are looked for."""
+        if self.expected.simulated and watch.advanced(sim_s, wall_s):
+            return ""
+        stuck_s = wall_s - watch.since_wall_s
+        if stuck_s < STALL_REPORT_S:
+            return ""
+        stopped = stopped_processes(processes)
+        if not self.expected.simulated and not stopped:
+            watch.since_wall_s = wall_s
+            return ""
+        held = f" ({'; '.join(stopped)})" if stopped else ""
+        says = f"; {self.clock_source_says}" if self.clock_source_says else ""
+        reason = f"sim time has not advanced for {stuck_s:.0f} s (wall) at {sim_s:.2f} s{held}{says}"
+        if not watch.reported:
+            watch.reported = True
+            self.say(f"\n{reason}")
+        return reason if stuck_s >= STALL_ABORT_S else ""
+
+    def check_single_graph(self) -> None:
+        """A second graph in our domain (another run forced onto it, an orphan of an older one) shows as a second
+        node of one of our names: end the run before the two mix (a ReadinessError)."""
+        node = self.node
+        ours = {f"/{name}" for name in self.expected.nodes}
+        ours |= {f"/{role}" for role in (RECORDER_ROLE, node.get_name())}
+        names = [f"{namespace.rstrip('/')}/{name}" for name, namespace in node.get_node_names_and_namespaces()]
+        now = time.monotonic()
+        twice = sorted(name for name in ours if names.count(name) > 1 and self.respawned_until.get(name, 0.0) < now)
+        if twice:
+            raise ReadinessError(f"another graph joined ROS domain {self.domain_id}: "
+                                 f"two nodes named {', '.join(twice)}; the run stops before the two mix")
+
+
+def stopped_processes(processes: Mapping[str, NodeProcess]) -> list[str]:
+    """'ROLE is stopped (pid N)' for every running process the OS has stopped (SIGSTOP, a debugger)."""
+    found = []
+    for role, process in processes.items():
+        if process.running and process.popen is not None:
+            try:
+                status = psutil.Process(process.popen.pid).status()
+            except psutil.Error:
+                continue
+            if status in (psutil.STATUS_STOPPED, psutil.STATUS_TRACING_STOP):
+                found.append(f"{role} is stopped (pid {process.popen.pid})")
+    return found
+
+
+def topics_to_record(published: Iterable[tuple[str, list[str]]], exclude: Collection[str],
+                     recordable: Callable[[str], bool]) -> list[str]:
+    """Which published topics (name, types) the recorder records: the ones not excluded whose type it can
+    store (it records a topic's first type), as recorder_node.RecorderNode.discover and add_topic decide."""
+    return sorted(topic for topic, types in published if topic not in exclude and types and recordable(types[0]))
+
+
+@functools.cache
+def recordable_type(msgtype: str) -> bool:
+    """Whether the recorder can record ``msgtype`` (the check its add_topic makes)."""
+    try:
+        recordable_definition(msgtype)
+    except BagError:
+        return False
+    return True
+
+
+def listens(process: NodeProcess, port: int) -> bool:
+    """Whether ``process`` has a TCP socket listening on ``port`` (asked of the OS: no connection is made)."""
+    if not process.running or process.popen is None:
+        return False
+    try:
+        sockets = psutil.Process(process.popen.pid).net_connections(kind="tcp")
+    except psutil.Error:
+        return False
+    return any(s.status == psutil.CONN_LISTEN and s.laddr and s.laddr.port == port for s in sockets)
