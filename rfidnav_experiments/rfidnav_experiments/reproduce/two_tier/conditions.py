@@ -46,7 +46,6 @@ ROUTES = {"route 1": ((1.0, 1.0, 0.3), ("T1", "T2", "T3", "T4", "T5")),
 # (the walls stop the robot; the old route along y = 1 drove through the x = 6 wall).
 LONG_ROUTE = ((1.0, 3.6, 0.0), (11.0, 3.6))
 FIG11_SPACINGS_M = {"direct": 0.1, "indirect": 4.0}    # geographic forwarding's reach: no landmark helps at 0.1 m
-RUNS = 20
 GRID_SPACING_M = 1.0
 GRID_SCANS_PER_POINT = 3
 ROBOT_SURVEY_SPACING_M = 0.5            # the robot's own survey: a scan this often while fresh from a tag fix
