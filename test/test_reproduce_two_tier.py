@@ -346,8 +346,8 @@ def test_a_bad_run_count_is_one_clear_error_from_the_command(tmp_path: Path) -> 
 
 
 def test_tier_one_answered_from_a_localizers_pose_takes_the_place_of_the_location_servers_locate() -> None:
-    from rfidnav_experiments.reproduce.two_tier import SETTINGS, home
-    from rfidnav_experiments.runners.two_tier import StepSeen, run_two_tier
+    from rfidnav_experiments.reproduce.two_tier import home
+    from rfidnav_experiments.runners.two_tier import SETTINGS, StepSeen, run_two_tier
 
     place = home("two_tier_flat")
     seen: list[StepSeen] = []
