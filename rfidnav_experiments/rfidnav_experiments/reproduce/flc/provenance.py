@@ -147,7 +147,6 @@ SOURCES: dict[str, tuple[Source, str]] = {
                                             "robot's entry into the first tag's read area to its entry into the "
                                             "last one's (ground truth), the same stretch for both"),
 }
-CONTROLLER_FIELDS = tuple(key.split(".", 1)[1] for key in SOURCES if key.startswith("heading_controller."))
 
 
 def row_source(source: Source) -> tuple[str, dict[str, str] | None]:

@@ -46,7 +46,6 @@ PARAMS = CONFIG_DIR / "params"
 LOCALIZER_FILES = {robot: PARAMS / f"rfid_localizer_{robot}.yaml"
                    for robot in ("hf_floor", "mixed", "floor_lattice", "wall_side", "uhf_2ant")}
 READER_FILES = {robot: PARAMS / f"reader_{robot}.yaml" for robot in ("hf_floor", "mixed", "uhf_2ant")}
-OURS_FILTER = "ours: the fused filter's"
 LOCALIZER_SOURCES: dict[str, tuple[str, str]] = {
     "initial_pose": ("ours", "empty: every localizer starts knowing only the map, as the papers' do"),
     "initial_sd": ("ours", "unused without an initial_pose (a kidnap is told 10 cm / 0.05 rad)"),
