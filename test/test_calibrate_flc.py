@@ -27,7 +27,9 @@ from rfidnav_experiments.calibrate.flc import (
     timeout_s,
     with_opens,
 )
-from rfidnav_experiments.reproduce.flc import SOURCES, conditions, evaluation_seeds, sweep_rows
+from rfidnav_experiments.reproduce.flc.conditions import evaluation_seeds
+from rfidnav_experiments.reproduce.flc.provenance import SOURCES, conditions
+from rfidnav_experiments.reproduce.flc.rows import sweep_rows
 from rfidnav_experiments.reproduce.tables import INTERPRETED, is_condition_source, rowless_fields
 from rfidnav_experiments.runners.tag_route import RouteRun, controller_parameters, floor_read_radius_m, run_tag_route
 from rfidnav_scenario.scenario import CONFIG_DIR

@@ -16,7 +16,8 @@ from pathlib import Path
 
 import pytest
 
-from rfidnav_experiments.reproduce.flc import (
+from rfidnav_experiments.reproduce.flc import reproduce_flc
+from rfidnav_experiments.reproduce.flc.conditions import (
     EVALUATION_SEED_BASE,
     PARAM_SETS,
     RANDOM,
@@ -24,9 +25,8 @@ from rfidnav_experiments.reproduce.flc import (
     SCENARIOS,
     params_file,
     random_seeds,
-    reproduce_flc,
-    run_one,
 )
+from rfidnav_experiments.reproduce.flc.jobs import run_one
 from rfidnav_experiments.reproduce.tables import is_condition_source
 from rfidnav_experiments.runners.tag_route import controller_parameters, run_tag_route
 from rfidnav_scenario.scenario import load_scenario

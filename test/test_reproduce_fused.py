@@ -15,38 +15,37 @@ import pytest
 
 from rfidnav_common.frames import map_to_odom
 from rfidnav_experiments import evaluation
-from rfidnav_experiments.reproduce.fused import (
+from rfidnav_experiments.reproduce.fused.conditions import (
     ARRIVING_WORLDS,
     DEVELOPMENT_SEED,
     DRIVING,
     EVALUATION_SEED,
     EXPERIMENT,
     HALLWAY,
-    LOCALIZER_FILES,
-    LOCALIZER_NOT_READ,
-    LOCALIZER_SOURCES,
-    METRICS,
     MIXED,
     PARTITION_DRIVING,
     PARTITIONS,
-    POSE_NAVIGATOR_NOT_READ,
-    POSE_NAVIGATOR_SOURCES,
-    READER_FILES,
-    READER_NOT_READ,
     RING,
     SINGLE_EVIDENCE,
     TIER_ONE,
     WORLDS,
-    TrackFigures,
-    all_condition_rows,
-    conditions,
-    home_run,
     localizer_file,
     localizers_of,
     reader_file,
-    recovery_keys,
-    world_run,
 )
+from rfidnav_experiments.reproduce.fused.jobs import home_run, world_run
+from rfidnav_experiments.reproduce.fused.provenance import (
+    LOCALIZER_FILES,
+    LOCALIZER_NOT_READ,
+    LOCALIZER_SOURCES,
+    POSE_NAVIGATOR_NOT_READ,
+    POSE_NAVIGATOR_SOURCES,
+    READER_FILES,
+    READER_NOT_READ,
+    all_condition_rows,
+    conditions,
+)
+from rfidnav_experiments.reproduce.fused.summary import METRICS, TrackFigures, recovery_keys
 from rfidnav_experiments.reproduce.tables import interpreted, is_condition_source
 from rfidnav_experiments.reproduce.two_tier import HOMES
 from rfidnav_experiments.runners.fused import Track

@@ -50,7 +50,7 @@ from rfidnav_sim.parameters import ReaderParameters
 
 PAPER_FILE = CONFIG_DIR / "params" / "flc_paper.yaml"
 CALIBRATED_FILE = CONFIG_DIR / "params" / "flc_paper_calibrated.yaml"
-CALIBRATION_SEEDS = tuple(range(1, 9))  # the reproduction reports other seeds (reproduce.flc.EVALUATION_SEEDS)
+CALIBRATION_SEEDS = tuple(range(1, 9))  # the reproduction reports other seeds (reproduce.flc's evaluation_seeds)
 NOISE_GRID_RAD_PER_M = (0.01, 0.02, 0.035, 0.05, 0.07, 0.085, 0.1, 0.14)
 OUTPUT_SCALE_GRID = (0.3, 0.6, 1.0, 1.5, 2.0, 3.0, 4.0, 6.0)
 FITTED_SCENARIOS = ("line_follow_90", "line_follow_0")
