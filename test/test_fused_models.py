@@ -10,14 +10,9 @@ import pytest
 
 from rfidnav_common.rf import wavelength_m
 from rfidnav_common.wall_tags import InductionArea, WallTag
-from rfidnav_localization.fused.filter import (
-    HELD_READINGS,
-    Evidence,
-    FusedFilter,
-    FusedSettings,
-    HeldReadings,
-    PhaseReading,
-)
+from rfidnav_localization.fused.filter import HELD_READINGS, FusedFilter, HeldReadings
+from rfidnav_localization.fused.kinds import PhaseReading
+from rfidnav_localization.fused.measurement import Evidence
 from rfidnav_localization.fused.models import (
     CompassModel,
     FloorModel,
@@ -25,6 +20,7 @@ from rfidnav_localization.fused.models import (
     WallTagModel,
     WifiModel,
 )
+from rfidnav_localization.fused.settings import FusedSettings
 from rfidnav_localization.fused.tag_map import FusedMap
 from rfidnav_sim.rfid_model import Antenna, ReaderModel, ReaderSimulator
 
@@ -299,7 +295,7 @@ def test_the_fused_status_names_the_lattice_tags_read_and_their_range_so_the_par
     localizer = FusedLocalizer(PARAMETERS.settings(), fused_map(), np.random.default_rng(3))
     localizer.on_odometry((0.0, 0.0, 0.0))
     localizer.set_pose(x, y, yaw, np.diag(np.square(PARAMETERS.initial_sd)))
-    lattice_ids = list(evidence_at(x, y, yaw).floor_tag_ids)
+    lattice_ids = list(evidence_at(x, y, yaw)["floor_tag_ids"])
     assert lattice_ids
     # A tag group's tag read with them is no lattice tag: not part of the partition.
     estimate = localizer.on_round(Evidence(floor_tag_ids=[*lattice_ids, GROUP_TAG_ID]))
