@@ -1,5 +1,6 @@
 """The fused localizer's measurement models (rfidnav_localization.fused.models) against likelihoods computed by
-hand, and against what the simulator's sensors produce; the filter's handling of absent and unknown evidence."""
+hand, and against what the simulator's sensors produce; the filter's handling of absent and unknown evidence; a
+new kind of evidence as one class (rfidnav_localization.fused.measurement) defined here, outside the package."""
 
 from __future__ import annotations
 
@@ -10,21 +11,18 @@ import pytest
 
 from rfidnav_common.rf import wavelength_m
 from rfidnav_common.wall_tags import InductionArea, WallTag
-from rfidnav_localization.fused.filter import (
-    HELD_READINGS,
-    Evidence,
-    FusedFilter,
-    FusedSettings,
-    HeldReadings,
-    PhaseReading,
-)
+from rfidnav_localization.fused.filter import HELD_READINGS, FusedFilter, HeldReadings
+from rfidnav_localization.fused.kinds import MEASUREMENTS, PhaseReading
+from rfidnav_localization.fused.measurement import Evidence, Likelihoods, Measurement, Particles
 from rfidnav_localization.fused.models import (
     CompassModel,
     FloorModel,
     PhaseDifferenceModel,
     WallTagModel,
     WifiModel,
+    robust_gaussian,
 )
+from rfidnav_localization.fused.settings import FusedSettings
 from rfidnav_localization.fused.tag_map import FusedMap
 from rfidnav_sim.rfid_model import Antenna, ReaderModel, ReaderSimulator
 
@@ -299,7 +297,7 @@ def test_the_fused_status_names_the_lattice_tags_read_and_their_range_so_the_par
     localizer = FusedLocalizer(PARAMETERS.settings(), fused_map(), np.random.default_rng(3))
     localizer.on_odometry((0.0, 0.0, 0.0))
     localizer.set_pose(x, y, yaw, np.diag(np.square(PARAMETERS.initial_sd)))
-    lattice_ids = list(evidence_at(x, y, yaw).floor_tag_ids)
+    lattice_ids = list(evidence_at(x, y, yaw)["floor_tag_ids"])
     assert lattice_ids
     # A tag group's tag read with them is no lattice tag: not part of the partition.
     estimate = localizer.on_round(Evidence(floor_tag_ids=[*lattice_ids, GROUP_TAG_ID]))
@@ -333,3 +331,78 @@ def test_readings_held_while_no_round_comes_are_bounded_to_the_latest_ones() -> 
         held.hold(float(index), 0.1 * index)
     assert len(held.readings) == HELD_READINGS
     assert held.take(1e6) == float(10 * HELD_READINGS - 1)         # the next round still weighs the latest
+
+
+def test_the_status_names_the_shipped_kinds_of_evidence_in_the_order_they_are_registered() -> None:
+    assert [kind for measurement in small_filter().measurements for kind in measurement.kinds] == \
+        ["lattice", "tag_group", "ceiling_phase", "ceiling_range_rate", "wall_tag", "wifi", "compass"]
+
+
+BEACON = (2.0, 3.0)
+BEACON_SD_M = 0.3
+
+
+class BeaconRange(Measurement[float]):
+    """A kind of evidence the package does not have, defined here: the measured distance to a radio beacon at
+    BEACON [m], a Gaussian of sd BEACON_SD_M with the settings' floor eps. Particles it cannot explain are
+    redrawn on the circle of that radius about the beacon."""
+    name = "beacon_range_m"
+    kinds = ("beacon",)
+    reset_memory = {"beacon": 1.0}
+    proposal_rank = 3
+
+    def __init__(self, settings: FusedSettings, fused_map: FusedMap) -> None:
+        self.eps = settings.eps
+
+    def log_likelihoods(self, reading: float, particles: Particles) -> Likelihoods:
+        distance = np.hypot(particles.states[0] - BEACON[0], particles.states[1] - BEACON[1])
+        result = Likelihoods()
+        result.add("beacon", robust_gaussian(distance - reading, BEACON_SD_M, self.eps))
+        return result
+
+    def poses(self, reading: float, yaw: np.ndarray, rng: np.random.Generator) -> np.ndarray | None:
+        angle = rng.uniform(-math.pi, math.pi, len(yaw))
+        return np.vstack((BEACON[0] + reading * np.cos(angle), BEACON[1] + reading * np.sin(angle), yaw))
+
+
+def test_a_new_kind_of_evidence_is_one_class_registered_after_the_shipped_ones_and_weighs_as_its_likelihood_says(
+        ) -> None:
+    # Never redrawn nor resampled: the weights are the likelihood's alone.
+    settings = FusedSettings(particles=2000, reset_threshold=0.0, resample_threshold=1e-9)
+    fused = FusedFilter(settings, FusedMap(extent=(0.0, 0.0, 10.0, 10.0)), np.random.default_rng(5),
+                        (*MEASUREMENTS, BeaconRange))
+    fused.initialise_at(4.0, 3.0, 0.0, np.diag([0.25, 0.25, 0.01]))        # 2 m east of the beacon, sd 0.5 m
+    x, y, _ = fused.states.copy()
+    update = fused.update(Evidence(beacon_range_m=2.4))
+    assert update.used == ("beacon",) and update.injected == 0
+    by_hand = EPS + (1 - EPS) * np.exp(-0.5 * np.square((np.hypot(x - 2.0, y - 3.0) - 2.4) / BEACON_SD_M))
+    assert np.allclose(fused.weights, by_hand / by_hand.sum(), rtol=1e-9, atol=0.0)
+    estimate = fused.estimate()
+    assert estimate.x == pytest.approx(float(by_hand @ x / by_hand.sum()), rel=1e-9)
+    assert estimate.x - 2.0 > 2.2                         # drawn out towards the 2.4 m the beacon measured
+    # Reported after the shipped kinds, in the order registered.
+    assert fused.update(Evidence(beacon_range_m=2.4, compass_yaw_rad=0.0)).used == ("compass", "beacon")
+
+
+def test_particles_a_new_kind_of_evidence_cannot_explain_are_redrawn_where_it_proposes() -> None:
+    fused = FusedFilter(FusedSettings(particles=500), FusedMap(extent=(0.0, 0.0, 10.0, 10.0)),
+                        np.random.default_rng(6), (*MEASUREMENTS, BeaconRange))
+    fused.initialise_global()                             # uniform over 100 m^2: few particles near a 1 m circle
+    update = fused.update(Evidence(beacon_range_m=1.0, floor_tag_ids=("NOT-A-TAG",)))
+    assert update.used == ("beacon",) and update.injected > 0
+    distances = np.hypot(fused.states[0] - BEACON[0], fused.states[1] - BEACON[1])
+    assert int(np.sum(np.isclose(distances, 1.0, rtol=0.0, atol=1e-9))) >= update.injected     # on the circle
+    assert float(np.mean(np.abs(distances - 1.0) < 3 * BEACON_SD_M)) > 0.9     # and the rest resampled near it
+
+
+def test_a_rider_given_some_kinds_of_evidence_gets_a_rounds_evidence_without_the_others_readings() -> None:
+    from rfidnav_experiments.runners.fused import Rider
+    from rfidnav_localization.fused.localizer import FusedLocalizer
+
+    evidence = Evidence(floor_tag_ids=["G1-00"], phase=[PhaseReading("C1", 0.3, 0.2, 915e6)],
+                        wall_tag_ids=[(4, "8")], wifi_fix=((1.0, 2.0), 1.5), compass_yaw_rad=0.2)
+    localizer = FusedLocalizer(FusedSettings(particles=10), FusedMap(extent=(0.0, 0.0, 1.0, 1.0)),
+                               np.random.default_rng(1))
+    assert Rider(localizer, ("floor", "compass")).evidence(evidence) == \
+        Evidence(floor_tag_ids=["G1-00"], compass_yaw_rad=0.2)
+    assert Rider(localizer).evidence(evidence) == evidence

@@ -30,13 +30,14 @@ from rfidnav_common.node_registry import NodeRegistration, ReadsAntennaPorts
 from rfidnav_common.robot_map import load_route_map
 from rfidnav_common.wall_tags import InductionArea
 from rfidnav_localization.fingerprint import WEIGHTINGS, LocateSettings
-from rfidnav_localization.fused.filter import FusedSettings, Ports
+from rfidnav_localization.fused.filter import Ports
 from rfidnav_localization.fused.models import (
     CompassModel,
     FloorModel,
     PhaseDifferenceModel,
     WifiModel,
 )
+from rfidnav_localization.fused.settings import FusedSettings
 from rfidnav_localization.partition import LocalizerSettings
 from rfidnav_localization.partition.estimate import METHODS
 

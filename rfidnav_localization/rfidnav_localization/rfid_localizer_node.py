@@ -33,7 +33,8 @@ from rfidnav_common.seeding import rng_for
 from rfidnav_common.stepped_node import SteppedNode
 from rfidnav_common.transforms import FrameBroadcaster
 from rfidnav_localization.conversions import fused_pose_message, fused_status_message, initial_pose
-from rfidnav_localization.fused.filter import HeldReadings, WifiFix, round_evidence
+from rfidnav_localization.fused.filter import HeldReadings, round_evidence
+from rfidnav_localization.fused.kinds import WifiFix
 from rfidnav_localization.fused.localizer import FusedLocalizer
 from rfidnav_localization.fused.tag_map import FusedMap
 from rfidnav_localization.parameters import RfidLocalizerParameters

@@ -15,11 +15,9 @@ the two-tier dead reckoning, whose heading is the compass's and has no sd.
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from collections.abc import Collection, Sequence
 from dataclasses import dataclass, field
-from typing import Any
 
 import numpy as np
 from builtin_interfaces.msg import Time
@@ -54,10 +52,10 @@ from rfidnav_sim.parameters import ReaderParameters
 from rfidnav_sim.rig import pose_of
 
 MIN_VARIANCE = 1e-12     # a covariance with a zero variance (a collapsed cloud) is floored, not inverted
-# The kinds a rider may be restricted to: the fields of Evidence they keep.
+# The kinds a rider may be restricted to: the readings of Evidence they keep (their measurements' names,
+# rfidnav_localization.fused.kinds).
 KINDS = {"floor": "floor_tag_ids", "phase": "phase", "wall": "wall_tag_ids", "wifi": "wifi_fix",
          "compass": "compass_yaw_rad"}
-NO_EVIDENCE = Evidence()
 CONVERGED_M = 0.5        # global localization and kidnap recovery: the error below this...
 CONVERGED_FOR_S = 5.0    # ...for this long
 
@@ -145,10 +143,8 @@ class Rider:
         return (pose.x, pose.y), sd_m
 
     def evidence(self, evidence: Evidence) -> Evidence:
-        """``evidence`` with the kinds this rider is not given left empty."""
-        dropped: dict[str, Any] = {name: getattr(NO_EVIDENCE, name) for kind, name in KINDS.items()
-                                   if kind not in self.kinds}
-        return dataclasses.replace(evidence, **dropped)
+        """``evidence`` without the readings of the kinds this rider is not given."""
+        return evidence.without([name for kind, name in KINDS.items() if kind not in self.kinds])
 
     def moved(self, time_s: float, odom: tuple[float, float, float], truth: tuple[float, float, float]) -> bool:
         """The odometry at ``time_s``, and the kidnap when it is due (the harness, not the localizer, knows the

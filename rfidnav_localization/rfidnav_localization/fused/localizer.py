@@ -12,7 +12,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from rfidnav_localization.fused.filter import Evidence, FusedFilter, FusedSettings, PoseEstimate, Update
+from rfidnav_localization.fused.filter import FusedFilter, PoseEstimate, Update
+from rfidnav_localization.fused.kinds import FloorTags
+from rfidnav_localization.fused.measurement import Evidence
+from rfidnav_localization.fused.settings import FusedSettings
 from rfidnav_localization.fused.tag_map import FusedMap
 from rfidnav_localization.motion_model import odometry_increment
 
@@ -54,6 +57,7 @@ class FusedLocalizer:
             self.filter.initialise_global()
         update = self.filter.update(evidence)
         fused_map = self.filter.map
-        partition = tuple(tag_id for tag_id in evidence.floor_tag_ids if fused_map.lattice_position(tag_id) is not None)
+        partition = tuple(tag_id for tag_id in evidence.get(FloorTags.name, ())
+                          if fused_map.lattice_position(tag_id) is not None)
         read_range_m = fused_map.deployment.read_range_m if fused_map.deployment is not None else 0.0
         return FusedEstimate(self.filter.estimate(), self.odom, update, partition, read_range_m)
