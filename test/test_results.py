@@ -113,6 +113,18 @@ def test_a_results_file_is_stale_once_an_input_it_recorded_changes(tmp_path: Pat
     assert results.stale_inputs(document) == ["config/robot.yaml (gone)"]
 
 
+def test_a_pinned_mismatch_names_the_vector_instructions_of_the_publishing_machine_and_this_one(tmp_path: Path) \
+        -> None:
+    cpuinfo = tmp_path / "cpuinfo"
+    cpuinfo.write_text("processor\t: 0\nflags\t\t: fpu sse2 avx avx2 fma avx512f\n")
+    assert results.vector_instructions(cpuinfo) == ["avx", "avx2", "fma", "avx512f"]
+    here = {"machine": {"vector_instructions": results.vector_instructions()}}
+    assert results.numerics_differ(here) == ""
+    assert "an unrecorded set" in results.numerics_differ({"machine": {"cores": 2}})
+    other = {"machine": {"vector_instructions": ["avx512f", *results.vector_instructions()]}}
+    assert "avx512f" in results.numerics_differ(other) and "reproduce all" in results.numerics_differ(other)
+
+
 def test_the_evaluation_ledgers_page_is_current() -> None:
     assert results.LEDGER_PAGE.read_text() == evaluation.ledger_markdown(), \
         "docs/results/evaluation-ledger.md differs from rfidnav_experiments/evaluation.py: run ./rfidnav reproduce docs"
@@ -148,4 +160,5 @@ def test_each_reproductions_pinned_subset_gives_exactly_the_rows_of_its_results_
     assert document["pinned"]["arguments"] == results.REPRODUCTIONS[name].pinned
     assert json.dumps(results.pinned_rows(name), sort_keys=True) == \
         json.dumps(document["pinned"]["rows"], sort_keys=True), \
-        f"reproduce {name}'s pinned figures moved: rerun ./rfidnav reproduce {name} --publish and commit the file"
+        f"reproduce {name}'s pinned figures moved: rerun ./rfidnav reproduce {name} --publish and commit the file" \
+        + results.numerics_differ(document)

@@ -268,9 +268,38 @@ def _figures(published: Command, stdout: str, out_dir: Path) -> Any:
         raise ResultsError(published.command(), "", f"no JSON in {source}: {error}") from error
 
 
+# The vector instructions that change floating-point results in their last bits (numpy's and the BLAS's kernels
+# pick them at run time): a closed-loop run can diverge from such a bit, so the pinned rows are exact on machines
+# with the same set only. The files published before this record differed here in 25 of flc's 211 pinned rows.
+VECTOR_FLAGS = ("avx", "avx2", "fma", "avx512f", "avx512dq", "avx512bw", "avx512vl")
+
+
+def vector_instructions(cpuinfo: Path = Path("/proc/cpuinfo")) -> list[str]:
+    """Which of VECTOR_FLAGS this machine's processor has (empty where /proc/cpuinfo cannot be read)."""
+    try:
+        text = cpuinfo.read_text()
+    except OSError:
+        return []
+    flags = next((line.split(":", 1)[1].split() for line in text.splitlines() if line.startswith("flags")), [])
+    return [flag for flag in VECTOR_FLAGS if flag in flags]
+
+
 def machine() -> dict[str, Any]:
     return {"cores": len(os.sched_getaffinity(0)), "load_1min": round(os.getloadavg()[0], 2),
-            "python": sys.version.split()[0]}
+            "python": sys.version.split()[0], "vector_instructions": vector_instructions()}
+
+
+def numerics_differ(document: dict[str, Any]) -> str:
+    """Why a results file's pinned rows may not be this machine's to the bit: a sentence naming the vector
+    instructions it was published with and this machine's, or '' when they are the same."""
+    published = document.get("machine", {}).get("vector_instructions")
+    here = vector_instructions()
+    if published == here:
+        return ""
+    then = "an unrecorded set" if published is None else (", ".join(published) or "none")
+    return (f"; it was published on a processor with vector instructions {then}, this one has "
+            f"{', '.join(here) or 'none'}: their floating-point results differ in the last bits, from which a "
+            "closed-loop run may diverge; run ./rfidnav reproduce all on this machine")
 
 
 def write_results(path: Path, content: dict[str, Any], inputs: set[Path]) -> None:
