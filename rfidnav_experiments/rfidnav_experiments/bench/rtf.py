@@ -17,15 +17,13 @@ from __future__ import annotations
 import json
 import math
 import statistics
-import subprocess
 import sys
-from collections.abc import Iterator
-from contextlib import contextmanager, redirect_stdout
+from contextlib import redirect_stdout
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from rfidnav_bringup.api import Orchestrator, RunOptions
+from rfidnav_bringup.api import Orchestrator, RunOptions, cpu_hogs
 from rfidnav_common.errors import ConfigError
 from rfidnav_common.progress import progress
 from rfidnav_scenario.scenario import Scenario
@@ -53,18 +51,6 @@ class SweepRow:
 
 def _mean(values: list[float | None]) -> float | None:
     return round(statistics.fmean(values), 6) if values and None not in values else None
-
-
-@contextmanager
-def cpu_hogs(count: int) -> Iterator[None]:
-    """``count`` busy-loop processes for the duration (the issue's ``python3 -c 'while 1: pass'``), ended by PID."""
-    hogs = [subprocess.Popen([sys.executable, "-c", "while 1: pass"]) for _ in range(count)]
-    try:
-        yield
-    finally:
-        for hog in hogs:
-            hog.kill()
-            hog.wait()
 
 
 def _per_sim_s(document: dict[str, Any]) -> tuple[float | None, float | None, dict[str, float]]:
