@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import json
 import os
+import shutil
 import subprocess
 import sys
 from importlib import metadata
@@ -32,10 +33,13 @@ RATE_HZ = 10.0
 
 @pytest.fixture(scope="module")
 def thermometer_site(tmp_path_factory) -> Path:
-    """The thermometer package installed as a user would (pip, into a folder of its own) and on sys.path."""
+    """The thermometer package installed as a user would (pip, into a folder of its own) and on sys.path.
+
+    pip builds from a copy: setuptools leaves a build/ folder beside setup.py, which must not land in the tree."""
     site = tmp_path_factory.mktemp("site")
+    source = shutil.copytree(THERMOMETER, tmp_path_factory.mktemp("source") / THERMOMETER.name)
     subprocess.run([sys.executable, "-m", "pip", "install", "--quiet", "--no-deps", "--no-build-isolation",
-                    "--no-index", "--disable-pip-version-check", "--target", str(site), str(THERMOMETER)], check=True)
+                    "--no-index", "--disable-pip-version-check", "--target", str(site), str(source)], check=True)
     sys.path.insert(0, str(site))
     yield site
     sys.path.remove(str(site))

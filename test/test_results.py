@@ -136,10 +136,15 @@ def test_each_experiment_has_one_evaluation_set_and_every_retired_set_names_its_
     names = {entry.name for entry in evaluation.LEDGER}
     for experiment in experiments:
         assert evaluation.current(experiment).status == "evaluation"
+    by_name = {entry.name: entry for entry in evaluation.LEDGER}
     for entry in evaluation.LEDGER:
         if entry.status == "development":
             assert entry.looked_at_then_changed and entry.replaced_by in names, entry
-            assert evaluation.current(entry.experiment).name == entry.replaced_by
+            successor = by_name[entry.replaced_by]           # retired in turn, it names its own successor
+            while successor.status == "development":
+                successor = by_name[successor.replaced_by]
+            assert successor.experiment == entry.experiment
+            assert evaluation.current(entry.experiment) == successor
 
 
 def test_drawn_seeds_follow_the_recorded_rule_and_miss_the_hand_chosen_ones() -> None:
@@ -147,7 +152,7 @@ def test_drawn_seeds_follow_the_recorded_rule_and_miss_the_hand_chosen_ones() ->
         if entry.drawn_by.startswith("drawn_seed"):
             count = len(entry.seeds)
             names = [f"{entry.name}#{k}" for k in range(count)] if count > 1 else [entry.name]
-            assert entry.seeds == tuple(evaluation.drawn_seed(entry.experiment, name, evaluation.DRAWN_ON)
+            assert entry.seeds == tuple(evaluation.drawn_seed(entry.experiment, name, entry.drawn_on)
                                         for name in names)
             assert all(evaluation.SEED_RANGE[0] <= seed < evaluation.SEED_RANGE[1] for seed in entry.seeds)
     assert evaluation.drawn_seed("flc", "a", "2026-12-04") != evaluation.drawn_seed("flc", "a", "2026-12-05")
