@@ -47,7 +47,13 @@ class SweepRow:
     topic_msgs_per_sim_s: dict[str, float] | None = None   # messages each topic carried per simulated second (bag)
 
     def within(self, reference: SweepRow, tolerance: float) -> bool:
-        return self.success and self.rmse_m is not None and reference.rmse_m is not None and \
+        if not self.success:
+            return False
+        if reference.success and reference.rmse_m is None:
+            # A mission with no route to track (building_large's wall following, a two-tier navigation): its runs
+            # are scored by success alone.
+            return self.rmse_m is None
+        return self.rmse_m is not None and reference.rmse_m is not None and \
             self.rmse_m <= reference.rmse_m * (1.0 + tolerance)
 
 
