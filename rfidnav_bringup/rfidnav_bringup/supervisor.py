@@ -60,6 +60,7 @@ class Supervisor:
         return self.processes[name].restarts
 
     def stop(self) -> None:
-        stop_together((process for role, process in self.processes.items() if role != RECORDER_ROLE), STOP_GRACE_S)
-        if RECORDER_ROLE in self.processes:
-            self.processes[RECORDER_ROLE].stop(3 * STOP_GRACE_S)
+        """Every node process at once, then the recorder, with longer to close the bag."""
+        stop_together([process for role, process in self.processes.items() if role != RECORDER_ROLE], STOP_GRACE_S)
+        stop_together([process for role, process in self.processes.items() if role == RECORDER_ROLE],
+                      3 * STOP_GRACE_S)
