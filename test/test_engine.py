@@ -204,21 +204,21 @@ def test_a_reproduction_stopped_by_sigterm_resumes_and_prints_what_an_uninterrup
 
     interrupted, fresh = tmp_path / "interrupted", tmp_path / "fresh"
     tasks = interrupted / "partitions_tasks.jsonl"
-    command = [sys.executable, "-m", "rfidnav_bringup.cli", "reproduce", "partitions", "--runs", "2", "--json"]
+    command = [sys.executable, "-m", "rfidnav_bringup.cli", "reproduce", "partitions", "--runs", "5", "--json"]
     stopped = subprocess.Popen([*command, "--workers", "2", "--out", str(interrupted)], cwd=WORKSPACE,
                                stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
     # Stopped once a fifth of its tasks have their rows (a wait on the file, bounded by the command ending).
-    while stopped.poll() is None and (not tasks.exists() or len(tasks.read_text().splitlines()) < 1 + 16):
+    while stopped.poll() is None and (not tasks.exists() or len(tasks.read_text().splitlines()) < 1 + 40):
         time.sleep(0.1)
     stopped.send_signal(signal.SIGTERM)
     _, err = stopped.communicate(timeout=120)
     assert stopped.returncode == 128 + signal.SIGTERM, err
     held = len(tasks.read_text().splitlines()) - 1
-    assert 16 <= held < 78
+    assert 40 <= held < 195
     resumed = subprocess.run([*command, "--workers", "1", "--out", str(interrupted), "--resume"], cwd=WORKSPACE,
                              capture_output=True, text=True, timeout=900)
     assert resumed.returncode == 0, resumed.stderr
-    assert f"{held} of 78 tasks taken from {tasks}" in resumed.stderr
+    assert f"{held} of 195 tasks taken from {tasks}" in resumed.stderr
     uninterrupted = subprocess.run([*command, "--workers", "2", "--out", str(fresh)], cwd=WORKSPACE,
                                    capture_output=True, text=True, timeout=900)
     assert uninterrupted.returncode == 0, uninterrupted.stderr
