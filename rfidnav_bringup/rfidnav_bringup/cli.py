@@ -119,9 +119,6 @@ def parser() -> tuple[argparse.ArgumentParser, dict[str, Handler]]:
                       help="keep N busy loops running beside the tests (a loaded machine: "
                            "./rfidnav test --under-load 2 -m 'node or graph'); pytest's --durations=30 lists the "
                            "slowest tests")
-    test.add_argument("--workers", type=int, default=os.cpu_count() or 1, metavar="N",
-                      help="pytest processes, each taking whole test files (pytest-xdist; default: this machine's "
-                           "cores; 1: the tests run in this one process, as --pdb needs)")
     test.add_argument("pytest_args", nargs=argparse.REMAINDER, help="passed to pytest, e.g. -m unit or a test file")
     run = verbs.add_parser("run", help="one mission through the real node graph")
     run.add_argument("scenario", help="scenario name (config/scenarios/NAME.yaml) or path")
@@ -280,11 +277,8 @@ def verb_test(args) -> int:
     from rfidnav_bringup.processes import cpu_hogs
 
     env = dict(os.environ, ROS_PYTHON_CHECK_FIELDS="1", PYTHONDONTWRITEBYTECODE="1")
-    # Whole files per worker (loadfile): a file's module fixtures, such as one recorded run that many tests read,
-    # are then made once, not once per worker.
-    workers = ["-n", str(args.workers), "--dist", "loadfile"] if args.workers > 1 else []
     with cpu_hogs(args.under_load):
-        return subprocess.call(pytest_command([*workers, *args.pytest_args], Path.cwd()), env=env, cwd=WORKSPACE)
+        return subprocess.call(pytest_command(args.pytest_args, Path.cwd()), env=env, cwd=WORKSPACE)
 
 
 def verb_replay(args) -> int:
