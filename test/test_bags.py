@@ -49,6 +49,7 @@ from rosgraph_msgs.msg import Clock
 from std_msgs.msg import Header
 from visualization_msgs.msg import Marker, MarkerArray
 
+from rfidnav_bag import bags
 from rfidnav_bag.bags import (
     bag_info,
     format_bag_info,
@@ -681,6 +682,28 @@ def test_foreign_type_decodes_from_the_definition_in_the_bag(tmp_path: Path) -> 
     [(topic, stamp, message)] = list(read_messages(tmp_path / "bag"))
     assert (topic, stamp, message.value, message.name, message.where.z) == ("/blip", 5, 42, "x", 3.0)
     assert "other_pkg/msg/Blip" not in typestore().fielddefs, "a bag's definitions leaked into the shared store"
+
+
+@pytest.mark.tier("unit")
+def test_an_interface_package_is_parsed_once_per_content_and_a_torn_cache_is_parsed_again(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(bags, "TYPES_CACHE", tmp_path / "cache")
+    share = tmp_path / "share" / "blip_msgs"
+    (share / "msg").mkdir(parents=True)
+    (share / "msg" / "Blip.msg").write_text("int32 value\n")
+    parsed = bags._package_types("blip_msgs", share)
+    assert list(parsed) == ["blip_msgs/msg/Blip"]
+    [cached] = (tmp_path / "cache").iterdir()
+    monkeypatch.setattr(bags, "_parse_package_types", lambda *_: pytest.fail("parsed again"))
+    assert bags._package_types("blip_msgs", share) == parsed
+    monkeypatch.undo()
+    monkeypatch.setattr(bags, "TYPES_CACHE", tmp_path / "cache")
+    (share / "msg" / "Blip.msg").write_text("int32 value\nstring name\n")     # new content: a new entry
+    assert len(bags._package_types("blip_msgs", share)["blip_msgs/msg/Blip"][1]) == 2
+    assert len(list((tmp_path / "cache").iterdir())) == 2
+    cached.write_bytes(cached.read_bytes()[:5])                              # torn: parsed, and rewritten
+    (share / "msg" / "Blip.msg").write_text("int32 value\n")
+    assert bags._package_types("blip_msgs", share) == parsed
 
 
 @pytest.mark.tier("unit")

@@ -24,7 +24,7 @@ NAVIGATION_NODES = ("wall_follower", "mission_executor")
 
 @pytest.fixture(scope="module")
 def paper_run(tmp_path_factory) -> Path:
-    return run_scenario(tmp_path_factory.mktemp("runs"), "building_floor", "--rtf", "5", "--seed", "1")
+    return run_scenario(tmp_path_factory.mktemp("runs"), "building_floor", "--rtf", "max", "--seed", "1")
 
 
 @pytest.fixture(scope="module")
@@ -33,7 +33,7 @@ def missed_goal_tag_run(tmp_path_factory) -> Path:
     assert "unreadable_tags: []" in reader
     params = tmp_path_factory.mktemp("params") / "reader_tag_19_unreadable.yaml"
     params.write_text(reader.replace("unreadable_tags: []", "unreadable_tags: ['19']"))
-    return run_scenario(tmp_path_factory.mktemp("runs"), "building_floor", "--rtf", "5", "--seed", "2",
+    return run_scenario(tmp_path_factory.mktemp("runs"), "building_floor", "--rtf", "max", "--seed", "2",
                         "--params", f"rfid_reader={params}")
 
 

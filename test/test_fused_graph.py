@@ -29,41 +29,41 @@ WIFI_TIER = LocalizationStatus.TIER_WIFI      # two_tier_navigator's tier one, w
 
 @pytest.fixture(scope="module")
 def mixed_run(tmp_path_factory) -> Path:
-    return run_scenario(tmp_path_factory.mktemp("runs"), "mixed_floor", "--rtf", "5", "--seed", "1")
+    return run_scenario(tmp_path_factory.mktemp("runs"), "mixed_floor", "--rtf", "max", "--seed", "1")
 
 
 @pytest.fixture(scope="module")
 def driving_run(tmp_path_factory) -> Path:
-    return run_scenario(tmp_path_factory.mktemp("runs"), "mixed_floor_fused", "--rtf", "5", "--seed", "1")
+    return run_scenario(tmp_path_factory.mktemp("runs"), "mixed_floor_fused", "--rtf", "max", "--seed", "1")
 
 
 @pytest.fixture(scope="module")
 def flat_run(tmp_path_factory) -> Path:
     # Seed 2: one the paper's navigator completes (it arrives in 80 % of runs on this flat, README; at seed 1 it
     # stalls at a wall), so that the fused localizer rides a whole mission beside it.
-    return run_scenario(tmp_path_factory.mktemp("runs"), "two_tier_flat", "--rtf", "5", "--seed", "2")
+    return run_scenario(tmp_path_factory.mktemp("runs"), "two_tier_flat", "--rtf", "max", "--seed", "2")
 
 
 @pytest.fixture(scope="module")
 def partition_run(tmp_path_factory) -> Path:
-    return run_scenario(tmp_path_factory.mktemp("runs"), "partition_field_fused", "--rtf", "3", "--seed", "1")
+    return run_scenario(tmp_path_factory.mktemp("runs"), "partition_field_fused", "--rtf", "max", "--seed", "1")
 
 
 @pytest.fixture(scope="module")
 def hallway_run(tmp_path_factory) -> Path:
-    return run_scenario(tmp_path_factory.mktemp("runs"), "hallway", "--rtf", "5", "--seed", "1")
+    return run_scenario(tmp_path_factory.mktemp("runs"), "hallway", "--rtf", "max", "--seed", "1")
 
 
 @pytest.fixture(scope="module")
 def ring_run(tmp_path_factory) -> Path:
-    return run_scenario(tmp_path_factory.mktemp("runs"), "building_ring", "--rtf", "5", "--seed", "1")
+    return run_scenario(tmp_path_factory.mktemp("runs"), "building_ring", "--rtf", "max", "--seed", "1")
 
 
 @pytest.fixture(scope="module")
 def tier_one_run(tmp_path_factory) -> Path:
     # Paper 003's navigator may stall at a wall where its estimate is off (it arrives in 80 % of runs on this flat with
     # its own tier one): the test asks where its tier one came from, not that it arrived.
-    return run_scenario(tmp_path_factory.mktemp("runs"), "two_tier_flat_fused", "--rtf", "5", "--seed", "1",
+    return run_scenario(tmp_path_factory.mktemp("runs"), "two_tier_flat_fused", "--rtf", "max", "--seed", "1",
                         mission_may_fail=True)
 
 

@@ -27,7 +27,7 @@ NAVIGATION_NODES = ("partition_localizer", "partition_navigator")
 
 @pytest.fixture(scope="module")
 def field_run(tmp_path_factory) -> Path:
-    return run_scenario(tmp_path_factory.mktemp("runs"), "partition_field", "--rtf", "3", "--seed", "1")
+    return run_scenario(tmp_path_factory.mktemp("runs"), "partition_field", "--rtf", "max", "--seed", "1")
 
 
 def test_partition_navigation_reaches_the_goal_partition(field_run: Path) -> None:

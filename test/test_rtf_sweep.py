@@ -28,6 +28,10 @@ def test_a_failed_reference_leaves_no_usable_rtf():
     assert highest_usable_rtf([row(1, None, success=False), row(2, 2.0)], 0.10) is None
 
 
+def test_a_scenario_without_a_tracked_route_is_usable_up_to_its_first_failed_run():
+    assert highest_usable_rtf([row(1, None), row(5, None), row(8, None, success=False)], 0.10).rtf == 5
+
+
 def test_report_names_the_highest_rtf_and_its_cpu():
     rows = [row(1, 2.0), row(2, 2.1), row(5, 3.0)]
     document = json.loads(report("hallway", rows, 0.10, as_json=True))

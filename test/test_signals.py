@@ -19,7 +19,7 @@ from rosgraph_msgs.msg import Clock
 
 from rfidnav_bag.bags import bag_info
 from rfidnav_bringup.errors import LaunchError
-from rfidnav_bringup.processes import DomainLease, lock_folder, open_lock_file
+from rfidnav_bringup.processes import DomainLease, cpu_hogs, lock_folder, open_lock_file
 from rfidnav_common.ros import standalone_node
 from support.runs import WORKSPACE, mission_started, start_cli
 
@@ -207,3 +207,54 @@ def test_two_runs_with_different_tmpdirs_still_share_one_set_of_domain_locks(tmp
             capture_output=True, text=True, cwd=WORKSPACE, env=dict(os.environ, TMPDIR=str(tmp_path)))
     assert result.returncode != 0
     assert f"ROS domain {held.domain_id} is in use by another rfidnav run" in result.stderr
+
+
+CTRL_C_LIMIT_S = 5.0      # issue 33: a user's Ctrl-C ends run, replay and view within this on a loaded machine
+
+
+@pytest.fixture(scope="module")
+def recorded_run(tmp_path_factory) -> Path:
+    out = tmp_path_factory.mktemp("runs")
+    with start_cli("run", "line_follow_90", "--rtf", "max", "--out", str(out), "--quiet") as cli:
+        cli.communicate(timeout=300)
+    return one_run(out)
+
+
+def working(verb: str, cli: subprocess.Popen, out: Path) -> list[psutil.Process]:
+    """Wait until the command does its work (a mission under way, a player republishing, a server serving); the
+    processes it started then."""
+    if verb == "run":
+        return mission_started(out, cli)
+    assert cli.stdout is not None
+    word = "replaying" if verb == "replay" else "ws://"
+    for line in cli.stdout:          # its first lines say where it is reached
+        if word in line:
+            break
+    else:
+        pytest.fail(f"{verb} ended ({cli.wait()}) without a line with {word!r}")
+    deadline = time.monotonic() + 60
+    children = psutil.Process(cli.pid).children(recursive=True)
+    while verb == "replay" and not children and time.monotonic() < deadline:
+        time.sleep(0.1)   # the player is a process replay starts: polled, no ROS signal reaches here
+        children = psutil.Process(cli.pid).children(recursive=True)
+    return children
+
+
+@pytest.mark.parametrize("verb", ["run", "replay", "view"])
+def test_ctrl_c_ends_run_replay_and_view_within_five_seconds_beside_two_busy_loops(
+        verb: str, recorded_run: Path, tmp_path: Path) -> None:
+    command = {"run": ("run", "line_follow_90", "--rtf", "1", "--out", str(tmp_path), "--quiet"),
+               "replay": ("replay", str(recorded_run), "--loop"),
+               "view": ("view", str(recorded_run / "bag"), "--port", "0")}[verb]
+    with start_cli(*command) as cli:
+        started_by_it = working(verb, cli, tmp_path)
+        with cpu_hogs(2):
+            interrupted = time.monotonic()
+            cli.send_signal(signal.SIGINT)
+            try:
+                cli.wait(timeout=60)
+            finally:
+                took_s = time.monotonic() - interrupted
+    assert cli.returncode == 128 + signal.SIGINT or (verb == "view" and cli.returncode == 0), cli.returncode
+    assert took_s <= CTRL_C_LIMIT_S, f"{verb} took {took_s:.1f} s to end after Ctrl-C beside two busy loops"
+    assert_all_gone(started_by_it)

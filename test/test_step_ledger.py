@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from rfidnav_common.step_ledger import StepLedger, StepReport
+from rfidnav_common.step_ledger import OBSERVER_SLACK, StepLedger, StepReport
 
 pytestmark = pytest.mark.tier("unit")
 
@@ -96,7 +96,8 @@ def test_an_input_first_reported_late_owes_only_what_comes_after() -> None:
     assert ledger.answered()
     ledger.report(report(SIM, {"/cmd_vel": 0}, {"/sim/ground_truth": 5}))
     ledger.report(report(READER, {"/sim/ground_truth": 5}, {"/rfid/reads": 0}))
-    assert [(u.node, u.behind) for u in ledger.unanswered()] == [(RECORDER, 1)]
+    # It owes the one message after it subscribed (a sink: an observer, which may lag, so look at what it owes)
+    assert [(u.node, u.behind) for u in ledger.behind()] == [(RECORDER, 1)]
 
 
 def test_a_step_waits_until_each_producer_has_matched_every_participant_consuming_its_topic() -> None:
@@ -145,3 +146,56 @@ def test_wiring_names_the_participants_never_heard_from_first() -> None:
     ledger = StepLedger([SIM, CONTROLLER])
     ledger.report(StepReport(SIM, 1, {"/cmd_vel": 0}, {}, subscribed={"/cmd_vel": 0}))
     assert [u.describe() for u in ledger.wiring()] == [f"{CONTROLLER} (not heard from yet)"]
+
+
+LOCALIZER = "/rfid_localizer"
+
+
+def observed_ledger() -> StepLedger:
+    """The started ledger with a localizer beside the loop whose pose only the recorder takes."""
+    ledger = StepLedger([SIM, READER, CONTROLLER, LOCALIZER, RECORDER])
+    ledger.report(report(SIM, {"/cmd_vel": 0}, {"/sim/ground_truth": 0, "/odom": 0}))
+    ledger.report(report(READER, {"/sim/ground_truth": 0}, {"/rfid/reads": 0}))
+    ledger.report(report(CONTROLLER, {"/rfid/reads": 0}, {"/cmd_vel": 0}))
+    ledger.report(report(LOCALIZER, {"/rfid/reads": 0, "/odom": 0}, {"/fused/pose": 0}))
+    ledger.report(report(RECORDER, {"/fused/pose": 0, "/odom": 0}, {}, slack=50))
+    return ledger
+
+
+def test_a_participant_whose_outputs_only_the_recorder_takes_is_an_observer_the_loop_does_not_wait_for() -> None:
+    ledger = observed_ledger()
+    assert ledger.observers == {LOCALIZER}
+    for step in range(1, OBSERVER_SLACK + 1):     # the loop runs on; the localizer has handled nothing yet
+        ledger.report(report(SIM, {"/cmd_vel": step - 1}, {"/sim/ground_truth": step, "/odom": step}))
+        ledger.report(report(READER, {"/sim/ground_truth": step}, {"/rfid/reads": step}))
+        ledger.report(report(CONTROLLER, {"/rfid/reads": step}, {"/cmd_vel": step}))
+        ledger.report(report(SIM, {"/cmd_vel": step}, {"/sim/ground_truth": step, "/odom": step}))
+        assert ledger.answered(), step
+        assert not ledger.settled()
+    step = OBSERVER_SLACK + 1
+    ledger.report(report(SIM, {"/cmd_vel": step - 1}, {"/sim/ground_truth": step, "/odom": step}))
+    ledger.report(report(READER, {"/sim/ground_truth": step}, {"/rfid/reads": step}))
+    ledger.report(report(CONTROLLER, {"/rfid/reads": step}, {"/cmd_vel": step}))
+    ledger.report(report(SIM, {"/cmd_vel": step}, {"/sim/ground_truth": step, "/odom": step}))
+    assert [(u.node, u.topic, u.behind) for u in ledger.unanswered()] == \
+        [(LOCALIZER, "/rfid/reads", step), (LOCALIZER, "/odom", step)]
+    ledger.report(report(LOCALIZER, {"/rfid/reads": step, "/odom": step}, {"/fused/pose": step}))
+    assert ledger.answered() and not ledger.settled()     # the recorder is still behind, within its slack
+    ledger.report(report(RECORDER, {"/fused/pose": step, "/odom": step}, {}, slack=50))
+    assert ledger.settled() and ledger.behind() == []
+
+
+def test_a_participant_whose_outputs_another_lockstep_participant_takes_is_no_observer() -> None:
+    ledger = observed_ledger()
+    ledger.report(report("/pose_navigator", {"/fused/pose": 0}, {"/cmd_vel": 0}))   # not a participant: ignored
+    assert ledger.observers == {LOCALIZER}
+    navigated = StepLedger([SIM, LOCALIZER, "/pose_navigator"])
+    navigated.report(report(SIM, {"/cmd_vel": 0}, {"/odom": 0}))
+    navigated.report(report(LOCALIZER, {"/odom": 0}, {"/fused/pose": 0}))
+    navigated.report(report("/pose_navigator", {"/fused/pose": 0}, {"/cmd_vel": 0}))
+    assert navigated.observers == frozenset()
+    # A service call's answers are a topic the caller both produces and consumes: it is no observer either.
+    calling = StepLedger([SIM, LOCALIZER])
+    calling.report(report(SIM, {}, {"/odom": 0}))
+    calling.report(report(LOCALIZER, {"/odom": 0, "/locate (answers)": 0}, {"/locate (answers)": 0}))
+    assert calling.observers == frozenset()

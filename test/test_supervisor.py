@@ -9,8 +9,8 @@ from pathlib import Path
 
 import pytest
 
+from rfidnav_bringup import supervisor as supervisor_module
 from rfidnav_bringup.errors import NodeExitedError
-from rfidnav_bringup.processes import NodeProcess
 from rfidnav_bringup.run_plan import RECORDER_ROLE, ProcessPlan
 from rfidnav_bringup.supervisor import Supervisor
 
@@ -47,11 +47,12 @@ def test_the_recorder_starts_apart_from_the_other_processes(tmp_path: Path) -> N
 
 
 def test_the_recorder_stops_after_every_other_process(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    stopped: list[tuple[str, float]] = []
-    monkeypatch.setattr(NodeProcess, "stop", lambda process, grace_s: stopped.append((process.role, grace_s)))
+    stopped: list[tuple[list[str], float]] = []
+    monkeypatch.setattr(supervisor_module, "stop_together",
+                        lambda processes, grace_s: stopped.append(([p.role for p in processes], grace_s)))
     supervised = Supervised(tmp_path, *(ProcessPlan(name, RUNS) for name in (RECORDER_ROLE, "simulator", "controller")))
     supervised.supervisor.stop()
-    assert [name for name, _ in stopped] == ["simulator", "controller", RECORDER_ROLE]
+    assert [roles for roles, _ in stopped] == [["simulator", "controller"], [RECORDER_ROLE]]   # the nodes together
     assert stopped[-1][1] > stopped[0][1]   # the recorder has longer to close the bag
 
 

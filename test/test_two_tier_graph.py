@@ -23,7 +23,7 @@ NAVIGATION_NODES = ("location_server", "two_tier_navigator")
 
 @pytest.fixture(scope="module")
 def home_run(tmp_path_factory) -> Path:
-    return run_scenario(tmp_path_factory.mktemp("runs"), "two_tier_home", "--rtf", "5", "--seed", "1")
+    return run_scenario(tmp_path_factory.mktemp("runs"), "two_tier_home", "--rtf", "max", "--seed", "1")
 
 
 def test_the_robot_reaches_the_target_with_centimetre_fixes(home_run: Path) -> None:

@@ -18,7 +18,9 @@ here, with the same fields, so their RIHS01 hashes equal the ones rosidl compute
 from __future__ import annotations
 
 import functools
+import hashlib
 import os
+import pickle
 import re
 import struct
 import sys
@@ -78,7 +80,40 @@ def _package_share(package: str) -> Path | None:
     return None
 
 
+# Parsed interface packages, one file per package and content (rosbags' IDL parser takes about a second for
+# rfidnav_msgs: every recorder, report and replay would pay it): beside the venv's packages, as pip's caches are.
+TYPES_CACHE = Path(sys.prefix) / "var" / "cache" / "rfidnav" / "types"
+
+
 def _package_types(package: str, share: Path) -> dict:
+    """Every message, service and action definition an installed interface package ships, parsed (once per
+    content: the parse is cached in TYPES_CACHE under the hash of the package's definition files)."""
+    sources = sorted(path for folder in ("msg", "srv", "action") for path in (share / folder).glob("*.*"))
+    digest = hashlib.sha256()
+    try:
+        for source in sources:
+            digest.update(f"{source.relative_to(share)}\0".encode() + source.read_bytes() + b"\0")
+    except OSError as error:
+        raise BagError(f"{error.filename}: cannot read this interface definition: {error.strerror}") from error
+    cached = TYPES_CACHE / f"{package}-{digest.hexdigest()[:32]}.pickle"
+    try:
+        return pickle.loads(cached.read_bytes())
+    except OSError:
+        pass      # not parsed yet: parse it
+    except (pickle.UnpicklingError, EOFError, ValueError, IndexError, AttributeError, ImportError):
+        pass      # a torn or foreign file (what unpickling garbage raises): parse it and write it anew
+    types = _parse_package_types(package, share)
+    try:
+        cached.parent.mkdir(parents=True, exist_ok=True)
+        partial = cached.with_suffix(f".{os.getpid()}.part")
+        partial.write_bytes(pickle.dumps(types))
+        partial.replace(cached)
+    except OSError:
+        pass      # a read-only venv: parse each time
+    return types
+
+
+def _parse_package_types(package: str, share: Path) -> dict:
     """Parse every message, service and action definition an installed interface package ships."""
     types: dict = {}
     source = share

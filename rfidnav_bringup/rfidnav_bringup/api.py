@@ -5,9 +5,9 @@ from __future__ import annotations
 
 from rfidnav_bringup.errors import ReadinessError
 from rfidnav_bringup.orchestrator import Orchestrator
-from rfidnav_bringup.processes import DomainLease, NodeProcess, child_environment
+from rfidnav_bringup.processes import DomainLease, NodeProcess, child_environment, cpu_hogs
 from rfidnav_bringup.run_plan import RunOptions
 from rfidnav_bringup.summary import RunSummary
 
 __all__ = ["DomainLease", "NodeProcess", "Orchestrator", "ReadinessError", "RunOptions", "RunSummary",
-           "child_environment"]
+           "child_environment", "cpu_hogs"]

@@ -115,6 +115,10 @@ def parser() -> tuple[argparse.ArgumentParser, dict[str, Handler]]:
     add_run_options(demo, DEMO_RTF)
     test = verbs.add_parser("test", help="ruff, mypy and the test suite (-m unit: the fast tier)")
     test.add_argument("--no-lint", action="store_true", help="skip ruff and mypy")
+    test.add_argument("--under-load", type=int, default=0, metavar="N",
+                      help="keep N busy loops running beside the tests (a loaded machine: "
+                           "./rfidnav test --under-load 2 -m 'node or graph'); pytest's --durations=30 lists the "
+                           "slowest tests")
     test.add_argument("pytest_args", nargs=argparse.REMAINDER, help="passed to pytest, e.g. -m unit or a test file")
     run = verbs.add_parser("run", help="one mission through the real node graph")
     run.add_argument("scenario", help="scenario name (config/scenarios/NAME.yaml) or path")
@@ -270,8 +274,11 @@ def verb_test(args) -> int:
             if code != 0:
                 print(f"rfidnav test: {name} found problems (exit {code}); nothing tested", file=sys.stderr)
                 return code
+    from rfidnav_bringup.processes import cpu_hogs
+
     env = dict(os.environ, ROS_PYTHON_CHECK_FIELDS="1", PYTHONDONTWRITEBYTECODE="1")
-    return subprocess.call(pytest_command(args.pytest_args, Path.cwd()), env=env, cwd=WORKSPACE)
+    with cpu_hogs(args.under_load):
+        return subprocess.call(pytest_command(args.pytest_args, Path.cwd()), env=env, cwd=WORKSPACE)
 
 
 def verb_replay(args) -> int:

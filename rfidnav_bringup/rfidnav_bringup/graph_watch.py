@@ -31,6 +31,9 @@ from rfidnav_bringup.run_plan import RECORDER_ROLE, ExpectedGraph
 READY_TIMEOUT_S = 90.0
 RESEND_ATTEMPTS = 6
 RESEND_TIMEOUT_S = 5.0
+# Wall time the graph may take after the mission to handle what it lags behind: an observer up to OBSERVER_SLACK
+# messages per input (its callbacks, a localizer's 4 ms each, at most a few seconds on a loaded machine).
+SETTLE_TIMEOUT_S = 60.0
 STALL_REPORT_S = 5.0      # wall time without sim-time progress after which the run says who holds it up
 STALL_ABORT_S = 60.0      # ... and after which it ends the mission as stalled
 RESPAWN_GRACE_S = 30.0    # a killed node stays in the graph until its DDS lease ends (Fast DDS: 20 s)
@@ -124,7 +127,18 @@ class GraphWatch:
         starts): the clock source's ledger has every participant's report and every publisher and subscription of
         theirs matched with the participants on the other side of its topic (``~/wired``). A message sent before
         both sides have matched is lost, and its consumer would hold the clock for ever."""
-        wired = self.node.create_client(Trigger, f"/{self.expected.clock_source}/wired")
+        self.ask_clock_source("wired", READY_TIMEOUT_S, "the participants' publishers and subscriptions to match")
+
+    def settle(self) -> None:
+        """After the mission, with the stepped clock: stop the clock and wait until every participant has handled
+        everything published (``~/settle``), the observers' and the recorder's slack included, so that what they
+        publish of the mission's last steps is in the bag whatever the machine's load."""
+        self.ask_clock_source("settle", SETTLE_TIMEOUT_S, "every participant to handle the mission's last messages")
+
+    def ask_clock_source(self, service: str, timeout_s: float, what: str) -> None:
+        """Call the clock source's Trigger ``service`` until it answers success (its message says what it waits
+        for meanwhile)."""
+        client = self.node.create_client(Trigger, f"/{self.expected.clock_source}/{service}")
         answer: dict[str, str] = {}
         pending: list[Future] = []
 
@@ -134,16 +148,15 @@ class GraphWatch:
                 if result is not None and result.success:
                     return True
                 answer["waiting"] = result.message if result is not None else "no answer"
-            if not pending and wired.service_is_ready():
-                pending.append(wired.call_async(Trigger.Request()))
+            if not pending and client.service_is_ready():
+                pending.append(client.call_async(Trigger.Request()))
             return False
 
         try:
-            self.waiter.spin_until(ask, READY_TIMEOUT_S,
-                                   lambda: f"the participants' publishers and subscriptions to match: "
-                                           f"{answer.get('waiting', 'no answer yet from the clock source')}")
+            self.waiter.spin_until(ask, timeout_s,
+                                   lambda: f"{what}: {answer.get('waiting', 'no answer yet from the clock source')}")
         finally:
-            self.node.destroy_client(wired)
+            self.node.destroy_client(client)
 
     def start_clock(self) -> None:
         if self.expected.clock_source is None:

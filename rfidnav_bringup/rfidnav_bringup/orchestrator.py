@@ -222,6 +222,8 @@ class Orchestrator:
                     self.outcome.message = f"timeout after {elapsed_sim:.1f} s of sim time"
                 mission.cancel()
                 break
+        if mission.done and self.plan.stepped_with is not None:
+            watch.settle()    # the observers' last outputs (they may lag the loop) reach the bag
         self.outcome.ended_sim_s = watch.sim_seconds()
         self.outcome.ended_wall = time.monotonic()
         self.outcome.cpu_at_end = cpu_seconds(self.processes)

@@ -17,7 +17,8 @@ import stat
 import subprocess
 import sys
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterable, Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -258,13 +259,7 @@ class NodeProcess:
 
     def stop(self, grace_s: float) -> None:
         """SIGINT (and SIGCONT, so that a stopped process can act on it), then SIGKILL after the grace period."""
-        if not self.running:
-            return
-        self.signal(signal.SIGINT)
-        self.signal(signal.SIGCONT)
-        if not self.wait(grace_s):
-            self.signal(signal.SIGKILL)
-            self.wait(5.0)
+        stop_together([self], grace_s)
 
     def cpu_seconds(self) -> float | None:
         """User + system CPU time of the running process (None once it has exited)."""
@@ -282,3 +277,30 @@ class NodeProcess:
         except FileNotFoundError:
             return "(no log)"
         return "\n".join("    " + line for line in lines[-count:])
+
+
+def stop_together(processes: Iterable[NodeProcess], grace_s: float) -> None:
+    """Stop ``processes`` at once: SIGINT (and SIGCONT, so that a stopped process can act on it) to every one, then
+    SIGKILL to those still running when the shared grace period is over. One at a time, a run's Ctrl-C took the sum
+    of its processes' exits, which a loaded machine stretches past a user's patience."""
+    running = [process for process in processes if process.running]
+    for process in running:
+        process.signal(signal.SIGINT)
+        process.signal(signal.SIGCONT)
+    deadline = time.monotonic() + grace_s
+    for process in running:
+        if not process.wait(max(0.0, deadline - time.monotonic())):
+            process.signal(signal.SIGKILL)
+            process.wait(5.0)
+
+
+@contextmanager
+def cpu_hogs(count: int) -> Iterator[None]:
+    """``count`` busy-loop processes for the duration (the issue's ``python3 -c 'while 1: pass'``), ended by PID."""
+    hogs = [subprocess.Popen([sys.executable, "-c", "while 1: pass"]) for _ in range(count)]
+    try:
+        yield
+    finally:
+        for hog in hogs:
+            hog.kill()
+            hog.wait()

@@ -9,7 +9,7 @@ from collections.abc import Callable, Iterable
 from pathlib import Path
 
 from rfidnav_bringup.errors import NodeExitedError
-from rfidnav_bringup.processes import NodeProcess
+from rfidnav_bringup.processes import NodeProcess, stop_together
 from rfidnav_bringup.run_plan import RECORDER_ROLE, ProcessPlan
 
 STOP_GRACE_S = 5.0
@@ -60,8 +60,7 @@ class Supervisor:
         return self.processes[name].restarts
 
     def stop(self) -> None:
-        for role, process in self.processes.items():
-            if role != RECORDER_ROLE:
-                process.stop(STOP_GRACE_S)
-        if RECORDER_ROLE in self.processes:
-            self.processes[RECORDER_ROLE].stop(3 * STOP_GRACE_S)
+        """Every node process at once, then the recorder, with longer to close the bag."""
+        stop_together([process for role, process in self.processes.items() if role != RECORDER_ROLE], STOP_GRACE_S)
+        stop_together([process for role, process in self.processes.items() if role == RECORDER_ROLE],
+                      3 * STOP_GRACE_S)

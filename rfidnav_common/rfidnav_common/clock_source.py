@@ -11,8 +11,9 @@ Two clocks:
   (rfidnav_common.step_ledger); ``rtf`` is then a ceiling, and ``math.inf`` none (as fast as they answer).
 
 With ``start_paused`` time stays at zero until ``~/start`` (std_srvs/Trigger) is called; with the stepped clock
-``~/wired`` says whether every participant's publishers and subscriptions have matched, and a step that waits
-longer than :data:`STALL_REPORT_S` (wall) is logged with who it waits for.
+``~/wired`` says whether every participant's publishers and subscriptions have matched, ``~/settle`` stops the
+clock and says whether every participant has caught up (after the mission), and a step that waits longer than
+:data:`STALL_REPORT_S` (wall) is logged with who it waits for.
 """
 
 from __future__ import annotations
@@ -74,6 +75,7 @@ class ClockSource:
         if node.stepped:
             node.create_subscription(StepAck, STEP_ACK_TOPIC, self.on_step_ack, STEP_ACK_READER_QOS)
             node.create_service(Trigger, "~/wired", self.on_wired)
+            node.create_service(Trigger, "~/settle", self.on_settle)
             node.create_timer(STALL_REPORT_S, self.report_stall, clock=steady)
         # A clock source cannot pace itself on sim time: a steady wall timer drives the steps, running as many as
         # are due, so that the long-run rate is exactly rtf (at most rtf, stepped, where answers drive them too).
@@ -108,6 +110,16 @@ class ClockSource:
         waiting = self.ledger.wiring()
         response.success = not waiting
         response.message = ", ".join(u.describe() for u in waiting) or "every participant wired"
+        return response
+
+    def on_settle(self, _request: Trigger.Request, response: Trigger.Response) -> Trigger.Response:
+        """The mission has ended: stop the clock, and say whether every participant has handled everything
+        published so far, slack and all (the orchestrator asks until it has, then stops the graph)."""
+        self.running = False
+        self.ledger.report(self.node.step_report())
+        response.success = self.ledger.settled()
+        response.message = (f"stopped at sim time {self.now_s:.3f} s" if response.success else
+                            ", ".join(u.describe() for u in self.ledger.behind()))
         return response
 
     def on_step_ack(self, message: StepAck) -> None:

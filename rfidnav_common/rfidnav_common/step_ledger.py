@@ -22,7 +22,7 @@ each other (:func:`unwired`): a message sent before then would be lost and its c
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Iterator, Mapping
+from collections.abc import Callable, Iterable, Iterator, Mapping
 from dataclasses import dataclass, field
 
 # The simulation clocks a run can have: stepped (this ledger decides each step), or free-running at a fixed RTF.
@@ -30,6 +30,10 @@ CLOCKS = ("stepped", "free")
 # Where the participants answer each step (rfidnav_common.stepped_node); here so that pure code (the run plan, which
 # leaves it out of the bag) can name it without rclpy.
 STEP_ACK_TOPIC = "/sim/step_ack"
+# Messages per input an observer (a participant whose outputs no lockstep participant consumes: a localizer only
+# recorded, as rfid_localizer beside the hallway route) may be behind before it holds a step: it then works on
+# the other core while the loop goes on. A quarter of the inputs' queue (SENSOR_QOS keeps 100), so nothing is lost.
+OBSERVER_SLACK = 25
 
 
 @dataclass(frozen=True)
@@ -100,6 +104,22 @@ def unwired(reports: Iterable[StepReport]) -> Iterator[Unwired]:
                 yield Unwired(report.node, topic, matched, needed, "subscription")
 
 
+def observers(reports: Iterable[StepReport]) -> Iterator[str]:
+    """Participants the loop need not wait for step by step: no slack of their own, and none of their outputs
+    consumed by a participant without slack (itself included: a service call's answers are its own topic). What
+    they publish only the recorder takes, so where they are in their inputs' queues changes no other node's input;
+    they handle their inputs in the order they came all the same, so their outputs do not depend on the lag."""
+    reports = list(reports)
+    lockstep_consumers: dict[str, int] = {}
+    for report in reports:
+        if not report.slack:
+            for topic in report.consumed:
+                lockstep_consumers[topic] = lockstep_consumers.get(topic, 0) + 1
+    for report in reports:
+        if not report.slack and not any(lockstep_consumers.get(topic) for topic in report.produced):
+            yield report.node
+
+
 @dataclass
 class _Participant:
     report: StepReport | None = None
@@ -117,6 +137,7 @@ class StepLedger:
         self.participants: dict[str, _Participant] = {name: _Participant() for name in participants}
         self.totals: dict[str, int] = {}       # messages published per topic, restarted processes' included
         self.wired = False                     # every producer reaches every consumer; recomputed on a change
+        self.observers: frozenset[str] = frozenset()   # recomputed when a participant's topics change
 
     def report(self, report: StepReport) -> bool:
         """Take a participant's latest counts; False for a node that is not a participant (ignored)."""
@@ -133,10 +154,13 @@ class StepLedger:
             if count != before.get(topic, 0):
                 self.totals[topic] = self.totals.get(topic, 0) + count - before.get(topic, 0)
         entry.report = report
-        if (previous is None or previous.matched != report.matched or previous.subscribed != report.subscribed
-                or previous.consumed.keys() != report.consumed.keys()
-                or previous.produced.keys() != report.produced.keys()):
+        topics_changed = (previous is None or previous.consumed.keys() != report.consumed.keys()
+                          or previous.produced.keys() != report.produced.keys() or previous.slack != report.slack)
+        if topics_changed or (previous is not None and (previous.matched != report.matched
+                                                        or previous.subscribed != report.subscribed)):
             self.wired = not self._unwired()
+        if topics_changed:
+            self.observers = frozenset(observers(self._reports()))
         for topic, consumed in report.consumed.items():
             # An input first reported now (a new process, or a subscription made late, as the recorder's are)
             # owes nothing published before: those messages went by before it listened.
@@ -173,15 +197,28 @@ class StepLedger:
             if entry.report is None:
                 yield Unanswered(name, "", 0)
 
+    def settled(self) -> bool:
+        """Whether every participant has handled everything published, slack or not: the graph is quiet (the
+        end of a mission, with the clock stopped)."""
+        return self.answered() and not self.behind()
+
+    def behind(self) -> list[Unanswered]:
+        """Every input with a message not handled yet, within slack or not."""
+        return list(self._behind(lambda _name, _report: 0))
+
     def _waiting(self) -> Iterator[Unanswered | Unwired]:
         yield from self._never_heard()
         if not self.wired:
             yield from self._unwired()
+        observing = self.observers
+        yield from self._behind(lambda name, report: max(report.slack, OBSERVER_SLACK if name in observing else 0))
+
+    def _behind(self, allowed: Callable[[str, StepReport], int]) -> Iterator[Unanswered]:
         for name, entry in self.participants.items():
             report = entry.report
             if report is None:
                 continue
             for topic, consumed in report.consumed.items():
                 behind = self.published(topic) - entry.baseline[topic] - consumed
-                if behind > report.slack:
+                if behind > allowed(name, report):
                     yield Unanswered(name, topic, behind)

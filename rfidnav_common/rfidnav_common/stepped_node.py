@@ -4,9 +4,10 @@ With the parameter ``stepped_clock`` false (hardware, replay, the free-running c
 With it true (the orchestrator sets it on every participant of a stepped simulated run) the node takes part in
 lockstep without code of its own:
 
-- every subscription callback and every publish is counted, per resolved topic, and after each callback (or a
-  publish from outside one: an action callback, or a publisher or subscription matching a new peer: the counts
-  include how many each has matched) the node publishes its cumulative counts on ``/sim/step_ack``
+- every subscription callback and every publish is counted, per resolved topic, and after the callbacks the
+  executor had ready (or a publish from outside one: an action callback, or a publisher or subscription matching a
+  new peer: the counts include how many each has matched) the node publishes its cumulative counts on
+  ``/sim/step_ack``
   (rfidnav_msgs/StepAck); the simulator advances time only when every counted message has been handled
   (rfidnav_common.step_ledger);
 - its clock is simulated time taken from the stamps of the messages it handles (``header.stamp``, or a
@@ -147,6 +148,9 @@ class SteppedNode(Node):
         self.produced_counts: dict[str, int] = {}
         self.counted_publishers: dict[str, list[Publisher]] = {}
         self.counted_subscriptions: dict[str, list[Subscription]] = {}
+        # What each counted publisher or subscription has matched on the other side, read when a matched event says
+        # it changed (a step report, after every callback and every step, would otherwise ask rcl each time).
+        self.peers: dict[Publisher | Subscription, int] = {}
         self.sim_timers: list[SimTimer] = []
         self.sim_time_ns = 0
         self.calls_topics: dict[str, str] = {}          # service name -> the counted topic of its calls' answers
@@ -179,6 +183,11 @@ class SteppedNode(Node):
             # made them all: it goes out when the executor first runs, even from a node that consumes nothing.
             self.announced = False
             self.announce_timer = super().create_timer(0.0, self.announce, clock=steady)
+            # One answer for the callbacks the executor has ready at once (a step's odometry and round come
+            # together): a change starts this timer (the events executor has no guard conditions), whose event
+            # comes after the callbacks queued before it.
+            self.answer_due = False
+            self.answer_timer = super().create_timer(0.0, self.answer_signalled, clock=steady, autostart=False)
 
     # -------------------------------------------------------------------------------- rclpy overrides
     def create_subscription(self, msg_type: Any, topic: str, callback: Callable[[Any], Any], qos_profile: Any,
@@ -203,10 +212,13 @@ class SteppedNode(Node):
         self.changed()   # a new input: the simulator learns to wait for it
         # A publisher matched (or gone) changes what the node reports, as for its publishers.
         events = kwargs.pop("event_callbacks", None) or SubscriptionEventCallbacks()
+        made: list[Subscription] = []
         if events.matched is None:
-            events.matched = lambda _status: self.changed()
+            events.matched = lambda _status: self.rematched(made[0], made[0].get_publisher_count())
         subscription = super().create_subscription(msg_type, topic, counted, qos_profile, event_callbacks=events,
                                                    **kwargs)
+        made.append(subscription)
+        self.peers[subscription] = subscription.get_publisher_count()
         self.counted_subscriptions.setdefault(resolved, []).append(subscription)
         return subscription
 
@@ -215,10 +227,13 @@ class SteppedNode(Node):
             return super().create_publisher(msg_type, topic, qos_profile, **kwargs)
         # A subscription matched (or gone) changes what the node reports: the simulator may be waiting for it.
         events = kwargs.pop("event_callbacks", None) or PublisherEventCallbacks()
+        made: list[Publisher] = []
         if events.matched is None:
-            events.matched = lambda _status: self.changed()
+            events.matched = lambda _status: self.rematched(made[0], made[0].get_subscription_count())
         publisher = cast(CountedPublisher, super().create_publisher(
             msg_type, topic, qos_profile, event_callbacks=events, publisher_class=CountedPublisher, **kwargs))
+        made.append(publisher)
+        self.peers[publisher] = publisher.get_subscription_count()
         resolved = publisher.topic_name
         self.produced_counts.setdefault(resolved, 0)
         self.counted_publishers.setdefault(resolved, []).append(publisher)
@@ -337,13 +352,25 @@ class SteppedNode(Node):
         for timer in list(self.sim_timers):
             timer.fire_if_due(stamp_ns)
 
+    def rematched(self, endpoint: Publisher | Subscription, peers: int) -> None:
+        """``endpoint``'s matched event: it now has ``peers`` on the other side of its topic."""
+        self.peers[endpoint] = peers
+        self.changed()
+
     def changed(self) -> None:
         """A count changed: answer with all counts (they are cumulative, so every answer is complete), at once
         or, with slack, once enough changed."""
         if not self.answers_steps or not self.announced:
             return
         self.unanswered_changes += 1
-        if self.unanswered_changes > self.step_slack // 2:
+        if self.unanswered_changes > self.step_slack // 2 and not self.answer_due:
+            self.answer_due = True
+            self.answer_timer.reset()
+
+    def answer_signalled(self) -> None:
+        self.answer_timer.cancel()
+        self.answer_due = False
+        if self.unanswered_changes:
             self.answer()
 
     def announce(self) -> None:
@@ -376,9 +403,9 @@ class SteppedNode(Node):
         super().destroy_node()
 
     def step_report(self) -> StepReport:
-        matched = {topic: min(p.get_subscription_count() for p in publishers)
-                   for topic, publishers in self.counted_publishers.items()}
-        subscribed = {topic: min(s.get_publisher_count() for s in subscriptions)
+        peers = self.peers
+        matched = {topic: min(peers[p] for p in publishers) for topic, publishers in self.counted_publishers.items()}
+        subscribed = {topic: min(peers[s] for s in subscriptions)
                       for topic, subscriptions in self.counted_subscriptions.items()}
         for calls in self.calls_topics.values():   # its own, produced and consumed: nothing to match
             matched[calls] = subscribed[calls] = 1

@@ -90,8 +90,9 @@ COMMANDS: dict[str, Command] = {c.key: c for c in (
                                   "--seeds", "1", "--json"), "json"),
     Command("bench_rtf_hallway_loaded", ("bench", "rtf", "--scenario", "hallway", "--clock", "stepped", "--rtfs",
                                          "5,max", "--hogs", "2", "--seeds", "1", "--json"), "json"),
-    Command("bench_rtf_building_large", ("bench", "rtf", "--scenario", "building_large", "--clock", "stepped",
-                                         "--rtfs", "max", "--seeds", "1", "--json"), "json"),
+    *(Command(f"bench_rtf_{scenario}", ("bench", "rtf", "--scenario", scenario, "--clock", "stepped", "--rtfs", "max",
+                                        "--seeds", "1", "--json"), "json")
+      for scenario in ("building_large", "two_tier_home", "mixed_floor_fused")),
     _run("long_legs", "long_legs", "--rtf", "max", "--seed", "1"),
     _run("mixed_floor_fused", "mixed_floor_fused", "--rtf", "max", "--seed", "1"),
     _run("partition_field_fused", "partition_field_fused", "--rtf", "max", "--seed", "1"),

@@ -17,15 +17,14 @@ from __future__ import annotations
 import json
 import math
 import statistics
-import subprocess
 import sys
-from collections.abc import Iterator
-from contextlib import contextmanager, redirect_stdout
+from contextlib import redirect_stdout
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from rfidnav_bringup.api import Orchestrator, RunOptions
+from rfidnav_bag.bags import bag_info
+from rfidnav_bringup.api import Orchestrator, RunOptions, cpu_hogs
 from rfidnav_common.errors import ConfigError
 from rfidnav_common.progress import progress
 from rfidnav_scenario.scenario import Scenario
@@ -45,26 +44,21 @@ class SweepRow:
     cpu_s_per_sim_s: float | None = None     # the graph's CPU (all processes) per simulated second
     process_cpu_s_per_sim_s: dict[str, float] | None = None
     rmses_m: tuple[float | None, ...] = ()   # each seed's, to see identical figures as identical
+    topic_msgs_per_sim_s: dict[str, float] | None = None   # messages each topic carried per simulated second (bag)
 
     def within(self, reference: SweepRow, tolerance: float) -> bool:
-        return self.success and self.rmse_m is not None and reference.rmse_m is not None and \
+        if not self.success:
+            return False
+        if reference.success and reference.rmse_m is None:
+            # A mission with no route to track (building_large's wall following, a two-tier navigation): its runs
+            # are scored by success alone.
+            return self.rmse_m is None
+        return self.rmse_m is not None and reference.rmse_m is not None and \
             self.rmse_m <= reference.rmse_m * (1.0 + tolerance)
 
 
 def _mean(values: list[float | None]) -> float | None:
     return round(statistics.fmean(values), 6) if values and None not in values else None
-
-
-@contextmanager
-def cpu_hogs(count: int) -> Iterator[None]:
-    """``count`` busy-loop processes for the duration (the issue's ``python3 -c 'while 1: pass'``), ended by PID."""
-    hogs = [subprocess.Popen([sys.executable, "-c", "while 1: pass"]) for _ in range(count)]
-    try:
-        yield
-    finally:
-        for hog in hogs:
-            hog.kill()
-            hog.wait()
 
 
 def _per_sim_s(document: dict[str, Any]) -> tuple[float | None, float | None, dict[str, float]]:
@@ -73,6 +67,23 @@ def _per_sim_s(document: dict[str, Any]) -> tuple[float | None, float | None, di
         return None, None, {}
     per_process = {role: round(value / sim_s, 4) for role, value in cpu["process_cpu_s"].items() if value is not None}
     return round(sim_s / cpu["mission_wall_s"], 2), round(cpu["graph_cpu_s"] / sim_s, 4), per_process
+
+
+def _topic_rates(document: dict[str, Any], run_dir: Path) -> dict[str, float]:
+    """Messages per simulated second of each recorded topic (the bag's counts over the run's sim time)."""
+    sim_s = document.get("sim_duration_s")
+    if not sim_s or not (run_dir / "bag").is_dir():
+        return {}
+    return {topic.name: round(topic.count / sim_s, 2) for topic in bag_info(run_dir / "bag").topics}
+
+
+def _means(dicts: list[dict[str, float]]) -> dict[str, float]:
+    """Per key, the mean over the dicts that have it."""
+    values: dict[str, list[float]] = {}
+    for entries in dicts:
+        for key, value in entries.items():
+            values.setdefault(key, []).append(value)
+    return {key: round(statistics.fmean(found), 4) for key, found in sorted(values.items())}
 
 
 def sweep(scenario: Scenario, rtfs: list[float], seeds: list[int], out_dir: Path, clock: str = "free",
@@ -94,18 +105,15 @@ def sweep(scenario: Scenario, rtfs: list[float], seeds: list[int], out_dir: Path
                 run_dirs.append(str(summary.run_dir))
                 advance(1)
             speeds = [_per_sim_s(d) for d in documents]
-            per_process: dict[str, list[float]] = {}
-            for _, _, processes in speeds:
-                for role, value in processes.items():
-                    per_process.setdefault(role, []).append(value)
+            topics = [_topic_rates(d, Path(run_dir)) for d, run_dir in zip(documents, run_dirs, strict=True)]
             rows.append(SweepRow(
                 rtf, all(d["success"] for d in documents),
                 _mean([d["metrics"].get("tracking_rmse_m") for d in documents]),
                 _mean([(d.get("cpu") or {}).get("graph_cpu_percent_of_one_core") for d in documents]),
                 _mean([d.get("wall_duration_s") for d in documents]), tuple(run_dirs), clock,
                 _mean([speed for speed, _, _ in speeds]), _mean([cpu for _, cpu, _ in speeds]),
-                {role: round(statistics.fmean(values), 4) for role, values in per_process.items()},
-                tuple(d["metrics"].get("tracking_rmse_m") for d in documents)))
+                _means([processes for _, _, processes in speeds]),
+                tuple(d["metrics"].get("tracking_rmse_m") for d in documents), _means(topics)))
     return rows
 
 
@@ -145,6 +153,22 @@ def report(scenario: str, rows: list[SweepRow], tolerance: float, as_json: bool)
         per_sim = f"{row.cpu_s_per_sim_s:.3f}" if row.cpu_s_per_sim_s is not None else "-"
         lines.append(f"{row.rtf:>5g}  {str(row.success):>7}  {rmse:>8}  {ratio:>7}  {cpu:>6}  {wall:>7}  "
                      f"{speed:>6}  {per_sim:>7}  {' '.join(row.run_dirs)}")
+    lines += _breakdown("graph CPU-s per sim s, by process", [row.process_cpu_s_per_sim_s or {} for row in rows],
+                        rows, "{:.4f}")
+    lines += _breakdown("messages per sim s, by topic (the bag's)", [row.topic_msgs_per_sim_s or {} for row in rows],
+                        rows, "{:.1f}")
     lines.append(f"highest RTF within {100 * tolerance:.0f}% of the RTF {reference.rtf:g} RMSE: "
                  + (f"{best.rtf:g}, graph CPU {best.cpu_percent_of_one_core:.1f}% of one core" if best else "none"))
     return "\n".join(lines)
+
+
+def _breakdown(title: str, columns: list[dict[str, float]], rows: list[SweepRow], number: str) -> list[str]:
+    """A table of one figure per key (a process, a topic) and RTF, largest first."""
+    keys = sorted({key for column in columns for key in column}, key=lambda k: -max(c.get(k, 0.0) for c in columns))
+    if not keys:
+        return []
+    width = max(len(key) for key in keys)
+    header = "  ".join(f"{'max' if math.isinf(row.rtf) else f'{row.rtf:g}':>9}" for row in rows)
+    return [title + ":", f"{'':<{width}}  {header}", *(
+        f"{key:<{width}}  " + "  ".join(f"{number.format(column[key]) if key in column else '-':>9}"
+                                        for column in columns) for key in keys)]

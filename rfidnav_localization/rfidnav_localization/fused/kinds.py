@@ -19,7 +19,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from rfidnav_localization.fused.measurement import Likelihoods, Measurement, MeasurementFactory, Particles
-from rfidnav_localization.fused.models import WallTagModel, mounted
+from rfidnav_localization.fused.models import Antennas, WallTagModel, mounted
 from rfidnav_localization.fused.settings import FusedSettings
 from rfidnav_localization.fused.tag_map import FusedMap
 
@@ -143,19 +143,23 @@ class CeilingPhases(Measurement[Sequence[PhaseReading]]):
 
     def log_likelihoods(self, reading: Sequence[PhaseReading], particles: Particles) -> Likelihoods:
         result = Likelihoods()
-        states = particles.states
+        model = self.model
+        antennas: Antennas | None = None           # on the particles now and then, once a round needs them
+        antennas_then: Antennas | None = None
         for phase in reading:
             ceiling_tag = self.map.ceiling_tags.get(phase.tag_id)
-            if ceiling_tag is None or self.model is None:
+            if ceiling_tag is None or model is None:
                 result.ignored.append(phase.tag_id)
                 continue
-            result.add("ceiling_phase",
-                       self.model.log_likelihood(states, ceiling_tag, phase.dphi_rad, phase.frequency_hz))
+            antennas = antennas or model.antennas(particles.states)
+            result.add("ceiling_phase", model.log_likelihood_at(antennas, ceiling_tag, phase.dphi_rad,
+                                                                phase.frequency_hz))
             before = self.previous.get(phase.tag_id)
             if before is not None and before.frequency_hz == phase.frequency_hz and self.previous_states is not None:
+                antennas_then = antennas_then or model.antennas(self.previous_states)
                 changes = (phase.phase1_rad - before.phase1_rad, phase.phase2_rad - before.phase2_rad)
-                result.add("ceiling_range_rate", self.model.range_change_log_likelihood(
-                    self.previous_states, states, ceiling_tag, changes, phase.frequency_hz))
+                result.add("ceiling_range_rate", model.range_change_log_likelihood_at(
+                    antennas_then, antennas, ceiling_tag, changes, phase.frequency_hz))
         return result
 
     def end_round(self, reading: Sequence[PhaseReading] | None, particles: Particles) -> None:

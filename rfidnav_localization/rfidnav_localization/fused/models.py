@@ -87,10 +87,20 @@ class PhaseDifferenceModel:
     floor_rad: float = 0.02
     eps: float = 0.01
 
+    def antennas(self, states: np.ndarray) -> Antennas:
+        """Both receiving antennas on each pose, in the map frame: a round weighs all its tags from them."""
+        cos_yaw, sin_yaw = np.cos(states[2]), np.sin(states[2])
+        return tuple(_mounted_at(states, cos_yaw, sin_yaw, antenna) for antenna in (self.antenna1, self.antenna2))
+
     def log_likelihood(self, states: np.ndarray, tag: tuple[float, float, float], dphi_rad: float,
                        frequency_hz: float) -> np.ndarray:
         """The phase difference phi1 - phi2 of one backscatter."""
-        d1, d2 = (_distances(states, antenna, tag) for antenna in (self.antenna1, self.antenna2))
+        return self.log_likelihood_at(self.antennas(states), tag, dphi_rad, frequency_hz)
+
+    def log_likelihood_at(self, antennas: Antennas, tag: tuple[float, float, float], dphi_rad: float,
+                          frequency_hz: float) -> np.ndarray:
+        """:meth:`log_likelihood` with the antennas on the poses (:meth:`antennas`)."""
+        d1, d2 = (_distances(antenna, tag) for antenna in antennas)
         predicted = 4.0 * math.pi * (d1 - d2) / wavelength_m(frequency_hz) + (self.offset1_rad - self.offset2_rad)
         return robust_phase(wrap_angles(dphi_rad - predicted), self._sd(d1, d2), self.floor_rad, self.eps)
 
@@ -99,9 +109,16 @@ class PhaseDifferenceModel:
                                     frequency_hz: float) -> np.ndarray:
         """Each antenna's phase change (``changes_rad``: antenna 1, antenna 2) since the previous round, the
         particles there (``previous``) and here (``states``)."""
-        total = np.zeros(states.shape[1])
-        for antenna, change in zip((self.antenna1, self.antenna2), changes_rad, strict=True):
-            before, now = _distances(previous, antenna, tag), _distances(states, antenna, tag)
+        return self.range_change_log_likelihood_at(self.antennas(previous), self.antennas(states), tag, changes_rad,
+                                                   frequency_hz)
+
+    def range_change_log_likelihood_at(self, previous: Antennas, antennas: Antennas,
+                                       tag: tuple[float, float, float], changes_rad: tuple[float, float],
+                                       frequency_hz: float) -> np.ndarray:
+        """:meth:`range_change_log_likelihood` with the antennas on the poses then and now (:meth:`antennas`)."""
+        total = np.zeros(antennas[0][0].shape)
+        for then, now_at, change in zip(previous, antennas, changes_rad, strict=True):
+            before, now = _distances(then, tag), _distances(now_at, tag)
             predicted = 4.0 * math.pi * (now - before) / wavelength_m(frequency_hz)
             total += robust_phase(wrap_angles(change - predicted), self._sd(before, now), self.floor_rad, self.eps)
         return total
@@ -112,11 +129,23 @@ class PhaseDifferenceModel:
                        + self.floor_rad ** 2)
 
 
-def _distances(states: np.ndarray, antenna: tuple[float, float, float],
-               tag: tuple[float, float, float]) -> np.ndarray:
+# An antenna on each pose: its map-frame x and y (n each) and its height [m].
+Mounted = tuple[np.ndarray, np.ndarray, float]
+Antennas = tuple[Mounted, ...]
+
+
+def _mounted_at(states: np.ndarray, cos_yaw: np.ndarray, sin_yaw: np.ndarray,
+                antenna: tuple[float, float, float]) -> Mounted:
+    """:func:`mounted` with the poses' cos and sin of yaw computed once for several antennas (the same sums)."""
+    x, y, _ = states
+    return (x + cos_yaw * antenna[0] - sin_yaw * antenna[1], y + sin_yaw * antenna[0] + cos_yaw * antenna[1],
+            antenna[2])
+
+
+def _distances(antenna: Mounted, tag: tuple[float, float, float]) -> np.ndarray:
     """The distance from the antenna mounted on each pose to the tag [m]."""
-    x, y = mounted(states, (antenna[0], antenna[1]))
-    return np.sqrt(np.square(tag[0] - x) + np.square(tag[1] - y) + (tag[2] - antenna[2]) ** 2)
+    x, y, height = antenna
+    return np.sqrt(np.square(tag[0] - x) + np.square(tag[1] - y) + (tag[2] - height) ** 2)
 
 
 @dataclass(frozen=True)
