@@ -73,9 +73,11 @@ def test_recorder_lost_nothing(line_run: Path) -> None:
     # The controller answers every reader round with a command until the mission ends; the reader goes on for the
     # steps until the clock source settles, as many as the machine's load lets through, so the rounds compared are
     # those up to the last command (bag log times are sim times).
-    commands = [time for _, time, _ in read_messages(line_run / "bag", ["/cmd_vel"])]
-    rounds = [time for _, time, _ in read_messages(line_run / "bag", ["/rfid/reads"]) if time <= max(commands)]
-    assert abs(len(commands) - len(rounds)) <= 3
+    times: dict[str, list[int]] = {"/cmd_vel": [], "/rfid/reads": []}
+    for topic, time, _ in read_messages(line_run / "bag", list(times)):
+        times[topic].append(time)
+    rounds = [time for time in times["/rfid/reads"] if time <= max(times["/cmd_vel"])]
+    assert abs(len(times["/cmd_vel"]) - len(rounds)) <= 3
     assert topics["/sim/markers"] == 1
 
 
