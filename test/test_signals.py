@@ -146,18 +146,21 @@ def test_a_node_of_a_second_graph_taking_one_of_our_names_ends_the_run_before_th
     assert_all_gone(nodes)
 
 
-def test_sigterm_on_replay_stops_its_player_on_the_domain_it_leased(tmp_path: Path) -> None:
-    out = tmp_path / "runs"
-    with start_cli("run", "line_follow_90", "--rtf", RTF, "--out", str(out), "--quiet") as cli:
-        cli.communicate(timeout=300)
-    with start_cli("replay", str(one_run(out)), "--loop") as replay:
+def player_started(replay: subprocess.Popen) -> list[psutil.Process]:
+    """Wait for the player's own line, once its node is up (replay says "replaying ..." before it starts the
+    player); replay's processes then."""
+    assert replay.stdout is not None
+    for line in replay.stdout:
+        if "]: playing " in line:
+            return psutil.Process(replay.pid).children(recursive=True)
+    pytest.fail(f"replay ended ({replay.wait()}) without its player saying it plays")
+
+
+def test_sigterm_on_replay_stops_its_player_on_the_domain_it_leased(recorded_run: Path) -> None:
+    with start_cli("replay", str(recorded_run), "--loop") as replay:
         announced = replay.stdout.readline()
         assert "ROS_DOMAIN_ID=" in announced and "ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST" in announced, announced
-        deadline = time.monotonic() + 60
-        players: list[psutil.Process] = []
-        while not players and time.monotonic() < deadline:
-            players = psutil.Process(replay.pid).children()
-            time.sleep(0.1)   # the player is a process replay starts: polled, no ROS signal reaches here
+        players = player_started(replay)
         assert players, "the player never started"
         replay.send_signal(signal.SIGTERM)
         output, _ = replay.communicate(timeout=60)
@@ -221,23 +224,17 @@ def recorded_run(tmp_path_factory) -> Path:
 
 
 def working(verb: str, cli: subprocess.Popen, out: Path) -> list[psutil.Process]:
-    """Wait until the command does its work (a mission under way, a player republishing, a server serving); the
-    processes it started then."""
+    """Wait until the command does its work (a mission under way, the player up, a server serving); the processes
+    it started then."""
     if verb == "run":
         return mission_started(out, cli)
+    if verb == "replay":
+        return player_started(cli)
     assert cli.stdout is not None
-    word = "replaying" if verb == "replay" else "ws://"
     for line in cli.stdout:          # its first lines say where it is reached
-        if word in line:
-            break
-    else:
-        pytest.fail(f"{verb} ended ({cli.wait()}) without a line with {word!r}")
-    deadline = time.monotonic() + 60
-    children = psutil.Process(cli.pid).children(recursive=True)
-    while verb == "replay" and not children and time.monotonic() < deadline:
-        time.sleep(0.1)   # the player is a process replay starts: polled, no ROS signal reaches here
-        children = psutil.Process(cli.pid).children(recursive=True)
-    return children
+        if "ws://" in line:
+            return psutil.Process(cli.pid).children(recursive=True)
+    pytest.fail(f"{verb} ended ({cli.wait()}) without a line with 'ws://'")
 
 
 @pytest.mark.parametrize("verb", ["run", "replay", "view"])
