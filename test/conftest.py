@@ -18,7 +18,13 @@ from __future__ import annotations
 
 import os
 
-os.environ.setdefault("ROS_DOMAIN_ID", str(1 + os.getpid() % 50))
+# The session's own domain, 1-50 (./rfidnav run leases from 51 on). pytest-xdist's workers inherit the controller's
+# environment, this variable included: each takes the next domain after it, or two workers' tests would hear each
+# other's nodes (a player's /clock, a recorder's topics).
+SESSION_DOMAIN = int(os.environ.setdefault("ROS_DOMAIN_ID", str(1 + os.getpid() % 50)))
+WORKER = os.environ.get("PYTEST_XDIST_WORKER", "")   # gw0, gw1, ...; empty without workers
+if WORKER:
+    os.environ["ROS_DOMAIN_ID"] = str(1 + (SESSION_DOMAIN + int(WORKER.removeprefix("gw"))) % 50)
 os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
 os.environ["ROS_PYTHON_CHECK_FIELDS"] = "1"
 
@@ -60,9 +66,13 @@ def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item
                                 + ", ".join(untiered[:10]) + (" ..." if len(untiered) > 10 else ""))
 
 
-@pytest.fixture
+@pytest.fixture(scope="session")
 def domain():
-    """A DDS domain leased for one test (as ./rfidnav run leases one), so concurrent sessions never cross-talk."""
+    """A DDS domain leased for this pytest process's session (as ./rfidnav run leases one), so that concurrent
+    sessions, pytest-xdist's other worker and the runs the tests start never cross-talk with the nodes the tests
+    make in this process. Held to the end, not per test: rclpy destroys a context's participant only once nothing
+    refers to it any more, so a test's nodes can still be heard after it ended, and a run leasing the domain
+    then would meet them ("another graph joined ROS domain 51: two nodes named /robot_sim")."""
     # Imported here, not at the top: only the tests taking this fixture need rfidnav_bringup (support/packages.py).
     from rfidnav_bringup.processes import DomainLease
 

@@ -114,7 +114,10 @@ def test_a_slow_location_server_slows_the_run_but_changes_neither_commands_nor_f
     # rfid_localizer alone locates a scan a second, over a mission of a minute or more: tens of slow answers.
     assert summary(slow)["wall_duration_s"] > summary(prompt)["wall_duration_s"] + 10 * 0.3
     assert len(commands(prompt)) > 100 and commands(slow) == commands(prompt)
-    assert fused_poses(slow) == fused_poses(prompt)
+    # rfid_localizer goes on for the steps after the mission until the clock source stops (~/settle), as many as
+    # the load lets through: one run's poses are the other's up to where the shorter ends.
+    shorter, longer = sorted((fused_poses(slow), fused_poses(prompt)), key=len)
+    assert len(shorter) > 50 and longer[:len(shorter)] == shorter
 
 
 def fused_poses(run: Path) -> list[tuple[float, float, float]]:

@@ -115,10 +115,13 @@ def parser() -> tuple[argparse.ArgumentParser, dict[str, Handler]]:
     add_run_options(demo, DEMO_RTF)
     test = verbs.add_parser("test", help="ruff, mypy and the test suite (-m unit: the fast tier)")
     test.add_argument("--no-lint", action="store_true", help="skip ruff and mypy")
-    test.add_argument("--under-load", type=int, default=0, metavar="N",
+    test.add_argument("--under-load", type=count_value(64), default=0, metavar="N",
                       help="keep N busy loops running beside the tests (a loaded machine: "
                            "./rfidnav test --under-load 2 -m 'node or graph'); pytest's --durations=30 lists the "
                            "slowest tests")
+    test.add_argument("--workers", type=count_value(64), default=os.cpu_count() or 1, metavar="N",
+                      help="pytest processes (pytest-xdist), each taking whole modules, so that a module's shared "
+                           "run is made once; default: one per core (%(default)s here); 1: in this process")
     test.add_argument("pytest_args", nargs=argparse.REMAINDER, help="passed to pytest, e.g. -m unit or a test file")
     run = verbs.add_parser("run", help="one mission through the real node graph")
     run.add_argument("scenario", help="scenario name (config/scenarios/NAME.yaml) or path")
@@ -251,14 +254,17 @@ def verb_demo(args) -> int:
 LINTERS = (("ruff", ["-m", "ruff", "check", "--quiet", "."]), ("mypy", ["-m", "mypy"]))   # ruff.toml, mypy.ini
 
 
-def pytest_command(pytest_args: list[str], cwd: Path) -> list[str]:
+def pytest_command(pytest_args: list[str], cwd: Path, workers: int = 1) -> list[str]:
     """pytest on exactly what it is given, from the workspace (so that pytest.ini's ``testpaths``, the whole of
-    test/, applies when no file or id is given); a file or id that exists from ``cwd`` is made absolute."""
+    test/, applies when no file or id is given); a file or id that exists from ``cwd`` is made absolute. With
+    ``workers`` above 1, pytest-xdist's processes take one module at a time (``loadscope``): a module's shared
+    run (a module-scoped fixture) is then made once, not once per worker."""
     def absolute(arg: str) -> str:
         path = arg.split("::", 1)[0]
         return str(cwd / arg) if not arg.startswith("-") and path and (cwd / path).exists() else arg
 
-    return [sys.executable, "-m", "pytest", *(absolute(arg) for arg in pytest_args)]
+    parallel = ["-n", str(workers), "--dist", "loadscope"] if workers > 1 else []
+    return [sys.executable, "-m", "pytest", *parallel, *(absolute(arg) for arg in pytest_args)]
 
 
 def verb_test(args) -> int:
@@ -278,7 +284,7 @@ def verb_test(args) -> int:
 
     env = dict(os.environ, ROS_PYTHON_CHECK_FIELDS="1", PYTHONDONTWRITEBYTECODE="1")
     with cpu_hogs(args.under_load):
-        return subprocess.call(pytest_command(args.pytest_args, Path.cwd()), env=env, cwd=WORKSPACE)
+        return subprocess.call(pytest_command(args.pytest_args, Path.cwd(), args.workers), env=env, cwd=WORKSPACE)
 
 
 def verb_replay(args) -> int:
