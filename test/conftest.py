@@ -64,24 +64,6 @@ def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item
     if untiered:
         raise pytest.UsageError(f"tests without a tier (pytest.mark.tier, one of {', '.join(TIERS)}): "
                                 + ", ".join(untiered[:10]) + (" ..." if len(untiered) > 10 else ""))
-    if WORKER:
-        items[:] = heaviest_modules_first(items)
-
-
-def heaviest_modules_first(items: list[pytest.Item]) -> list[pytest.Item]:
-    """The items module by module, the modules with graph tests first, then slow, node and unit ones (each
-    module's items in their order). pytest-xdist hands whole modules out in this order: the minutes-long ones
-    start while the other worker still has seconds-long ones to take, instead of one of them running alone at the
-    end."""
-    modules: dict[str, list[pytest.Item]] = {}
-    for item in items:
-        modules.setdefault(item.nodeid.split("::", 1)[0], []).append(item)
-
-    def heaviest_tier(module_items: list[pytest.Item]) -> int:
-        return max(TIERS.index(item.get_closest_marker("tier").args[0]) for item in module_items)
-
-    ordered = sorted(modules.values(), key=heaviest_tier, reverse=True)   # sorted() is stable
-    return [item for module_items in ordered for item in module_items]
 
 
 @pytest.fixture(scope="session")

@@ -84,7 +84,7 @@ def test_test_passes_pytest_exactly_what_it_is_given(tmp_path: Path) -> None:
 @pytest.mark.tier("unit")
 def test_test_with_workers_gives_each_pytest_xdist_worker_whole_modules(tmp_path: Path) -> None:
     assert cli.pytest_command(["-m", "unit"], tmp_path, workers=2)[3:] == [
-        "-n", "2", "--dist", "loadscope", "--no-loadscope-reorder", "-m", "unit"]
+        "-n", "2", "--dist", "loadscope", "-m", "unit"]
     args, extra = cli.parser()[0].parse_known_args(["test", "--workers", "1", "-m", "unit"])
     assert args.workers == 1 and cli.pytest_command([*extra, *args.pytest_args], tmp_path, args.workers)[3:] == [
         "-m", "unit"]

@@ -263,9 +263,7 @@ def pytest_command(pytest_args: list[str], cwd: Path, workers: int = 1) -> list[
         path = arg.split("::", 1)[0]
         return str(cwd / arg) if not arg.startswith("-") and path and (cwd / path).exists() else arg
 
-    # In the order collected (test/conftest.py puts the modules with graph tests first), not by their number of
-    # tests, xdist's default: that left two-test graph modules of a minute each for the end, one worker idle.
-    parallel = ["-n", str(workers), "--dist", "loadscope", "--no-loadscope-reorder"] if workers > 1 else []
+    parallel = ["-n", str(workers), "--dist", "loadscope"] if workers > 1 else []
     return [sys.executable, "-m", "pytest", *parallel, *(absolute(arg) for arg in pytest_args)]
 
 
