@@ -282,7 +282,9 @@ def verb_test(args) -> int:
                 return code
     from rfidnav_bringup.processes import cpu_hogs
 
-    env = dict(os.environ, ROS_PYTHON_CHECK_FIELDS="1", PYTHONDONTWRITEBYTECODE="1")
+    # The busy loops are said to the tests too: one that sets up a loaded machine of its own adds only what is missing.
+    env = dict(os.environ, ROS_PYTHON_CHECK_FIELDS="1", PYTHONDONTWRITEBYTECODE="1",
+               RFIDNAV_TEST_BUSY_LOOPS=str(args.under_load))
     with cpu_hogs(args.under_load):
         return subprocess.call(pytest_command(args.pytest_args, Path.cwd(), args.workers), env=env, cwd=WORKSPACE)
 
