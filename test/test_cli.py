@@ -85,9 +85,9 @@ def test_test_passes_pytest_exactly_what_it_is_given(tmp_path: Path) -> None:
 def test_test_with_workers_gives_each_pytest_xdist_worker_whole_modules(tmp_path: Path) -> None:
     assert cli.pytest_command(["-m", "unit"], tmp_path, workers=2)[3:] == [
         "-n", "2", "--dist", "loadscope", "-m", "unit"]
-    args, extra = cli.parser()[0].parse_known_args(["test", "--workers", "1", "-m", "unit"])
-    assert args.workers == 1 and cli.pytest_command([*extra, *args.pytest_args], tmp_path, args.workers)[3:] == [
-        "-m", "unit"]
+    args, extra = cli.parser()[0].parse_known_args(["test", "--workers", "1", "--under-load", "0", "-m", "unit"])
+    assert args.under_load == 0 and args.workers == 1
+    assert cli.pytest_command([*extra, *args.pytest_args], tmp_path, args.workers)[3:] == ["-m", "unit"]
 
 
 @pytest.mark.tier("unit")

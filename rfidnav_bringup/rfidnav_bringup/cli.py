@@ -47,6 +47,11 @@ VERB_ENTRY_POINTS = "rfidnav.verbs"
 LIVE_PORT = 8765   # Foxglove's default WebSocket port
 MAX_ECHO_COUNT = 1_000_000
 
+# test --under-load: 0 (the default, an idle machine) to 64 busy loops.
+BUSY_LOOPS_VALUE = checked_number(int, "a whole number", lambda count: 0 <= count <= 64,
+                                  lambda text: f"expected a whole number 0-64, got {text}")
+
+
 def bag_size_value(text: str) -> int:
     """``--max-bag-size``: 0 (one file) or at least the smallest split size rosbag2's MCAP plugin takes."""
     from rfidnav_bag.writer import MIN_SPLIT_SIZE  # here, not at the top: it loads mcap (~0.2 s) for every verb
@@ -115,7 +120,7 @@ def parser() -> tuple[argparse.ArgumentParser, dict[str, Handler]]:
     add_run_options(demo, DEMO_RTF)
     test = verbs.add_parser("test", help="ruff, mypy and the test suite (-m unit: the fast tier)")
     test.add_argument("--no-lint", action="store_true", help="skip ruff and mypy")
-    test.add_argument("--under-load", type=count_value(64), default=0, metavar="N",
+    test.add_argument("--under-load", type=BUSY_LOOPS_VALUE, default=0, metavar="N",
                       help="keep N busy loops running beside the tests (a loaded machine: "
                            "./rfidnav test --under-load 2 -m 'node or graph'); pytest's --durations=30 lists the "
                            "slowest tests")
