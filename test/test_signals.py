@@ -19,7 +19,7 @@ from rosgraph_msgs.msg import Clock
 
 from rfidnav_bag.bags import bag_info
 from rfidnav_bringup.errors import LaunchError
-from rfidnav_bringup.processes import DomainLease, cpu_hogs, lock_folder, open_lock_file
+from rfidnav_bringup.processes import DomainLease, cpu_hogs, lock_folder, open_lock_file, start_child
 from rfidnav_common.ros import standalone_node
 from support.runs import WORKSPACE, mission_started, start_cli
 
@@ -210,6 +210,23 @@ def test_two_runs_with_different_tmpdirs_still_share_one_set_of_domain_locks(tmp
             capture_output=True, text=True, cwd=WORKSPACE, env=dict(os.environ, TMPDIR=str(tmp_path)))
     assert result.returncode != 0
     assert f"ROS domain {held.domain_id} is in use by another rfidnav run" in result.stderr
+
+
+def test_a_domain_stays_leased_until_the_last_process_started_with_its_lease_has_ended() -> None:
+    """A SIGKILLed orchestrator's lock is gone at once, but its nodes take seconds to stop (the recorder closes its
+    bag): they hold the lease on, so no run leases the domain in those seconds and meets them (issue 33's CI run:
+    "another graph joined ROS domain 51: two nodes named /robot_sim")."""
+    with DomainLease(range(40, 51)) as lease:
+        domain = lease.domain_id
+        node = start_child([sys.executable, "-c", "import sys; sys.stdin.read()"], lease.handle,
+                           stdin=subprocess.PIPE)
+    try:
+        with pytest.raises(LaunchError, match=f"ROS domain {domain} is in use by another rfidnav run"):
+            DomainLease(range(domain, domain + 1))
+    finally:
+        node.communicate(input=b"", timeout=60)   # its stdin closed: it ends
+    with DomainLease(range(domain, domain + 1)) as again:
+        assert again.domain_id == domain
 
 
 CTRL_C_LIMIT_S = 5.0      # issue 33: a user's Ctrl-C ends run, replay and view within this on a loaded machine

@@ -305,7 +305,8 @@ def verb_replay(args) -> int:
     # robot and no other run.
     with DomainLease(RUN_DOMAINS if args.domain is None else range(args.domain, args.domain + 1)) as lease:
         print(f"replaying {bag} on {reach_text(lease.domain_id, args.discovery)}", file=sys.stderr, flush=True)
-        return run_supervised(player_command(bag, args), child_environment(lease.domain_id, args.discovery))
+        return run_supervised(player_command(bag, args), child_environment(lease.domain_id, args.discovery),
+                              lease.handle)
 
 
 def player_command(bag: Path, args: argparse.Namespace) -> list[str]:

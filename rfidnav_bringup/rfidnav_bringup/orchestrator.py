@@ -78,8 +78,8 @@ class Orchestrator:
     def processes(self) -> dict[str, NodeProcess]:
         return self.supervisor.processes
 
-    def prepare(self, env: dict[str, str]) -> None:
-        self.supervisor.add(self.plan.write(), self.plan.log_path, env)
+    def prepare(self, env: dict[str, str], lease_fd: int | None = None) -> None:
+        self.supervisor.add(self.plan.write(), self.plan.log_path, env, lease_fd)
 
     def run(self) -> RunSummary:
         lease = DomainLease() if self.options.domain is None else DomainLease(range(self.options.domain,
@@ -100,7 +100,7 @@ class Orchestrator:
         self.watch = GraphWatch(node, waiter, self.plan.expected_graph(), lease.domain_id, self.say_now)
         previous_handlers = {signum: signal.signal(signum, self.on_stop_signal) for signum in STOP_SIGNALS}
         try:
-            self.prepare(env)
+            self.prepare(env, lease.handle)
             if lease.skipped:
                 self.say(f"skipped ROS domains in use by nodes not of this run: {lease.describe_skipped()}",
                          always=True)

@@ -1,9 +1,10 @@
 """Node processes: starting with logs, stopping politely, and
 never outliving the process that started them (Linux's parent-death signal).
 
-Also hands out DDS domain ids: each run holds an exclusive lock on one id for its lifetime, so
-concurrent runs (and test sessions) on one machine never hear each other, and passes over an id in which
-nodes are already heard (a graph that does not know our locks), so that no foreign node joins a run.
+Also hands out DDS domain ids: each run holds an exclusive lock on one id for its lifetime, and so do the node
+processes it starts (they inherit the lock's descriptor), so concurrent runs (and test sessions) on one machine never
+hear each other, even while a killed run's nodes are still stopping; a lease also passes over an id in which nodes
+are already heard (a graph that does not know our locks), so that no foreign node joins a run.
 """
 
 from __future__ import annotations
@@ -167,11 +168,16 @@ def die_with_parent(parent_pid: int) -> Callable[[], None]:
     return set_parent_death_signal
 
 
-def start_child(command: list[str], **popen_options: Any) -> subprocess.Popen:
+def start_child(command: list[str], lease_fd: int | None = None, **popen_options: Any) -> subprocess.Popen:
     """``subprocess.Popen(command)`` in a session of its own (Ctrl-C in the terminal reaches only its parent, which
-    stops it in order) that dies with its parent (die_with_parent)."""
+    stops it in order) that dies with its parent (die_with_parent).
+
+    ``lease_fd``, a DomainLease's descriptor, is inherited: the domain's lock is an flock, held while any process
+    has the descriptor open, so the domain stays leased until the child has ended too. A killed orchestrator's
+    nodes take seconds to stop (the recorder closes its bag); a run leasing the domain in those seconds would meet
+    them, and a probe of the domain on a loaded machine can miss them."""
     return subprocess.Popen(command, start_new_session=True, preexec_fn=die_with_parent(os.getpid()),
-                            **popen_options)
+                            pass_fds=() if lease_fd is None else (lease_fd,), **popen_options)
 
 
 def reach_text(domain_id: int, discovery: str) -> str:
@@ -189,11 +195,12 @@ def child_environment(domain_id: int, discovery: str = "localhost") -> dict[str,
     return env
 
 
-def run_supervised(command: list[str], env: dict[str, str]) -> int:
-    """Run one child to its end (start_child), passing any of SIGINT, SIGTERM and SIGHUP on to it as SIGINT (its
-    Ctrl-C), and return its exit code, or 128 + the first signal that came (the shell's convention)."""
+def run_supervised(command: list[str], env: dict[str, str], lease_fd: int | None = None) -> int:
+    """Run one child to its end (start_child, holding ``lease_fd``), passing any of SIGINT, SIGTERM and SIGHUP on to
+    it as SIGINT (its Ctrl-C), and return its exit code, or 128 + the first signal that came (the shell's
+    convention)."""
     first: list[int] = []
-    child = start_child(command, env=env)
+    child = start_child(command, lease_fd, env=env)
 
     def pass_on(signum: int, _frame: object) -> None:
         first.append(signum)
@@ -218,6 +225,7 @@ class NodeProcess:
     env: dict[str, str]
     respawn: bool = False
     max_respawns: int = 0
+    lease_fd: int | None = None      # the run's DomainLease descriptor, held by the child too (start_child)
     restarts: int = 0
     popen: subprocess.Popen | None = field(default=None, repr=False)
     exit_code: int | None = None
@@ -228,7 +236,7 @@ class NodeProcess:
         log.write(f"$ {' '.join(self.command)}\n")
         log.flush()
         try:
-            self.popen = start_child(self.command, stdout=log, stderr=subprocess.STDOUT, env=self.env)
+            self.popen = start_child(self.command, self.lease_fd, stdout=log, stderr=subprocess.STDOUT, env=self.env)
         except OSError as error:
             raise LaunchError(f"{self.role}: cannot start '{self.command[0]}': {error.strerror}") from None
         finally:

@@ -23,10 +23,11 @@ class Supervisor:
         self.say, self.stopping, self.respawned = say, stopping, respawned
         self.processes: dict[str, NodeProcess] = {}
 
-    def add(self, plans: Iterable[ProcessPlan], log_path: Callable[[str], Path], env: dict[str, str]) -> None:
+    def add(self, plans: Iterable[ProcessPlan], log_path: Callable[[str], Path], env: dict[str, str],
+            lease_fd: int | None = None) -> None:
         for plan in plans:
             self.processes[plan.name] = NodeProcess(plan.name, plan.command, log_path(plan.name), env, plan.respawn,
-                                                    plan.max_respawns)
+                                                    plan.max_respawns, lease_fd)
 
     def start(self, recorder: bool) -> None:
         """Start the recorder (``recorder``), else every other process."""
