@@ -6,21 +6,31 @@ the robot (pose_navigator) and its map -> odom is the tf tree's; in partition_fi
 status drives the partition navigator, paper 000's localizer beside it; in hallway (paper 001) and building_ring
 (paper 004) it rides beside the route follower and the mission executor on their building's tag survey; in
 two_tier_flat_fused paper 003's navigator takes its tier one from it. Its errors come from the bag: each pose against
-the ground truth at its stamp."""
+the ground truth at its stamp. And the stepped clock holds a step for a slow location server's answers: the commands
+and the fused poses are those of the prompt run."""
 
 from __future__ import annotations
 
 import json
 import math
+import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
+import yaml
 
 from rfidnav_bag.bags import read_messages
 from rfidnav_msgs.msg import LocalizationStatus
 from support.frames import assert_estimates_are_published_as_map_to_odom
-from support.runs import evidence_used, navigation_subscriptions, pose_errors, run_scenario
+from support.runs import (
+    WORKSPACE,
+    evidence_used,
+    navigation_subscriptions,
+    pose_errors,
+    run_scenario,
+    scenario_document,
+)
 
 pytestmark = pytest.mark.tier("graph")
 
@@ -170,3 +180,39 @@ def test_paper_003s_navigator_takes_each_tier_one_fix_from_the_fused_pose(tier_o
     fixes = [(m.x, m.y) for _, _, m in read_messages(tier_one_run / "bag", ["/localization/status"])
              if m.method == "two_tier" and m.last_fix_tier == WIFI_TIER and m.distance_since_fix_m == 0.0]
     assert fixes and all(fix in fused for fix in fixes)
+
+
+def test_a_slow_location_server_slows_the_run_but_changes_neither_commands_nor_fused_poses(
+        flat_run: Path, tmp_path: Path) -> None:
+    """Paper 003's navigator calls the location server (locate, tag map), and so does rfid_localizer beside it
+    (locate): each call holds its step until the answer has been handled, so an answer 0.3 s of wall time late
+    (at --rtf max, seconds of simulated time) lands in the same step as a prompt one (flat_run's)."""
+    document = scenario_document("two_tier_flat")
+    server = document["nodes"]["location_server"]
+    document["nodes"]["location_server"] = {
+        "command": f"{sys.executable} {WORKSPACE / 'test/support/slow_location_server.py'}",
+        "name": "location_server", "stepped": True, "params": server["params"],
+        # A command role is not told the run's folder: its database goes here, not into the working directory.
+        "overrides": {**server["overrides"], "database_file": str(tmp_path / "location.db")}}
+    (tmp_path / "slow.yaml").write_text(yaml.safe_dump(document))
+    slow = run_scenario(tmp_path / "slow", str(tmp_path / "slow.yaml"), "--rtf", "max", "--seed", "2")
+    # rfid_localizer alone locates a scan a second, over a mission of a minute or more: tens of slow answers.
+    assert wall_duration_s(slow) > wall_duration_s(flat_run) + 10 * 0.3
+    assert len(commands(flat_run)) > 100 and commands(slow) == commands(flat_run)
+    # rfid_localizer goes on for the steps after the mission until the clock source stops (~/settle), as many as
+    # the load lets through: one run's poses are the other's up to where the shorter ends.
+    shorter, longer = sorted((fused_poses(slow), fused_poses(flat_run)), key=len)
+    assert len(shorter) > 50 and longer[:len(shorter)] == shorter
+
+
+def wall_duration_s(run: Path) -> float:
+    return json.loads((run / "summary.json").read_text())["wall_duration_s"]
+
+
+def commands(run: Path) -> list[tuple[float, float]]:
+    return [(msg.linear.x, msg.angular.z) for _, _, msg in read_messages(run / "bag", ["/cmd_vel"])]
+
+
+def fused_poses(run: Path) -> list[tuple[float, float, float]]:
+    return [(msg.pose.pose.position.x, msg.pose.pose.position.y, msg.pose.pose.orientation.z)
+            for _, _, msg in read_messages(run / "bag", ["/fused/pose"])]

@@ -15,7 +15,8 @@ import pytest
 import yaml
 
 from rfidnav_bag.bags import read_messages
-from support.runs import WORKSPACE, run_killing_the_controller, run_scenario
+from support.runs import WORKSPACE, run_killing_the_controller, run_scenario, scenario_document
+from support.slow_heading_controller import DELAY_S
 
 pytestmark = pytest.mark.tier("graph")
 
@@ -53,19 +54,8 @@ def test_rtf_max_and_rtf_3_give_the_same_commands_for_the_same_seed(max_run: Pat
         summary(max_run)["metrics"]["tracking_rmse_m"], rel=METRIC_TOLERANCE)
 
 
-def scenario_document(name: str = SCENARIO) -> dict:
-    """The scenario as a mapping with absolute paths, to be changed and written elsewhere."""
-    document = yaml.safe_load((WORKSPACE / "config/scenarios" / f"{name}.yaml").read_text())
-    base = WORKSPACE / "config/scenarios"
-    for key in ("world", "map"):
-        document[key] = str((base / document[key]).resolve())
-    for entry in document["nodes"].values():
-        entry["params"] = str((base / entry["params"]).resolve())
-    return document
-
-
 def test_a_slow_participant_slows_the_run_but_does_not_change_its_commands(max_run: Path, tmp_path: Path) -> None:
-    document = scenario_document()
+    document = scenario_document(SCENARIO)
     document["nodes"]["heading_controller"] = {
         "command": f"{sys.executable} {WORKSPACE / 'test/support/slow_heading_controller.py'}",
         "name": "heading_controller", "stepped": True, "params": document["nodes"]["heading_controller"]["params"]}
@@ -74,8 +64,8 @@ def test_a_slow_participant_slows_the_run_but_does_not_change_its_commands(max_r
     slow = run_scenario(tmp_path / "runs", str(scenario), "--rtf", "max", "--seed", "3")
     assert "/heading_controller" in summary(slow)["clock"]["participants"]
     rounds = len(commands(slow))
-    # Each round cost the controller 30 ms of wall time on top: the whole run waited for it.
-    assert summary(slow)["wall_duration_s"] > rounds * 0.03
+    # Each round cost the controller DELAY_S of wall time on top: the whole run waited for it.
+    assert summary(slow)["wall_duration_s"] > rounds * DELAY_S
     assert commands(slow) == commands(max_run)
 
 
@@ -85,7 +75,7 @@ def test_the_free_running_clock_is_still_there(tmp_path: Path) -> None:
 
 
 def test_a_participant_that_dies_ends_the_run_naming_it_instead_of_holding_the_clock(tmp_path: Path) -> None:
-    document = scenario_document()
+    document = scenario_document(SCENARIO)
     document["nodes"]["heading_controller"]["respawn"] = False
     scenario = tmp_path / "mortal.yaml"
     scenario.write_text(yaml.safe_dump(document))
@@ -94,32 +84,3 @@ def test_a_participant_that_dies_ends_the_run_naming_it_instead_of_holding_the_c
     assert returncode == 1, output
     summary = json.loads(next(out.glob("*/summary.json")).read_text())
     assert summary["success"] is False and "node heading_controller exited" in summary["message"]
-
-
-def test_a_slow_location_server_slows_the_run_but_changes_neither_commands_nor_fused_poses(tmp_path: Path) -> None:
-    """Paper 003's navigator calls the location server (locate, tag map), and so does rfid_localizer beside it
-    (locate): each call holds its step until the answer has been handled, so an answer 0.3 s of wall time late
-    (at --rtf max, seconds of simulated time) lands in the same step as a prompt one."""
-    scenario = "two_tier_flat"
-    prompt = run_scenario(tmp_path / "prompt", scenario, "--rtf", "max", "--seed", "2")
-    document = scenario_document(scenario)
-    server = document["nodes"]["location_server"]
-    document["nodes"]["location_server"] = {
-        "command": f"{sys.executable} {WORKSPACE / 'test/support/slow_location_server.py'}",
-        "name": "location_server", "stepped": True, "params": server["params"],
-        # A command role is not told the run's folder: its database goes here, not into the working directory.
-        "overrides": {**server["overrides"], "database_file": str(tmp_path / "location.db")}}
-    (tmp_path / "slow.yaml").write_text(yaml.safe_dump(document))
-    slow = run_scenario(tmp_path / "slow", str(tmp_path / "slow.yaml"), "--rtf", "max", "--seed", "2")
-    # rfid_localizer alone locates a scan a second, over a mission of a minute or more: tens of slow answers.
-    assert summary(slow)["wall_duration_s"] > summary(prompt)["wall_duration_s"] + 10 * 0.3
-    assert len(commands(prompt)) > 100 and commands(slow) == commands(prompt)
-    # rfid_localizer goes on for the steps after the mission until the clock source stops (~/settle), as many as
-    # the load lets through: one run's poses are the other's up to where the shorter ends.
-    shorter, longer = sorted((fused_poses(slow), fused_poses(prompt)), key=len)
-    assert len(shorter) > 50 and longer[:len(shorter)] == shorter
-
-
-def fused_poses(run: Path) -> list[tuple[float, float, float]]:
-    return [(msg.pose.pose.position.x, msg.pose.pose.position.y, msg.pose.pose.orientation.z)
-            for _, _, msg in read_messages(run / "bag", ["/fused/pose"])]

@@ -12,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 import psutil
+import yaml
 
 from rfidnav_bag.bags import read_messages
 from rfidnav_bringup.report import load_run
@@ -37,6 +38,17 @@ def run_scenario(out: Path, scenario: str, *options: str, mission_may_fail: bool
     runs[0].joinpath("cli.log").write_text(result.stdout + result.stderr)
     assert result.returncode in ((0, 1) if mission_may_fail else (0,)), result.stdout + result.stderr
     return runs[0]
+
+
+def scenario_document(name: str) -> dict:
+    """The shipped scenario ``name`` as a mapping with absolute paths, to be changed and written elsewhere."""
+    base = WORKSPACE / "config/scenarios"
+    document = yaml.safe_load((base / f"{name}.yaml").read_text())
+    for key in ("world", "map"):
+        document[key] = str((base / document[key]).resolve())
+    for entry in document["nodes"].values():
+        entry["params"] = str((base / entry["params"]).resolve())
+    return document
 
 
 def navigation_subscriptions(run: Path, navigation_nodes: tuple[str, ...]) -> dict[str, set[str]]:
