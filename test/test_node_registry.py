@@ -19,8 +19,8 @@ import yaml
 from rfidnav_bag.bags import read_messages
 from rfidnav_common.errors import ConfigError
 from rfidnav_common.node_registry import NodeRegistration, registered_node, registered_nodes
-from rfidnav_scenario.scenario import SCENARIO_DIR, load_scenario, node_parameters
-from support.runs import WORKSPACE, run_scenario
+from rfidnav_scenario.scenario import load_scenario, node_parameters
+from support.runs import WORKSPACE, run_scenario, scenario_document
 
 pytestmark = pytest.mark.tier("unit")
 
@@ -48,12 +48,7 @@ def thermometer_site(tmp_path_factory) -> Path:
 
 def scenario_with(tmp_path: Path, role: str, entry: dict) -> Path:
     """SCENARIO with one more role, written to ``tmp_path`` with the scenario's paths made absolute."""
-    document = yaml.safe_load((SCENARIO_DIR / f"{SCENARIO}.yaml").read_text())
-    for key in ("world", "map"):
-        document[key] = str((SCENARIO_DIR / document[key]).resolve())
-    for spec in document["nodes"].values():
-        if "params" in spec:
-            spec["params"] = str((SCENARIO_DIR / spec["params"]).resolve())
+    document = scenario_document(SCENARIO)
     document["nodes"][role] = entry
     path = tmp_path / f"{SCENARIO}_{role}.yaml"
     path.write_text(yaml.safe_dump(document))
@@ -107,11 +102,11 @@ def test_a_simulator_of_another_package_is_a_participant_with_its_parameters_che
 @pytest.mark.tier("graph")
 def test_a_slow_simulator_of_another_package_holds_the_stepped_clock_and_misses_no_reading(
         thermometer_site: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    """At --rtf max a reading takes 50 ms of wall time, several times the wall time a step takes: a node off the
+    """At --rtf max a reading takes 20 ms of wall time, several times the wall time a step takes (~4 ms): a node off the
     stepped clock would fall behind and lose ground-truth messages (they are best effort), so readings would go
     missing; a participant holds each step until it has answered, so there is one at every 1/rate s of sim time."""
     entry = {"package": "rfidnav_thermometer", "executable": "thermometer_sim", "sim": True,
-             "overrides": {"rate_hz": RATE_HZ, "work_s": 0.05}}
+             "overrides": {"rate_hz": RATE_HZ, "work_s": 0.02}}
     monkeypatch.setenv("PYTHONPATH", os.pathsep.join(filter(None, [str(thermometer_site),
                                                                     os.environ.get("PYTHONPATH")])))
     run = run_scenario(tmp_path / "runs", str(scenario_with(tmp_path, "thermometer", entry)), "--rtf", "max",

@@ -47,7 +47,8 @@ def scenario_document(name: str) -> dict:
     for key in ("world", "map"):
         document[key] = str((base / document[key]).resolve())
     for entry in document["nodes"].values():
-        entry["params"] = str((base / entry["params"]).resolve())
+        if "params" in entry:
+            entry["params"] = str((base / entry["params"]).resolve())
     return document
 
 
