@@ -391,15 +391,16 @@ def test_the_bridge_subscribes_while_watched_and_gives_a_late_client_the_latched
 # A live run's messages are stamped with the latest /clock the view had handled: sim time, not wall time (that
 # would be 1.7e18 ns away). The view is no stepped participant, and /clock reaches it on a subscription of its own:
 # on a loaded machine one runs ahead of the other by as much sim time as a stall lets the clock go on (0.12 s
-# beside a second pytest worker, at RTF 3), so the bound is seconds, not a step.
-SIM_TIME_LAG_NS = 5_000_000_000
+# beside a second pytest worker, at RTF 3), so the bound is seconds, not a step: 10 s, 2 s of wall time at RTF 5.
+SIM_TIME_LAG_NS = 10_000_000_000
 
 
 @pytest.mark.tier("graph")
 def test_a_live_run_serves_its_topics_as_cdr_with_their_definitions_and_the_sim_time(tmp_path: Path) -> None:
     port = free_port()
-    cli = Cli("run", "line_follow_0", "--rtf", "3", "--seed", "1", "--out", str(tmp_path), "--quiet",
-              "--live", str(port))
+    # To the route's first tag at RTF 5: what is checked is served while the mission runs; the run then ends by itself.
+    cli = Cli("run", "line_follow_0", "--rtf", "5", "--seed", "1", "--goal", "{tag_ids: [C1]}", "--out", str(tmp_path),
+              "--quiet", "--live", str(port))
     try:
         line = cli.wait_for_line("live view:", "ws://")
         assert url_in(line) == f"ws://localhost:{port}"
