@@ -6,6 +6,8 @@ One run of line_follow_90 is shared by the tests of this module (it takes ~40 s 
 from __future__ import annotations
 
 import json
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -168,3 +170,32 @@ def test_a_domain_given_with_domain_that_another_run_holds_is_refused_before_any
     assert result.returncode == 2, result.stdout + result.stderr
     assert f"ROS domain {held.domain_id} is in use by another rfidnav run" in result.stderr
     assert not list(tmp_path.glob("*/logs/*.log"))          # no node was started
+
+
+# Run in a process of its own: a run in process sets ROS_DOMAIN_ID in os.environ, which this worker's tests use.
+IN_PROCESS_RUN = """
+import json, sys
+from pathlib import Path
+from rfidnav_bringup.api import Orchestrator, RunOptions
+from rfidnav_bringup.processes import nodes_in_domain
+from rfidnav_scenario.scenario import load_scenario
+
+domain, out = int(sys.argv[1]), Path(sys.argv[2])
+orchestrator = Orchestrator(load_scenario("line_follow_90"),
+                            RunOptions(rtf=float("inf"), seed=1, out_dir=out, record=False, quiet=True, domain=domain))
+summary = orchestrator.run()   # the orchestrator object stays referenced: what it leaves behind stays too
+print(json.dumps({"success": summary.document["success"], "left": nodes_in_domain(domain, 3.0)}))
+"""
+
+
+def test_a_run_in_process_leaves_no_node_in_its_domain_for_the_next_run_in_that_process(tmp_path: Path) -> None:
+    """bench rtf and sweeps run one run after another in one process: the second run met the first's
+    /rfidnav_orchestrator in the domain ("another graph joined ROS domain 51: two nodes named
+    /rfidnav_orchestrator"), kept there by a cycle between the node and its action client."""
+    with DomainLease(range(40, 51)) as free:     # a domain of the tests' own range, free now
+        domain = free.domain_id
+    result = subprocess.run([sys.executable, "-c", IN_PROCESS_RUN, str(domain), str(tmp_path)], cwd=WORKSPACE,
+                            capture_output=True, text=True, timeout=300)
+    assert result.returncode == 0, result.stderr
+    assert json.loads(result.stdout.splitlines()[-1]) == {"success": True, "left": []}, result.stderr[-2000:]
+

@@ -40,6 +40,7 @@ import time
 from typing import Any
 
 import rclpy
+from rclpy.action import ActionClient
 from rclpy.context import Context
 from rclpy.node import Node
 from rclpy.signals import SignalHandlerOptions
@@ -118,10 +119,15 @@ class Orchestrator:
             # Our handlers stay until the bag is closed and the summary written: a second signal must not cut that.
             self.supervisor.stop()
             executor.shutdown()
+            # The mission's action client holds the node's handle and the node holds the client, a cycle: without
+            # this, destroy_node leaves the node, and the context its DDS participant, until the garbage collector
+            # breaks the cycle, and the next run in this process (bench rtf, a sweep) meets /rfidnav_orchestrator.
+            for waitable in list(node.waitables):
+                if isinstance(waitable, ActionClient):
+                    waitable.destroy()
             node.destroy_node()
             rclpy.try_shutdown(context=context)
-            # Destroyed, not only shut down: its DDS participant would stay in the domain (and a sweep running one
-            # run after another in this process would find its own last run there).
+            # Destroyed, not only shut down: its DDS participant would stay in the domain.
             context.destroy()
             lease.close()
             summary = self.write_summary()
