@@ -18,13 +18,18 @@ from __future__ import annotations
 
 import os
 
-# The session's own domain, 1-50 (./rfidnav run leases from 51 on). pytest-xdist's workers inherit the controller's
-# environment, this variable included: each takes the next domain after it, or two workers' tests would hear each
-# other's nodes (a player's /clock, a recorder's topics).
-SESSION_DOMAIN = int(os.environ.setdefault("ROS_DOMAIN_ID", str(1 + os.getpid() % 50)))
+from support.domains import session_domain  # noqa: E402  (os only: nothing of ROS is loaded yet)
+
+# The session's own domain, 1-39 (support/domains.py): the next one after the controller's for each pytest-xdist
+# worker, or two workers' tests would hear each other's nodes (a player's /clock, a recorder's topics). A session
+# that a test starts (colcon test) inherits a worker's variables but is no worker of this controller: its own pid.
 WORKER = os.environ.get("PYTEST_XDIST_WORKER", "")   # gw0, gw1, ...; empty without workers
-if WORKER:
-    os.environ["ROS_DOMAIN_ID"] = str(1 + (SESSION_DOMAIN + int(WORKER.removeprefix("gw"))) % 50)
+CONTROLLER = os.environ.get("RFIDNAV_TEST_CONTROLLER_PID", "")
+if WORKER and CONTROLLER == str(os.getppid()):
+    os.environ["ROS_DOMAIN_ID"] = str(session_domain(int(CONTROLLER), WORKER))
+else:
+    os.environ["RFIDNAV_TEST_CONTROLLER_PID"] = str(os.getpid())
+    os.environ["ROS_DOMAIN_ID"] = str(session_domain(os.getpid(), ""))
 os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
 os.environ["ROS_PYTHON_CHECK_FIELDS"] = "1"
 

@@ -43,6 +43,7 @@ from rfidnav_bag.writer import CHUNK_DURATION_NS, BagWriter, StorageOptions
 from rfidnav_bringup import cli
 from rfidnav_bringup.processes import DomainLease
 from rfidnav_common.ros import standalone_node
+from support.domains import handed_domains
 
 pytestmark = pytest.mark.tier("unit")
 
@@ -373,7 +374,7 @@ WORKSPACE = Path(__file__).resolve().parents[1]
 def run_killing_the_recorder(out: Path, scenario: str) -> tuple[int, int, str]:
     """``./rfidnav run SCENARIO --rtf max`` whose recorder is SIGKILLed once /clock passes KILL_AT_NS: the latest
     /clock this process had seen at the kill, the CLI's exit code and its output."""
-    with DomainLease(range(40, 51)) as free:     # a domain of the tests' own range, free now
+    with DomainLease(handed_domains()) as free:     # a domain of this worker's share, free now
         domain = free.domain_id
     env = dict(os.environ)
     env.pop("ROS_DOMAIN_ID", None)

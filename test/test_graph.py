@@ -19,6 +19,7 @@ from rfidnav_bringup.processes import DomainLease
 from rfidnav_bringup.report import run_metrics
 from rfidnav_common.frames import compose
 from rfidnav_common.ros import odometry_pose
+from support.domains import handed_domains
 from support.frames import assert_same_pose, frame_tree
 from support.runs import WORKSPACE, run_cli, run_killing_the_controller, run_scenario
 
@@ -133,7 +134,7 @@ def test_a_killed_controller_is_respawned_and_given_the_mission_again(tmp_path: 
     """heading_controller is `respawn: true`: killed mid-mission, it is restarted, the goal is sent again and
     the mission still succeeds, with the restart counted in summary.json."""
     out = tmp_path / "runs"
-    with DomainLease(range(40, 51)) as free:     # a domain of the tests' own range, free now
+    with DomainLease(handed_domains()) as free:     # a domain of this worker's share, free now
         domain = free.domain_id
     returncode, output = run_killing_the_controller(out, "line_follow_90", "--rtf", str(GRAPH_TEST_RTF),
                                                     "--domain", str(domain))
@@ -164,7 +165,7 @@ def test_the_antennas_hang_under_base_link_and_odom_sits_in_the_map_at_the_start
 
 
 def test_a_domain_given_with_domain_that_another_run_holds_is_refused_before_anything_starts(tmp_path: Path) -> None:
-    with DomainLease(range(40, 51)) as held:
+    with DomainLease(handed_domains()) as held:
         result = run_cli("run", "line_follow_90", "--domain", str(held.domain_id), "--no-record", "--out",
                          str(tmp_path))
     assert result.returncode == 2, result.stdout + result.stderr
@@ -192,7 +193,7 @@ def test_a_run_in_process_leaves_no_node_in_its_domain_for_the_next_run_in_that_
     """bench rtf and sweeps run one run after another in one process: the second run met the first's
     /rfidnav_orchestrator in the domain ("another graph joined ROS domain 51: two nodes named
     /rfidnav_orchestrator"), kept there by a cycle between the node and its action client."""
-    with DomainLease(range(40, 51)) as free:     # a domain of the tests' own range, free now
+    with DomainLease(handed_domains()) as free:     # a domain of this worker's share, free now
         domain = free.domain_id
     result = subprocess.run([sys.executable, "-c", IN_PROCESS_RUN, str(domain), str(tmp_path)], cwd=WORKSPACE,
                             capture_output=True, text=True, timeout=300)

@@ -21,6 +21,7 @@ from rfidnav_bag.bags import bag_info
 from rfidnav_bringup.errors import LaunchError
 from rfidnav_bringup.processes import DomainLease, cpu_hogs, lock_folder, open_lock_file, start_child
 from rfidnav_common.ros import standalone_node
+from support.domains import handed_domains
 from support.runs import WORKSPACE, mission_started, start_cli
 
 pytestmark = pytest.mark.tier("graph")
@@ -126,7 +127,7 @@ def test_a_stopped_simulator_is_named_within_seconds_and_the_run_goes_on_when_it
 
 def test_a_node_of_a_second_graph_taking_one_of_our_names_ends_the_run_before_the_two_mix(tmp_path: Path) -> None:
     out = tmp_path / "runs"
-    with DomainLease(range(40, 51)) as free:     # a domain of the tests' own range, free now
+    with DomainLease(handed_domains()) as free:     # a domain of this worker's share, free now
         domain = free.domain_id
     impostor_code = ("import rclpy, sys; from rclpy.node import Node; rclpy.init(domain_id=int(sys.argv[1])); "
                      "node = Node('heading_controller'); print('up', flush=True); rclpy.spin(node)")
@@ -203,7 +204,7 @@ def test_the_domain_lock_folder_must_be_this_users_own_private_folder(tmp_path: 
 
 
 def test_two_runs_with_different_tmpdirs_still_share_one_set_of_domain_locks(tmp_path: Path) -> None:
-    with DomainLease(range(40, 51)) as held:
+    with DomainLease(handed_domains()) as held:
         result = subprocess.run(
             [sys.executable, "-c", "from rfidnav_bringup.processes import DomainLease; import sys; "
              f"DomainLease(range({held.domain_id}, {held.domain_id + 1}))"],
@@ -216,7 +217,7 @@ def test_a_domain_stays_leased_until_the_last_process_started_with_its_lease_has
     """A SIGKILLed orchestrator's lock is gone at once, but its nodes take seconds to stop (the recorder closes its
     bag): they hold the lease on, so no run leases the domain in those seconds and meets them (issue 33's CI run:
     "another graph joined ROS domain 51: two nodes named /robot_sim")."""
-    with DomainLease(range(40, 51)) as lease:
+    with DomainLease(handed_domains()) as lease:
         domain = lease.domain_id
         node = start_child([sys.executable, "-c", "import sys; sys.stdin.read()"], lease.handle,
                            stdin=subprocess.PIPE)
