@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import os
 
-from support.domains import session_domain  # noqa: E402  (os only: nothing of ROS is loaded yet)
+from support.domains import session_domain  # os only: nothing of ROS is loaded yet
 
 # The session's own domain, 1-39 (support/domains.py): the next one after the controller's for each pytest-xdist
 # worker, or two workers' tests would hear each other's nodes (a player's /clock, a recorder's topics). A session

@@ -28,6 +28,7 @@ from support.runs import (
     evidence_used,
     navigation_subscriptions,
     pose_errors,
+    recorded_commands,
     run_scenario,
     scenario_document,
 )
@@ -198,7 +199,7 @@ def test_a_slow_location_server_slows_the_run_but_changes_neither_commands_nor_f
     slow = run_scenario(tmp_path / "slow", str(tmp_path / "slow.yaml"), "--rtf", "max", "--seed", "2")
     # rfid_localizer alone locates a scan a second, over a mission of a minute or more: tens of slow answers.
     assert wall_duration_s(slow) > wall_duration_s(flat_run) + 10 * 0.3
-    assert len(commands(flat_run)) > 100 and commands(slow) == commands(flat_run)
+    assert len(recorded_commands(flat_run)) > 100 and recorded_commands(slow) == recorded_commands(flat_run)
     # rfid_localizer goes on for the steps after the mission until the clock source stops (~/settle), as many as
     # the load lets through: one run's poses are the other's up to where the shorter ends.
     shorter, longer = sorted((fused_poses(slow), fused_poses(flat_run)), key=len)
@@ -207,10 +208,6 @@ def test_a_slow_location_server_slows_the_run_but_changes_neither_commands_nor_f
 
 def wall_duration_s(run: Path) -> float:
     return json.loads((run / "summary.json").read_text())["wall_duration_s"]
-
-
-def commands(run: Path) -> list[tuple[float, float]]:
-    return [(msg.linear.x, msg.angular.z) for _, _, msg in read_messages(run / "bag", ["/cmd_vel"])]
 
 
 def fused_poses(run: Path) -> list[tuple[float, float, float]]:

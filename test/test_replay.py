@@ -66,7 +66,7 @@ from rfidnav_control.fuzzy import FuzzyHeadingController
 from rfidnav_control.parameters import HeadingControllerParameters
 from rfidnav_control.tag_route import TagObservation, TagRouteFollower, observe
 from rfidnav_msgs.action import FollowTagRoute
-from support.runs import WORKSPACE
+from support.runs import WORKSPACE, recorded_commands
 
 pytestmark = pytest.mark.tier("graph")
 
@@ -114,10 +114,6 @@ def recorded_run(tmp_path_factory) -> Path:
     runs = list((out / "runs").iterdir()) if (out / "runs").is_dir() else []
     assert result.returncode == 0 and len(runs) == 1, result.stdout + result.stderr
     return runs[0]
-
-
-def recorded_commands(run_dir: Path) -> list[Command]:
-    return [(m.linear.x, m.angular.z) for _, _, m in read_messages(run_dir / "bag", ["/cmd_vel"])]
 
 
 def recorded_route(run_dir: Path) -> list[str]:

@@ -14,18 +14,13 @@ from pathlib import Path
 import pytest
 import yaml
 
-from rfidnav_bag.bags import read_messages
-from support.runs import WORKSPACE, run_killing_the_controller, run_scenario, scenario_document
+from support.runs import WORKSPACE, recorded_commands, run_killing_the_controller, run_scenario, scenario_document
 from support.slow_heading_controller import DELAY_S
 
 pytestmark = pytest.mark.tier("graph")
 
 SCENARIO = "line_follow_0"
 METRIC_TOLERANCE = 0.01   # the "within 1 %"; measured 0.15 % on this short route
-
-
-def commands(run: Path) -> list[tuple[float, float]]:
-    return [(msg.linear.x, msg.angular.z) for _, _, msg in read_messages(run / "bag", ["/cmd_vel"])]
 
 
 def summary(run: Path) -> dict:
@@ -47,8 +42,8 @@ def test_a_stepped_run_says_which_clock_ran_and_who_it_waited_for(max_run: Path)
 def test_rtf_max_and_rtf_6_give_the_same_commands_for_the_same_seed(max_run: Path, tmp_path: Path) -> None:
     # 6: paced (--rtf max gives about 10 on two idle cores), and the 75 s mission takes 12.5 s of wall time.
     paced = run_scenario(tmp_path, SCENARIO, "--rtf", "6", "--seed", "3")
-    assert len(commands(max_run)) > 100
-    assert commands(paced) == commands(max_run)
+    assert len(recorded_commands(max_run)) > 100
+    assert recorded_commands(paced) == recorded_commands(max_run)
     # The metrics read the mission's end from the log time of the final goal status, an action topic outside
     # the stepping, which the recorder stamps with the latest /clock it has handled: a step or two either way.
     assert summary(paced)["metrics"]["tracking_rmse_m"] == pytest.approx(
@@ -64,10 +59,10 @@ def test_a_slow_participant_slows_the_run_but_does_not_change_its_commands(max_r
     scenario.write_text(yaml.safe_dump(document))
     slow = run_scenario(tmp_path / "runs", str(scenario), "--rtf", "max", "--seed", "3")
     assert "/heading_controller" in summary(slow)["clock"]["participants"]
-    rounds = len(commands(slow))
+    rounds = len(recorded_commands(slow))
     # Each round cost the controller DELAY_S of wall time on top: the whole run waited for it.
     assert summary(slow)["wall_duration_s"] > rounds * DELAY_S
-    assert commands(slow) == commands(max_run)
+    assert recorded_commands(slow) == recorded_commands(max_run)
 
 
 def test_the_free_running_clock_is_still_there(tmp_path: Path) -> None:

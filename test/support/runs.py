@@ -40,6 +40,11 @@ def run_scenario(out: Path, scenario: str, *options: str, mission_may_fail: bool
     return runs[0]
 
 
+def recorded_commands(run: Path) -> list[tuple[float, float]]:
+    """The run's /cmd_vel as the bag recorded it: (linear.x [m/s], angular.z [rad/s]) per command, in order."""
+    return [(msg.linear.x, msg.angular.z) for _, _, msg in read_messages(run / "bag", ["/cmd_vel"])]
+
+
 def scenario_document(name: str) -> dict:
     """The shipped scenario ``name`` as a mapping with absolute paths, to be changed and written elsewhere."""
     base = WORKSPACE / "config/scenarios"

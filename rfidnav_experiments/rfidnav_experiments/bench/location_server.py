@@ -125,4 +125,3 @@ def locate_request(scan: dict[str, float]) -> Locate.Request:
     request = Locate.Request(scan=WifiScan(access_points=points))
     request.scan.header.frame_id = WIFI_FRAME
     return request
-
