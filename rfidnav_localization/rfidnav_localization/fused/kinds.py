@@ -19,7 +19,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from rfidnav_localization.fused.measurement import Likelihoods, Measurement, MeasurementFactory, Particles
-from rfidnav_localization.fused.models import Antennas, WallTagModel, mounted
+from rfidnav_localization.fused.models import PhaseTags, WallTagModel, mounted
 from rfidnav_localization.fused.settings import FusedSettings
 from rfidnav_localization.fused.tag_map import FusedMap
 
@@ -144,22 +144,30 @@ class CeilingPhases(Measurement[Sequence[PhaseReading]]):
     def log_likelihoods(self, reading: Sequence[PhaseReading], particles: Particles) -> Likelihoods:
         result = Likelihoods()
         model = self.model
-        antennas: Antennas | None = None           # on the particles now and then, once a round needs them
-        antennas_then: Antennas | None = None
+        heard: list[tuple[PhaseReading, tuple[float, float, float]]] = []
         for phase in reading:
             ceiling_tag = self.map.ceiling_tags.get(phase.tag_id)
             if ceiling_tag is None or model is None:
                 result.ignored.append(phase.tag_id)
-                continue
-            antennas = antennas or model.antennas(particles.states)
-            result.add("ceiling_phase", model.log_likelihood_at(antennas, ceiling_tag, phase.dphi_rad,
-                                                                phase.frequency_hz))
-            before = self.previous.get(phase.tag_id)
-            if before is not None and before.frequency_hz == phase.frequency_hz and self.previous_states is not None:
-                antennas_then = antennas_then or model.antennas(self.previous_states)
-                changes = (phase.phase1_rad - before.phase1_rad, phase.phase2_rad - before.phase2_rad)
-                result.add("ceiling_range_rate", model.range_change_log_likelihood_at(
-                    antennas_then, antennas, ceiling_tag, changes, phase.frequency_hz))
+            else:
+                heard.append((phase, ceiling_tag))
+        if not heard or model is None:
+            return result
+        # All of a round's tags in one pass over the particles (a row each), added one tag at a time as before.
+        antennas = model.antennas(particles.states)
+        tags = PhaseTags.of([(tag, phase.frequency_hz) for phase, tag in heard])
+        for row in model.log_likelihoods_at(antennas, tags, np.array([phase.dphi_rad for phase, _ in heard])):
+            result.add("ceiling_phase", row)
+        again = [(index, phase, before) for index, (phase, _) in enumerate(heard)
+                 if (before := self.previous.get(phase.tag_id)) is not None
+                 and before.frequency_hz == phase.frequency_hz]
+        if again and self.previous_states is not None:
+            changes = np.array([(phase.phase1_rad - before.phase1_rad, phase.phase2_rad - before.phase2_rad)
+                                for _, phase, before in again])
+            rows = model.range_change_log_likelihoods_at(model.antennas(self.previous_states), antennas,
+                                                         tags.rows([index for index, _, _ in again]), changes)
+            for row in rows:
+                result.add("ceiling_range_rate", row)
         return result
 
     def end_round(self, reading: Sequence[PhaseReading] | None, particles: Particles) -> None:

@@ -14,6 +14,7 @@ rfidnav_common.wall_tags, rfidnav_sim.compass_model), taken from the same parame
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -95,32 +96,34 @@ class PhaseDifferenceModel:
     def log_likelihood(self, states: np.ndarray, tag: tuple[float, float, float], dphi_rad: float,
                        frequency_hz: float) -> np.ndarray:
         """The phase difference phi1 - phi2 of one backscatter."""
-        return self.log_likelihood_at(self.antennas(states), tag, dphi_rad, frequency_hz)
+        return self.log_likelihoods_at(self.antennas(states), PhaseTags.of([(tag, frequency_hz)]),
+                                       np.array([dphi_rad]))[0]
 
-    def log_likelihood_at(self, antennas: Antennas, tag: tuple[float, float, float], dphi_rad: float,
-                          frequency_hz: float) -> np.ndarray:
-        """:meth:`log_likelihood` with the antennas on the poses (:meth:`antennas`)."""
-        d1, d2 = (_distances(antenna, tag) for antenna in antennas)
-        predicted = 4.0 * math.pi * (d1 - d2) / wavelength_m(frequency_hz) + (self.offset1_rad - self.offset2_rad)
-        return robust_phase(wrap_angles(dphi_rad - predicted), self._sd(d1, d2), self.floor_rad, self.eps)
+    def log_likelihoods_at(self, antennas: Antennas, tags: PhaseTags, dphi_rad: np.ndarray) -> np.ndarray:
+        """:meth:`log_likelihood` of several backscatters (one row each, ``dphi_rad`` one each) with the antennas on
+        the poses (:meth:`antennas`): a round's tags in one pass, each row what :meth:`log_likelihood` gives."""
+        d1, d2 = (tags.distances(antenna) for antenna in antennas)
+        predicted = 4.0 * math.pi * (d1 - d2) / tags.wavelengths_m + (self.offset1_rad - self.offset2_rad)
+        return robust_phase(wrap_angles(dphi_rad[:, None] - predicted), self._sd(d1, d2), self.floor_rad, self.eps)
 
     def range_change_log_likelihood(self, previous: np.ndarray, states: np.ndarray,
                                     tag: tuple[float, float, float], changes_rad: tuple[float, float],
                                     frequency_hz: float) -> np.ndarray:
         """Each antenna's phase change (``changes_rad``: antenna 1, antenna 2) since the previous round, the
         particles there (``previous``) and here (``states``)."""
-        return self.range_change_log_likelihood_at(self.antennas(previous), self.antennas(states), tag, changes_rad,
-                                                   frequency_hz)
+        return self.range_change_log_likelihoods_at(self.antennas(previous), self.antennas(states),
+                                                    PhaseTags.of([(tag, frequency_hz)]), np.array([changes_rad]))[0]
 
-    def range_change_log_likelihood_at(self, previous: Antennas, antennas: Antennas,
-                                       tag: tuple[float, float, float], changes_rad: tuple[float, float],
-                                       frequency_hz: float) -> np.ndarray:
-        """:meth:`range_change_log_likelihood` with the antennas on the poses then and now (:meth:`antennas`)."""
-        total = np.zeros(antennas[0][0].shape)
-        for then, now_at, change in zip(previous, antennas, changes_rad, strict=True):
-            before, now = _distances(then, tag), _distances(now_at, tag)
-            predicted = 4.0 * math.pi * (now - before) / wavelength_m(frequency_hz)
-            total += robust_phase(wrap_angles(change - predicted), self._sd(before, now), self.floor_rad, self.eps)
+    def range_change_log_likelihoods_at(self, previous: Antennas, antennas: Antennas, tags: PhaseTags,
+                                        changes_rad: np.ndarray) -> np.ndarray:
+        """:meth:`range_change_log_likelihood` of several tags (one row each; ``changes_rad`` one row of antenna 1's
+        and antenna 2's change each) with the antennas on the poses then and now (:meth:`antennas`)."""
+        total = np.zeros((len(changes_rad), antennas[0][0].shape[0]))
+        for then, now_at, change in zip(previous, antennas, changes_rad.T, strict=True):
+            before, now = tags.distances(then), tags.distances(now_at)
+            predicted = 4.0 * math.pi * (now - before) / tags.wavelengths_m
+            total += robust_phase(wrap_angles(change[:, None] - predicted), self._sd(before, now), self.floor_rad,
+                                  self.eps)
         return total
 
     def _sd(self, first: np.ndarray, second: np.ndarray) -> np.ndarray:
@@ -142,10 +145,31 @@ def _mounted_at(states: np.ndarray, cos_yaw: np.ndarray, sin_yaw: np.ndarray,
             antenna[2])
 
 
-def _distances(antenna: Mounted, tag: tuple[float, float, float]) -> np.ndarray:
-    """The distance from the antenna mounted on each pose to the tag [m]."""
-    x, y, height = antenna
-    return np.sqrt(np.square(tag[0] - x) + np.square(tag[1] - y) + (tag[2] - height) ** 2)
+@dataclass(frozen=True)
+class PhaseTags:
+    """Ceiling tags weighed together (one per row), each with the wavelength it was read at."""
+    x: np.ndarray                 # t x 1 [m], map frame
+    y: np.ndarray
+    z: np.ndarray                 # t values: the tags' heights [m]
+    wavelengths_m: np.ndarray     # t x 1
+
+    @classmethod
+    def of(cls, tags: Sequence[tuple[tuple[float, float, float], float]]) -> PhaseTags:
+        """From (tag position, frequency [Hz]) pairs."""
+        return cls(np.array([[tag[0]] for tag, _ in tags]), np.array([[tag[1]] for tag, _ in tags]),
+                   np.array([tag[2] for tag, _ in tags]),
+                   np.array([[wavelength_m(frequency_hz)] for _, frequency_hz in tags]))
+
+    def distances(self, antenna: Mounted) -> np.ndarray:
+        """t x n: the distance from the antenna mounted on each pose to each tag [m]."""
+        x, y, height = antenna
+        # The height term per tag as Python floats, as it was computed one tag at a time (the same bits).
+        rises = np.array([[(z - height) ** 2] for z in self.z.tolist()])
+        return np.sqrt(np.square(self.x - x) + np.square(self.y - y) + rises)
+
+    def rows(self, indices: Sequence[int]) -> PhaseTags:
+        """These tags only, in this order."""
+        return PhaseTags(self.x[indices], self.y[indices], self.z[indices], self.wavelengths_m[indices])
 
 
 @dataclass(frozen=True)
