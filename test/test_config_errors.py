@@ -119,7 +119,7 @@ CASES = {
         SCENARIO, "nodes.robot_sim.params", ("not found",)),
     "world file that is not found": Case(
         lambda root: (root / "worlds/line_follow.yaml").unlink(),
-        "worlds/line_follow.yaml", "", ("not found",)),
+        SCENARIO, "world", ("world file not found", "worlds/line_follow.yaml")),
     "map without arrival tags": Case(
         lambda root: edit(root / "maps/line_follow.yaml", "arrival_tags: {C1: F1, C2: F2}", "arrival_tags: {}"),
         "maps/line_follow.yaml", "arrival_tags", ()),

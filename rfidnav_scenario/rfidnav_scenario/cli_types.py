@@ -42,8 +42,19 @@ def checked_number(convert: Callable[[str], Any], unreadable: str, accepted: Cal
 
 
 MAX_RTF = 1000.0        # a real-time factor beyond it: use max
+
+
+def _rtf_number(text: str) -> float:
+    """``max`` is infinite. The number "inf" is not another way to say it: made NaN here, it is refused as out of
+    range (the help promises a number of at most MAX_RTF, or max)."""
+    if text == "max":
+        return math.inf
+    value = float(text)
+    return math.nan if math.isinf(value) else value
+
+
 # --rtf: a number above 0 (at most MAX_RTF), or ``max`` (infinite: as fast as the stepped graph answers).
-rtf_value = checked_number(lambda text: math.inf if text == "max" else float(text), "a number or 'max'",
+rtf_value = checked_number(_rtf_number, "a number or 'max'",
                            lambda rtf: rtf == math.inf or 0.0 < rtf <= MAX_RTF,
                            lambda text: f"expected a real-time factor above 0 and at most {MAX_RTF:g}, or max, "
                                         f"got {text}")

@@ -209,8 +209,8 @@ def load_scenario(name_or_path: str, swaps: dict[str, str] | None = None,
     section = Section.from_file(path)
     section.reject_unknown(("name", "description", "world", "map", "robot", "nodes", "mission", "metrics"))
     base = path.parent
-    world_file = (base / section.string("world")).resolve()
-    map_file = (base / section.string("map")).resolve()
+    world_file = _referenced_file(section, "world", section.string("world"), base, "world")
+    map_file = _referenced_file(section, "map", section.string("map"), base, "map")
     robot = section.section("robot")
     robot.reject_unknown(("x", "y", "yaw_deg"))
     nodes = {role: _node_spec(role, section.section("nodes").section(role), base)
@@ -274,6 +274,16 @@ def load_scenario(name_or_path: str, swaps: dict[str, str] | None = None,
     return replace(scenario, warnings=route_reach_warnings(scenario, parameters))
 
 
+def _referenced_file(section: Section, key: str, relative: str, base: Path, what: str) -> Path:
+    """The file a scenario field names (relative to the scenario's folder), refused at that field if it is none:
+    ``world: .`` names a folder, and the line must say which field of which scenario did."""
+    path = (base / relative).resolve()
+    if not path.is_file():
+        problem = "is a folder, not a file" if path.is_dir() else "not found"
+        raise section.error(key, f"{what} file {problem}: {path}")
+    return path
+
+
 def _node_spec(role: str, entry: Section, base: Path) -> NodeSpec:
     entry.reject_unknown(("package", "executable", "command", "name", "params", "overrides", "sim",
                           "clock_source", "respawn", "max_respawns", "process", "stepped", "map"))
@@ -289,17 +299,12 @@ def _node_spec(role: str, entry: Section, base: Path) -> NodeSpec:
     params = [params] if isinstance(params, str) else params
     if not isinstance(params, list) or not all(isinstance(p, str) for p in params):
         raise entry.error("params", "expected a parameter file path or a list of them")
-    files = tuple((base / p).resolve() for p in params)
-    for file in files:
-        if not file.is_file():
-            raise entry.error("params", f"parameter file not found: {file}")
+    files = tuple(_referenced_file(entry, "params", p, base, "parameter") for p in params)
     overrides = entry.raw("overrides", {})
     if not isinstance(overrides, dict):
         raise entry.error("overrides", "expected a mapping of parameter names to values")
-    map_file = (base / entry.string("map")).resolve() if entry.has("map") else None
+    map_file = _referenced_file(entry, "map", entry.string("map"), base, "map") if entry.has("map") else None
     if map_file is not None:
-        if not map_file.is_file():
-            raise entry.error("map", f"map file not found: {map_file}")
         _robot_map(map_file)           # a bad map is the scenario's error, before any process starts
     process = entry.raw("process", None)
     if process is not None:
