@@ -797,6 +797,22 @@ def test_player_plays_a_split_bag_in_order(ros: Ros, processes: Processes, tmp_p
     assert [m.pose.pose.position.x for m in inbox.received["/odom"]] == pytest.approx([0.1 * i for i in range(60)])
 
 
+@pytest.mark.tier("unit")
+def test_replay_of_a_topic_the_bag_lacks_is_refused_in_one_line_before_a_domain_is_leased(
+        synthetic_bag: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]) -> None:
+    from rfidnav_bringup import cli, processes
+
+    def tripwire(*_args, **_kwargs):
+        raise AssertionError("a domain was leased or the player started for a topic the bag lacks")
+    monkeypatch.setattr(processes, "DomainLease", tripwire)
+    monkeypatch.setattr(processes, "run_supervised", tripwire)
+    code = cli.main(["replay", str(synthetic_bag), "--topics", "/odom", "/nope"])
+    err = capsys.readouterr().err
+    assert code == 2 and "Traceback" not in err
+    assert err.strip().splitlines() == [f"rfidnav replay: --topics: /nope not in bag {synthetic_bag} "
+                                        "(it has /odom, /sim/markers)"]
+
+
 def test_player_rejects_a_topic_the_bag_lacks(processes: Processes, synthetic_bag: Path) -> None:
     player = processes.start("player", {"bag": str(synthetic_bag), "topics": "[/odom,/nope]"})
     assert processes.wait(player, 20) == 2

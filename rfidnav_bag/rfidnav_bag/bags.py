@@ -43,6 +43,7 @@ from ruamel.yaml import YAML, YAMLError
 
 from rfidnav_bag.errors import BagError
 from rfidnav_bag.salvage import FileScan, SalvagedChannel, salvaged_messages, scan_file
+from rfidnav_common.errors import ConfigError
 
 __all__ = [
     "Bag", "BagFile", "BagInfo", "OfferedQos", "RawMessage", "TopicInfo", "bag_info", "clock_stamp_ns",
@@ -342,6 +343,17 @@ class BagInfo:
     def compression(self) -> str:
         """The chunk compression of the files ("none" when no file is compressed)."""
         return ", ".join(dict.fromkeys(f.compression for f in self.files)) or "none"
+
+    def selected(self, names: Iterable[str], where: str, field: str) -> tuple[TopicInfo, ...]:
+        """The recorded topics named (all of them for none), refused as a ConfigError at ``where``/``field`` if one
+        is not in the bag: checked by the replay verb before it leases a domain, and by the player itself."""
+        recorded = {topic.name: topic for topic in self.topics}
+        names = list(names)
+        missing = [name for name in names if name not in recorded]
+        if missing:
+            raise ConfigError(where, field, f"{', '.join(missing)} not in bag {self.path} "
+                                            f"(it has {', '.join(recorded) or 'no topics'})")
+        return tuple(recorded[name] for name in names) if names else self.topics
 
     def topic(self, name: str) -> TopicInfo:
         for info in self.topics:

@@ -41,7 +41,7 @@ from std_srvs.srv import Trigger
 from rfidnav_bag.bags import BagInfo, RawMessage, TopicInfo, bag_info, read_raw
 from rfidnav_bag.errors import BagError
 from rfidnav_common.config import param
-from rfidnav_common.errors import ConfigError, ParameterError
+from rfidnav_common.errors import ParameterError
 from rfidnav_common.ros import declare_parameters, message_class, run_node, stop_requested
 
 TICK_S = 0.005  # the pacing timer's period: the worst lateness of a message [s, wall]
@@ -93,13 +93,8 @@ class PlayerNode(Node):
         for note in self.info.notes:   # a bag that was not finalised: what was lost
             self.get_logger().warning(f"{self.params.bag}: {note}")
         self.done: Future = Future()
-        recorded = {t.name: t for t in self.info.topics}
-        missing = [t for t in self.params.topics if t not in recorded]
-        if missing:
-            raise ConfigError(f"parameters of node '{self.get_fully_qualified_name()}'", "topics",
-                              f"{', '.join(missing)} not in bag {self.params.bag} "
-                              f"(it has {', '.join(recorded) or 'no topics'})")
-        selected = [recorded[t] for t in (self.params.topics or recorded)]
+        selected = list(self.info.selected(self.params.topics,
+                                           f"parameters of node '{self.get_fully_qualified_name()}'", "topics"))
         if self.params.clock and any(t.name == "/clock" for t in selected):
             self.get_logger().info("clock:=true: the recorded /clock is not replayed (this node publishes it)")
             selected = [t for t in selected if t.name != "/clock"]

@@ -300,7 +300,8 @@ def verb_replay(args) -> int:
     from rfidnav_bringup.report import locate_run
 
     _, bag = locate_run(args.bag)
-    bag_info(bag)  # fails early, with one clear message, on a missing or truncated bag
+    # Fails early, with one clear message, on a missing or truncated bag or a topic it does not hold.
+    bag_info(bag).selected(args.topics, "--topics", "")
     # A leased domain on this machine by default: a replay republishes the recorded /cmd_vel, which must reach no
     # robot and no other run.
     with DomainLease(RUN_DOMAINS if args.domain is None else range(args.domain, args.domain + 1)) as lease:
