@@ -332,6 +332,7 @@ FILE_CASES: dict[str, FileCase] = {
     "goal tags numbers": goal(LF, GOAL_LF, "goal: {tag_ids: [1, 2]}", "tag_ids", "non-empty list"),
     "goal without tags": goal(LF, GOAL_LF, "goal: {tag_ids: []}", "tag_ids", "non-empty list"),
     "goal tag not in the map": goal(LF, GOAL_LF, "goal: {tag_ids: [C1, C9]}", "C9"),
+    "goal tag twice in a row": goal(LF, GOAL_LF, "goal: {tag_ids: [C1, C1, C2]}", "C1 twice in a row"),
     "goal a number": goal(LF, GOAL_LF, "goal: 5", "mapping"),
     "empty goal": goal(LF, GOAL_LF, "goal: {}", "tag_ids: missing"),
     "no goal": FileCase(LF, replaced(S_LF, f"  {GOAL_LF}\n", ""), S_LF, "mission.goal", ("missing",)),

@@ -127,13 +127,16 @@ def test_closest_approach_arrival_when_the_floor_tag_falls_silent():
     assert route.step(ROUND_S * 4, ceiling_pair("C1", 1.0, 1.0)).mode == "finished"
 
 
-def test_unknown_tag_or_empty_route_in_start_raises():
+def test_an_unknown_tag_an_empty_route_or_a_tag_twice_in_a_row_is_refused_and_a_later_revisit_is_not():
     route = follower()
     with pytest.raises(ValueError, match="C9"):
         route.start(["C1", "C9"], 0.0)
     with pytest.raises(ValueError, match="empty"):
         route.start([], 0.0)
-    assert route.unknown_tags(["C1", "X", "C3", "Y"]) == ["X", "Y"]
+    assert route.refusal(["C1", "X", "C3", "Y"]) == "unknown tag ids X, Y"
+    with pytest.raises(ValueError, match=r"C3 twice in a row \(positions 2 and 3\)"):
+        route.start(["C1", "C3", "C3"], 0.0)
+    assert route.refusal(["C1", "C3", "C1"]) is None         # back along the same hallway
 
 
 # ---------------------------------------------------------------------------------------------------- steering

@@ -82,6 +82,17 @@ class RouteMap:
         return [tag for tag in route if tag not in self.arrival_tags]
 
 
+def repeated_in_a_row(route: Sequence[str]) -> str | None:
+    """Why a route that lists one tag twice in a row is refused (None if it does not). A leg joins two different
+    tags: a tag listed again at once would have the follower, just past it, turn back to pass it again, which no
+    one means. A tag listed again later is a way back along the same hallway, and is followed as listed."""
+    for index, (here, there) in enumerate(zip(route, route[1:])):
+        if here == there:
+            return (f"{here} twice in a row (positions {index + 1} and {index + 2}): each leg joins two different "
+                    "tags")
+    return None
+
+
 def load_route_map(path: Path, radio_map_may_be_missing: bool = False) -> RouteMap:
     """A route map; its ``radio_map`` must exist unless ``radio_map_may_be_missing`` (the survey that writes it)."""
     section = Section.from_file(Path(path))

@@ -61,12 +61,10 @@ class HeadingControllerNode(SteppedNode):
         return self.get_clock().now().nanoseconds * 1e-9
 
     def refusal(self, goal: FollowTagRoute.Goal) -> str | None:
-        route = list(goal.tag_ids)
-        if not route:
-            return "the route is empty"
-        if unknown := self.follower.unknown_tags(route):
-            return f"unknown tag ids {', '.join(unknown)} (not in the route map {self.params.map_file})"
-        return None
+        problem = self.follower.refusal(list(goal.tag_ids))
+        if problem is not None and problem.startswith("unknown"):
+            return f"{problem} (not in the route map {self.params.map_file})"
+        return problem
 
     def on_started(self, goal: RouteGoal) -> None:
         route = list(goal.handle.request.tag_ids)

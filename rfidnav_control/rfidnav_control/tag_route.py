@@ -46,6 +46,7 @@ from rfidnav_common.errors import ParameterError
 from rfidnav_common.geometry import wrap_angle
 from rfidnav_common.inputs import BadInput, TagRead, tag_read
 from rfidnav_common.rf import range_change_m
+from rfidnav_common.robot_map import repeated_in_a_row
 
 ARRIVAL_MODES = ("first_read", "closest_approach")
 SEARCH_MODES = ("search_turn", "search_spiral")
@@ -234,13 +235,18 @@ class TagRouteFollower:
         # follower's life: not steered on, counted for the node's warning.
         self.cross_channel_rounds = 0
 
-    def unknown_tags(self, route: list[str]) -> list[str]:
-        return [tag for tag in route if tag not in self.arrival_tags]
+    def refusal(self, route: list[str]) -> str | None:
+        """Why this route cannot be followed (None if it can): empty, a tag without an arrival tag, a tag twice in
+        a row."""
+        if not route:
+            return "the route is empty"
+        if unknown := [tag for tag in route if tag not in self.arrival_tags]:
+            return f"unknown tag ids {', '.join(unknown)}"
+        return repeated_in_a_row(route)
 
     def start(self, route: list[str], time_s: float) -> None:
-        unknown = self.unknown_tags(route)
-        if not route or unknown:
-            raise ValueError(f"unknown tag ids {unknown}" if unknown else "empty route")
+        if problem := self.refusal(route):
+            raise ValueError(problem)
         self.route = list(route)
         self.index = 0
         self.finished = False

@@ -39,7 +39,7 @@ from rfidnav_common.node_registry import (
     ReadsAntennaPorts,
     registered_node,
 )
-from rfidnav_common.robot_map import RouteMap, contains, load_route_map
+from rfidnav_common.robot_map import RouteMap, contains, load_route_map, repeated_in_a_row
 from rfidnav_common.topological_map import TopologicalMap, load_topological_map
 from rfidnav_localization.radio_map_file import load_radio_map
 from rfidnav_planning.partition_planner import lattice_refusal
@@ -511,6 +511,8 @@ def _check_route(scenario: Scenario, mission: Section) -> None:
     unknown = scenario.route_map.unknown_tags(tag_ids)
     if unknown:
         raise mission.error("goal", f"tag_ids: {', '.join(unknown)} not in the route map {scenario.map_file}")
+    if repeated := repeated_in_a_row(tag_ids):
+        raise mission.error("goal", f"tag_ids: {repeated}")
 
 
 def _check_goal_area(scenario: Scenario, mission: Section) -> None:
