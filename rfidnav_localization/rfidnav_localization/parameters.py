@@ -115,6 +115,12 @@ class LocationServerParameters:
     def validate(self) -> None:
         if not self.database_file:
             raise ParameterError("database_file", "required")
+        # A folder is refused here, before the node starts (as the node it would fail at start, be restarted and
+        # fail again): a name ending in a separator, ".", "..", or an absolute path to a folder.
+        named = Path(self.database_file)
+        if self.database_file.endswith("/") or named.name in ("", ".", "..") or (named.is_absolute()
+                                                                               and named.is_dir()):
+            raise ParameterError("database_file", f"names a folder, not a file: {self.database_file}")
         self.locate_settings().validate()
 
     def database_path(self) -> Path:
