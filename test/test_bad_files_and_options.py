@@ -728,6 +728,7 @@ OPTION_CASES: dict[str, tuple[tuple[str, ...], str, tuple[str, ...]]] = {
     "run --bogus": (("run", LF, "--bogus"), "--bogus", ("unrecognized",)),
     "demo --rtf 0": (("demo", "--rtf", "0"), "--rtf", ("above 0",)),
     "demo --out a file": (("demo", "--out", "FILE"), "--out", ("is a file",)),
+    "report --out a file": (("report", "OUT", "--out", "FILE"), "--out", ("is a file",)),
     "replay --rate 0": (("replay", "FILE", "--rate", "0"), "--rate", ("above 0",)),
     "replay --rate nan": (("replay", "FILE", "--rate", "nan"), "--rate", ("above 0",)),
     "replay --rate 1e9": (("replay", "FILE", "--rate", "1e9"), "--rate", ("at most 1000",)),

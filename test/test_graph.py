@@ -5,9 +5,13 @@ One run of line_follow_90 is shared by the tests of this module (it takes ~40 s 
 
 from __future__ import annotations
 
+import contextlib
 import json
+import os
+import shutil
 import subprocess
 import sys
+from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
@@ -113,6 +117,45 @@ def test_report_recomputes_the_summary_metrics(line_run: Path) -> None:
     assert result.returncode == 0, result.stderr
     report = json.loads(result.stdout)
     assert all(Path(p).stat().st_size > 10_000 for p in report["plots"])
+
+
+@contextlib.contextmanager
+def read_only(folder: Path) -> Iterator[None]:
+    """The folder read-only for this user: a read-only bind mount for root (whom permission bits do not stop, as
+    a run folder on a read-only disk or share would), its permission bits for anyone else."""
+    if os.geteuid() != 0:
+        folder.chmod(0o555)
+        try:
+            yield
+        finally:
+            folder.chmod(0o755)
+        return
+    for command in (["mount", "--bind", str(folder), str(folder)],
+                    ["mount", "-o", "remount,bind,ro", str(folder), str(folder)]):
+        done = subprocess.run(command, capture_output=True, text=True)
+        if done.returncode != 0:
+            subprocess.run(["umount", str(folder)], capture_output=True)
+            pytest.skip(f"cannot make a read-only bind mount here: {done.stderr.strip()}")
+    try:
+        yield
+    finally:
+        subprocess.run(["umount", str(folder)], check=True)
+
+
+def test_report_of_a_read_only_run_folder_is_refused_in_one_line_and_writes_its_plots_to_out(
+        line_run: Path, tmp_path: Path) -> None:
+    run = tmp_path / "run"
+    shutil.copytree(line_run, run, ignore=shutil.ignore_patterns("*.png"))
+    with read_only(run):
+        refused = run_cli("report", str(run))
+        plots = tmp_path / "plots"
+        written = run_cli("report", str(run), "--json", "--out", str(plots))
+    assert refused.returncode == 2 and "Traceback" not in refused.stderr
+    lines = [line for line in refused.stderr.splitlines() if line.startswith("rfidnav report:")]
+    assert len(lines) == 1 and str(run) in lines[0] and "--out" in lines[0], refused.stderr
+    assert written.returncode == 0, written.stderr
+    assert {Path(p).parent for p in json.loads(written.stdout)["plots"]} == {plots}
+    assert not list(run.glob("*.png"))
 
 
 def test_missing_and_truncated_bags_are_clear_errors(line_run: Path, tmp_path: Path) -> None:

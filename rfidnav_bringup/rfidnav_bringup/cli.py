@@ -39,6 +39,7 @@ from rfidnav_scenario.cli_types import (
     seed_value,
     start_seconds,
     topic_name,
+    unwritable,
 )
 
 DEMO_SCENARIO = "hallway"
@@ -174,6 +175,8 @@ def parser() -> tuple[argparse.ArgumentParser, dict[str, Handler]]:
     report = verbs.add_parser("report", help="plots and recomputed metrics of a run")
     report.add_argument("run", type=Path)
     report.add_argument("--json", action="store_true")
+    report.add_argument("--out", type=output_folder,
+                        help="folder for the plots (created if missing; default: the run folder)")
     handlers = dict(VERBS)
     for extension in entry_points(group=VERB_ENTRY_POINTS):
         handlers[extension.name] = extension.load()(verbs)
@@ -382,11 +385,15 @@ def verb_echo(args) -> int:
 
 
 def verb_report(args) -> int:
-    from rfidnav_bringup.report import write_report
+    from rfidnav_bringup.report import locate_run, write_report
     from rfidnav_common.progress import stage
 
+    if args.out is None:
+        run_dir, _ = locate_run(args.run)
+        if (problem := unwritable(run_dir)) is not None:
+            raise ConfigError(str(args.run), "", f"{problem}: give --out FOLDER for the plots")
     with stage(f"report {args.run}"):
-        metrics, plots = write_report(args.run)
+        metrics, plots = write_report(args.run, args.out)
     if args.json:
         print(json.dumps({"metrics": metrics, "plots": [str(p) for p in plots]}))
     else:

@@ -253,9 +253,12 @@ def draw_world(axes, record: RunRecord, run: Trajectory) -> None:
             axes.annotate(tag.tag_id, tag.position[:2], textcoords="offset points", xytext=(4, 4))
 
 
-def write_report(path: Path) -> tuple[dict[str, float | int | None], list[Path]]:
-    """Recompute the metrics and write trajectory.png (and tracking_error.png for tag routes) into the run folder."""
+def write_report(path: Path, out_dir: Path | None = None) -> tuple[dict[str, float | int | None], list[Path]]:
+    """Recompute the metrics and write trajectory.png (and tracking_error.png for tag routes) into ``out_dir``
+    (created if missing; default: the run folder)."""
     record = load_run(path)
+    out_dir = record.run_dir if out_dir is None else out_dir
+    out_dir.mkdir(parents=True, exist_ok=True)
     metrics = record_metrics(record)
     run = record.ground_truth.between(record.mission_start_s, record.mission_end_s)
     figure, axes = plt.subplots(figsize=(7, 7))
@@ -271,7 +274,7 @@ def write_report(path: Path) -> tuple[dict[str, float | int | None], list[Path]]
     axes.set_title(f"{record.run_dir.name}: trajectory")
     axes.legend(loc="best")
     axes.grid(True, alpha=0.3)
-    trajectory_png = record.run_dir / "trajectory.png"
+    trajectory_png = out_dir / "trajectory.png"
     figure.savefig(trajectory_png, dpi=110, bbox_inches="tight")
     plt.close(figure)
     if "tracking" not in record.metric_groups or record.trajectory_source != "ground_truth":
@@ -287,7 +290,7 @@ def write_report(path: Path) -> tuple[dict[str, float | int | None], list[Path]]
     axes.set_xlabel("time since mission start [s]")
     axes.set_ylabel("e(t) [cm], + = left of path")
     axes.grid(True, alpha=0.3)
-    error_png = record.run_dir / "tracking_error.png"
+    error_png = out_dir / "tracking_error.png"
     figure.savefig(error_png, dpi=110, bbox_inches="tight")
     plt.close(figure)
     return metrics, [trajectory_png, error_png]

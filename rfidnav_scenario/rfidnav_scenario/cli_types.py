@@ -112,11 +112,19 @@ def output_folder(text: str) -> Path:
     existing = next(parent for parent in (path, *path.parents) if parent.exists())
     if not existing.is_dir():
         raise argparse.ArgumentTypeError(f"{existing} is a file, not a folder")
-    try:
-        Path(tempfile.mkdtemp(dir=existing, prefix=".rfidnav-probe-")).rmdir()
-    except OSError as error:
-        raise argparse.ArgumentTypeError(f"cannot write in {existing}: {error.strerror}") from None
+    if (problem := unwritable(existing)) is not None:
+        raise argparse.ArgumentTypeError(problem)
     return path
+
+
+def unwritable(folder: Path) -> str | None:
+    """Why this user cannot write in an existing folder (None if it can), found by trying: permission bits do not
+    say it for root, nor for a read-only file system."""
+    try:
+        Path(tempfile.mkdtemp(dir=folder, prefix=".rfidnav-probe-")).rmdir()
+    except OSError as error:
+        return f"cannot write in {folder}: {error.strerror}"
+    return None
 
 
 def output_file(text: str) -> Path:
