@@ -150,10 +150,14 @@ def test_a_non_finite_velocity_is_refused(bad):
         inputs.velocity(0.1, bad, 0.5, 2.0)
 
 
-def test_a_wifi_scan_refuses_an_rss_beyond_physics_and_an_empty_bssid():
+def test_a_wifi_scan_refuses_an_rss_beyond_physics_an_empty_bssid_and_a_bssid_listed_twice():
     def scan(*aps):
         return SimpleNamespace(access_points=[SimpleNamespace(bssid=b, rssi_dbm=r) for b, r in aps])
-    assert inputs.wifi_rss(scan(("aa", -50.0), ("aa", -40.0), ("bb", -90.0))) == {"aa": -40.0, "bb": -90.0}
+    assert inputs.wifi_rss(scan(("aa", -50.0), ("bb", -90.0))) == {"aa": -50.0, "bb": -90.0}
+    for twice in ("aa", "AA"):
+        with pytest.raises(BadInput,
+                           match=rf"access_points\[2\].bssid: {twice} listed twice \(also access_points\[0\]\)"):
+            inputs.wifi_rss(scan(("aa", -50.0), ("bb", -90.0), (twice, -40.0)))
     for bad in EXTREMES:
         with pytest.raises(BadInput, match=r"access_points\[1\].rssi_dbm \(bb\)"):
             inputs.wifi_rss(scan(("aa", -50.0), ("bb", bad)))

@@ -200,15 +200,18 @@ def round_reads(msg: Any, drops: Drops, ports: Collection[int] | None = None, wh
 
 
 def wifi_rss(scan: Any) -> dict[str, float]:
-    """A rfidnav_msgs WifiScan as BSSID -> RSS [dBm] (the strongest when an AP is listed twice), each RSS in
-    RSS_DBM and each BSSID non-empty; BadInput naming the first access point that is not."""
+    """A rfidnav_msgs WifiScan as BSSID -> RSS [dBm], each RSS in RSS_DBM, each BSSID non-empty and listed once
+    (in any case: a scan lists an AP once, and which of two readings to trust no one can say); BadInput naming the
+    first access point that is not."""
     rss: dict[str, float] = {}
+    first: dict[str, int] = {}
     for index, access_point in enumerate(scan.access_points):
         where = f"access_points[{index}]"
         if not access_point.bssid:
             raise BadInput(f"{where}.bssid: empty")
-        value = rss_dbm(access_point.rssi_dbm, f"{where}.rssi_dbm ({access_point.bssid})")
-        rss[access_point.bssid] = max(value, rss.get(access_point.bssid, value))
+        if (before := first.setdefault(access_point.bssid.lower(), index)) != index:
+            raise BadInput(f"{where}.bssid: {access_point.bssid} listed twice (also access_points[{before}])")
+        rss[access_point.bssid] = rss_dbm(access_point.rssi_dbm, f"{where}.rssi_dbm ({access_point.bssid})")
     return rss
 
 
