@@ -31,6 +31,7 @@ from rfidnav_common.config import (
 )
 from rfidnav_common.errors import ParameterError
 from rfidnav_common.frames import BASE_FRAME, FACINGS, MAP_FRAME, ODOM_FRAME, Frame, antenna_frames
+from rfidnav_common.inputs import RSS_DBM
 from rfidnav_common.node_registry import LimitsSpeed, NodeRegistration, PublishesAntennaPorts
 from rfidnav_common.polling import PollClock, Polling
 from rfidnav_common.seeding import rng_for
@@ -153,6 +154,10 @@ class ReaderParameters(PublishesAntennaPorts):
     miss_probability: float = param("probability that a readable tag is missed in a round", 0.0, PROBABILITY)
     rssi_at_1m_dbm: float = param("RSSI of a tag 1 m away on boresight [dBm]", -40.0, DBM)
     sensitivity_dbm: float = param("weakest RSSI the reader decodes [dBm]", -90.0, DBM)
+    max_rssi_dbm: float = param(
+        "strongest RSSI the reader reports [dBm]: its receiver saturates, so a tag on the antenna reads no stronger "
+        "(the link budget alone gives +50 dBm 2 mm from the HF floor antenna; every consumer refuses a read above "
+        "+30 dBm, rfidnav_common.inputs.RSS_DBM)", -10.0, Limits(RSS_DBM[0], RSS_DBM[1]))
     pattern_exponent: float = param("antenna gain pattern cos(angle)^n, one way", 1.0, Limits(0.0, 100.0))
     side_area_width_m: float = param("side antennas: width of the induction area [m] (paper 004: 40 cm)", 0.40,
                                      READ_RANGE_M)
@@ -175,6 +180,9 @@ class ReaderParameters(PublishesAntennaPorts):
                                **{name: len(getattr(self, name)) for name in PER_ANTENNA}})
         if not self.channels_mhz:
             raise ParameterError("channels_mhz", "at least one frequency is needed")
+        if self.max_rssi_dbm <= self.sensitivity_dbm:
+            raise ParameterError("max_rssi_dbm", f"{self.max_rssi_dbm:g} dBm is not above sensitivity_dbm "
+                                                 f"{self.sensitivity_dbm:g}: no read could be reported")
         self.check_range_caps()
 
     def check_range_caps(self) -> None:
@@ -221,7 +229,8 @@ class ReaderParameters(PublishesAntennaPorts):
         return ReaderModel(antennas=antennas, channels_hz=tuple(f * 1e6 for f in self.channels_mhz),
                            hop_dwell_s=self.hop_dwell_s, phase_noise_rad_per_m=self.phase_noise_rad_per_m,
                            miss_probability=self.miss_probability, rssi_at_1m_dbm=self.rssi_at_1m_dbm,
-                           sensitivity_dbm=self.sensitivity_dbm, pattern_exponent=self.pattern_exponent,
+                           sensitivity_dbm=self.sensitivity_dbm, max_rssi_dbm=self.max_rssi_dbm,
+                           pattern_exponent=self.pattern_exponent,
                            side_area_width_m=self.side_area_width_m,
                            passage_miss_probability=self.passage_miss_probability,
                            unreadable_tags=tuple(self.unreadable_tags))

@@ -62,6 +62,7 @@ class ReaderModel:
     miss_probability: float = 0.0
     rssi_at_1m_dbm: float = -40.0
     sensitivity_dbm: float = -90.0
+    max_rssi_dbm: float = -10.0              # the receiver saturates: no read is reported stronger
     pattern_exponent: float = 1.0            # one-way gain cos(theta)^n off boresight
     side_area_width_m: float = 0.40          # side antennas: the induction area's width (paper 004 Fig. 3)
     passage_miss_probability: float = 0.0    # side antennas: a wall tag missed for a whole passage
@@ -217,7 +218,9 @@ class ReaderSimulator:
 
     def reads_of(self, tag_ids: list[str], antenna_indices: np.ndarray, distance: np.ndarray,
                  phase_offsets: np.ndarray, rssi: np.ndarray, frequency: float) -> list[Read]:
-        """One Read per (tag, antenna, distance): phase with distance-proportional noise, I/Q from RSSI."""
+        """One Read per (tag, antenna, distance): phase with distance-proportional noise, I/Q from RSSI (saturated at
+        the receiver's ``max_rssi_dbm``: the link budget grows without bound as a tag nears the antenna)."""
+        rssi = np.minimum(rssi, self.model.max_rssi_dbm)
         noise = self.rng.normal(0.0, 1.0, distance.size) * self.model.phase_noise_rad_per_m * distance
         phase = round_trip_phase(distance, frequency, phase_offsets + noise)
         amplitude = 10.0 ** (rssi / 20.0)
