@@ -180,3 +180,11 @@ def test_drops_are_counted_per_input_and_warned_about_at_most_once_a_period():
     drops.drop("/odom", "late")
     assert lines[-1] == "/odom: dropped a message: late (3 dropped so far)"
     assert (drops.dropped("/odom"), drops.dropped("/rfid/reads"), drops.dropped(), drops.clamped()) == (3, 3, 6, 1)
+
+
+def test_a_stamp_a_minute_or_more_from_the_nodes_clock_is_refused_unless_the_clock_has_not_started():
+    assert inputs.stamp_near(130.0, 100.0) == 130.0 and inputs.stamp_near(40.5, 100.0) == 40.5
+    for far in (160.5, 39.0, float(2 ** 31 - 1), math.nan, math.inf):
+        with pytest.raises(BadInput, match=r"header.stamp: .* from this node's clock \(100.000 s\), more than 60 s"):
+            inputs.stamp_near(far, 100.0)
+    assert inputs.stamp_near(float(2 ** 31 - 1), 0.0) == 2 ** 31 - 1       # no clock yet: nothing to check against

@@ -20,6 +20,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from builtin_interfaces.msg import Time
 from geometry_msgs.msg import PoseWithCovarianceStamped, Twist
 from nav_msgs.msg import Odometry
 from rclpy.action import ActionClient
@@ -209,7 +210,20 @@ def read_cases(tag: str = "readings[0]", unknown_tag: str = "ZZ-UNKNOWN", one_po
             + cases(f"{tag}.antenna", (("0", 0),), ACCEPT if one_port else DROP)
             + cases(f"{tag}.antenna", (("65535", UINT16_MAX),), ACCEPT)
             + cases(f"{tag}.tag_id", (("''", ""),), DROP) + cases(f"{tag}.tag_id", (("unknown", unknown_tag),), ACCEPT)
-            + [Case("readings=[]", lambda m: setattr(m, "readings", []), ACCEPT)] + frames() + [GOOD])
+            + [Case("readings=[]", lambda m: setattr(m, "readings", []), ACCEPT)] + frames() + far_stamps() + [GOOD])
+
+
+def far_stamps() -> list[Case]:
+    """A stamp from another era (2^31 - 1 s aborted a route, issue 34) or a minute and more off the node's clock
+    (which the fuzzer keeps at each message's nominal stamp): dropped and counted, not taken as time. A stamp
+    within the minute is taken (a lagging graph)."""
+    def shifted(seconds: float) -> Callable[[Any], None]:
+        def mutate(message: Any) -> None:
+            message.header.stamp = time_msg(message.header.stamp.sec + message.header.stamp.nanosec * 1e-9 + seconds)
+        return mutate
+    return [Case("header.stamp=2^31-1 s", lambda m: setattr(m.header, "stamp", Time(sec=2 ** 31 - 1)), DROP),
+            Case("header.stamp=+61 s", shifted(61.0), DROP),
+            Case("header.stamp=+30 s", shifted(30.0), ACCEPT)]
 
 
 def scan(frame_id: str = "base_link", rss: tuple[float, ...] = (-40.0, -60.0)) -> WifiScan:
@@ -334,7 +348,8 @@ SPECS = [
                     numbers("x") + numbers("y") + numbers("yaw_rad") + numbers("yaw_lower_rad")
                     + numbers("yaw_upper_rad") + numbers("read_range_m")
                     + cases("partitions_traversed", (("4294967295", UINT32_MAX),), ACCEPT)
-                    + cases("partition_tag_ids", (("[unknown]", ["ZZ"]),), ACCEPT) + frames() + [GOOD]),
+                    + cases("partition_tag_ids", (("[unknown]", ["ZZ"]),), ACCEPT) + frames() + far_stamps()
+                    + [GOOD]),
          GoalInput("/navigate_to_point", NavigateToPoint, lambda: target(2.0, 1.3),
                    POINT_GOAL_CASES + goal_cases([("tolerance_m", EXTREMES + (("-1", -1.0),), REFUSE)])
                    + POINT_GOAL_TAKEN)],
@@ -493,12 +508,14 @@ class Fuzzer:
             if hasattr(message, "header"):
                 self.stamp_s += 0.05
                 message.header.stamp = time_msg(self.stamp_s)
+                self.node.advance_time(round(self.stamp_s * 1e9))     # the node's clock at the nominal stamp
             case.mutate(message)
             before, handled = self.counts(spec_input.topic), self.node.consumed_counts[resolved]
             publisher.publish(message)
             self.graph.spin_until(lambda handled=handled: self.node.consumed_counts[resolved] > handled,
                                   f"{self.spec.name} to handle {spec_input.topic} {case.label}")
             self.check(spec_input.topic, case, before)
+            self.stamp_s = max(self.stamp_s, self.node.sim_time_ns * 1e-9)    # a stamp taken moved the clock on
 
     def service(self, spec_input: ServiceInput) -> None:
         client = self.graph.probe.create_client(spec_input.service, spec_input.name)

@@ -205,6 +205,23 @@ def test_bad_odometry_unknown_tags_and_a_foreign_initial_pose_are_dropped_counte
     harness.spin_until(lambda: harness.logged("rfid_localizer", "NOT-A-TAG"), "the unknown tag's warning")
 
 
+def test_a_round_and_a_compass_reading_stamped_in_another_era_are_dropped_counted_and_leave_the_clock_alone(
+        make_harness) -> None:
+    harness = make_harness(initial_pose=[3.0, 1.2, 0.0])
+    harness.send_odometry(0.0, 0.0, 0.0)
+    harness.stamp_s = float(2 ** 31 - 1)
+    harness.send_compass(0.0)
+    far = TagReadArray(readings=[reading(WALL_TAG, SIDE)])
+    far.header.stamp, far.header.frame_id = time_msg(harness.stamp_s), "base_link"
+    before = harness.node.consumed_counts["/rfid/reads"]
+    harness.reads_pub.publish(far)
+    harness.spin_until(lambda: harness.node.consumed_counts["/rfid/reads"] > before, "the far round handled")
+    assert harness.node.drops.counts == {"/compass": 1, "/rfid/reads": 1}
+    harness.stamp_s = 100.0
+    status, pose = harness.send_round([reading(WALL_TAG, SIDE)])     # the clock still at 100 s: taken
+    assert list(status.evidence_used) == ["wall_tag"] and pose.header.stamp == time_msg(100.04)
+
+
 def test_a_map_that_does_not_say_where_the_robot_may_be_is_one_error_naming_the_map_and_its_extent(
         domain: int, tmp_path: Path) -> None:
     map_file = tmp_path / "ceiling_only.yaml"

@@ -33,6 +33,9 @@ MAX_COORDINATE_M = 1e5
 # Received power [dBm]: below -150 no receiver hears anything (thermal noise over 1 Hz is -174 dBm, real channels
 # are far wider); above +30 more than a legal transmitter radiates would arrive at the antenna.
 RSS_DBM = (-150.0, 30.0)
+# How far a message's stamp may be from the node's clock [s]: more than any lag of a run's graph (the stepped clock
+# lets an observer lag a second; a free-running clock a few), less than any stamp from another run or era.
+STAMP_TOLERANCE_S = 60.0
 # Carrier frequencies [Hz]: LF RFID (125 kHz) to millimetre-wave WiFi (60 GHz), with room on both sides.
 RF_FREQUENCY_HZ = (1e3, 1e11)
 # A unit quaternion, as every publisher normalises it; further from norm 1 than this it is not a rotation.
@@ -174,13 +177,31 @@ def tag_read(read: Any, field: str = "reading", required: Collection[str] = READ
     return checked
 
 
-def round_reads(msg: Any, drops: Drops, ports: Collection[int] | None = None, where: str = "/rfid/reads",
-                required: Collection[str] = ()) -> list[TagRead] | None:
+def seconds_of(stamp: Any) -> float:
+    """A builtin_interfaces/Time in seconds."""
+    return stamp.sec + stamp.nanosec * 1e-9
+
+
+def stamp_near(stamp_s: float, now_s: float, field: str = "header.stamp") -> float:
+    """A message's stamp [s], refused (BadInput) when more than STAMP_TOLERANCE_S from the node's clock ``now_s``:
+    a node that takes stamps as time (the round's own moment, not its arrival) must not take one from another era
+    (one round stamped 2^31 s aborted a route: "no inventory rounds for 2147483635.7 s"). A clock not started yet
+    (0: no /clock heard) checks nothing."""
+    if now_s > 0.0 and not abs(stamp_s - now_s) <= STAMP_TOLERANCE_S:
+        raise BadInput(f"{field}: {stamp_s:.3f} s is {stamp_s - now_s:+.1f} s from this node's clock "
+                       f"({now_s:.3f} s), more than {STAMP_TOLERANCE_S:g} s")
+    return stamp_s
+
+
+def round_reads(msg: Any, drops: Drops, now_s: float, ports: Collection[int] | None = None,
+                where: str = "/rfid/reads", required: Collection[str] = ()) -> list[TagRead] | None:
     """The checked reads of a rfidnav_msgs TagReadArray (of ``ports`` only, when given), each read that fails
     :func:`tag_read` (with ``required``: the measurements this node uses) dropped and counted; None, the round
-    dropped and counted, when it is not in READER_FRAME."""
+    dropped and counted, when it is not in READER_FRAME or its stamp is far from the node's clock ``now_s``
+    (:func:`stamp_near`)."""
     try:
         frame(msg.header.frame_id, READER_FRAME)
+        stamp_near(seconds_of(msg.header.stamp), now_s)
     except BadInput as error:
         drops.drop(where, error)
         return None

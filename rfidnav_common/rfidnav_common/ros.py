@@ -30,6 +30,7 @@ from rclpy.signals import SignalHandlerOptions
 from rfidnav_common.config import did_you_mean, parameters_from_mapping
 from rfidnav_common.errors import ConfigError, RfidnavError
 from rfidnav_common.geometry import quaternion_to_yaw
+from rfidnav_common.inputs import seconds_of, stamp_near
 
 # Sensor streams: reliable, with room for a burst (a high RTF on a busy machine) so that the recorder
 # and the controller see every message on localhost.
@@ -203,8 +204,14 @@ def time_msg(seconds: float) -> Time:
     return Time(sec=nanoseconds // 1_000_000_000, nanosec=nanoseconds % 1_000_000_000)
 
 
-def seconds_of(stamp: Time) -> float:
-    return stamp.sec + stamp.nanosec * 1e-9
+def clock_seconds(node: Node) -> float:
+    """The node's clock now [s] (sim time under /clock; 0 before the first)."""
+    return node.get_clock().now().nanoseconds * 1e-9
+
+
+def stamp_seconds(node: Node, stamp: Time, field: str = "header.stamp") -> float:
+    """A message's stamp [s], checked against the node's clock (rfidnav_common.inputs.stamp_near: BadInput if far)."""
+    return stamp_near(seconds_of(stamp), clock_seconds(node), field)
 
 
 def message_class(type_name: str) -> type | None:

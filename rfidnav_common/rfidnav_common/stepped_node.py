@@ -50,6 +50,7 @@ from rclpy.subscription import Subscription
 from rclpy.task import Future
 from rclpy.time import Time
 
+from rfidnav_common.inputs import STAMP_TOLERANCE_S
 from rfidnav_common.rclpy_compat import drive_ros_time_without_clock_topic
 from rfidnav_common.step_ledger import STEP_ACK_TOPIC, StepReport
 from rfidnav_msgs.msg import StepAck  # type: ignore[attr-defined]  # generated
@@ -201,7 +202,7 @@ class SteppedNode(Node):
             self.in_callback = True
             try:
                 stamp_ns = message_stamp_ns(message) if not isinstance(message, bytes) else None
-                if stamp_ns is not None:
+                if stamp_ns is not None and not self.far_ahead(stamp_ns):
                     self.advance_time(stamp_ns)
                 callback(message)
             finally:
@@ -342,6 +343,13 @@ class SteppedNode(Node):
                 self.release_call(future)       # (counted already, unless the answer had come meanwhile)
 
     # ------------------------------------------------------------------------------------- stepping
+    def far_ahead(self, stamp_ns: int) -> bool:
+        """A stamp more than STAMP_TOLERANCE_S past this node's time, once it has one, is from elsewhere (another run,
+        a broken clock: one stamped 2^31 s froze a route's node at that time for good), not the step to come: it
+        does not move the clock, and the node's input check (rfidnav_common.inputs.stamp_near) drops the message.
+        Every node of ours handles a stream of 2 Hz or more, so no step of its own is that far ahead."""
+        return self.sim_time_ns > 0 and stamp_ns - self.sim_time_ns > STAMP_TOLERANCE_S * 1e9
+
     def advance_time(self, stamp_ns: int) -> None:
         """Move this node's simulated time to ``stamp_ns`` (never back) and fire the timers now due."""
         if stamp_ns <= self.sim_time_ns:

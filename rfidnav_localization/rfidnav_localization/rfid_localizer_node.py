@@ -28,7 +28,15 @@ from sensor_msgs.msg import Imu
 
 from rfidnav_common import inputs
 from rfidnav_common.robot_map import load_route_map
-from rfidnav_common.ros import COMMAND_QOS, SENSOR_QOS, declare_parameters, run_node, seconds_of
+from rfidnav_common.ros import (
+    COMMAND_QOS,
+    SENSOR_QOS,
+    clock_seconds,
+    declare_parameters,
+    run_node,
+    seconds_of,
+    stamp_seconds,
+)
 from rfidnav_common.seeding import rng_for
 from rfidnav_common.stepped_node import SteppedNode
 from rfidnav_common.transforms import FrameBroadcaster
@@ -95,7 +103,7 @@ class RfidLocalizerNode(SteppedNode):
 
     def on_compass(self, msg: Imu) -> None:
         try:
-            self.compass_yaws.hold(inputs.compass_heading(msg), seconds_of(msg.header.stamp))
+            self.compass_yaws.hold(inputs.compass_heading(msg), stamp_seconds(self, msg.header.stamp))
         except inputs.BadInput as error:
             self.drops.drop("/compass", error)
 
@@ -103,12 +111,12 @@ class RfidLocalizerNode(SteppedNode):
         """Locate the scan unless a call is out (scans come faster than fixes are weighed, by wifi_min_travel_m)."""
         try:
             inputs.scan_rss(msg)
+            scan_time_s = stamp_seconds(self, msg.header.stamp)
         except inputs.BadInput as error:
             self.drops.drop("/wifi/scan", error)
             return
         if self.locating is not None or self.locate_client is None or not self.locate_client.service_is_ready():
             return
-        scan_time_s = seconds_of(msg.header.stamp)
         self.locating = self.call_service(self.locate_client, Locate.Request(scan=msg),
                                           lambda future: self.on_located(future, scan_time_s))
 
@@ -136,7 +144,7 @@ class RfidLocalizerNode(SteppedNode):
 
     def on_reads(self, msg: TagReadArray) -> None:
         p = self.params
-        reads = inputs.round_reads(msg, self.drops, ports=set(p.antenna_ports_read().values()))
+        reads = inputs.round_reads(msg, self.drops, clock_seconds(self), ports=set(p.antenna_ports_read().values()))
         if reads is None:
             return
         round_time_s = seconds_of(msg.header.stamp)

@@ -31,7 +31,7 @@ from rfidnav_common.ros import (
     SENSOR_QOS,
     declare_parameters,
     run_node,
-    seconds_of,
+    stamp_seconds,
     twist,
 )
 from rfidnav_common.stepped_node import SteppedNode
@@ -140,7 +140,7 @@ class PartitionNavigatorNode(SteppedNode):
             self.goals.heard()
         try:
             inputs.frame(msg.header.frame_id, MAP_FRAME)
-            estimate = estimate_from_status(msg, seconds_of(msg.header.stamp),
+            estimate = estimate_from_status(msg, stamp_seconds(self, msg.header.stamp),
                                             active.previous_partition if active is not None else None)
         except inputs.BadInput as error:
             self.drops.drop(self.params.status_topic, error)

@@ -22,7 +22,7 @@ from geometry_msgs.msg import Pose2D, PoseWithCovarianceStamped, Twist
 from rfidnav_common import inputs
 from rfidnav_common.goal_server import ActiveGoal, GoalOutcome, SingleGoalServer
 from rfidnav_common.robot_map import load_route_map
-from rfidnav_common.ros import COMMAND_QOS, SENSOR_QOS, declare_parameters, run_node, seconds_of, twist
+from rfidnav_common.ros import COMMAND_QOS, SENSOR_QOS, declare_parameters, run_node, stamp_seconds, twist
 from rfidnav_common.stepped_node import SteppedNode
 from rfidnav_msgs.action import NavigateToPoint
 from rfidnav_planning.conversions import point_goal_refusal, pose_from_message
@@ -63,13 +63,14 @@ class PoseNavigatorNode(SteppedNode):
     def on_pose(self, msg: PoseWithCovarianceStamped) -> None:
         try:
             pose = pose_from_message(msg, self.params.map_frame)
+            stamp_s = stamp_seconds(self, msg.header.stamp)
         except inputs.BadInput as error:
             self.drops.drop(self.params.pose_topic, error)
             return
         if self.pose is not None and self.goals.running is not None:
             self.travelled_m += math.dist((pose.x, pose.y), (self.pose.x, self.pose.y))
         self.pose = pose
-        self.pose_stamp_s = seconds_of(msg.header.stamp)
+        self.pose_stamp_s = stamp_s
 
     # -------------------------------------------------------------------------------------- goals
     def refusal(self, goal: NavigateToPoint.Goal) -> str | None:
