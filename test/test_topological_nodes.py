@@ -101,6 +101,23 @@ def test_the_wall_follower_is_idle_until_commanded_then_drives_and_stops(graph: 
     graph.spin_until(lambda: probe.states[-1] == "idle", "idle in the state heartbeat")
 
 
+def test_a_stop_whose_distance_is_no_distance_is_dropped_and_changes_nothing(graph: Graph) -> None:
+    node = graph.add(WallFollowerNode(context=graph.context))
+    probe = FollowerProbe(graph)
+    graph.spin_until(lambda: probe.command_pub.get_subscription_count() > 0, "the command topic")
+    probe.command("follow")
+    graph.spin_until(lambda: probe.twists and probe.twists[-1].linear.x > 0.0, "driving forward")
+    for bad in (math.nan, math.inf, -1.0):
+        dropped = node.drops.dropped("/wall_follower/command")
+        probe.command("stop", bad)
+        graph.spin_until(lambda dropped=dropped: node.drops.dropped("/wall_follower/command") > dropped,
+                         f"the stop within {bad} m dropped")
+    twists = len(probe.twists)
+    graph.spin_until(lambda: len(probe.twists) > twists + 5, "five more control periods")
+    assert all(twist.linear.x == 0.2 for twist in probe.twists[twists:]) and "stopped" not in probe.events
+    assert node.follower is not None and node.follower.stop_from is None
+
+
 def test_silent_or_nan_sonar_holds_the_robot_still_and_the_node_stays_up(graph: Graph) -> None:
     graph.add(WallFollowerNode(context=graph.context, parameter_overrides=[
         Parameter("sonar_timeout_s", value=0.3)]))

@@ -88,11 +88,13 @@ class WallFollowerNode(SteppedNode):
             return
         if action == WallFollowerCommand.STOP:
             if self.follower is not None:
+                # A stop whose distance is no distance is dropped like any bad message: it changes nothing, and
+                # the executor's plan goes on (stopping at once on it let one foreign message end a mission
+                # 1.25 m short of its goal).
                 try:
                     self.follower.command_stop(inputs.length(msg.stop_within_m, "stop_within_m"))
                 except (inputs.BadInput, ValueError) as error:
-                    self.drops.drop("/wall_follower/command", f"{error}; stopping at once")
-                    self.follower.command_stop(0.0)
+                    self.drops.drop("/wall_follower/command", error)
             return
         if self.follower is None:
             self.follower = WallFollower(self.settings)
