@@ -185,11 +185,11 @@ def reads(*readings: TagReading) -> TagReadArray:
 
 
 def read_cases(tag: str = "readings[0]", unknown_tag: str = "ZZ-UNKNOWN", one_port: bool = False,
-               needs: tuple[str, ...] = ()) -> list[Case]:
+               needs: tuple[str, ...] = (), stamp_as_time: bool = False) -> list[Case]:
     """What a read can carry: phases of any size are wrapped (no I/Q: the phase is taken), I/Q of any size give a
     phase; the rest has a physical range. NaN is "not reported" (the LLRP driver's convention): dropped by a node
     that ``needs`` that measurement, taken by the others. A node that reads ``one_port`` ignores a read of port 0
-    as another's."""
+    as another's. A node that takes the round's stamp as time (``stamp_as_time``) drops a far one."""
     def unreported(name: str) -> str:
         return DROP if name in needs else ACCEPT
 
@@ -210,19 +210,20 @@ def read_cases(tag: str = "readings[0]", unknown_tag: str = "ZZ-UNKNOWN", one_po
             + cases(f"{tag}.antenna", (("0", 0),), ACCEPT if one_port else DROP)
             + cases(f"{tag}.antenna", (("65535", UINT16_MAX),), ACCEPT)
             + cases(f"{tag}.tag_id", (("''", ""),), DROP) + cases(f"{tag}.tag_id", (("unknown", unknown_tag),), ACCEPT)
-            + [Case("readings=[]", lambda m: setattr(m, "readings", []), ACCEPT)] + frames() + far_stamps() + [GOOD])
+            + [Case("readings=[]", lambda m: setattr(m, "readings", []), ACCEPT)] + frames()
+            + far_stamps(DROP if stamp_as_time else ACCEPT) + [GOOD])
 
 
-def far_stamps() -> list[Case]:
+def far_stamps(far: str = DROP) -> list[Case]:
     """A stamp from another era (2^31 - 1 s aborted a route, issue 34) or a minute and more off the node's clock
-    (which the fuzzer keeps at each message's nominal stamp): dropped and counted, not taken as time. A stamp
-    within the minute is taken (a lagging graph)."""
+    (which the fuzzer keeps at each message's nominal stamp): dropped and counted by a node that takes it as time
+    (``far``: ACCEPT for one that does not). A stamp within the minute is taken (a lagging graph)."""
     def shifted(seconds: float) -> Callable[[Any], None]:
         def mutate(message: Any) -> None:
             message.header.stamp = time_msg(message.header.stamp.sec + message.header.stamp.nanosec * 1e-9 + seconds)
         return mutate
-    return [Case("header.stamp=2^31-1 s", lambda m: setattr(m.header, "stamp", Time(sec=2 ** 31 - 1)), DROP),
-            Case("header.stamp=+61 s", shifted(61.0), DROP),
+    return [Case("header.stamp=2^31-1 s", lambda m: setattr(m.header, "stamp", Time(sec=2 ** 31 - 1)), far),
+            Case("header.stamp=+61 s", shifted(61.0), far),
             Case("header.stamp=+30 s", shifted(30.0), ACCEPT)]
 
 
@@ -328,7 +329,7 @@ SPECS = [
     NodeSpec("heading_controller", lambda graph, _tmp: HeadingControllerNode(
         context=graph.context, parameter_overrides=stepped(map_file=str(CONFIG / "maps/line_follow.yaml"))),
         [TopicInput("/rfid/reads", lambda: reads(read("C1", 1, 1.2), read("C1", 2, 1.0)),
-                    read_cases(needs=("phase_rad", "frequency_hz"))),
+                    read_cases(needs=("phase_rad", "frequency_hz"), stamp_as_time=True)),
          GoalInput("/follow_tag_route", FollowTagRoute, lambda: FollowTagRoute.Goal(tag_ids=["C1"]), [
              Case("tag_ids=[]", setting("tag_ids", []), REFUSE),
              Case("tag_ids=[unknown]", setting("tag_ids", ["ZZ"]), REFUSE),
@@ -338,7 +339,8 @@ SPECS = [
     NodeSpec("partition_localizer", lambda graph, _tmp: PartitionLocalizerNode(
         context=graph.context, parameter_overrides=stepped()),
         [TopicInput("/odom", odometry, odometry_cases()),
-         TopicInput("/rfid/reads", lambda: reads(read("ZZ", 1), read("ZZ", 1)), read_cases(one_port=True))],
+         TopicInput("/rfid/reads", lambda: reads(read("ZZ", 1), read("ZZ", 1)),
+                    read_cases(one_port=True, stamp_as_time=True))],
         [("/localization/pose", PoseWithCovarianceStamped), ("/localization/status", LocalizationStatus)]),
     NodeSpec("partition_navigator", lambda graph, _tmp: PartitionNavigatorNode(
         context=graph.context, parameter_overrides=stepped(map_file=str(CONFIG / "maps/partition_field.yaml"),

@@ -193,15 +193,16 @@ def stamp_near(stamp_s: float, now_s: float, field: str = "header.stamp") -> flo
     return stamp_s
 
 
-def round_reads(msg: Any, drops: Drops, now_s: float, ports: Collection[int] | None = None,
+def round_reads(msg: Any, drops: Drops, now_s: float | None = None, ports: Collection[int] | None = None,
                 where: str = "/rfid/reads", required: Collection[str] = ()) -> list[TagRead] | None:
     """The checked reads of a rfidnav_msgs TagReadArray (of ``ports`` only, when given), each read that fails
     :func:`tag_read` (with ``required``: the measurements this node uses) dropped and counted; None, the round
-    dropped and counted, when it is not in READER_FRAME or its stamp is far from the node's clock ``now_s``
-    (:func:`stamp_near`)."""
+    dropped and counted, when it is not in READER_FRAME or, for a node that takes the round's stamp as time (it
+    gives its clock, ``now_s``), when the stamp is far from that clock (:func:`stamp_near`)."""
     try:
         frame(msg.header.frame_id, READER_FRAME)
-        stamp_near(seconds_of(msg.header.stamp), now_s)
+        if now_s is not None:
+            stamp_near(seconds_of(msg.header.stamp), now_s)
     except BadInput as error:
         drops.drop(where, error)
         return None

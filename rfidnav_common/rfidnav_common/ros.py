@@ -204,14 +204,20 @@ def time_msg(seconds: float) -> Time:
     return Time(sec=nanoseconds // 1_000_000_000, nanosec=nanoseconds % 1_000_000_000)
 
 
-def clock_seconds(node: Node) -> float:
-    """The node's clock now [s] (sim time under /clock; 0 before the first)."""
-    return node.get_clock().now().nanoseconds * 1e-9
+def sim_clock_seconds(node: Node) -> float | None:
+    """The node's simulated time now [s] (the stepped clock's, or /clock's; 0 before the first), or None on wall
+    time. Stamps are checked against simulated time only: there a stamp from another era stops a run, while on a
+    real robot the drivers' clocks are the operator's to keep in step (a robot whose reader's clock is off would
+    otherwise go blind on a check of ours)."""
+    clock = node.get_clock()
+    return clock.now().nanoseconds * 1e-9 if getattr(clock, "ros_time_is_active", False) else None
 
 
 def stamp_seconds(node: Node, stamp: Time, field: str = "header.stamp") -> float:
-    """A message's stamp [s], checked against the node's clock (rfidnav_common.inputs.stamp_near: BadInput if far)."""
-    return stamp_near(seconds_of(stamp), clock_seconds(node), field)
+    """A message's stamp [s], checked against the node's simulated time (rfidnav_common.inputs.stamp_near:
+    BadInput if far); as it is on wall time."""
+    now_s = sim_clock_seconds(node)
+    return seconds_of(stamp) if now_s is None else stamp_near(seconds_of(stamp), now_s, field)
 
 
 def message_class(type_name: str) -> type | None:

@@ -19,7 +19,15 @@ from geometry_msgs.msg import Twist
 from rfidnav_common import inputs
 from rfidnav_common.goal_server import ActiveGoal, GoalOutcome, SingleGoalServer, Watchdog
 from rfidnav_common.robot_map import load_route_map
-from rfidnav_common.ros import COMMAND_QOS, SENSOR_QOS, clock_seconds, declare_parameters, run_node, seconds_of, twist
+from rfidnav_common.ros import (
+    COMMAND_QOS,
+    SENSOR_QOS,
+    declare_parameters,
+    run_node,
+    seconds_of,
+    sim_clock_seconds,
+    twist,
+)
 from rfidnav_common.stepped_node import SteppedNode
 from rfidnav_control.fuzzy import FuzzyHeadingController
 from rfidnav_control.parameters import HeadingControllerParameters
@@ -77,7 +85,7 @@ class HeadingControllerNode(SteppedNode):
 
     def on_reads(self, msg: TagReadArray) -> None:
         # The phase difference needs both phases and the channels they were read on.
-        valid = inputs.round_reads(msg, self.drops, clock_seconds(self), required=("phase_rad", "frequency_hz"))
+        valid = inputs.round_reads(msg, self.drops, sim_clock_seconds(self), required=("phase_rad", "frequency_hz"))
         if valid is None:
             return
         goal = self.goals.running

@@ -16,7 +16,7 @@ from geometry_msgs.msg import PoseWithCovarianceStamped
 from nav_msgs.msg import Odometry
 
 from rfidnav_common import inputs
-from rfidnav_common.ros import SENSOR_QOS, clock_seconds, declare_parameters, run_node, seconds_of
+from rfidnav_common.ros import SENSOR_QOS, declare_parameters, run_node, seconds_of, sim_clock_seconds
 from rfidnav_common.seeding import rng_for
 from rfidnav_common.stepped_node import SteppedNode
 from rfidnav_common.transforms import FrameBroadcaster
@@ -55,7 +55,7 @@ class PartitionLocalizerNode(SteppedNode):
             self.drops.drop("/odom", error)
 
     def on_reads(self, msg: TagReadArray) -> None:
-        floor_reads = inputs.round_reads(msg, self.drops, clock_seconds(self), ports=(self.params.antenna,))
+        floor_reads = inputs.round_reads(msg, self.drops, sim_clock_seconds(self), ports=(self.params.antenna,))
         if floor_reads is None:
             return
         tag_ids = [read.tag_id for read in floor_reads]

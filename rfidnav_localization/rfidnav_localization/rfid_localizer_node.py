@@ -31,10 +31,10 @@ from rfidnav_common.robot_map import load_route_map
 from rfidnav_common.ros import (
     COMMAND_QOS,
     SENSOR_QOS,
-    clock_seconds,
     declare_parameters,
     run_node,
     seconds_of,
+    sim_clock_seconds,
     stamp_seconds,
 )
 from rfidnav_common.seeding import rng_for
@@ -144,7 +144,7 @@ class RfidLocalizerNode(SteppedNode):
 
     def on_reads(self, msg: TagReadArray) -> None:
         p = self.params
-        reads = inputs.round_reads(msg, self.drops, clock_seconds(self), ports=set(p.antenna_ports_read().values()))
+        reads = inputs.round_reads(msg, self.drops, sim_clock_seconds(self), ports=set(p.antenna_ports_read().values()))
         if reads is None:
             return
         round_time_s = seconds_of(msg.header.stamp)

@@ -23,7 +23,7 @@ from typing import Any
 from rfidnav_common import inputs
 from rfidnav_common.frames import ODOM_FRAME
 from rfidnav_common.goal_server import ActiveGoal, GoalOutcome, SingleGoalServer
-from rfidnav_common.ros import COMMAND_QOS, SENSOR_QOS, clock_seconds, declare_parameters, run_node
+from rfidnav_common.ros import COMMAND_QOS, SENSOR_QOS, declare_parameters, run_node
 from rfidnav_common.stepped_node import SteppedNode
 from rfidnav_common.topological_map import load_topological_map
 from rfidnav_msgs.action import NavigateToNode
@@ -83,7 +83,7 @@ class MissionExecutorNode(SteppedNode):
 
     # ---------------------------------------------------------------------------------- sensing
     def on_reads(self, msg: TagReadArray) -> None:
-        reads = inputs.round_reads(msg, self.drops, clock_seconds(self))
+        reads = inputs.round_reads(msg, self.drops)
         if self.goals.running is None or not reads:
             return
         tag_ids = [read.tag_id for read in reads]

@@ -36,7 +36,7 @@ from rfidnav_common import inputs
 from rfidnav_common.geometry import yaw_to_quaternion
 from rfidnav_common.goal_server import ActiveGoal, GoalOutcome, SingleGoalServer
 from rfidnav_common.robot_map import load_route_map
-from rfidnav_common.ros import COMMAND_QOS, SENSOR_QOS, clock_seconds, declare_parameters, run_node, twist
+from rfidnav_common.ros import COMMAND_QOS, SENSOR_QOS, declare_parameters, run_node, twist
 from rfidnav_common.stepped_node import SteppedNode
 from rfidnav_common.transforms import FrameBroadcaster
 from rfidnav_msgs.action import NavigateToPoint
@@ -123,7 +123,7 @@ class TwoTierNavigatorNode(SteppedNode):
     def on_reads(self, msg: TagReadArray) -> None:
         """Keep the round with the odometry pose it was read at: the control step comes up to a period later,
         1 cm further at 0.2 m/s, which a fix taken at the step's pose would add to its error."""
-        floor_reads = inputs.round_reads(msg, self.drops, clock_seconds(self), ports=(self.params.floor_antenna,))
+        floor_reads = inputs.round_reads(msg, self.drops, ports=(self.params.floor_antenna,))
         tag_ids = [read.tag_id for read in floor_reads or ()]
         if tag_ids and self.odom is not None:
             self.reads.append((self.odom, tag_ids))

@@ -59,6 +59,7 @@ SOURCES: dict[str, tuple[Source, str]] = {
     "rfid_reader_sim.miss_probability": ("ours", "no missed reads: the paper models none"),
     "rfid_reader_sim.rssi_at_1m_dbm": ("ours", "only decides what is heard: every paper route's tag is"),
     "rfid_reader_sim.sensitivity_dbm": ("ours", "an Impinj-class reader"),
+    "rfid_reader_sim.max_rssi_dbm": ("ours", "a receiver saturates; nothing reads the RSSI"),
     "rfid_reader_sim.pattern_exponent": ("ours", "a cosine pattern"),
     "rfid_reader_sim.side_area_width_m": ("ours", "side antennas only (paper 004): none here"),
     "rfid_reader_sim.passage_miss_probability": ("ours", "side antennas only: none here"),

@@ -74,6 +74,7 @@ READER_SOURCES: dict[str, tuple[str, str]] = {
     "rfid_reader_sim.miss_probability": ("ours", "a poll fails whole (round_failure_probability), never tag by tag"),
     "rfid_reader_sim.rssi_at_1m_dbm": ("ours", "only decides what is heard: every tag within 5 cm is"),
     "rfid_reader_sim.sensitivity_dbm": ("ours", "as above"),
+    "rfid_reader_sim.max_rssi_dbm": ("ours", "a receiver saturates; nothing reads the RSSI"),
     "rfid_reader_sim.pattern_exponent": ("ours", "no pattern within 5 cm"),
 }
 NAVIGATOR_SOURCES: dict[str, tuple[str, str]] = {
