@@ -9,11 +9,14 @@ import json
 from collections.abc import Callable
 from dataclasses import replace
 from pathlib import Path
+from typing import Any
 
 import pytest
 import rclpy
+import rclpy.client
 from nav_msgs.msg import Odometry
 from rclpy.node import Node
+from rclpy.task import Future
 from rosgraph_msgs.msg import Clock
 from std_srvs.srv import Trigger
 
@@ -110,6 +113,22 @@ def test_the_wiring_is_awaited_until_the_clock_source_says_every_participant_is_
     source = graph.add(ClockSource(graph, wired_after=2))
     Watched(graph).watch.wait_for_wiring()
     assert source.wired_asked == 3
+
+
+def test_a_wiring_question_whose_answer_is_lost_is_asked_again(graph: Graph, monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(rfidnav_bringup.graph_watch, "RESEND_TIMEOUT_S", 0.5)
+    call_async = rclpy.client.Client.call_async
+    lost: list[Any] = []
+
+    def first_lost(client: rclpy.client.Client, request: Any) -> Future:
+        if not lost:                      # as if the request or its answer never arrived: a future never done
+            lost.append(request)
+            return Future()
+        return call_async(client, request)
+    monkeypatch.setattr(rclpy.client.Client, "call_async", first_lost)
+    source = graph.add(ClockSource(graph))
+    Watched(graph).watch.wait_for_wiring()
+    assert len(lost) == 1 and source.wired_asked == 1
 
 
 def test_wiring_that_never_completes_times_out_with_what_the_clock_source_waits_for(

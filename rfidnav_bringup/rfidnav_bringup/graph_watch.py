@@ -137,19 +137,23 @@ class GraphWatch:
 
     def ask_clock_source(self, service: str, timeout_s: float, what: str) -> None:
         """Call the clock source's Trigger ``service`` until it answers success (its message says what it waits
-        for meanwhile)."""
+        for meanwhile). A call unanswered for RESEND_TIMEOUT_S is made again: Fast DDS can lose a service
+        exchange (as ~/start's, below), and one lost answer would otherwise hold the run until ``timeout_s``. The
+        services only report, so asking twice changes nothing."""
         client = self.node.create_client(Trigger, f"/{self.expected.clock_source}/{service}")
         answer: dict[str, str] = {}
-        pending: list[Future] = []
+        pending: list[tuple[Future, float]] = []
 
         def ask() -> bool:
-            if pending and pending[0].done():
-                result = pending.pop().result()
+            if pending and pending[0][0].done():
+                result = pending.pop()[0].result()
                 if result is not None and result.success:
                     return True
                 answer["waiting"] = result.message if result is not None else "no answer"
+            elif pending and time.monotonic() - pending[0][1] > RESEND_TIMEOUT_S:
+                client.remove_pending_request(pending.pop()[0])
             if not pending and client.service_is_ready():
-                pending.append(client.call_async(Trigger.Request()))
+                pending.append((client.call_async(Trigger.Request()), time.monotonic()))
             return False
 
         try:
