@@ -181,6 +181,20 @@ def test_a_second_node_of_one_of_our_names_ends_the_run_unless_its_process_was_j
     watched.watch.check_single_graph()
 
 
+def test_a_publisher_of_a_node_not_of_the_run_ends_the_run_naming_it_and_its_topic(graph: Graph) -> None:
+    watched = Watched(graph)
+    talker = graph.add(Node("talker", context=graph.context))
+    talker.create_publisher(Odometry, "/odom", 10)
+    graph.spin_until(lambda: watched.watch.node.get_publishers_info_by_topic("/odom"), "the talker's /odom")
+    watched.watch.check_single_graph()                   # our own publishers, and /rosout of every node
+    injector = graph.add(Node("injector", context=graph.context))
+    injector.create_publisher(Odometry, "/odom", 10)
+    graph.spin_until(lambda: len(watched.watch.node.get_publishers_info_by_topic("/odom")) == 2, "the injector's")
+    with pytest.raises(ReadinessError, match="a publisher not of this run joined ROS domain 7: /injector on /odom; "
+                                             "the run stops before its messages mix with the run's"):
+        watched.watch.check_single_graph()
+
+
 def test_a_stall_is_said_once_with_the_clock_source_s_last_warning_and_ends_the_mission_after_a_minute(
         graph: Graph) -> None:
     watched = Watched(graph)

@@ -31,6 +31,10 @@ from rfidnav_bringup.run_plan import RECORDER_ROLE, ExpectedGraph
 READY_TIMEOUT_S = 90.0
 RESEND_ATTEMPTS = 6
 RESEND_TIMEOUT_S = 5.0
+# Topics every ROS node publishes (a viewer's, a CLI's): no sign of a foreign publisher of the run's messages.
+EVERY_NODE_TOPICS = frozenset({"/rosout", "/parameter_events"})
+# What rmw reports as the node of an endpoint whose participant has not said its node names yet.
+UNKNOWN_NODE_NAME = "_NODE_NAME_UNKNOWN_"
 # Wall time the graph may take after the mission to handle what it lags behind: an observer up to OBSERVER_SLACK
 # messages per input (its callbacks, a localizer's 4 ms each, at most a few seconds on a loaded machine).
 SETTLE_TIMEOUT_S = 60.0
@@ -224,16 +228,42 @@ class GraphWatch:
 
     def check_single_graph(self) -> None:
         """A second graph in our domain (another run forced onto it, an orphan of an older one) shows as a second
-        node of one of our names: end the run before the two mix (a ReadinessError)."""
+        node of one of our names, a foreign one (a tester's injector, a teleop) as a publisher of a node not ours on
+        one of the domain's topics: end the run before the two mix (a ReadinessError naming them). With a role
+        whose node name the run does not know (a command line without ``name``), no publisher is called foreign."""
         node = self.node
-        ours = {f"/{name}" for name in self.expected.nodes}
-        ours |= {f"/{role}" for role in (RECORDER_ROLE, node.get_name())}
+        ours = self.our_names()
         names = [f"{namespace.rstrip('/')}/{name}" for name, namespace in node.get_node_names_and_namespaces()]
         now = time.monotonic()
         twice = sorted(name for name in ours if names.count(name) > 1 and self.respawned_until.get(name, 0.0) < now)
         if twice:
             raise ReadinessError(f"another graph joined ROS domain {self.domain_id}: "
                                  f"two nodes named {', '.join(twice)}; the run stops before the two mix")
+        foreign = self.foreign_publishers(ours) if not self.expected.unnamed_roles else []
+        if foreign:
+            raise ReadinessError(f"a publisher not of this run joined ROS domain {self.domain_id}: "
+                                 f"{'; '.join(foreign)}; the run stops before its messages mix with the run's")
+
+    def our_names(self) -> set[str]:
+        """The run's node names, with their leading slash: the scenario's, its helpers', the recorder's and the
+        orchestrator's."""
+        return {f"/{name}" for name in (*self.expected.nodes, *self.expected.helpers, RECORDER_ROLE,
+                                         self.node.get_name())}
+
+    def foreign_publishers(self, ours: Collection[str]) -> list[str]:
+        """'NODE on TOPIC' for each publisher of a node not ``ours`` on a topic of the domain, but the ones every
+        node has (/rosout, /parameter_events), and but endpoints whose node DDS has not named yet (a node's name
+        comes after its endpoints in discovery: one of ours can show so for a moment)."""
+        node = self.node
+        found = set()
+        for topic, _ in node.get_topic_names_and_types():
+            if topic in EVERY_NODE_TOPICS:
+                continue
+            for info in node.get_publishers_info_by_topic(topic):
+                name = f"{info.node_namespace.rstrip('/')}/{info.node_name}"
+                if info.node_name != UNKNOWN_NODE_NAME and name not in ours:
+                    found.add(f"{name} on {topic}")
+        return sorted(found)
 
 
 def stopped_processes(processes: Mapping[str, NodeProcess]) -> list[str]:
