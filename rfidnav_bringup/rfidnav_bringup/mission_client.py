@@ -9,6 +9,7 @@ import time
 from collections.abc import Callable
 from typing import Any
 
+from action_msgs.msg import GoalStatus
 from rclpy.action import ActionClient
 from rclpy.node import Node
 
@@ -18,6 +19,7 @@ from rfidnav_common.progress import StatusLine
 from rfidnav_common.ros import fill_message
 
 CANCEL_TIMEOUT_S = 5.0   # how long a cancelled goal's answer and result are waited for
+CONCLUDED = (GoalStatus.STATUS_SUCCEEDED, GoalStatus.STATUS_ABORTED, GoalStatus.STATUS_CANCELED)
 
 
 class MissionClient:
@@ -31,6 +33,7 @@ class MissionClient:
         self.client = ActionClient(node, action_type, action_name)
         self.handle: Any = None          # the accepted goal's handle
         self.result_future: Any = None   # its result, once it comes
+        self.result_asked = 0.0          # when (monotonic) the result was last asked for
         self.feedback: Any = None        # the last feedback
         self.target_index: Any = None    # the last feedback's target, if it has one: a new one is a milestone
 
@@ -54,6 +57,7 @@ class MissionClient:
         if not handle.accepted:
             raise ReadinessError(f"goal rejected by {self.action_name}{self.rejection_detail()}")
         self.handle, self.result_future = handle, handle.get_result_async()
+        self.result_asked = time.monotonic()
         return True
 
     def resend(self, goal: Any, server: str) -> bool:
@@ -76,6 +80,16 @@ class MissionClient:
         target = getattr(feedback, "target_index", None)
         milestone, self.target_index = target != self.target_index, target
         self.progress.show(f"[{self.label}] {feedback_text(feedback)}", milestone)
+
+    def ask_result_again(self) -> None:
+        """Ask for the result again when the goal has ended (its status says so) and the answer to the first
+        question is RESEND_TIMEOUT_S late: a server paused past its DDS lease answered it into a match DDS had
+        dropped, and the run waited for its timeout although the mission had succeeded. The server keeps a goal's
+        result, and answers every question."""
+        if self.handle is None or self.done or self.handle.status not in CONCLUDED:
+            return
+        if time.monotonic() - self.result_asked > RESEND_TIMEOUT_S:
+            self.result_future, self.result_asked = self.handle.get_result_async(), time.monotonic()
 
     @property
     def done(self) -> bool:
