@@ -34,6 +34,7 @@ class MissionClient:
         self.handle: Any = None          # the accepted goal's handle
         self.result_future: Any = None   # its result, once it comes
         self.result_asked = 0.0          # when (monotonic) the result was last asked for
+        self.server_lost = False         # the server's match was dropped since then
         self.feedback: Any = None        # the last feedback
         self.target_index: Any = None    # the last feedback's target, if it has one: a new one is a milestone
 
@@ -82,19 +83,29 @@ class MissionClient:
         self.progress.show(f"[{self.label}] {feedback_text(feedback)}", milestone)
 
     def ask_result_again(self) -> None:
-        """Ask for the result again when the goal has ended (its status says so) and the answer to the first
-        question is RESEND_TIMEOUT_S late: a server paused past its DDS lease answered it into a match DDS had
-        dropped, and the run waited for its timeout although the mission had succeeded. The server keeps a goal's
-        result, and answers every question."""
-        if self.handle is None or self.done or self.handle.status not in CONCLUDED:
+        """Ask for the goal's result again once the server is back after DDS dropped it (a server paused past its
+        lease: the question, or its answer, was lost with the match), and every RESEND_TIMEOUT_S while the goal's
+        status says it has ended without the answer: without this the run waited for its timeout although the
+        mission had succeeded. The server keeps a goal's result and answers every question, at once or when the
+        goal ends."""
+        if self.handle is None or self.done:
             return
-        if time.monotonic() - self.result_asked > RESEND_TIMEOUT_S:
+        if not self.client.server_is_ready():
+            self.server_lost = True
+            return
+        late = time.monotonic() - self.result_asked > RESEND_TIMEOUT_S
+        if self.server_lost or (late and self.handle.status in CONCLUDED):
+            self.server_lost = False
             self.result_future, self.result_asked = self.handle.get_result_async(), time.monotonic()
 
     @property
     def done(self) -> bool:
-        """The goal has its result."""
-        return self.result_future is not None and self.result_future.done()
+        """The goal has its result (an answer of unknown status is none: a server that does not know the goal, a
+        respawned one asked again before the goal is sent to it again)."""
+        if self.result_future is None or not self.result_future.done():
+            return False
+        answer = self.result_future.result()
+        return answer is not None and answer.status != GoalStatus.STATUS_UNKNOWN
 
     def cancel(self) -> None:
         """Cancel the goal and wait, CANCEL_TIMEOUT_S at most, for the answer and the goal's result."""
