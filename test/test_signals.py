@@ -22,11 +22,12 @@ from rfidnav_bringup.errors import LaunchError
 from rfidnav_bringup.processes import DomainLease, cpu_hogs, lock_folder, open_lock_file, start_child
 from rfidnav_common.ros import standalone_node
 from support.domains import handed_domains
-from support.runs import WORKSPACE, mission_started, start_cli
+from support.runs import WORKSPACE, mission_started, recorded_commands, run_scenario, start_cli
 
 pytestmark = pytest.mark.tier("graph")
 
 RTF = "5"
+BUSY_LOOPS = 2            # the loaded machine: two busy loops, counting those `./rfidnav test --under-load N` keeps
 LEFTOVER_WAIT_S = 30.0   # a node's own stop (its bag, its base) takes a few seconds on a loaded machine
 
 
@@ -123,6 +124,54 @@ def test_a_stopped_simulator_is_named_within_seconds_and_the_run_goes_on_when_it
     report = seen[-1]
     assert f"simulator is stopped (pid {simulator.pid})" in report, "".join(seen)
     assert cli.returncode == 0, "".join(seen) + output
+
+
+# A participant lease of 2 s (Fast DDS's default: 20 s), so that pauses of 1.5, 3 and 15 leases -- the issue's
+# SIGSTOP of 20 (just past a lease that ends on a timer's tick), 60 and 300 s -- take seconds, not minutes.
+LEASE_S = 2
+SHORT_LEASE_PROFILE = f"""<?xml version="1.0" encoding="UTF-8" ?>
+<dds xmlns="http://www.eprosima.com/XMLSchemas/fastRTPS_Profiles"><profiles>
+  <participant profile_name="short_lease" is_default_profile="true"><rtps><builtin><discovery_config>
+    <leaseDuration><sec>{LEASE_S}</sec></leaseDuration>
+    <leaseAnnouncement><nanosec>500000000</nanosec></leaseAnnouncement>
+  </discovery_config></builtin></rtps></participant>
+</profiles></dds>
+"""
+PAUSE_SEED = "3"
+
+
+@pytest.fixture(scope="module")
+def unpaused_commands(tmp_path_factory: pytest.TempPathFactory) -> list[tuple[float, float]]:
+    run = run_scenario(tmp_path_factory.mktemp("unpaused"), "line_follow_90", "--rtf", RTF, "--seed", PAUSE_SEED)
+    return recorded_commands(run)
+
+
+@pytest.mark.parametrize("leases, busy_loops", [(1.5, 0), (3, BUSY_LOOPS), (15, 0)])
+def test_a_participant_paused_past_its_dds_lease_is_sent_what_it_lost_and_the_run_repeats_its_commands(
+        leases: float, busy_loops: int, tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+        unpaused_commands: list[tuple[float, float]]) -> None:
+    """Issue 34: a heading_controller SIGSTOPped for 20 s (Fast DDS's lease) lost the round in flight to it, and
+    the stepped clock waited for it until the stall ended the run. Now the clock source asks its producer to send
+    it again, and the run goes on as if nothing had happened."""
+    profile = tmp_path / "short_lease.xml"
+    profile.write_text(SHORT_LEASE_PROFILE)
+    monkeypatch.setenv("FASTRTPS_DEFAULT_PROFILES_FILE", str(profile))    # every process of the run
+    out = tmp_path / "runs"
+    with cpu_hogs(max(0, busy_loops - int(os.environ.get("RFIDNAV_TEST_BUSY_LOOPS", "0")))), \
+            start_cli("run", "line_follow_90", "--rtf", RTF, "--seed", PAUSE_SEED, "--out", str(out), "--quiet") as cli:
+        controller = next(p for p in mission_started(out, cli)
+                          if any("heading_controller" in part for part in p.cmdline()))
+        controller.suspend()
+        try:
+            time.sleep(leases * LEASE_S)     # the pause is what is tested: a stretch of wall time, not a wait
+        finally:
+            controller.resume()
+        output, _ = cli.communicate(timeout=300)
+    assert cli.returncode == 0, output
+    run = one_run(out)
+    assert recorded_commands(run) == unpaused_commands
+    logs = "".join(log.read_text() for log in (run / "logs").glob("*.log"))
+    assert "were sent again and handled" in logs, "the pause lost nothing: the test did not test the recovery"
 
 
 def test_a_node_of_a_second_graph_taking_one_of_our_names_ends_the_run_before_the_two_mix(tmp_path: Path) -> None:
@@ -231,7 +280,6 @@ def test_a_domain_stays_leased_until_the_last_process_started_with_its_lease_has
 
 
 CTRL_C_LIMIT_S = 5.0      # issue 33: a user's Ctrl-C ends run, replay and view within this on a loaded machine
-BUSY_LOOPS = 2            # the loaded machine: two busy loops, counting those `./rfidnav test --under-load N` keeps
 
 
 @pytest.fixture(scope="module")

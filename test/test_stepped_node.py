@@ -23,7 +23,7 @@ from rfidnav_common.errors import ConfigError
 from rfidnav_common.ros import COMMAND_QOS, SENSOR_QOS
 from rfidnav_common.step_ledger import StepLedger
 from rfidnav_common.stepped_node import STEP_ACK_QOS, STEP_ACK_TOPIC, SteppedNode, step_report_of
-from rfidnav_msgs.msg import StepAck
+from rfidnav_msgs.msg import StepAck, StepResend
 from rfidnav_sim.robot_sim_node import RobotSimNode
 from support.domains import handed_domains
 from support.graph import Graph, ground_truth
@@ -100,6 +100,58 @@ def test_a_stepped_node_answers_again_when_its_subscription_matches_a_publisher_
     graph.spin_until(lambda: step_report_of(received[-1]).subscribed == {"/sim/ground_truth": 1},
                      "an answer with the match")
     assert step_report_of(received[-1]).consumed == {"/sim/ground_truth": 0}
+
+
+class Producer(SteppedNode):
+    """A participant publishing ground truth, which a Recording consumes."""
+
+    def __init__(self, context: Context) -> None:
+        super().__init__("producer", context=context, parameter_overrides=[Parameter("stepped_clock", value=True)])
+        self.pub = self.create_publisher(Odometry, "/sim/ground_truth", SENSOR_QOS)
+
+
+class ResentTo(Recording):
+    """A Recording that counts the messages sent again to it, taken or not."""
+
+    def __init__(self, context: Context) -> None:
+        self.resends_seen = 0
+        super().__init__(context)
+
+    def on_resend(self, resend: StepResend) -> None:
+        if resend.consumer == self.get_fully_qualified_name():
+            self.resends_seen += 1
+        super().on_resend(resend)
+
+
+def test_messages_a_participant_lost_with_its_dds_match_are_sent_again_once_and_handled_in_order(graph) -> None:
+    producer = graph.add(Producer(graph.context))
+    for stamp_s in (0.04, 0.08, 0.12):      # before the consumer is there: it never gets them, as if lost
+        producer.pub.publish(ground_truth(0.0, 0.0, 0.0, stamp_s))
+    consumer = graph.add(ResentTo(graph.context))
+    graph.spin_until(lambda: producer.pub.get_subscription_count() == 1
+                     and producer.count_subscribers(stepped_node.RESEND_REQUEST_TOPIC) >= 2
+                     and consumer.count_publishers(stepped_node.RESEND_TOPIC) >= 2, "the topics matched")
+
+    def ask(request: int) -> None:
+        seen = consumer.resends_seen
+        producer.request_resend(request, "/participant", "/sim/ground_truth", 3)
+        graph.spin_until(lambda: consumer.resends_seen == seen + 3, f"request {request}'s three resends")
+
+    # It lost nothing (its subscription never lost the producer): a slow consumer's messages are still coming.
+    ask(1)
+    assert consumer.seen == [] and consumer.consumed_counts["/sim/ground_truth"] == 0
+    # DDS dropped the producer (its lease ended) and found it again: the three come again, in order, answered as
+    # the originals would have been.
+    subscription = consumer.counted_subscriptions["/sim/ground_truth"][0]
+    consumer.rematched(subscription, 0)
+    consumer.rematched(subscription, 1)
+    ask(2)
+    assert consumer.seen == [("truth", 0.04), ("truth", 0.08), ("timer", 0.12), ("truth", 0.12)]   # its 0.1 s timer
+    assert consumer.consumed_counts["/sim/ground_truth"] == 3 and consumer.produced_counts["/cmd_vel"] == 3
+    # Asked again (a request crossing the consumer's answer): made good already, nothing is handled twice.
+    ask(2)
+    ask(3)
+    assert consumer.consumed_counts["/sim/ground_truth"] == 3 and len(consumer.seen) == 4
 
 
 class Caller(SteppedNode):

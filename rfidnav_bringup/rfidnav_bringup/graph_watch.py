@@ -31,6 +31,11 @@ from rfidnav_bringup.run_plan import RECORDER_ROLE, ExpectedGraph
 READY_TIMEOUT_S = 90.0
 RESEND_ATTEMPTS = 6
 RESEND_TIMEOUT_S = 5.0
+GRAPH_RECHECK_S = 1.0   # a name seen twice is looked at again this much later before the run is stopped
+# Topics every ROS node publishes (a viewer's, a CLI's): no sign of a foreign publisher of the run's messages.
+EVERY_NODE_TOPICS = frozenset({"/rosout", "/parameter_events"})
+# What rmw reports as the node of an endpoint whose participant has not said its node names yet.
+UNKNOWN_NODE_NAME = "_NODE_NAME_UNKNOWN_"
 # Wall time the graph may take after the mission to handle what it lags behind: an observer up to OBSERVER_SLACK
 # messages per input (its callbacks, a localizer's 4 ms each, at most a few seconds on a loaded machine).
 SETTLE_TIMEOUT_S = 60.0
@@ -87,6 +92,7 @@ class GraphWatch:
     # Nodes of a respawned process, and until when (wall): the dead one stays in the graph until its DDS lease
     # ends, so two of the name are expected for that long.
     respawned_until: dict[str, float] = field(default_factory=dict)
+    seen_twice: set[str] = field(default_factory=set)    # our names the last check saw twice
 
     def __post_init__(self) -> None:
         self.node.create_subscription(Log, "/rosout", self.on_log, 100)
@@ -137,19 +143,23 @@ class GraphWatch:
 
     def ask_clock_source(self, service: str, timeout_s: float, what: str) -> None:
         """Call the clock source's Trigger ``service`` until it answers success (its message says what it waits
-        for meanwhile)."""
+        for meanwhile). A call unanswered for RESEND_TIMEOUT_S is made again: Fast DDS can lose a service
+        exchange (as ~/start's, below), and one lost answer would otherwise hold the run until ``timeout_s``. The
+        services only report, so asking twice changes nothing."""
         client = self.node.create_client(Trigger, f"/{self.expected.clock_source}/{service}")
         answer: dict[str, str] = {}
-        pending: list[Future] = []
+        pending: list[tuple[Future, float]] = []
 
         def ask() -> bool:
-            if pending and pending[0].done():
-                result = pending.pop().result()
+            if pending and pending[0][0].done():
+                result = pending.pop()[0].result()
                 if result is not None and result.success:
                     return True
                 answer["waiting"] = result.message if result is not None else "no answer"
+            elif pending and time.monotonic() - pending[0][1] > RESEND_TIMEOUT_S:
+                client.remove_pending_request(pending.pop()[0])
             if not pending and client.service_is_ready():
-                pending.append(client.call_async(Trigger.Request()))
+                pending.append((client.call_async(Trigger.Request()), time.monotonic()))
             return False
 
         try:
@@ -220,16 +230,55 @@ class GraphWatch:
 
     def check_single_graph(self) -> None:
         """A second graph in our domain (another run forced onto it, an orphan of an older one) shows as a second
-        node of one of our names: end the run before the two mix (a ReadinessError)."""
+        node of one of our names, a foreign one (a tester's injector, a teleop) as a publisher of a node not ours on
+        one of the domain's topics: end the run before the two mix (a ReadinessError naming them). With a role
+        whose node name the run does not know (a command line without ``name``), no publisher is called foreign."""
         node = self.node
-        ours = {f"/{name}" for name in self.expected.nodes}
-        ours |= {f"/{role}" for role in (RECORDER_ROLE, node.get_name())}
+        ours = self.our_names()
         names = [f"{namespace.rstrip('/')}/{name}" for name, namespace in node.get_node_names_and_namespaces()]
         now = time.monotonic()
-        twice = sorted(name for name in ours if names.count(name) > 1 and self.respawned_until.get(name, 0.0) < now)
-        if twice:
+        twice = {name for name in ours if names.count(name) > 1 and self.respawned_until.get(name, 0.0) < now}
+        # Seen twice at two checks in a row: discovery can show one node twice for a moment when a participant's
+        # lease ends and it is found again (a process paused, a loaded machine); a second graph stays.
+        confirmed, self.seen_twice = sorted(twice & self.seen_twice), twice
+        if confirmed:
             raise ReadinessError(f"another graph joined ROS domain {self.domain_id}: "
-                                 f"two nodes named {', '.join(twice)}; the run stops before the two mix")
+                                 f"two nodes named {', '.join(confirmed)}; the run stops before the two mix")
+        foreign = self.foreign_publishers(ours) if not self.expected.unnamed_roles else []
+        if foreign:
+            raise ReadinessError(f"a publisher not of this run joined ROS domain {self.domain_id}: "
+                                 f"{'; '.join(foreign)}; the run stops before its messages mix with the run's")
+
+    def check_single_graph_now(self) -> None:
+        """:meth:`check_single_graph`, a second time after GRAPH_RECHECK_S when a name shows twice (before the goal:
+        an orphan must not be sent it)."""
+        self.check_single_graph()
+        if self.seen_twice:
+            until = time.monotonic() + GRAPH_RECHECK_S
+            self.waiter.spin_until(lambda: time.monotonic() >= until, 2 * GRAPH_RECHECK_S + READY_TIMEOUT_S,
+                                   "a second look at the graph")
+            self.check_single_graph()
+
+    def our_names(self) -> set[str]:
+        """The run's node names, with their leading slash: the scenario's, its helpers', the recorder's and the
+        orchestrator's."""
+        return {f"/{name}" for name in (*self.expected.nodes, *self.expected.helpers, RECORDER_ROLE,
+                                         self.node.get_name())}
+
+    def foreign_publishers(self, ours: Collection[str]) -> list[str]:
+        """'NODE on TOPIC' for each publisher of a node not ``ours`` on a topic of the domain, but the ones every
+        node has (/rosout, /parameter_events), and but endpoints whose node DDS has not named yet (a node's name
+        comes after its endpoints in discovery: one of ours can show so for a moment)."""
+        node = self.node
+        found = set()
+        for topic, _ in node.get_topic_names_and_types():
+            if topic in EVERY_NODE_TOPICS:
+                continue
+            for info in node.get_publishers_info_by_topic(topic):
+                name = f"{info.node_namespace.rstrip('/')}/{info.node_name}"
+                if info.node_name != UNKNOWN_NODE_NAME and name not in ours:
+                    found.add(f"{name} on {topic}")
+        return sorted(found)
 
 
 def stopped_processes(processes: Mapping[str, NodeProcess]) -> list[str]:

@@ -9,6 +9,7 @@ import time
 from collections.abc import Callable
 from typing import Any
 
+from action_msgs.msg import GoalStatus
 from rclpy.action import ActionClient
 from rclpy.node import Node
 
@@ -18,6 +19,7 @@ from rfidnav_common.progress import StatusLine
 from rfidnav_common.ros import fill_message
 
 CANCEL_TIMEOUT_S = 5.0   # how long a cancelled goal's answer and result are waited for
+CONCLUDED = (GoalStatus.STATUS_SUCCEEDED, GoalStatus.STATUS_ABORTED, GoalStatus.STATUS_CANCELED)
 
 
 class MissionClient:
@@ -31,6 +33,8 @@ class MissionClient:
         self.client = ActionClient(node, action_type, action_name)
         self.handle: Any = None          # the accepted goal's handle
         self.result_future: Any = None   # its result, once it comes
+        self.result_asked = 0.0          # when (monotonic) the result was last asked for
+        self.server_lost = False         # the server's match was dropped since then
         self.feedback: Any = None        # the last feedback
         self.target_index: Any = None    # the last feedback's target, if it has one: a new one is a milestone
 
@@ -54,6 +58,7 @@ class MissionClient:
         if not handle.accepted:
             raise ReadinessError(f"goal rejected by {self.action_name}{self.rejection_detail()}")
         self.handle, self.result_future = handle, handle.get_result_async()
+        self.result_asked = time.monotonic()
         return True
 
     def resend(self, goal: Any, server: str) -> bool:
@@ -77,10 +82,30 @@ class MissionClient:
         milestone, self.target_index = target != self.target_index, target
         self.progress.show(f"[{self.label}] {feedback_text(feedback)}", milestone)
 
+    def ask_result_again(self) -> None:
+        """Ask for the goal's result again once the server is back after DDS dropped it (a server paused past its
+        lease: the question, or its answer, was lost with the match), and every RESEND_TIMEOUT_S while the goal's
+        status says it has ended without the answer: without this the run waited for its timeout although the
+        mission had succeeded. The server keeps a goal's result and answers every question, at once or when the
+        goal ends."""
+        if self.handle is None or self.done:
+            return
+        if not self.client.server_is_ready():
+            self.server_lost = True
+            return
+        late = time.monotonic() - self.result_asked > RESEND_TIMEOUT_S
+        if self.server_lost or (late and self.handle.status in CONCLUDED):
+            self.server_lost = False
+            self.result_future, self.result_asked = self.handle.get_result_async(), time.monotonic()
+
     @property
     def done(self) -> bool:
-        """The goal has its result."""
-        return self.result_future is not None and self.result_future.done()
+        """The goal has its result (an answer of unknown status is none: a server that does not know the goal, a
+        respawned one asked again before the goal is sent to it again)."""
+        if self.result_future is None or not self.result_future.done():
+            return False
+        answer = self.result_future.result()
+        return answer is not None and answer.status != GoalStatus.STATUS_UNKNOWN
 
     def cancel(self) -> None:
         """Cancel the goal and wait, CANCEL_TIMEOUT_S at most, for the answer and the goal's result."""

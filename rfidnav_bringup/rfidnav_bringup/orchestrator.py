@@ -210,6 +210,7 @@ class Orchestrator:
             now_sim, now = watch.sim_seconds(), time.monotonic()
             elapsed_sim = now_sim - self.outcome.started_sim_s
             self.supervisor.check(starting=False)
+            mission.ask_result_again()
             if now - graph_checked > GRAPH_CHECK_PERIOD_S:
                 graph_checked = now
                 watch.check_single_graph()

@@ -31,6 +31,7 @@ from rfidnav_scenario.scenario import (
 
 RECORDER_ROLE = "recorder"
 LIVE_ROLE = "live_view"                  # foxglove_bridge with --live: no participant of the stepped clock
+LIVE_NODE = "foxglove_bridge"            # its node's name
 STEPPING_CLOCK_SOURCE = ("rfidnav_sim", "robot_sim")   # the clock source that can step
 
 
@@ -68,6 +69,10 @@ class ExpectedGraph:
     clock_source: str | None            # the clock source's node name: its ~/start and ~/wired, its warnings
     simulated: bool                     # sim time runs (else real time: no clock to watch)
     record_exclude: tuple[str, ...]     # the topics the recorder leaves out (not waited for)
+    # Other nodes of the run (the live view's), and the roles whose node names the run does not know (a command
+    # line without ``name``): with one, no publisher can be told foreign by its node's name.
+    helpers: frozenset[str] = frozenset()
+    unnamed_roles: tuple[str, ...] = ()
 
 
 class RunPlan:
@@ -170,7 +175,9 @@ class RunPlan:
             nodes=frozenset(spec.name for spec in nodes if spec.name),
             simulators=tuple(sorted(spec.name for spec in nodes if spec.sim and spec.name)),
             clock_source=next((spec.name for spec in nodes if spec.clock_source), None),
-            simulated=self.scenario.simulated, record_exclude=self.record_exclude)
+            simulated=self.scenario.simulated, record_exclude=self.record_exclude,
+            helpers=frozenset({LIVE_NODE} if self.options.live_port is not None else ()),
+            unnamed_roles=tuple(sorted(spec.role for spec in nodes if not spec.name)))
 
     def clock_summary(self) -> dict[str, Any]:
         """Which clock ran, and for the stepped clock who it waited for and which roles ran free beside it."""

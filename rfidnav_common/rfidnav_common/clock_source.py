@@ -26,7 +26,7 @@ from rclpy.clock import Clock, ClockType
 from std_srvs.srv import Trigger
 
 from rfidnav_common.errors import ConfigError
-from rfidnav_common.step_ledger import StepLedger, StepReport
+from rfidnav_common.step_ledger import StepLedger, StepReport, Unanswered
 from rfidnav_common.stepped_node import STEP_ACK_READER_QOS, STEP_ACK_TOPIC, SteppedNode, step_report_of
 from rfidnav_msgs.msg import StepAck  # type: ignore[attr-defined]  # generated
 
@@ -35,6 +35,9 @@ from rfidnav_msgs.msg import StepAck  # type: ignore[attr-defined]  # generated
 STEPS_PER_CALLBACK = 500
 CATCH_UP_STEPS = 50     # free-running, after a stall (a slow machine): steps a tick at most, then the rest dropped
 STALL_REPORT_S = 10.0   # wall time a step may wait before the clock source says who it is waiting for
+# Wall time a step may wait before the clock source asks the producers to send a participant what it lacks again
+# (rfidnav_common.stepped_node: only a participant that DDS dropped takes them), and again every as long.
+RESEND_AFTER_S = 5.0
 TICK_S = 0.01           # the wall timer's shortest period: more often buys nothing at 50 Hz of published sim time
 
 
@@ -65,6 +68,8 @@ class ClockSource:
         self.wall_origin = time.monotonic()
         self.ledger = StepLedger([*participants, node.get_fully_qualified_name()])
         self.waiting_since = time.monotonic()
+        self.producers: dict[str, set[str]] = {}   # per topic: the participants that publish it
+        self.resend_requests = 0
 
     def serve(self) -> None:
         """The owner has made everything a step publishes (and keeps this as its ``clock``): offer the services,
@@ -77,6 +82,7 @@ class ClockSource:
             node.create_service(Trigger, "~/wired", self.on_wired)
             node.create_service(Trigger, "~/settle", self.on_settle)
             node.create_timer(STALL_REPORT_S, self.report_stall, clock=steady)
+            node.create_timer(RESEND_AFTER_S, self.recover_lost, clock=steady)
         # A clock source cannot pace itself on sim time: a steady wall timer drives the steps, running as many as
         # are due, so that the long-run rate is exactly rtf (at most rtf, stepped, where answers drive them too).
         node.create_timer(max(self.step_s / self.rtf, TICK_S), self.advance, clock=steady)
@@ -127,8 +133,28 @@ class ClockSource:
 
     def take_answer(self, report: StepReport) -> None:
         """A participant's counts, from /sim/step_ack or directly from a participant in the owner's process."""
+        self.note_producer(report)
         if self.ledger.report(report):
             self.advance()
+
+    def note_producer(self, report: StepReport) -> None:
+        for topic in report.produced:
+            self.producers.setdefault(topic, set()).add(report.node)
+
+    def recover_lost(self) -> None:
+        """A step held RESEND_AFTER_S or more: ask the producer of each topic a participant is behind on to send it
+        the messages it lacks again. One lost them if DDS dropped it (its lease ended while it was paused: SIGSTOP,
+        a suspended laptop, a debugger) with them in flight; the others are only slow, and take none (their own
+        messages are still coming). A topic with several producers is not asked for: whose messages it lacks
+        cannot be told."""
+        if not self.running or time.monotonic() - self.waiting_since < RESEND_AFTER_S:
+            return
+        self.note_producer(self.node.step_report())
+        for waiting in self.ledger.unanswered():
+            if isinstance(waiting, Unanswered) and waiting.behind > 0 and len(self.producers.get(waiting.topic,
+                                                                                                ())) == 1:
+                self.resend_requests += 1
+                self.node.request_resend(self.resend_requests, waiting.node, waiting.topic, waiting.behind)
 
     def owner_changed(self) -> None:
         """One of the owner's own counts changed: a command arrived, which can complete a step (a publication is

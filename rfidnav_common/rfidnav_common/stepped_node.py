@@ -36,6 +36,8 @@ from __future__ import annotations
 
 import random
 import time
+from array import array
+from collections import deque
 from collections.abc import Callable
 from typing import Any, cast
 
@@ -46,6 +48,7 @@ from rclpy.event_handler import PublisherEventCallbacks, SubscriptionEventCallba
 from rclpy.node import Node
 from rclpy.publisher import Publisher
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.serialization import deserialize_message, serialize_message
 from rclpy.subscription import Subscription
 from rclpy.task import Future
 from rclpy.time import Time
@@ -53,12 +56,20 @@ from rclpy.time import Time
 from rfidnav_common.inputs import STAMP_TOLERANCE_S
 from rfidnav_common.rclpy_compat import drive_ros_time_without_clock_topic
 from rfidnav_common.step_ledger import STEP_ACK_TOPIC, StepReport
-from rfidnav_msgs.msg import StepAck  # type: ignore[attr-defined]  # generated
+from rfidnav_msgs.msg import StepAck, StepResend  # type: ignore[attr-defined]  # generated
 
 STEPPED_CLOCK_PARAMETER = "stepped_clock"
 # Topics no participant's publisher counts (logs, parameter events, an action's own topics): handling them
 # cannot complete a step, so they are not counted and cost no answer.
-UNCOUNTED_TOPICS = ("/rosout", "/parameter_events", STEP_ACK_TOPIC)
+# The recovery of messages a participant lost (rfidnav_msgs/StepResend): the clock source's requests, the producers'
+# resends.
+RESEND_REQUEST_TOPIC = "/sim/resend_request"
+RESEND_TOPIC = "/sim/resend"
+UNCOUNTED_TOPICS = ("/rosout", "/parameter_events", STEP_ACK_TOPIC, RESEND_REQUEST_TOPIC, RESEND_TOPIC)
+# A counted publisher's last messages, kept to be sent again: the depth its subscriptions keep (SENSOR_QOS).
+RESEND_DEPTH = 100
+RESEND_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=RESEND_DEPTH * 10,
+                        reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.VOLATILE)
 ACTION_TOPIC_MARK = "/_action/"
 SLACK_ANSWER_PERIOD_S = 0.02
 # Wall seconds a step waits for a service's answer before it goes on without it (a server that died with the call
@@ -122,12 +133,12 @@ def message_stamp_ns(message: Any) -> int | None:
 class CountedPublisher(Publisher):
     """A publisher that tells its stepped node of each message it sent (rclpy's ``publisher_class`` hook)."""
 
-    on_published: Callable[[], None] | None = None
+    on_published: Callable[[Any], None] | None = None
 
     def publish(self, msg: Any) -> None:
         super().publish(msg)
         if self.on_published is not None:
-            self.on_published()
+            self.on_published(msg)
 
 
 class SteppedNode(Node):
@@ -159,6 +170,15 @@ class SteppedNode(Node):
         self.served: list[str] = []                     # services of its own
         self.counted_clients: list[Client] = []
         self.service_timer: Any = None
+        # Recovery (rfidnav_msgs/StepResend): each counted publisher's last messages and whether it has lost a
+        # subscription; per consumed topic, how to handle a message sent again, whether a subscription lost a
+        # publisher since the topic's last message, and the resends being taken (request, count at its start).
+        self.recent: dict[Publisher, deque[Any]] = {}
+        self.lost_subscription_at: dict[Publisher, int] = {}     # its produced count when it last lost one
+        self.resend_handlers: dict[str, tuple[Any, bool, Callable[..., None]]] = {}
+        self.lost_publishers: set[str] = set()
+        self.resends_taken: dict[str, tuple[int, int]] = {}
+        self.resend_requests: Publisher | None = None
         # The latest service_wiring(): per service topic, the clients a served one has (step_report's matched)
         # and, for a client's, 1 once its server is ready (step_report's subscribed).
         self.services_wired: tuple[dict[str, int], dict[str, int]] = ({}, {})
@@ -173,6 +193,9 @@ class SteppedNode(Node):
         self.in_callback = False
         self.unanswered_changes = 0
         self.answered_at = time.monotonic()
+        self.resends = super().create_publisher(StepResend, RESEND_TOPIC, RESEND_QOS)
+        super().create_subscription(StepResend, RESEND_REQUEST_TOPIC, self.on_resend_request, RESEND_QOS)
+        super().create_subscription(StepResend, RESEND_TOPIC, self.on_resend, RESEND_QOS)
         if not self.answers_steps:
             _CLOCK_OWNERS[id(self.context)] = self
         else:
@@ -198,7 +221,9 @@ class SteppedNode(Node):
             return super().create_subscription(msg_type, topic, callback, qos_profile, **kwargs)
         self.consumed_counts.setdefault(resolved, 0)
 
-        def counted(message: Any) -> None:
+        def counted(message: Any, resent: bool = False) -> None:
+            if not resent:
+                self.lost_publishers.discard(resolved)
             self.in_callback = True
             try:
                 stamp_ns = message_stamp_ns(message) if not isinstance(message, bytes) else None
@@ -221,6 +246,7 @@ class SteppedNode(Node):
         made.append(subscription)
         self.peers[subscription] = subscription.get_publisher_count()
         self.counted_subscriptions.setdefault(resolved, []).append(subscription)
+        self.resend_handlers.setdefault(resolved, (msg_type, bool(kwargs.get("raw")), counted))
         return subscription
 
     def create_publisher(self, msg_type: Any, topic: str, qos_profile: Any, **kwargs: Any) -> Any:
@@ -238,8 +264,11 @@ class SteppedNode(Node):
         resolved = publisher.topic_name
         self.produced_counts.setdefault(resolved, 0)
         self.counted_publishers.setdefault(resolved, []).append(publisher)
+        recent: deque[Any] = deque(maxlen=RESEND_DEPTH)
+        self.recent[publisher] = recent
 
-        def counted() -> None:
+        def counted(message: Any) -> None:
+            recent.append(message)
             self.produced_counts[resolved] += 1
             if not self.in_callback:   # within a callback the answer after it counts this too
                 self.changed()
@@ -361,9 +390,64 @@ class SteppedNode(Node):
             timer.fire_if_due(stamp_ns)
 
     def rematched(self, endpoint: Publisher | Subscription, peers: int) -> None:
-        """``endpoint``'s matched event: it now has ``peers`` on the other side of its topic."""
+        """``endpoint``'s matched event: it now has ``peers`` on the other side of its topic (fewer than before: a
+        peer gone, or dropped by DDS when its lease ended, with what was in flight to it)."""
+        if peers < self.peers.get(endpoint, 0):
+            if isinstance(endpoint, Subscription):
+                self.lost_publishers.add(endpoint.topic_name)
+            else:
+                self.lost_subscription_at[endpoint] = self.produced_counts[endpoint.topic_name]
         self.peers[endpoint] = peers
         self.changed()
+
+    # ------------------------------------------------------------------- recovering what was lost
+    def request_resend(self, request: int, consumer: str, topic: str, behind: int) -> None:
+        """The clock source's side: ask the producer of ``topic`` for the ``behind`` messages ``consumer`` lacks."""
+        if self.resend_requests is None:
+            self.resend_requests = super().create_publisher(StepResend, RESEND_REQUEST_TOPIC, RESEND_QOS)
+        self.resend_requests.publish(StepResend(request=request, consumer=consumer, topic=topic, behind=behind))
+
+    def on_resend_request(self, request: StepResend) -> None:
+        """A producer's side: send the consumer the last ``behind`` messages published on the topic, again."""
+        publishers = self.counted_publishers.get(request.topic, [])
+        if len(publishers) != 1:     # none of ours; or two, whose messages the consumer cannot be told apart
+            return
+        kept = list(self.recent[publishers[0]])
+        if request.behind > len(kept):
+            self.get_logger().warning(f"{request.consumer} lacks {request.behind} messages on {request.topic}, "
+                                      f"more than the {len(kept)} kept to send again", throttle_duration_sec=10.0)
+            return
+        # Lost here if the publisher lost a subscription after the first of them went out (in flight then).
+        lost_match = self.lost_subscription_at.get(publishers[0], -1) > self.produced_counts[request.topic] - \
+            request.behind
+        for index, message in enumerate(kept[len(kept) - request.behind:]):
+            data = message if isinstance(message, bytes) else serialize_message(message)
+            self.resends.publish(StepResend(request=request.request, consumer=request.consumer, topic=request.topic,
+                                            behind=request.behind, index=index, lost_match=lost_match,
+                                            data=array("B", data)))
+
+    def on_resend(self, resend: StepResend) -> None:
+        """A consumer's side: handle a message sent again if it is the next one this node lacks. It lacks them
+        only if DDS dropped one side of the topic's match (here, or at the producer's: ``lost_match``): a node
+        that is merely slow still has them coming, and takes none sent again."""
+        topic = resend.topic
+        if resend.consumer != self.get_fully_qualified_name() or topic not in self.resend_handlers:
+            return
+        if resend.index == 0:
+            if topic not in self.lost_publishers and not resend.lost_match:
+                return
+            self.resends_taken[topic] = (resend.request, self.consumed_counts[topic])
+        request, start = self.resends_taken.get(topic, (-1, 0))
+        if request != resend.request or self.consumed_counts[topic] != start + resend.index:
+            return              # a resend already taken (the request was made again), or not the next one
+        msg_type, raw, counted = self.resend_handlers[topic]
+        data = bytes(resend.data)
+        counted(data if raw else deserialize_message(data, msg_type), resent=True)
+        if resend.index == resend.behind - 1:
+            # Made good: another request (one crossing this node's answer) must find nothing lost.
+            self.lost_publishers.discard(topic)
+            self.get_logger().warning(f"{resend.behind} message(s) on {topic} lost to this node (a DDS lease "
+                                      "ended: a pause?) were sent again and handled")
 
     def changed(self) -> None:
         """A count changed: answer with all counts (they are cumulative, so every answer is complete), at once
