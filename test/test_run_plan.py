@@ -14,6 +14,7 @@ import pytest
 import yaml
 
 from rfidnav_bringup.run_plan import LIVE_ROLE, RECORDER_ROLE, ProcessPlan, RunOptions, RunPlan
+from rfidnav_common.clock_topics import RESEND_TOPICS
 from rfidnav_common.errors import ConfigError
 from rfidnav_scenario.scenario import Scenario, load_scenario
 
@@ -89,7 +90,7 @@ def test_the_stepped_clock_waits_for_our_nodes_of_the_loop_and_the_recorder_and_
     assert "/robot_sim" not in plan.stepped_with   # the clock source waits for the others
     recorder = processes[RECORDER_ROLE].command
     assert "stepped_clock:=true" in recorder
-    assert json.loads(parameter(recorder, "exclude_topics")) == ["/rosout", "/sim/step_ack"]
+    assert json.loads(parameter(recorder, "exclude_topics")) == ["/rosout", "/sim/step_ack", *RESEND_TOPICS]
     summary = plan.clock_summary()
     assert summary["mode"] == "stepped" and summary["participants"] == list(plan.stepped_with)
     assert "robot_sim" not in summary["free_running_roles"]
@@ -125,7 +126,7 @@ def test_the_live_view_starts_after_the_recorder_and_hides_what_the_recorder_lea
     assert list(processes)[:2] == [RECORDER_ROLE, LIVE_ROLE]
     live = processes[LIVE_ROLE].command
     assert parameter(live, "port") == "8765"
-    assert json.loads(parameter(live, "exclude_topics")) == ["/sim/step_ack"]
+    assert json.loads(parameter(live, "exclude_topics")) == ["/sim/step_ack", *RESEND_TOPICS]
 
 
 def test_a_command_line_with_nothing_to_add_runs_as_given(hallway: Scenario, tmp_path: Path) -> None:
@@ -178,7 +179,7 @@ def test_the_expected_graph_names_the_scenario_s_nodes_its_simulators_and_its_cl
     assert expected.nodes == {spec.name for spec in hallway.nodes.values()}
     assert expected.simulators == ("rfid_reader_sim", "robot_sim")
     assert expected.clock_source == "robot_sim" and expected.simulated
-    assert expected.record_exclude == ("/sim/step_ack",)
+    assert expected.record_exclude == ("/sim/step_ack", *RESEND_TOPICS)
 
 
 def test_the_run_plan_loads_without_rclpy() -> None:

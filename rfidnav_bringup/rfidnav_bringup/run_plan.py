@@ -18,6 +18,7 @@ from typing import Any
 
 import yaml
 
+from rfidnav_common.clock_topics import RESEND_TOPICS
 from rfidnav_common.errors import ConfigError
 from rfidnav_common.install import resolve_executable
 from rfidnav_common.step_ledger import CLOCKS, STEP_ACK_TOPIC
@@ -87,7 +88,7 @@ class RunPlan:
             participants.append(f"/{RECORDER_ROLE}")
         self.stepped_with: tuple[str, ...] | None = tuple(participants) if self.clock == "stepped" else None
         # The answers to the stepped clock are bookkeeping, not data: left out of the bag.
-        self.record_exclude = options.record_exclude + ((STEP_ACK_TOPIC,) if self.stepped_with else ())
+        self.record_exclude = options.record_exclude + ((STEP_ACK_TOPIC, *RESEND_TOPICS) if self.stepped_with else ())
 
     def write(self) -> Iterator[ProcessPlan]:
         """Write the run's folder and yield the processes to start, in order: the recorder, the live view, the

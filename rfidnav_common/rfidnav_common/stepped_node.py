@@ -53,6 +53,7 @@ from rclpy.subscription import Subscription
 from rclpy.task import Future
 from rclpy.time import Time
 
+from rfidnav_common.clock_topics import RESEND_REQUEST_TOPIC, RESEND_TOPIC, RESEND_TOPICS
 from rfidnav_common.inputs import STAMP_TOLERANCE_S
 from rfidnav_common.rclpy_compat import drive_ros_time_without_clock_topic
 from rfidnav_common.step_ledger import STEP_ACK_TOPIC, StepReport
@@ -61,11 +62,7 @@ from rfidnav_msgs.msg import StepAck, StepResend  # type: ignore[attr-defined]  
 STEPPED_CLOCK_PARAMETER = "stepped_clock"
 # Topics no participant's publisher counts (logs, parameter events, an action's own topics): handling them
 # cannot complete a step, so they are not counted and cost no answer.
-# The recovery of messages a participant lost (rfidnav_msgs/StepResend): the clock source's requests, the producers'
-# resends.
-RESEND_REQUEST_TOPIC = "/sim/resend_request"
-RESEND_TOPIC = "/sim/resend"
-UNCOUNTED_TOPICS = ("/rosout", "/parameter_events", STEP_ACK_TOPIC, RESEND_REQUEST_TOPIC, RESEND_TOPIC)
+UNCOUNTED_TOPICS = ("/rosout", "/parameter_events", STEP_ACK_TOPIC, *RESEND_TOPICS)
 # A counted publisher's last messages, kept to be sent again: the depth its subscriptions keep (SENSOR_QOS).
 RESEND_DEPTH = 100
 RESEND_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=RESEND_DEPTH * 10,
