@@ -58,8 +58,9 @@ def test_the_recorder_is_told_the_topics_the_wait_leaves_out(tmp_path: Path):
     orchestrator = Orchestrator(scenario, options)
     orchestrator.prepare(env={})
     recorder = orchestrator.processes["recorder"].command
-    # With the stepped clock (the default) the answers on /sim/step_ack are left out too.
-    assert 'exclude_topics:=["/parameter_events", "/rosout", "/sim/step_ack"]' in recorder
+    # With the stepped clock (the default) its answers on /sim/step_ack and its resends are left out too.
+    assert ('exclude_topics:=["/parameter_events", "/rosout", "/sim/step_ack", "/stepped_clock/resend_request", '
+            '"/stepped_clock/resend"]') in recorder
     # Node commands start with the executable load_scenario resolved.
     resolved = list(scenario.nodes["heading_controller"].command)
     assert orchestrator.processes["heading_controller"].command[:len(resolved)] == resolved
