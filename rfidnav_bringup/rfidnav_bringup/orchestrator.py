@@ -210,9 +210,9 @@ class Orchestrator:
             now_sim, now = watch.sim_seconds(), time.monotonic()
             elapsed_sim = now_sim - self.outcome.started_sim_s
             self.supervisor.check(starting=False)
-            mission.ask_result_again()
             if now - graph_checked > GRAPH_CHECK_PERIOD_S:
                 graph_checked = now
+                mission.ask_result_again()
                 watch.check_single_graph()
             stalled = watch.check_stall(stall, now_sim, now, self.processes)
             if server and self.supervisor.restarts(server) > restarts and not self.interrupted:

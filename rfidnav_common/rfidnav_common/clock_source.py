@@ -68,7 +68,7 @@ class ClockSource:
         self.wall_origin = time.monotonic()
         self.ledger = StepLedger([*participants, node.get_fully_qualified_name()])
         self.waiting_since = time.monotonic()
-        self.producers: dict[str, set[str]] = {}   # per topic: the participants that publish it
+        self.reports: dict[str, StepReport] = {}   # each participant's latest, for recover_lost
         self.resend_requests = 0
 
     def serve(self) -> None:
@@ -133,13 +133,9 @@ class ClockSource:
 
     def take_answer(self, report: StepReport) -> None:
         """A participant's counts, from /sim/step_ack or directly from a participant in the owner's process."""
-        self.note_producer(report)
+        self.reports[report.node] = report
         if self.ledger.report(report):
             self.advance()
-
-    def note_producer(self, report: StepReport) -> None:
-        for topic in report.produced:
-            self.producers.setdefault(topic, set()).add(report.node)
 
     def recover_lost(self) -> None:
         """A step held RESEND_AFTER_S or more: ask the producer of each topic a participant is behind on to send it
@@ -149,10 +145,12 @@ class ClockSource:
         cannot be told."""
         if not self.running or time.monotonic() - self.waiting_since < RESEND_AFTER_S:
             return
-        self.note_producer(self.node.step_report())
+        owner = self.node.step_report()
+        reports = {**self.reports, owner.node: owner}.values()
         for waiting in self.ledger.unanswered():
-            if isinstance(waiting, Unanswered) and waiting.behind > 0 and len(self.producers.get(waiting.topic,
-                                                                                                ())) == 1:
+            if not isinstance(waiting, Unanswered) or waiting.behind <= 0:
+                continue
+            if sum(waiting.topic in report.produced for report in reports) == 1:
                 self.resend_requests += 1
                 self.node.request_resend(self.resend_requests, waiting.node, waiting.topic, waiting.behind)
 
