@@ -34,8 +34,16 @@ os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
 os.environ["ROS_PYTHON_CHECK_FIELDS"] = "1"
 
 
+import tempfile  # noqa: E402
 from collections.abc import Iterator  # noqa: E402
 from pathlib import Path  # noqa: E402
+
+from rfidnav_bringup.partition import join_process_partition  # noqa: E402  # XML only: nothing of ROS either
+
+# The session's DDS partition, joined before anything of ROS as a run's orchestrator joins its own: the workers and
+# the runs the tests start inherit it (a profile naming a partition is kept), so a test's nodes hear a run's graph.
+# A test of the partition itself starts its run without it.
+join_process_partition(Path(tempfile.gettempdir()))
 from typing import TYPE_CHECKING  # noqa: E402
 
 import pytest  # noqa: E402

@@ -384,7 +384,7 @@ def run_killing_the_recorder(out: Path, scenario: str) -> tuple[int, int, str]:
     with subprocess.Popen(command, cwd=WORKSPACE, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
                           text=True) as run:
         assert run.stdout is not None
-        # Join only once the run leased its domain (it refuses a domain that has nodes in it already).
+        # Join only once the run leased its domain.
         head = []
         for line in iter(run.stdout.readline, ""):
             head.append(line)

@@ -19,6 +19,7 @@ from mcap.reader import make_reader
 from mcap_ros2.decoder import DecoderFactory
 
 from rfidnav_bag.bags import bag_info, read_messages
+from rfidnav_bringup.partition import PROFILES_VARIABLE
 from rfidnav_bringup.processes import DomainLease
 from rfidnav_bringup.report import run_metrics
 from rfidnav_common.frames import compose
@@ -184,7 +185,9 @@ def test_a_killed_controller_is_respawned_and_given_the_mission_again(tmp_path: 
     assert returncode == 0, output
     assert "re-sending the goal to the restarted heading_controller" in output
     # --quiet still says how to reach the graph
-    assert f"ROS_DOMAIN_ID={domain} ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST ./rfidnav echo" in output
+    reach = next(line for line in output.splitlines() if line.startswith("graph on "))
+    assert f"to join it: ROS_DOMAIN_ID={domain} ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST" in reach
+    assert f"{PROFILES_VARIABLE}={os.environ[PROFILES_VARIABLE]} ./rfidnav echo /odom" in reach   # the session's
     summary = json.loads(next(out.glob("*/summary.json")).read_text())
     assert summary["success"] is True and summary["ros_domain"]["id"] == domain
     assert summary["nodes"]["heading_controller"]["restarts"] == 1

@@ -22,7 +22,7 @@ from rfidnav_bringup.errors import LaunchError
 from rfidnav_bringup.processes import DomainLease, cpu_hogs, lock_folder, open_lock_file, start_child
 from rfidnav_common.ros import standalone_node
 from support.domains import handed_domains
-from support.runs import WORKSPACE, mission_started, recorded_commands, run_scenario, start_cli
+from support.runs import WORKSPACE, mission_started, one_run, recorded_commands, run_scenario, start_cli
 
 pytestmark = pytest.mark.tier("graph")
 
@@ -37,12 +37,6 @@ def assert_all_gone(processes: list[psutil.Process]) -> None:
     for process in alive:   # ours: end them, so that no orphan spoils the next test's domain
         process.kill()
     assert not leftovers, f"left running: {leftovers}"
-
-
-def one_run(out: Path) -> Path:
-    runs = list(out.iterdir())
-    assert len(runs) == 1, runs
-    return runs[0]
 
 
 def assert_finalised(run: Path, message: str) -> dict:

@@ -23,7 +23,8 @@ from rfidnav_common.errors import RfidnavError
 
 pytestmark = pytest.mark.tier("unit")
 
-FACTS = RunFacts("hallway", 7, "max", {"mode": "stepped"}, {"id": 51, "skipped": {}, "discovery": "localhost"})
+FACTS = RunFacts("hallway", 7, "max", {"mode": "stepped"},
+                 {"id": 51, "partition": "rfidnav-0123456789abcdef", "discovery": "localhost"})
 
 
 def processes(tmp_path: Path) -> dict[str, NodeProcess]:

@@ -125,9 +125,12 @@ def parser() -> tuple[argparse.ArgumentParser, dict[str, Handler]]:
                       help="keep N busy loops running beside the tests (a loaded machine: "
                            "./rfidnav test --under-load 2 -m 'node or graph'); pytest's --durations=30 lists the "
                            "slowest tests")
-    test.add_argument("--workers", type=count_value(64), default=os.cpu_count() or 1, metavar="N",
+    # One more than the cores: a graph test spends much of its wall time waiting (a paced clock, nodes starting),
+    # which a third process on two cores fills (docs/install.md has the figures).
+    test.add_argument("--workers", type=count_value(64), default=(os.cpu_count() or 1) + 1, metavar="N",
                       help="pytest processes (pytest-xdist), each taking whole modules, so that a module's shared "
-                           "run is made once; default: one per core (%(default)s here); 1: in this process")
+                           "run is made once; default: one per core and one more (%(default)s here); 1: in this "
+                           "process")
     test.add_argument("pytest_args", nargs=argparse.REMAINDER, help="passed to pytest, e.g. -m unit or a test file")
     run = verbs.add_parser("run", help="one mission through the real node graph")
     run.add_argument("scenario", help="scenario name (config/scenarios/NAME.yaml) or path")

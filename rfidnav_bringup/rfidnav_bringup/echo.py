@@ -19,6 +19,7 @@ from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
+from rfidnav_bringup.partition import JOIN_ADVICE, UNKNOWN_NODE_NAME
 from rfidnav_common.errors import RfidnavError
 from rfidnav_common.ros import message_class, standalone_node
 
@@ -68,8 +69,18 @@ def echo(topic: str, count: int, wait_s: float, timeout_s: float, out: TextIO = 
         while len(received) < count and time.monotonic() < deadline:
             executor.spin_once(timeout_sec=0.1)
         if len(received) < count:
-            raise EchoError(f"{topic}: {len(received)} of {count} messages within {timeout_s:g} s")
+            raise EchoError(f"{topic}: {len(received)} of {count} messages within {timeout_s:g} s"
+                            + partition_hint(node, topic, received))
         return len(received)
+
+
+def partition_hint(node: Node, topic: str, received: list[Any]) -> str:
+    """Why nothing came, when the topic's publishers are all of nodes this process cannot name: outside its DDS
+    partition (a run's graph, heard of in discovery but never matched)."""
+    publishers = node.get_publishers_info_by_topic(topic)
+    if received or not publishers or any(info.node_name != UNKNOWN_NODE_NAME for info in publishers):
+        return ""
+    return f"; its publishers are outside this process's DDS partition ({JOIN_ADVICE})"
 
 
 def wait_for_type(node: Node, executor: SingleThreadedExecutor, topic: str, wait_s: float) -> str:

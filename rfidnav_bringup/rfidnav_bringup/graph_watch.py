@@ -25,6 +25,7 @@ from std_srvs.srv import Trigger
 from rfidnav_bag.errors import BagError
 from rfidnav_bag.recorder_node import recordable_definition
 from rfidnav_bringup.errors import NodeExitedError, ReadinessError
+from rfidnav_bringup.partition import UNKNOWN_NODE_NAME
 from rfidnav_bringup.processes import NodeProcess
 from rfidnav_bringup.run_plan import RECORDER_ROLE, ExpectedGraph
 
@@ -34,8 +35,6 @@ RESEND_TIMEOUT_S = 5.0
 GRAPH_RECHECK_S = 1.0   # a name seen twice is looked at again this much later before the run is stopped
 # Topics every ROS node publishes (a viewer's, a CLI's): no sign of a foreign publisher of the run's messages.
 EVERY_NODE_TOPICS = frozenset({"/rosout", "/parameter_events"})
-# What rmw reports as the node of an endpoint whose participant has not said its node names yet.
-UNKNOWN_NODE_NAME = "_NODE_NAME_UNKNOWN_"
 # Wall time the graph may take after the mission to handle what it lags behind: an observer up to OBSERVER_SLACK
 # messages per input (its callbacks, a localizer's 4 ms each, at most a few seconds on a loaded machine).
 SETTLE_TIMEOUT_S = 60.0
@@ -267,8 +266,8 @@ class GraphWatch:
 
     def foreign_publishers(self, ours: Collection[str]) -> list[str]:
         """'NODE on TOPIC' for each publisher of a node not ``ours`` on a topic of the domain, but the ones every
-        node has (/rosout, /parameter_events), and but endpoints whose node DDS has not named yet (a node's name
-        comes after its endpoints in discovery: one of ours can show so for a moment)."""
+        node has (/rosout, /parameter_events), and but endpoints whose node DDS has not named: a node outside the run's
+        DDS partition, which cannot reach the run, or one of ours for the moment before its name is discovered."""
         node = self.node
         found = set()
         for topic, _ in node.get_topic_names_and_types():

@@ -47,7 +47,8 @@ from rclpy.signals import SignalHandlerOptions
 
 from rfidnav_bringup.graph_watch import GraphWatch, StallWatch, Waiter
 from rfidnav_bringup.mission_client import MissionClient
-from rfidnav_bringup.processes import DomainLease, NodeProcess, child_environment, reach_text
+from rfidnav_bringup.partition import join_process_partition
+from rfidnav_bringup.processes import RUN_DOMAINS, DomainLease, NodeProcess, child_environment, lock_folder, reach_text
 from rfidnav_bringup.run_plan import LIVE_ROLE, RECORDER_ROLE, RunOptions, RunPlan, rtf_text, run_id, unique_dir
 from rfidnav_bringup.summary import MissionOutcome, RunFacts, RunSummary, cpu_seconds, write_run_summary
 from rfidnav_bringup.supervisor import Supervisor
@@ -68,7 +69,7 @@ class Orchestrator:
         self.run_dir = self.plan.run_dir
         self.say_now = functools.partial(self.say, always=True)   # what is said even with --quiet
         self.supervisor = Supervisor(self.say_now, lambda: self.interrupted, self.respawned)
-        self.domain: dict[str, Any] | None = None    # the ROS domain it ran in, and the ones it skipped
+        self.domain: dict[str, Any] | None = None    # the ROS domain and DDS partition it ran in
         self.watch: GraphWatch                        # from run(), once the orchestrator's node is in the domain
         self.outcome = MissionOutcome()
         self.progress = StatusLine(options.quiet)
@@ -83,10 +84,14 @@ class Orchestrator:
         self.supervisor.add(self.plan.write(), self.plan.log_path, env, lease_fd)
 
     def run(self) -> RunSummary:
-        lease = DomainLease() if self.options.domain is None else DomainLease(range(self.options.domain,
-                                                                                    self.options.domain + 1))
-        self.domain = {"id": lease.domain_id, "skipped": {str(d): nodes for d, nodes in lease.skipped.items()},
-                       "discovery": self.options.discovery}
+        # First, before any DDS participant of this process: the partition that keeps foreign nodes out of the run.
+        # A domain is then leased by its lock alone: a node in it that ignores our locks (a killed run's orphan,
+        # another graph) cannot reach a partition it does not know, so there is nothing to listen for.
+        partition = join_process_partition(lock_folder())
+        candidates = RUN_DOMAINS if self.options.domain is None else range(self.options.domain,
+                                                                           self.options.domain + 1)
+        lease = DomainLease(candidates, occupants=lambda _domain: [])
+        self.domain = {"id": lease.domain_id, "partition": partition.name, "discovery": self.options.discovery}
         env = child_environment(lease.domain_id, self.options.discovery)
         os.environ.update({k: env[k] for k in ("ROS_DOMAIN_ID", "ROS_AUTOMATIC_DISCOVERY_RANGE")})
         context = Context()
@@ -102,12 +107,9 @@ class Orchestrator:
         previous_handlers = {signum: signal.signal(signum, self.on_stop_signal) for signum in STOP_SIGNALS}
         try:
             self.prepare(env, lease.handle)
-            if lease.skipped:
-                self.say(f"skipped ROS domains in use by nodes not of this run: {lease.describe_skipped()}",
-                         always=True)
             self.say(f"run {self.run_dir.name}: seed {self.options.seed}, RTF {rtf_text(self.options.rtf)}, "
                      f"{self.plan.clock} clock{self.plan.clock_note}")
-            self.say(f"graph on {reach_text(lease.domain_id, self.options.discovery)}", always=True)
+            self.say(f"graph on {reach_text(lease.domain_id, self.options.discovery, partition)}", always=True)
             mission = self.start_graph(node)
             if not self.interrupted:
                 self.fly_mission(mission)

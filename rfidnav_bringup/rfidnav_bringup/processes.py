@@ -3,8 +3,9 @@ never outliving the process that started them (Linux's parent-death signal).
 
 Also hands out DDS domain ids: each run holds an exclusive lock on one id for its lifetime, and so do the node
 processes it starts (they inherit the lock's descriptor), so concurrent runs (and test sessions) on one machine never
-hear each other, even while a killed run's nodes are still stopping; a lease also passes over an id in which nodes
-are already heard (a graph that does not know our locks), so that no foreign node joins a run.
+hear each other, even while a killed run's nodes are still stopping. A graph that does not know our locks is kept
+out of a run by the run's DDS partition (partition.py); a lease for a replay, which has none, passes over an id in
+which nodes are already heard.
 """
 
 from __future__ import annotations
@@ -27,6 +28,7 @@ from typing import Any
 import psutil
 
 from rfidnav_bringup.errors import LaunchError
+from rfidnav_bringup.partition import PROFILES_VARIABLE, RunPartition
 
 RUN_DOMAINS = range(51, 102)   # 1-50 are left to test sessions; 0-101 avoid the ephemeral port range
 # The domain locks live in one folder per user under /tmp, not $TMPDIR: two runs with different TMPDIRs must still
@@ -180,10 +182,13 @@ def start_child(command: list[str], lease_fd: int | None = None, **popen_options
                             pass_fds=() if lease_fd is None else (lease_fd,), **popen_options)
 
 
-def reach_text(domain_id: int, discovery: str) -> str:
-    """How another shell (or machine) joins the running graph."""
+def reach_text(domain_id: int, discovery: str, partition: RunPartition | None = None) -> str:
+    """How another shell (or machine) joins the running graph: its domain, and its DDS partition's profile."""
     where = "this machine only" if discovery == "localhost" else "this subnet"
     variables = f"ROS_DOMAIN_ID={domain_id} ROS_AUTOMATIC_DISCOVERY_RANGE={DISCOVERY_RANGES[discovery]}"
+    if partition is not None:
+        variables += f" {PROFILES_VARIABLE}={partition.profiles_file}"
+        where += f", DDS partition {partition.name}"
     return f"{variables} ({where}); to join it: {variables} ./rfidnav echo /odom"
 
 

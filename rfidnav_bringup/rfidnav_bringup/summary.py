@@ -49,7 +49,7 @@ class RunFacts:
     seed: int
     rtf: str | float                       # run_plan.rtf_text
     clock: dict[str, Any]                  # run_plan.RunPlan.clock_summary
-    ros_domain: dict[str, Any] | None      # the domain it ran in and the ones it skipped; None if it never leased one
+    ros_domain: dict[str, Any] | None      # the domain and DDS partition it ran in; None if it never leased one
 
 
 @dataclass

@@ -33,10 +33,16 @@ def run_scenario(out: Path, scenario: str, *options: str, mission_may_fail: bool
     mission's failure, exit 1: a method that does not always arrive): the one run folder, with the CLI's output kept
     in it as cli.log."""
     result = run_cli("run", scenario, *options, "--out", str(out))
-    runs = list(out.iterdir())
-    assert len(runs) == 1, result.stdout + result.stderr
-    runs[0].joinpath("cli.log").write_text(result.stdout + result.stderr)
+    run = one_run(out, result.stdout + result.stderr)
+    run.joinpath("cli.log").write_text(result.stdout + result.stderr)
     assert result.returncode in ((0, 1) if mission_may_fail else (0,)), result.stdout + result.stderr
+    return run
+
+
+def one_run(out: Path, output: str = "") -> Path:
+    """The one run folder the CLI made in ``out`` (``output``, the CLI's, says why when there is none or more)."""
+    runs = list(out.iterdir())
+    assert len(runs) == 1, output or runs
     return runs[0]
 
 
