@@ -97,7 +97,8 @@ def test_a_run_in_a_domain_with_a_foreign_controller_neither_hears_nor_records_i
     out = tmp_path / "runs"
     with foreign_graph(domain) as foreign:
         # Without the test session's partition: the run makes its own, as ./rfidnav run does from a shell.
-        result = subprocess.run([sys.executable, "-m", "rfidnav_bringup.cli", "run", "line_follow_90", "--rtf", "max",
+        # At RTF 5, for the seconds it takes to call a publisher that stays nameless one outside the partition.
+        result = subprocess.run([sys.executable, "-m", "rfidnav_bringup.cli", "run", "line_follow_90", "--rtf", "5",
                                  "--seed", "1", "--domain", str(domain), "--out", str(out), "--quiet"],
                                 cwd=WORKSPACE, env=without_session_partition(), capture_output=True, text=True,
                                 timeout=600)
@@ -110,6 +111,10 @@ def test_a_run_in_a_domain_with_a_foreign_controller_neither_hears_nor_records_i
     partition = summary["ros_domain"]["partition"]
     assert summary["ros_domain"]["id"] == domain and partition.startswith("rfidnav-")
     assert f"DDS partition {partition}" in result.stdout
+    # Counted and said, not taken: the foreign node's topics, one publisher each.
+    kept_out = summary["ros_domain"]["kept_out"]
+    assert kept_out["/cmd_vel"] == 1 and kept_out["/odom"] == 1, kept_out
+    assert f"a publisher on /cmd_vel not of this run is in ROS domain {domain}: kept out" in result.stdout
     bag = run / "bag"
     speeds = [message.linear.x for _, _, message in read_messages(bag, ["/cmd_vel"])]
     assert speeds and FOREIGN_SPEED not in speeds

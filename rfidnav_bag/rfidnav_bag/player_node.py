@@ -133,8 +133,11 @@ class PlayerNode(Node):
     # -- readiness --------------------------------------------------------------------------------------
 
     def has_subscriber(self, topic: str) -> bool:
-        publisher = self.topic_publishers.get(topic)
-        if publisher is not None:  # matched to our publisher, not merely present in the graph
+        # Matched to our publisher, not merely present in the graph: discovery lists a subscription a moment before
+        # DDS matches it, and what is published in that moment never reaches it (the first /clock of a run, seen
+        # with three test workers on two cores).
+        publisher = self.topic_publishers.get(topic) or (self.clock_publisher if topic == "/clock" else None)
+        if publisher is not None:
             return publisher.get_subscription_count() > 0
         return self.count_subscribers(topic) > 0
 

@@ -33,6 +33,9 @@ READY_TIMEOUT_S = 90.0
 RESEND_ATTEMPTS = 6
 RESEND_TIMEOUT_S = 5.0
 GRAPH_RECHECK_S = 1.0   # a name seen twice is looked at again this much later before the run is stopped
+# A publisher of ours shows with no node name only until discovery brings its node's name (well under a second on
+# one machine, seconds on a loaded one); one still unnamed after this is outside the run's DDS partition.
+KEPT_OUT_AFTER_S = 10.0
 # Topics every ROS node publishes (a viewer's, a CLI's): no sign of a foreign publisher of the run's messages.
 EVERY_NODE_TOPICS = frozenset({"/rosout", "/parameter_events"})
 # Wall time the graph may take after the mission to handle what it lags behind: an observer up to OBSERVER_SLACK
@@ -92,6 +95,10 @@ class GraphWatch:
     # ends, so two of the name are expected for that long.
     respawned_until: dict[str, float] = field(default_factory=dict)
     seen_twice: set[str] = field(default_factory=set)    # our names the last check saw twice
+    # Publishers with no node name, by endpoint GID: (topic, when first seen, wall). One still unnamed after
+    # KEPT_OUT_AFTER_S is outside the run's DDS partition: kept out, counted for the summary.
+    unnamed_since: dict[tuple[int, ...], tuple[str, float]] = field(default_factory=dict)
+    kept_out: dict[tuple[int, ...], str] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         self.node.create_subscription(Log, "/rosout", self.on_log, 100)
@@ -266,18 +273,39 @@ class GraphWatch:
 
     def foreign_publishers(self, ours: Collection[str]) -> list[str]:
         """'NODE on TOPIC' for each publisher of a node not ``ours`` on a topic of the domain, but the ones every
-        node has (/rosout, /parameter_events), and but endpoints whose node DDS has not named: a node outside the run's
-        DDS partition, which cannot reach the run, or one of ours for the moment before its name is discovered."""
+        node has (/rosout, /parameter_events), and but endpoints whose node DDS has not named: a node outside the
+        run's DDS partition, which cannot reach the run (counted by :meth:`note_unnamed`), or one of ours for the
+        moment before its name is discovered."""
         node = self.node
         found = set()
+        unnamed = {}
         for topic, _ in node.get_topic_names_and_types():
             if topic in EVERY_NODE_TOPICS:
                 continue
             for info in node.get_publishers_info_by_topic(topic):
                 name = f"{info.node_namespace.rstrip('/')}/{info.node_name}"
-                if info.node_name != UNKNOWN_NODE_NAME and name not in ours:
+                if info.node_name == UNKNOWN_NODE_NAME:
+                    unnamed[tuple(info.endpoint_gid)] = topic
+                elif name not in ours:
                     found.add(f"{name} on {topic}")
+        self.note_unnamed(unnamed, time.monotonic())
         return sorted(found)
+
+    def note_unnamed(self, unnamed: Mapping[tuple[int, ...], str], now: float) -> None:
+        """Publishers with no node name now (GID: topic): one unnamed for KEPT_OUT_AFTER_S is kept out, said once."""
+        self.unnamed_since = {gid: self.unnamed_since.get(gid, (topic, now)) for gid, topic in unnamed.items()}
+        for gid, (topic, since) in self.unnamed_since.items():
+            if now - since >= KEPT_OUT_AFTER_S and gid not in self.kept_out:
+                self.kept_out[gid] = topic
+                self.say(f"\na publisher on {topic} not of this run is in ROS domain {self.domain_id}: kept out by "
+                         "the run's DDS partition")
+
+    def kept_out_counts(self) -> dict[str, int]:
+        """Publishers outside the run's partition seen in its domain, by topic (none of their messages came in)."""
+        counts: dict[str, int] = {}
+        for topic in self.kept_out.values():
+            counts[topic] = counts.get(topic, 0) + 1
+        return dict(sorted(counts.items()))
 
 
 def stopped_processes(processes: Mapping[str, NodeProcess]) -> list[str]:

@@ -249,6 +249,8 @@ class Orchestrator:
         return f"\n{self.processes[server].last_lines(5)}" if server else ""
 
     def write_summary(self) -> RunSummary:
+        if self.domain is not None and hasattr(self, "watch"):
+            self.domain["kept_out"] = self.watch.kept_out_counts()
         facts = RunFacts(self.scenario.name, self.options.seed, rtf_text(self.options.rtf),
                          self.plan.clock_summary(), self.domain)
         return write_run_summary(self.run_dir, facts, self.outcome, self.processes, self.say_now)
