@@ -165,7 +165,11 @@ def test_a_participant_paused_past_its_dds_lease_is_sent_what_it_lost_and_the_ru
     run = one_run(out)
     assert recorded_commands(run) == unpaused_commands
     logs = "".join(log.read_text() for log in (run / "logs").glob("*.log"))
-    assert "were sent again and handled" in logs, "the pause lost nothing: the test did not test the recovery"
+    # Past three leases DDS has dropped the paused participant for certain. Just past one, whether it has depends on
+    # when the others' lease checks ran: on a loaded machine they can come after the resume, and nothing is lost
+    # (seen once in a suite beside two busy loops); the run must then still repeat its commands, as above.
+    if leases >= 3:
+        assert "were sent again and handled" in logs, "the pause lost nothing: the test did not test the recovery"
 
 
 def test_a_node_of_a_second_graph_taking_one_of_our_names_ends_the_run_before_the_two_mix(tmp_path: Path) -> None:
