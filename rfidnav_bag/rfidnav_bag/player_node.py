@@ -227,9 +227,10 @@ def spin_until_played(executor: Executor, node: PlayerNode) -> int:
     """Spin until playback is done (or the process is stopped); its exit code."""
     while not node.done.done() and not stop_requested() and node.context.ok():
         executor.spin_once(timeout_sec=0.1)
-    code = node.done.result() if node.done.done() else 0
+    if not node.done.done():
+        return 0       # stopped (Ctrl-C): nobody is owed the last messages, and the user waits for the end
     node.wait_for_acknowledgements()
-    return code
+    return node.done.result()
 
 
 def main(args: list[str] | None = None) -> int:

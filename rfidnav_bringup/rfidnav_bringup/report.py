@@ -16,25 +16,21 @@ import math
 import sys
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
-import matplotlib
+import networkx as nx
+import numpy as np
+import yaml
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import networkx as nx  # noqa: E402
-import numpy as np  # noqa: E402
-import yaml  # noqa: E402
-from matplotlib.figure import Figure  # noqa: E402
-
-from rfidnav_bag.bags import bag_info, is_bag_directory, read_messages  # noqa: E402
-from rfidnav_bag.errors import BagError  # noqa: E402
-from rfidnav_common.topological_map import (  # noqa: E402
+from rfidnav_bag.bags import bag_info, is_bag_directory, read_messages
+from rfidnav_bag.errors import BagError
+from rfidnav_common.topological_map import (
     UNKNOWN,
     TopologicalMap,
     load_topological_map,
     parse_hallway_text,
 )
-from rfidnav_scenario.metrics import (  # noqa: E402
+from rfidnav_scenario.metrics import (
     Fix,
     Trajectory,
     partition_metrics,
@@ -44,7 +40,7 @@ from rfidnav_scenario.metrics import (  # noqa: E402
     two_tier_metrics,
     wall_crossings,
 )
-from rfidnav_sim.world import World, load_world  # noqa: E402
+from rfidnav_sim.world import World, load_world
 
 STATUS_ACCEPTED, STATUS_EXECUTING = 1, 2
 STATUS_FINAL = {4: "succeeded", 5: "canceled", 6: "aborted"}
@@ -253,6 +249,15 @@ def draw_world(axes, record: RunRecord, run: Trajectory) -> None:
             axes.annotate(tag.tag_id, tag.position[:2], textcoords="offset points", xytext=(4, 4))
 
 
+def new_figure(width_in: float, height_in: float) -> Any:
+    """A figure of matplotlib's object API (no pyplot and its global figures; PNGs through Agg), imported at the
+    first plot: a run's summary, which computes metrics only, then does not wait for matplotlib (a second of a
+    Ctrl-C's end on a loaded machine)."""
+    from matplotlib.figure import Figure
+
+    return Figure(figsize=(width_in, height_in))
+
+
 def write_report(path: Path, out_dir: Path | None = None) -> tuple[dict[str, float | int | None], list[Path]]:
     """Recompute the metrics and write trajectory.png (and tracking_error.png for tag routes) into ``out_dir``
     (created if missing; default: the run folder)."""
@@ -261,7 +266,8 @@ def write_report(path: Path, out_dir: Path | None = None) -> tuple[dict[str, flo
     out_dir.mkdir(parents=True, exist_ok=True)
     metrics = record_metrics(record)
     run = record.ground_truth.between(record.mission_start_s, record.mission_end_s)
-    figure, axes = plt.subplots(figsize=(7, 7))
+    figure = new_figure(7.0, 7.0)
+    axes = figure.add_subplot()
     if record.trajectory_source == "ground_truth":
         draw_world(axes, record, run)
         axes.plot(run.xy[:, 0], run.xy[:, 1], color="tab:blue", label="robot (ground truth)")
@@ -276,13 +282,13 @@ def write_report(path: Path, out_dir: Path | None = None) -> tuple[dict[str, flo
     axes.grid(True, alpha=0.3)
     trajectory_png = out_dir / "trajectory.png"
     figure.savefig(trajectory_png, dpi=110, bbox_inches="tight")
-    plt.close(figure)
     if "tracking" not in record.metric_groups or record.trajectory_source != "ground_truth":
         return metrics, [trajectory_png]
     points = route_points(record.world, record.route)
 
     error = tracking_error(run, points)
-    figure, axes = plt.subplots(figsize=(8, 3.5))
+    figure = new_figure(8.0, 3.5)
+    axes = figure.add_subplot()
     axes.plot(error.times_s - record.mission_start_s, error.xy[:, 0] * 100.0, color="tab:red")
     axes.axhline(0.0, color="0.5", linewidth=0.8)
     rmse = metrics.get("tracking_rmse_m")
@@ -292,7 +298,6 @@ def write_report(path: Path, out_dir: Path | None = None) -> tuple[dict[str, flo
     axes.grid(True, alpha=0.3)
     error_png = out_dir / "tracking_error.png"
     figure.savefig(error_png, dpi=110, bbox_inches="tight")
-    plt.close(figure)
     return metrics, [trajectory_png, error_png]
 
 
@@ -309,7 +314,7 @@ def draw_map(topological_map: TopologicalMap, path_png: Path | str) -> None:
     drawn_lengths = sorted(math.dist(positions[e.node_a], positions[e.node_b]) for e in edges)
     stub = 0.35 * (drawn_lengths[len(drawn_lengths) // 2] if drawn_lengths else 1.0)
 
-    figure = Figure(figsize=(10.0, 8.0))
+    figure = new_figure(10.0, 8.0)
     axes = figure.add_subplot()
     label_style = {"fontsize": 7, "ha": "center", "va": "center",
                    "bbox": {"boxstyle": "round,pad=0.2", "facecolor": "white", "edgecolor": "none", "alpha": 0.85}}
