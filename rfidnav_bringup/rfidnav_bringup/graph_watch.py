@@ -99,6 +99,9 @@ class GraphWatch:
     # KEPT_OUT_AFTER_S is outside the run's DDS partition: kept out, counted for the summary.
     unnamed_since: dict[tuple[int, ...], tuple[str, float]] = field(default_factory=dict)
     kept_out: dict[tuple[int, ...], str] = field(default_factory=dict)
+    # Publishers seen with a node name: ours. A participant of ours found again after its DDS lease ended (a paused
+    # process) shows its endpoints, same GIDs, nameless for a while: they are not outside the partition.
+    named: set[tuple[int, ...]] = field(default_factory=set)
 
     def __post_init__(self) -> None:
         self.node.create_subscription(Log, "/rosout", self.on_log, 100)
@@ -286,14 +289,17 @@ class GraphWatch:
                 name = f"{info.node_namespace.rstrip('/')}/{info.node_name}"
                 if info.node_name == UNKNOWN_NODE_NAME:
                     unnamed[tuple(info.endpoint_gid)] = topic
-                elif name not in ours:
+                    continue
+                self.named.add(tuple(info.endpoint_gid))
+                if name not in ours:
                     found.add(f"{name} on {topic}")
         self.note_unnamed(unnamed, time.monotonic())
         return sorted(found)
 
     def note_unnamed(self, unnamed: Mapping[tuple[int, ...], str], now: float) -> None:
         """Publishers with no node name now (GID: topic): one unnamed for KEPT_OUT_AFTER_S is kept out, said once."""
-        self.unnamed_since = {gid: self.unnamed_since.get(gid, (topic, now)) for gid, topic in unnamed.items()}
+        self.unnamed_since = {gid: self.unnamed_since.get(gid, (topic, now)) for gid, topic in unnamed.items()
+                              if gid not in self.named}
         for gid, (topic, since) in self.unnamed_since.items():
             if now - since >= KEPT_OUT_AFTER_S and gid not in self.kept_out:
                 self.kept_out[gid] = topic

@@ -86,12 +86,17 @@ class Orchestrator:
     def run(self) -> RunSummary:
         # First, before any DDS participant of this process: the partition that keeps foreign nodes out of the run.
         # A domain is then leased by its lock alone: a node in it that ignores our locks (a killed run's orphan,
-        # another graph) cannot reach a partition it does not know, so there is nothing to listen for.
+        # another graph) cannot reach a partition of the run's own, so there is nothing to listen for. A partition
+        # the caller chose may be shared (a test session's runs): then nodes already in the domain, in it, are
+        # listened for as before.
         partition = join_process_partition(lock_folder())
         candidates = RUN_DOMAINS if self.options.domain is None else range(self.options.domain,
                                                                            self.options.domain + 1)
-        lease = DomainLease(candidates, occupants=lambda _domain: [])
+        lease = (DomainLease(candidates) if partition.chosen_by_caller
+                 else DomainLease(candidates, occupants=lambda _domain: []))
         self.domain = {"id": lease.domain_id, "partition": partition.name, "discovery": self.options.discovery}
+        if lease.skipped:       # only in a caller's partition, whose other users may be in a domain
+            self.domain["skipped"] = {str(d): nodes for d, nodes in lease.skipped.items()}
         env = child_environment(lease.domain_id, self.options.discovery)
         os.environ.update({k: env[k] for k in ("ROS_DOMAIN_ID", "ROS_AUTOMATIC_DISCOVERY_RANGE")})
         context = Context()
