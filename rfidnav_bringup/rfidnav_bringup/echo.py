@@ -70,15 +70,15 @@ def echo(topic: str, count: int, wait_s: float, timeout_s: float, out: TextIO = 
             executor.spin_once(timeout_sec=0.1)
         if len(received) < count:
             raise EchoError(f"{topic}: {len(received)} of {count} messages within {timeout_s:g} s"
-                            + partition_hint(node, topic, received))
+                            + ("" if received else partition_hint(node, topic)))
         return len(received)
 
 
-def partition_hint(node: Node, topic: str, received: list[Any]) -> str:
+def partition_hint(node: Node, topic: str) -> str:
     """Why nothing came, when the topic's publishers are all of nodes this process cannot name: outside its DDS
     partition (a run's graph, heard of in discovery but never matched)."""
     publishers = node.get_publishers_info_by_topic(topic)
-    if received or not publishers or any(info.node_name != UNKNOWN_NODE_NAME for info in publishers):
+    if not publishers or any(info.node_name != UNKNOWN_NODE_NAME for info in publishers):
         return ""
     return f"; its publishers are outside this process's DDS partition ({JOIN_ADVICE})"
 

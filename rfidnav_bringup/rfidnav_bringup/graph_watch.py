@@ -11,6 +11,7 @@ from __future__ import annotations
 import functools
 import json
 import time
+from collections import Counter
 from collections.abc import Callable, Collection, Iterable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -308,10 +309,7 @@ class GraphWatch:
 
     def kept_out_counts(self) -> dict[str, int]:
         """Publishers outside the run's partition seen in its domain, by topic (none of their messages came in)."""
-        counts: dict[str, int] = {}
-        for topic in self.kept_out.values():
-            counts[topic] = counts.get(topic, 0) + 1
-        return dict(sorted(counts.items()))
+        return dict(sorted(Counter(self.kept_out.values()).items()))
 
 
 def stopped_processes(processes: Mapping[str, NodeProcess]) -> list[str]:

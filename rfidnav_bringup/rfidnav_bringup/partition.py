@@ -55,8 +55,9 @@ def default_profile(root: ElementTree.Element, kind: str) -> ElementTree.Element
 def partition_in(root: ElementTree.Element) -> str | None:
     """The first partition name of the default publisher profile, if there is one."""
     profile = default_profile(root, "publisher")
-    name = None if profile is None else profile.find(f"{tag('qos')}/{tag('partition')}/{tag('names')}/{tag('name')}")
-    return None if name is None or not (name.text or "").strip() else (name.text or "").strip()
+    path = "/".join(tag(part) for part in ("qos", "partition", "names", "name"))
+    name = None if profile is None else profile.findtext(path)
+    return (name or "").strip() or None
 
 
 def parse_profiles(path: Path) -> ElementTree.Element:
@@ -93,10 +94,6 @@ def with_partition(root: ElementTree.Element, partition: str) -> ElementTree.Ele
     return root
 
 
-def empty_profiles() -> ElementTree.Element:
-    return ElementTree.Element(tag("dds"))
-
-
 _joined: RunPartition | None = None
 
 
@@ -109,7 +106,7 @@ def join_process_partition(folder: Path) -> RunPartition:
     if _joined is not None:
         return _joined
     given = os.environ.get(PROFILES_VARIABLE, "").strip()
-    root = parse_profiles(Path(given)) if given else empty_profiles()
+    root = parse_profiles(Path(given)) if given else ElementTree.Element(tag("dds"))
     chosen = partition_in(root)
     if chosen is not None:
         _joined = RunPartition(chosen, Path(given), chosen_by_caller=True)
