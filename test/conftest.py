@@ -85,15 +85,18 @@ def domain():
     sessions, pytest-xdist's other worker and the runs the tests start never cross-talk with the nodes the tests
     make in this process. Held to the end, not per test: rclpy destroys a context's participant only once nothing
     refers to it any more, so a test's nodes can still be heard after it ended, and a run leasing the domain
-    then would meet them ("another graph joined ROS domain 51: two nodes named /robot_sim")."""
+    then would meet them ("another graph joined ROS domain 51: two nodes named /robot_sim"). Held past the session
+    too, until this process ends: pytest-xdist lets a worker out of tests wait for the others, and a run of theirs
+    leasing the domain then met its nodes still heard (a publisher in another DDS partition, reported kept out)."""
     # Imported here, not at the top: only the tests taking this fixture need rfidnav_bringup (support/packages.py).
     from rfidnav_bringup.processes import DomainLease
 
     lease = DomainLease()
-    try:
-        yield lease.domain_id
-    finally:
-        lease.close()
+    _HELD_TO_EXIT.append(lease)
+    return lease.domain_id
+
+
+_HELD_TO_EXIT: list[object] = []   # the session's domain lease, let go when the process ends (its lock's descriptor)
 
 
 @pytest.fixture

@@ -165,14 +165,12 @@ def test_a_participant_paused_past_its_dds_lease_is_sent_what_it_lost_and_the_ru
     # Found again after its lease ended, the controller's endpoints show without a node name for a while: they are
     # the run's own, not publishers its partition kept out (said of /cmd_vel after a 15-lease pause, before).
     assert "kept out by the run's DDS partition" not in output
-    run = one_run(out)
-    assert recorded_commands(run) == unpaused_commands
-    logs = "".join(log.read_text() for log in (run / "logs").glob("*.log"))
-    # Past three leases DDS has dropped the paused participant for certain. Just past one, whether it has depends on
-    # when the others' lease checks ran: on a loaded machine they can come after the resume, and nothing is lost
-    # (seen once in a suite beside two busy loops); the run must then still repeat its commands, as above.
-    if leases >= 3:
-        assert "were sent again and handled" in logs, "the pause lost nothing: the test did not test the recovery"
+    # Whether a pause loses a message at all is a race at the resume: past a lease DDS has dropped the paused
+    # participant, but what went out before is in its shared-memory port and still comes, and what it publishes on
+    # waking is lost only if its own lease checks drop the others first (a 15-lease pause lost nothing once, a
+    # 3-lease one lost a round). So the recovery itself is tested where the loss is made for certain
+    # (test_stepped_node); here, that the run goes on to the same commands whatever the pause lost.
+    assert recorded_commands(one_run(out)) == unpaused_commands
 
 
 def test_a_node_of_a_second_graph_taking_one_of_our_names_ends_the_run_before_the_two_mix(tmp_path: Path) -> None:

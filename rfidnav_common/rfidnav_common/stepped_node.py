@@ -39,6 +39,7 @@ import time
 from array import array
 from collections import deque
 from collections.abc import Callable
+from itertools import count
 from typing import Any, cast
 
 from rcl_interfaces.msg import ParameterDescriptor
@@ -54,8 +55,9 @@ from rclpy.task import Future
 from rclpy.time import Time
 
 from rfidnav_common.clock_topics import RESEND_REQUEST_TOPIC, RESEND_TOPIC, RESEND_TOPICS
+from rfidnav_common.in_order import WIDEST_HOLE, InOrder
 from rfidnav_common.inputs import STAMP_TOLERANCE_S
-from rfidnav_common.rclpy_compat import drive_ros_time_without_clock_topic
+from rfidnav_common.rclpy_compat import drive_ros_time_without_clock_topic, hand_message_info, message_and_info
 from rfidnav_common.step_ledger import STEP_ACK_TOPIC, StepReport
 from rfidnav_msgs.msg import StepAck, StepResend  # type: ignore[attr-defined]  # generated
 
@@ -64,7 +66,7 @@ STEPPED_CLOCK_PARAMETER = "stepped_clock"
 # cannot complete a step, so they are not counted and cost no answer.
 UNCOUNTED_TOPICS = ("/rosout", "/parameter_events", STEP_ACK_TOPIC, *RESEND_TOPICS)
 # A counted publisher's last messages, kept to be sent again: the depth its subscriptions keep (SENSOR_QOS).
-RESEND_DEPTH = 100
+RESEND_DEPTH = WIDEST_HOLE
 RESEND_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=RESEND_DEPTH * 10,
                         reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.VOLATILE)
 ACTION_TOPIC_MARK = "/_action/"
@@ -167,14 +169,15 @@ class SteppedNode(Node):
         self.served: list[str] = []                     # services of its own
         self.counted_clients: list[Client] = []
         self.service_timer: Any = None
-        # Recovery (rfidnav_msgs/StepResend): each counted publisher's last messages and whether it has lost a
-        # subscription; per consumed topic, how to handle a message sent again, whether a subscription lost a
-        # publisher since the topic's last message, and the resends being taken (request, count at its start).
-        self.recent: dict[Publisher, deque[Any]] = {}
+        # Recovery (rfidnav_msgs/StepResend): each counted publisher's last messages with their publication sequence
+        # numbers and whether it has lost a subscription; per consumed topic, how to handle a message sent again,
+        # whether a subscription lost a publisher since the topic's last message, and the resends being taken
+        # (request, its last number, messages handled).
+        self.recent: dict[Publisher, deque[tuple[int, Any]]] = {}
         self.lost_subscription_at: dict[Publisher, int] = {}     # its produced count when it last lost one
-        self.resend_handlers: dict[str, tuple[Any, bool, Callable[..., None]]] = {}
+        self.resend_handlers: dict[str, tuple[Any, bool, InOrder, Callable[[Any], None]]] = {}
         self.lost_publishers: set[str] = set()
-        self.resends_taken: dict[str, tuple[int, int]] = {}
+        self.resends_taken: dict[str, tuple[int, int, int]] = {}
         self.resend_requests: Publisher | None = None
         # The latest service_wiring(): per service topic, the clients a served one has (step_report's matched)
         # and, for a client's, 1 once its server is ready (step_report's subscribed).
@@ -218,9 +221,7 @@ class SteppedNode(Node):
             return super().create_subscription(msg_type, topic, callback, qos_profile, **kwargs)
         self.consumed_counts.setdefault(resolved, 0)
 
-        def counted(message: Any, resent: bool = False) -> None:
-            if not resent:
-                self.lost_publishers.discard(resolved)
+        def counted(message: Any) -> None:
             self.in_callback = True
             try:
                 stamp_ns = message_stamp_ns(message) if not isinstance(message, bytes) else None
@@ -232,18 +233,31 @@ class SteppedNode(Node):
                 self.in_callback = False
                 self.changed()
 
+        order = InOrder()
+        made: list[Subscription] = []
+
+        def arrived(*taken: Any) -> None:
+            message, info = message_and_info(*taken)
+            self.lost_publishers.discard(resolved)
+            if self.peers[made[0]] > 1:      # several publishers: their numbers interleave
+                order.reset(0)
+                counted(message)
+                return
+            for ready in order.arrived(info["publication_sequence_number"], message):
+                counted(ready)
+
         self.changed()   # a new input: the simulator learns to wait for it
         # A publisher matched (or gone) changes what the node reports, as for its publishers.
         events = kwargs.pop("event_callbacks", None) or SubscriptionEventCallbacks()
-        made: list[Subscription] = []
         if events.matched is None:
             events.matched = lambda _status: self.rematched(made[0], made[0].get_publisher_count())
-        subscription = super().create_subscription(msg_type, topic, counted, qos_profile, event_callbacks=events,
+        subscription = super().create_subscription(msg_type, topic, arrived, qos_profile, event_callbacks=events,
                                                    **kwargs)
+        hand_message_info(subscription)
         made.append(subscription)
         self.peers[subscription] = subscription.get_publisher_count()
         self.counted_subscriptions.setdefault(resolved, []).append(subscription)
-        self.resend_handlers.setdefault(resolved, (msg_type, bool(kwargs.get("raw")), counted))
+        self.resend_handlers.setdefault(resolved, (msg_type, bool(kwargs.get("raw")), order, counted))
         return subscription
 
     def create_publisher(self, msg_type: Any, topic: str, qos_profile: Any, **kwargs: Any) -> Any:
@@ -261,11 +275,12 @@ class SteppedNode(Node):
         resolved = publisher.topic_name
         self.produced_counts.setdefault(resolved, 0)
         self.counted_publishers.setdefault(resolved, []).append(publisher)
-        recent: deque[Any] = deque(maxlen=RESEND_DEPTH)
+        recent: deque[tuple[int, Any]] = deque(maxlen=RESEND_DEPTH)
         self.recent[publisher] = recent
+        numbers = count(1)     # as DDS numbers the publisher's writes
 
         def counted(message: Any) -> None:
-            recent.append(message)
+            recent.append((next(numbers), message))
             self.produced_counts[resolved] += 1
             if not self.in_callback:   # within a callback the answer after it counts this too
                 self.changed()
@@ -405,7 +420,8 @@ class SteppedNode(Node):
         self.resend_requests.publish(StepResend(request=request, consumer=consumer, topic=topic, behind=behind))
 
     def on_resend_request(self, request: StepResend) -> None:
-        """A producer's side: send the consumer the last ``behind`` messages published on the topic, again."""
+        """A producer's side: send the consumer the last ``behind`` messages published on the topic again, each with
+        its publication sequence number."""
         publishers = self.counted_publishers.get(request.topic, [])
         if len(publishers) != 1:     # none of ours; or two, whose messages the consumer cannot be told apart
             return
@@ -417,34 +433,35 @@ class SteppedNode(Node):
         # Lost here if the publisher lost a subscription after the first of them went out (in flight then).
         lost_match = self.lost_subscription_at.get(publishers[0], -1) > self.produced_counts[request.topic] - \
             request.behind
-        for index, message in enumerate(kept[len(kept) - request.behind:]):
+        for number, message in kept[len(kept) - request.behind:]:
             data = message if isinstance(message, bytes) else serialize_message(message)
             self.resends.publish(StepResend(request=request.request, consumer=request.consumer, topic=request.topic,
-                                            behind=request.behind, index=index, lost_match=lost_match,
+                                            behind=request.behind, index=number, lost_match=lost_match,
                                             data=array("B", data)))
 
     def on_resend(self, resend: StepResend) -> None:
-        """A consumer's side: handle a message sent again if it is the next one this node lacks. It lacks them
-        only if DDS dropped one side of the topic's match (here, or at the producer's: ``lost_match``): a node
-        that is merely slow still has them coming, and takes none sent again."""
+        """A consumer's side: handle a message sent again if this node lacks it (rfidnav_common.in_order): one in a
+        hole of the publisher's numbers, or one after the last it had if DDS dropped one side of the topic's match
+        (here, or at the producer's: ``lost_match``); a node merely slow still has it coming. Those after a hole
+        wait for it, so that they are handled in the order they were published."""
         topic = resend.topic
         if resend.consumer != self.get_fully_qualified_name() or topic not in self.resend_handlers:
             return
-        if resend.index == 0:
-            if topic not in self.lost_publishers and not resend.lost_match:
-                return
-            self.resends_taken[topic] = (resend.request, self.consumed_counts[topic])
-        request, start = self.resends_taken.get(topic, (-1, 0))
-        if request != resend.request or self.consumed_counts[topic] != start + resend.index:
-            return              # a resend already taken (the request was made again), or not the next one
-        msg_type, raw, counted = self.resend_handlers[topic]
+        msg_type, raw, order, counted = self.resend_handlers[topic]
+        request, last, taken = self.resends_taken.get(topic, (-1, 0, 0))
+        if request != resend.request:
+            request, last, taken = resend.request, resend.index + resend.behind - 1, 0
         data = bytes(resend.data)
-        counted(data if raw else deserialize_message(data, msg_type), resent=True)
-        if resend.index == resend.behind - 1:
-            # Made good: another request (one crossing this node's answer) must find nothing lost.
-            self.lost_publishers.discard(topic)
-            self.get_logger().warning(f"{resend.behind} message(s) on {topic} lost to this node (a DDS lease "
-                                      "ended: a pause?) were sent again and handled")
+        lost_since = topic in self.lost_publishers or resend.lost_match
+        before = len(order.taken_again)
+        for message in order.resent(resend.index, data if raw else deserialize_message(data, msg_type), lost_since):
+            counted(message)
+        taken += len(order.taken_again) - before
+        self.resends_taken[topic] = (request, last, taken)
+        if resend.index == last and taken:
+            self.get_logger().warning(f"{taken} message(s) on {topic} lost to this node (a DDS lease ended: a "
+                                      "pause?) were sent again and handled"
+                                      + ("; some are still missing" if order.lacks() else ""))
 
     def changed(self) -> None:
         """A count changed: answer with all counts (they are cumulative, so every answer is complete), at once
