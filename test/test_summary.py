@@ -111,6 +111,18 @@ def test_metrics_that_cannot_be_computed_are_said_and_left_out(tmp_path: Path,
     assert summary.document["metrics"] == {} and summary.document["bag"] == str(tmp_path / "bag")
 
 
+
+def test_an_interrupted_run_leaves_its_metrics_to_report_and_says_so(tmp_path: Path,
+                                                                     monkeypatch: pytest.MonkeyPatch) -> None:
+    (tmp_path / "bag").mkdir()
+    (tmp_path / "bag" / "metadata.yaml").write_text("{}")
+    read: list[Path] = []
+    monkeypatch.setattr(rfidnav_bringup.report, "run_metrics", lambda run: read.append(run) or {"rmse_m": 0.1})
+    said: list[str] = []
+    summary = write_run_summary(tmp_path, FACTS, finished(), processes(tmp_path), said.append, interrupted=True)
+    assert read == [] and summary.document["metrics"] == {}
+    assert said == [f"metrics not computed for an interrupted run: ./rfidnav report {tmp_path} computes them"]
+
 def test_the_printed_summary_aligns_one_row_per_fact(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     summary = write_run_summary(tmp_path, FACTS, finished(), processes(tmp_path), print)
     print_summary(summary)

@@ -258,4 +258,4 @@ class Orchestrator:
             self.domain["kept_out"] = self.watch.kept_out_counts()
         facts = RunFacts(self.scenario.name, self.options.seed, rtf_text(self.options.rtf),
                          self.plan.clock_summary(), self.domain)
-        return write_run_summary(self.run_dir, facts, self.outcome, self.processes, self.say_now)
+        return write_run_summary(self.run_dir, facts, self.outcome, self.processes, self.say_now, self.interrupted)

@@ -87,14 +87,18 @@ def mission_cpu(outcome: MissionOutcome) -> dict[str, Any] | None:
 
 
 def write_run_summary(run_dir: Path, facts: RunFacts, outcome: MissionOutcome, processes: Mapping[str, NodeProcess],
-                  say: Callable[[str], None]) -> RunSummary:
+                      say: Callable[[str], None], interrupted: bool = False) -> RunSummary:
     """Write ``run_dir``/summary.json and return it; ``outcome`` becomes a failure if ground truth objects.
-    ``say`` tells what could not be done (the metrics, the file), which does not end the run."""
+    ``say`` tells what could not be done (the metrics, the file), which does not end the run. An ``interrupted``
+    run (Ctrl-C, SIGTERM) is not scored: its metrics, which read the whole bag (seconds on a loaded machine, where
+    the user waits for the prompt), are left to ``./rfidnav report``."""
     from rfidnav_bringup.report import run_metrics
 
     metrics: dict[str, Any] = {}
     bag = run_dir / "bag"
-    if (bag / "metadata.yaml").exists():
+    if interrupted:
+        say(f"metrics not computed for an interrupted run: ./rfidnav report {run_dir} computes them")
+    elif (bag / "metadata.yaml").exists():
         try:
             metrics = run_metrics(run_dir)
         except RfidnavError as error:
