@@ -199,6 +199,19 @@ def test_a_publisher_of_a_node_not_of_the_run_ends_the_run_naming_it_and_its_top
         watched.watch.check_single_graph()
 
 
+
+def test_with_a_role_of_unknown_name_no_publisher_is_foreign_but_the_unnamed_are_still_counted(
+        graph: Graph, monkeypatch: pytest.MonkeyPatch) -> None:
+    watched = Watched(graph, replace(EXPECTED, unnamed_roles=("driver",)))
+    noted: list[dict] = []
+    monkeypatch.setattr(watched.watch, "note_unnamed", lambda unnamed, _now: noted.append(dict(unnamed)))
+    driver = graph.add(Node("vendor_driver", context=graph.context))    # the role's node, named by its command
+    driver.create_publisher(Odometry, "/odom", 10)
+    graph.spin_until(lambda: watched.watch.node.get_publishers_info_by_topic("/odom"), "the driver's /odom")
+    watched.watch.check_single_graph()       # not ended: /vendor_driver may be the role's
+    # The publishers without a node name (outside the run's partition) are looked for at every check all the same.
+    assert noted == [{}]
+
 def test_a_stall_is_said_once_with_the_clock_source_s_last_warning_and_ends_the_mission_after_a_minute(
         graph: Graph) -> None:
     watched = Watched(graph)

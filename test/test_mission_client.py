@@ -105,6 +105,16 @@ def test_a_cancelled_goal_ends_with_the_server_s_result(graph: Graph) -> None:
     assert server.goals.active is None
 
 
+
+def test_a_cancel_not_waited_for_still_reaches_the_server(graph: Graph) -> None:
+    server, mission, _ = ready(graph)
+    assert mission.send(mission.goal({"tag_ids": ["H1"]}, "mission.goal"))
+    mission.cancel(wait=False)
+    assert not mission.done      # it returned before the answer
+    graph.spin_until(lambda: server.goals.active is None, "the server ending the cancelled goal")
+    graph.spin_until(lambda: mission.done, "the goal's result")
+    assert mission.result().message == "cancelled by the client"
+
 def test_the_goal_is_sent_again_to_a_respawned_server(graph: Graph) -> None:
     first, mission, _ = ready(graph)
     goal = mission.goal({"tag_ids": ["H1", "H2"]}, "mission.goal")

@@ -107,9 +107,14 @@ class MissionClient:
         answer = self.result_future.result()
         return answer is not None and answer.status != GoalStatus.STATUS_UNKNOWN
 
-    def cancel(self) -> None:
-        """Cancel the goal and wait, CANCEL_TIMEOUT_S at most, for the answer and the goal's result."""
+    def cancel(self, wait: bool = True) -> None:
+        """Cancel the goal and, with ``wait``, wait CANCEL_TIMEOUT_S at most for the answer and the goal's result:
+        a run that timed out or stalled records how its goal ended. A run stopped by a signal does not wait: its
+        nodes are stopped next, which ends the goal too, and its user waits for the prompt (a round trip through
+        the server took seconds of a Ctrl-C beside busy processes)."""
         cancel = self.handle.cancel_goal_async()
+        if not wait:
+            return
         deadline = time.monotonic() + CANCEL_TIMEOUT_S
         while not (cancel.done() and self.result_future.done()) and time.monotonic() < deadline:
             self.waiter.executor.spin_once(timeout_sec=0.05)

@@ -234,7 +234,7 @@ class Orchestrator:
                     self.outcome.message = f"stalled: {stalled}"
                 elif not self.interrupted:
                     self.outcome.message = f"timeout after {elapsed_sim:.1f} s of sim time"
-                mission.cancel()
+                mission.cancel(wait=not self.interrupted)
                 break
         if mission.done and self.plan.stepped_with is not None:
             watch.settle()    # the observers' last outputs (they may lag the loop) reach the bag
