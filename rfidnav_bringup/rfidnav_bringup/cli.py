@@ -437,7 +437,8 @@ def exit_without_teardown(code: int) -> typing.NoReturn:
     """End the process once everything is written: the exit handlers run (the run's partition profile is removed)
     and the standard streams are flushed, but the interpreter does not free, one by one, the modules rclpy, numpy
     and the verb loaded: that took a third of a second idle and over a second beside busy processes, a wait added
-    to every Ctrl-C of ``run``."""
+    to every Ctrl-C of ``run``. Only for a process whose DDS participants are destroyed already: one destroyed by
+    the teardown would otherwise stay in the domain until its lease ended, without a word to the others."""
     atexit._run_exitfuncs()      # what the interpreter's own exit runs first (private, but multiprocessing's way too)
     for stream in (sys.stdout, sys.stderr):
         try:
@@ -447,5 +448,12 @@ def exit_without_teardown(code: int) -> typing.NoReturn:
     os._exit(code)
 
 
+# The verbs that destroy every DDS participant they made before they return (the orchestrator destroys its
+# context): they may end without the teardown, which for the others would leave a participant to end with it.
+ENDS_WITHOUT_TEARDOWN = ("run", "demo")
+
 if __name__ == "__main__":
-    exit_without_teardown(main())
+    exit_code = main()
+    if sys.argv[1:2] and sys.argv[1] in ENDS_WITHOUT_TEARDOWN:
+        exit_without_teardown(exit_code)
+    sys.exit(exit_code)
