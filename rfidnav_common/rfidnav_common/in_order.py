@@ -35,12 +35,9 @@ class InOrder:
         if number in self.taken_again:
             self.taken_again.discard(number)
             return []
-        if self.newest == 0 or number <= self.newest:
-            # The first, or a new writer (a restarted producer starts again at 1): what the old one left is moot.
-            released = [self.held[n] for n in sorted(self.held)]
-            self.reset(number)
-            return [*released, message]
-        if number - self.newest > WIDEST_HOLE:
+        if self.newest == 0 or number <= self.newest or number - self.newest > WIDEST_HOLE:
+            # The first; a new writer (a restarted producer starts again at 1), what the old one left being moot; or
+            # a hole wider than any producer keeps to send again, never to be filled.
             released = [self.held[n] for n in sorted(self.held)]
             self.reset(number)
             return [*released, message]
