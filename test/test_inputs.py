@@ -182,9 +182,28 @@ def test_drops_are_counted_per_input_and_warned_about_at_most_once_a_period():
     assert (drops.dropped("/odom"), drops.dropped("/rfid/reads"), drops.dropped(), drops.clamped()) == (3, 3, 6, 1)
 
 
-def test_a_stamp_a_minute_or_more_from_the_nodes_clock_is_refused_unless_the_clock_has_not_started():
+def clocked_node(nanoseconds: int, sim_time: bool) -> SimpleNamespace:
+    clock = SimpleNamespace(ros_time_is_active=sim_time, now=lambda: SimpleNamespace(nanoseconds=nanoseconds))
+    return SimpleNamespace(get_clock=lambda: clock)
+
+
+def test_stamps_are_checked_against_sim_time_once_its_clock_has_started_and_never_on_wall_time():
+    from builtin_interfaces.msg import Time
+
+    from rfidnav_common.ros import sim_clock_seconds, stamp_seconds
+
+    assert sim_clock_seconds(clocked_node(100_000_000_000, True)) == 100.0
+    assert sim_clock_seconds(clocked_node(0, True)) is None              # no /clock heard yet
+    assert sim_clock_seconds(clocked_node(100_000_000_000, False)) is None
+    far = Time(sec=2 ** 31 - 1)
+    assert stamp_seconds(clocked_node(0, True), far) == 2 ** 31 - 1
+    assert stamp_seconds(clocked_node(100_000_000_000, False), far) == 2 ** 31 - 1
+    with pytest.raises(BadInput, match="from this node's clock"):
+        stamp_seconds(clocked_node(100_000_000_000, True), far)
+
+
+def test_a_stamp_a_minute_or_more_from_the_nodes_clock_is_refused():
     assert inputs.stamp_near(130.0, 100.0) == 130.0 and inputs.stamp_near(40.5, 100.0) == 40.5
     for far in (160.5, 39.0, float(2 ** 31 - 1), math.nan, math.inf):
         with pytest.raises(BadInput, match=r"header.stamp: .* from this node's clock \(100.000 s\), more than 60 s"):
             inputs.stamp_near(far, 100.0)
-    assert inputs.stamp_near(float(2 ** 31 - 1), 0.0) == 2 ** 31 - 1       # no clock yet: nothing to check against

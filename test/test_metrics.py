@@ -12,11 +12,13 @@ from rfidnav_scenario.metrics import (
     READ_AREA_RADIUS_M,
     Trajectory,
     area_entries,
+    flagged_spans,
     ground_truth_objection,
     signed_segment_error,
     tracking_error,
     tracking_metrics,
     wall_crossings,
+    within_bound,
 )
 
 pytestmark = pytest.mark.tier("unit")
@@ -235,3 +237,48 @@ def test_ground_truth_objects_to_a_run_that_crossed_a_wall_or_missed_the_goal():
     assert ground_truth_objection({"wall_crossings": 1, "success": False, "final_distance_m": 3.25}) == (
         "did not reach the goal (metrics.success false, 3.25 m from it) and made 1 wall crossing "
         "(metrics.wall_crossings)")
+
+
+def detour_run(detour_m: float = 1.0, dt: float = 0.01):
+    """On the line (0,0)->(0,5) at 0.2 m/s, but from 10 s to 20 s out to x = ``detour_m`` and back (a search:
+    5 s out, 5 s back, standing still in y); the time the detour starts and ends."""
+    times = np.arange(0.0, 35.0 + dt / 2, dt)
+    y = 0.2 * np.clip(times, None, 10.0) + 0.2 * np.clip(times - 20.0, 0.0, None)
+    x = np.where((times > 10.0) & (times < 20.0), detour_m * (1.0 - np.abs(times - 15.0) / 5.0), 0.0)
+    return Trajectory(times, np.column_stack((x, y))), (10.0, 20.0)
+
+
+def test_a_search_is_left_out_of_the_tracking_error_and_reported_apart():
+    trajectory, search = detour_run(detour_m=1.0)
+    with_search = tracking_metrics(trajectory, LINE_TAGS, [], 0.0, 35.0)
+    without = tracking_metrics(trajectory, LINE_TAGS, [], 0.0, 35.0, searching=[search])
+    assert with_search.tracking_rmse_m > 0.3 and with_search.tracking_max_abs_m == pytest.approx(1.0, abs=0.01)
+    assert without.tracking_rmse_m == pytest.approx(0.0, abs=1e-9)
+    assert without.tracking_max_abs_m == pytest.approx(0.0, abs=1e-9)
+    assert (without.searches, without.search_s) == (1, 10.0)
+    assert without.search_length_m == pytest.approx(2.0, abs=1e-6)          # 1 m out and 1 m back
+    assert with_search.searches == 0 and with_search.search_length_m == 0.0
+    assert without.path_length_m == pytest.approx(with_search.path_length_m)   # driven either way
+
+
+def test_the_final_distance_is_from_the_last_route_tag():
+    trajectory, _ = detour_run()
+    metrics = tracking_metrics(trajectory, LINE_TAGS, [], 0.0, 34.0)       # stopped at y = 4.8
+    assert metrics.final_distance_m == pytest.approx(0.2, abs=1e-9)
+    assert tracking_metrics(trajectory, LINE_TAGS, [], 100.0, 200.0).final_distance_m is None     # no track
+
+
+def test_flagged_spans_start_at_the_first_flag_and_end_at_the_next_unflagged_sample():
+    times = [0.0, 1.0, 2.0, 3.0, 4.0, 5.0]
+    assert flagged_spans(times, [False, True, True, False, True, False], 9.0) == [(1.0, 3.0), (4.0, 5.0)]
+    assert flagged_spans(times, [True, False, False, False, False, True], 9.0) == [(0.0, 1.0), (5.0, 9.0)]
+    assert flagged_spans(times, [False] * 6, 9.0) == [] and flagged_spans([], [], 9.0) == []
+
+
+def test_success_is_stopping_within_the_declared_bound():
+    assert within_bound(0.10, 0.10) is True and within_bound(0.1001, 0.10) is False
+    assert within_bound(None, 0.10) is None and within_bound(0.05, None) is None
+    assert within_bound(math.nan, 0.5) is None          # a run without a track
+    assert ground_truth_objection({"success": False, "final_error_m": 0.318, "success_within_m": 0.17}) == (
+        "did not reach the goal (metrics.success false, 0.32 m from it, more than the scenario's 0.17 m)")
+    assert ground_truth_objection({"success": None, "final_error_m": 0.318}) is None    # no criterion: no say

@@ -133,7 +133,7 @@ def test_an_unknown_tag_an_empty_route_or_a_tag_twice_in_a_row_is_refused_and_a_
         route.start(["C1", "C9"], 0.0)
     with pytest.raises(ValueError, match="empty"):
         route.start([], 0.0)
-    assert route.refusal(["C1", "X", "C3", "Y"]) == "unknown tag ids X, Y"
+    assert route.refusal(["C1", "X", "C3", "Y"]) == "unknown tag ids X, Y (not in the route map)"
     with pytest.raises(ValueError, match=r"C3 twice in a row \(positions 2 and 3\)"):
         route.start(["C1", "C3", "C3"], 0.0)
     assert route.refusal(["C1", "C3", "C1"]) is None         # back along the same hallway

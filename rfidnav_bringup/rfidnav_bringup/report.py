@@ -30,15 +30,18 @@ from rfidnav_common.topological_map import (
     load_topological_map,
     parse_hallway_text,
 )
+from rfidnav_control.tag_route import SEARCH_MODES
 from rfidnav_scenario.metrics import (
     Fix,
     Trajectory,
+    flagged_spans,
     partition_metrics,
     topological_metrics,
     tracking_error,
     tracking_metrics,
     two_tier_metrics,
     wall_crossings,
+    within_bound,
 )
 from rfidnav_sim.world import World, load_world
 
@@ -62,6 +65,8 @@ class RunRecord:
     last_feedback: object | None             # the mission's last feedback before it ended
     action: str                              # the mission's action name, without a trailing slash
     trajectory_source: str = "ground_truth"  # or "odom": a run on a real robot (no simulator)
+    searching: tuple[tuple[float, float], ...] = ()   # (start, end) of each search its feedback reported
+    success_within_m: float | None = None    # the scenario's success criterion (None: a run from before it had one)
 
 
 def locate_run(path: Path) -> tuple[Path, Path]:
@@ -97,6 +102,8 @@ def load_run(path: Path) -> RunRecord:
     target = 0
     last_feedback = None
     odom_times, odom_xy = [], []
+    feedback_times: list[float] = []
+    searching: list[bool] = []
     for topic, stamp_ns, msg in read_messages(bag, ["/sim/ground_truth", "/odom", status_topic, feedback_topic]):
         now_s = stamp_ns * 1e-9
         if topic in ("/sim/ground_truth", "/odom"):
@@ -112,6 +119,8 @@ def load_run(path: Path) -> RunRecord:
                     final, end_s = STATUS_FINAL[status.status], now_s
         elif topic == feedback_topic and final is None:
             last_feedback = msg.feedback
+            feedback_times.append(now_s)
+            searching.append(is_searching(msg.feedback))
             while getattr(msg.feedback, "target_index", 0) > target:   # tag routes: the next target means arrival
                 arrivals.append(now_s)
                 target += 1
@@ -125,10 +134,17 @@ def load_run(path: Path) -> RunRecord:
     if final == "succeeded" and len(arrivals) < len(route):
         arrivals.append(end_s)
     trajectory = Trajectory(np.array(times), np.array(xy))
-    return RunRecord(run_dir, bag, world, route, trajectory, start_s,
-                     end_s if end_s is not None else float(trajectory.times_s[-1]), final, arrivals,
+    end_s = end_s if end_s is not None else float(trajectory.times_s[-1])
+    return RunRecord(run_dir, bag, world, route, trajectory, start_s, end_s, final, arrivals,
                      list(scenario.get("metrics", [])), dict(scenario["mission"]["goal"]), last_feedback, action,
-                     source)
+                     source, tuple(flagged_spans(feedback_times, searching, end_s)),
+                     scenario["mission"].get("success_within_m"))
+
+
+def is_searching(feedback: object) -> bool:
+    """Whether a mission's feedback says it is searching: a tag route's search for an unheard target (its mode,
+    rfidnav_control.tag_route.SEARCH_MODES) or a two-tier navigator's spiral search (its phase)."""
+    return getattr(feedback, "mode", None) in SEARCH_MODES or getattr(feedback, "phase", None) == "searching"
 
 
 def route_points(world: World, route: list[str]) -> np.ndarray:
@@ -149,8 +165,8 @@ def record_metrics(record: RunRecord) -> dict[str, float | int | None]:
         "wall_crossings": wall_crossings(record.ground_truth.xy, record.world.wall_segments())}
     if "tracking" in record.metric_groups:
         metrics.update(tracking_metrics(record.ground_truth, route_points(record.world, record.route),
-                                        record.arrival_times_s, record.mission_start_s,
-                                        record.mission_end_s).as_dict())
+                                        record.arrival_times_s, record.mission_start_s, record.mission_end_s,
+                                        searching=record.searching).as_dict())
     if "partition" in record.metric_groups:
         target = record.goal.get("target", {})
         replans = getattr(record.last_feedback, "replans", None)
@@ -164,14 +180,17 @@ def record_metrics(record: RunRecord) -> dict[str, float | int | None]:
         topological_map = learned_map(record.run_dir / "map.yaml", feedback)
         metrics.update(topological_metrics(
             record.ground_truth, record.mission_start_s, record.mission_end_s, topological_map,
-            str(record.goal.get("goal_node")), record.final_status == "succeeded", first_arrival,
+            str(record.goal.get("goal_node")), first_arrival,
             getattr(feedback, "tags_missed", None), getattr(feedback, "replans", None)).as_dict())
     if "two_tier" in record.metric_groups:
         target = record.goal.get("target", {})
-        fixes, searching = two_tier_events(record)
         metrics.update(two_tier_metrics(record.ground_truth, record.mission_start_s, record.mission_end_s,
-                                        (float(target.get("x", 0.0)), float(target.get("y", 0.0))), fixes,
-                                        searching).as_dict())
+                                        (float(target.get("x", 0.0)), float(target.get("y", 0.0))),
+                                        two_tier_fixes(record), list(record.searching)).as_dict())
+    if record.metric_groups:
+        final = next((metrics[key] for key in ("final_distance_m", "final_error_m") if key in metrics), None)
+        metrics["success_within_m"] = record.success_within_m
+        metrics["success"] = within_bound(final, record.success_within_m)
     return metrics
 
 
@@ -195,28 +214,19 @@ def mission_feedback(record: RunRecord, topics: tuple[str, ...] = ()):
             yield topic, stamp_ns, msg
 
 
-def two_tier_events(record: RunRecord) -> tuple[list[Fix], list[tuple[float, float]]]:
-    """The tier-two fixes the navigator reported on /localization/status (a new last_fix_tag_id) and the spans
-    its feedback said it was searching, during the mission."""
+def two_tier_fixes(record: RunRecord) -> list[Fix]:
+    """The tier-two fixes the navigator reported on /localization/status (a new last_fix_tag_id) during the
+    mission."""
     fixes: list[Fix] = []
-    searching: list[tuple[float, float]] = []
-    search_start = None
     last_tag = ""
-    for topic, stamp_ns, msg in mission_feedback(record, ("/localization/status",)):
-        now_s = stamp_ns * 1e-9
-        if topic == "/localization/status":
-            if msg.last_fix_tier == 2 and msg.last_fix_tag_id != last_tag:
-                fixes.append(Fix(msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9, msg.last_fix_tag_id,
-                                 (msg.x, msg.y)))
-            last_tag = msg.last_fix_tag_id
-        elif msg.feedback.phase == "searching" and search_start is None:
-            search_start = now_s
-        elif msg.feedback.phase != "searching" and search_start is not None:
-            searching.append((search_start, now_s))
-            search_start = None
-    if search_start is not None:
-        searching.append((search_start, record.mission_end_s))
-    return fixes, searching
+    for topic, _, msg in mission_feedback(record, ("/localization/status",)):
+        if topic != "/localization/status":
+            continue
+        if msg.last_fix_tier == 2 and msg.last_fix_tag_id != last_tag:
+            fixes.append(Fix(msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9, msg.last_fix_tag_id,
+                             (msg.x, msg.y)))
+        last_tag = msg.last_fix_tag_id
+    return fixes
 
 
 def draw_world(axes, record: RunRecord, run: Trajectory) -> None:

@@ -185,9 +185,8 @@ def seconds_of(stamp: Any) -> float:
 def stamp_near(stamp_s: float, now_s: float, field: str = "header.stamp") -> float:
     """A message's stamp [s], refused (BadInput) when more than STAMP_TOLERANCE_S from the node's clock ``now_s``:
     a node that takes stamps as time (the round's own moment, not its arrival) must not take one from another era
-    (one round stamped 2^31 s aborted a route: "no inventory rounds for 2147483635.7 s"). A clock not started yet
-    (0: no /clock heard) checks nothing."""
-    if now_s > 0.0 and not abs(stamp_s - now_s) <= STAMP_TOLERANCE_S:
+    (one round stamped 2^31 s aborted a route: "no inventory rounds for 2147483635.7 s")."""
+    if not abs(stamp_s - now_s) <= STAMP_TOLERANCE_S:
         raise BadInput(f"{field}: {stamp_s:.3f} s is {stamp_s - now_s:+.1f} s from this node's clock "
                        f"({now_s:.3f} s), more than {STAMP_TOLERANCE_S:g} s")
     return stamp_s

@@ -205,12 +205,14 @@ def time_msg(seconds: float) -> Time:
 
 
 def sim_clock_seconds(node: Node) -> float | None:
-    """The node's simulated time now [s] (the stepped clock's, or /clock's; 0 before the first), or None on wall
-    time. Stamps are checked against simulated time only: there a stamp from another era stops a run, while on a
-    real robot the drivers' clocks are the operator's to keep in step (a robot whose reader's clock is off would
-    otherwise go blind on a check of ours)."""
+    """The node's simulated time now [s] (the stepped clock's, or /clock's), or None on wall time and before the
+    first clock message (nothing to check a stamp against yet). Stamps are checked against simulated time only:
+    there a stamp from another era stops a run, while on a real robot the drivers' clocks are the operator's to
+    keep in step (a robot whose reader's clock is off would otherwise go blind on a check of ours)."""
     clock = node.get_clock()
-    return clock.now().nanoseconds * 1e-9 if getattr(clock, "ros_time_is_active", False) else None
+    if not getattr(clock, "ros_time_is_active", False):
+        return None
+    return (clock.now().nanoseconds * 1e-9) or None     # 0: no /clock heard yet
 
 
 def stamp_seconds(node: Node, stamp: Time, field: str = "header.stamp") -> float:

@@ -49,13 +49,15 @@ class HeadingControllerNode(SteppedNode):
         self.params: HeadingControllerParameters = declare_parameters(self, HeadingControllerParameters)
         route_map = load_route_map(self.params.map_file)
         self.follower = TagRouteFollower(self.params.follower_settings(),
-                                         FuzzyHeadingController(self.params.fuzzy_spec()), route_map.arrival_tags)
+                                         FuzzyHeadingController(self.params.fuzzy_spec()), route_map.arrival_tags,
+                                         map_source=f"the route map {self.params.map_file}")
         self.drops = inputs.Drops(self.get_logger().warning)
         self.cmd_pub = self.create_publisher(Twist, "/cmd_vel", COMMAND_QOS)
         self.create_subscription(TagReadArray, "/rfid/reads", self.on_reads, SENSOR_QOS)
         self.goals: SingleGoalServer[RouteGoal] = SingleGoalServer(
             self, FollowTagRoute, "/follow_tag_route", what="route", busy="another route is being followed",
-            check=self.refusal, new_goal=lambda handle: RouteGoal(handle, started_s=self.now_s()),
+            check=lambda goal: self.follower.refusal(list(goal.tag_ids)),
+            new_goal=lambda handle: RouteGoal(handle, started_s=self.now_s()),
             started=self.on_started, result=self.result, stop=lambda: self.cmd_pub.publish(Twist()),
             watchdog=Watchdog(self.params.unheard_timeout_s, "inventory rounds on /rfid/reads"))
         self.get_logger().info(f"route map '{route_map.name}' with {len(route_map.arrival_tags)} tags; "
@@ -67,12 +69,6 @@ class HeadingControllerNode(SteppedNode):
 
     def now_s(self) -> float:
         return self.get_clock().now().nanoseconds * 1e-9
-
-    def refusal(self, goal: FollowTagRoute.Goal) -> str | None:
-        problem = self.follower.refusal(list(goal.tag_ids))
-        if problem is not None and problem.startswith("unknown"):
-            return f"{problem} (not in the route map {self.params.map_file})"
-        return problem
 
     def on_started(self, goal: RouteGoal) -> None:
         route = list(goal.handle.request.tag_ids)

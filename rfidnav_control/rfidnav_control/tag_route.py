@@ -222,8 +222,10 @@ class TagRouteFollower:
     """Follows an ordered list of ceiling tags; call :meth:`step` once per inventory round."""
 
     def __init__(self, settings: FollowerSettings, heading_controller: Callable[[float], float],
-                 arrival_tags: dict[str, str]) -> None:
+                 arrival_tags: dict[str, str], map_source: str = "the route map") -> None:
+        """``map_source``: where ``arrival_tags`` come from, as a refusal names it (the node: the map file)."""
         settings.validate()
+        self.map_source = map_source
         self.settings = settings
         self.search = UnheardSearch(settings) if settings.unheard_search else None
         self.heading_controller = heading_controller
@@ -241,7 +243,7 @@ class TagRouteFollower:
         if not route:
             return "the route is empty"
         if unknown := [tag for tag in route if tag not in self.arrival_tags]:
-            return f"unknown tag ids {', '.join(unknown)}"
+            return f"unknown tag ids {', '.join(unknown)} (not in {self.map_source})"
         return repeated_in_a_row(route)
 
     def start(self, route: list[str], time_s: float) -> None:

@@ -10,11 +10,16 @@ figures of the two agree by construction.
   signed, positive to the left of the direction of travel. The stretch and its segments are decided by ground
   truth alone (:func:`area_entries`), not by the controller's declared arrivals, so every controller of a
   comparison is scored over the same stretch by the same rule.
-* RMSE (eq. 4): sqrt(mean e(t)^2) over equally spaced samples; max |e|.
+* RMSE (eq. 4): sqrt(mean e(t)^2) over equally spaced samples; max |e|. The samples of a search for an unheard
+  target (the follower's search modes: a turn on the spot and a spiral, which follow no segment) are left out and
+  reported apart: how many searches, their time and the distance driven in them.
 * The approach: when the robot entered the first tag's read area, from the mission start; and the time to come
   within 1 cm of the first tag's projection (paper 001 sec. V-A's "within 1 cm").
 * Path length from the mission start to the end.
 
+Every mission kind ends at a place (the last route tag, the target point, the goal node) and its scenario declares
+how near it the robot must stop (``mission.success_within_m``): a run's metrics say where it stopped
+(``final_distance_m``, ``final_error_m``) and whether that is near enough (``success``, :func:`within_bound`).
 Every run with ground truth also counts its wall crossings (:func:`wall_crossings`), and ground truth has the last
 word on a run its mission's node called a success (:func:`ground_truth_objection`).
 """
@@ -22,7 +27,7 @@ word on a run its mission's node called a success (:func:`ground_truth_objection
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -89,14 +94,26 @@ def wall_crossings(xy: np.ndarray, walls: np.ndarray) -> int:
     return crossings
 
 
+def within_bound(final_distance_m: float | None, bound_m: float | None) -> bool | None:
+    """Whether a run stopped near enough its goal: ``final_distance_m`` at most the scenario's ``bound_m``
+    (``mission.success_within_m``); None when either is unknown (no track, or no criterion declared)."""
+    if final_distance_m is None or bound_m is None or math.isnan(final_distance_m):
+        return None
+    return final_distance_m <= bound_m
+
+
 def ground_truth_objection(metrics: Mapping[str, object]) -> str | None:
     """Why ground truth says a run its mission's node called a success was none (None: it agrees): the metrics
-    say it did not reach the goal (``success`` false), or its track crossed a wall (``wall_crossings`` > 0)."""
+    say it did not reach the goal (``success`` false: farther than ``success_within_m`` from it), or its track
+    crossed a wall (``wall_crossings`` > 0)."""
     objections = []
     if metrics.get("success") is False:
-        distance = metrics.get("final_distance_m")
+        distance = next((value for key in ("final_distance_m", "final_error_m")
+                         if isinstance(value := metrics.get(key), float)), None)
+        bound = metrics.get("success_within_m")
         objections.append("did not reach the goal (metrics.success false"
-                          + (f", {distance:.2f} m from it)" if isinstance(distance, float) else ")"))
+                          + (f", {distance:.2f} m from it" if distance is not None else "")
+                          + (f", more than the scenario's {bound:g} m" if isinstance(bound, float) else "") + ")")
     crossings = metrics.get("wall_crossings")
     if isinstance(crossings, int) and crossings > 0:
         objections.append(f"made {crossings} wall crossing{'s' if crossings > 1 else ''} (metrics.wall_crossings)")
@@ -105,7 +122,7 @@ def ground_truth_objection(metrics: Mapping[str, object]) -> str | None:
 
 @dataclass(frozen=True)
 class TrackingMetrics:
-    tracking_rmse_m: float | None
+    tracking_rmse_m: float | None           # e(t) over the scored stretch, its searches left out
     tracking_max_abs_m: float | None
     time_to_first_tag_s: float | None
     path_length_m: float
@@ -113,9 +130,40 @@ class TrackingMetrics:
     approach_s: float | None = None         # entered the first tag's read area (ground truth), from mission start
     scored_s: float | None = None           # the scored stretch's length in time: first read area to the last
     tags_entered: int = 0                   # route tags whose read area the robot entered, in order (ground truth)
+    final_distance_m: float | None = None   # where the robot stopped, from the last route tag's projection
+    searches: int = 0                       # searches for an unheard target (not tracking: left out of e(t))
+    search_s: float = 0.0                   # their time
+    search_length_m: float = 0.0            # the distance driven in them
 
     def as_dict(self) -> dict[str, float | int | None]:
         return dict(self.__dict__)
+
+
+def in_spans(times_s: np.ndarray, spans: Sequence[tuple[float, float]]) -> np.ndarray:
+    """Which of ``times_s`` fall in one of ``spans`` (start, end]: a sample, and the step that ends at it, belong to
+    the span when taken after its start and up to its end."""
+    times_s = np.asarray(times_s, dtype=float)
+    inside = np.zeros(times_s.shape, dtype=bool)
+    for start_s, end_s in spans:
+        inside |= (times_s > start_s) & (times_s <= end_s)
+    return inside
+
+
+def flagged_spans(times_s: Sequence[float], flags: Sequence[bool], end_s: float) -> list[tuple[float, float]]:
+    """The (start, end) spans of a mode from a stream of (time, in the mode) samples (a controller's feedback or
+    commands): each starts at a flagged sample after an unflagged one (or the first) and ends at the next unflagged
+    sample, or at ``end_s``."""
+    spans: list[tuple[float, float]] = []
+    start: float | None = None
+    for time_s, flag in zip(times_s, flags):
+        if flag and start is None:
+            start = float(time_s)
+        elif not flag and start is not None:
+            spans.append((start, float(time_s)))
+            start = None
+    if start is not None:
+        spans.append((start, float(end_s)))
+    return spans
 
 
 def signed_segment_error(points: np.ndarray, start: np.ndarray, end: np.ndarray) -> np.ndarray:
@@ -169,22 +217,28 @@ def tracking_error(trajectory: Trajectory, tag_points: np.ndarray,
 
 
 def tracking_metrics(trajectory: Trajectory, tag_points: np.ndarray, arrival_times_s: list[float],
-                     mission_start_s: float, mission_end_s: float,
-                     read_radius_m: float = READ_AREA_RADIUS_M) -> TrackingMetrics:
+                     mission_start_s: float, mission_end_s: float, read_radius_m: float = READ_AREA_RADIUS_M,
+                     searching: Sequence[tuple[float, float]] = ()) -> TrackingMetrics:
     """Metrics of one run; ``arrival_times_s[k]`` is when the controller declared route tag k reached (counted as
-    tags_reached; the scored stretch is ground truth's, :func:`tracking_error`)."""
+    tags_reached; the scored stretch is ground truth's, :func:`tracking_error`); ``searching``: the (start, end)
+    times of each search for an unheard target (:func:`flagged_spans` of the follower's search modes), whose
+    samples e(t) leaves out."""
     run = trajectory.between(mission_start_s, mission_end_s)
-    error = tracking_error(run, tag_points, read_radius_m=read_radius_m).xy[:, 0]
+    scored = tracking_error(run, tag_points, read_radius_m=read_radius_m)
+    error = scored.xy[~in_spans(scored.times_s, searching), 0]
     rmse = float(np.sqrt(np.mean(error ** 2))) if error.size else None
     max_abs = float(np.max(np.abs(error))) if error.size else None
     near_first = np.nonzero(np.linalg.norm(run.xy - tag_points[0], axis=1) <= FIRST_TAG_RADIUS_M)[0]
     time_to_first = float(run.times_s[near_first[0]] - mission_start_s) if near_first.size else None
-    path_length = float(np.sum(np.linalg.norm(np.diff(run.xy, axis=0), axis=1))) if len(run.xy) > 1 else 0.0
+    steps = np.linalg.norm(np.diff(run.xy, axis=0), axis=1) if len(run.xy) > 1 else np.empty(0)
     entries = area_entries(run, tag_points, read_radius_m)
-    return TrackingMetrics(rmse, max_abs, time_to_first, path_length, len(arrival_times_s),
+    return TrackingMetrics(rmse, max_abs, time_to_first, float(steps.sum()), len(arrival_times_s),
                            approach_s=entries[0] - mission_start_s if entries else None,
                            scored_s=entries[-1] - entries[0] if len(entries) > 1 else None,
-                           tags_entered=len(entries))
+                           tags_entered=len(entries),
+                           final_distance_m=float(np.linalg.norm(run.xy[-1] - tag_points[-1])) if len(run.xy) else None,
+                           searches=len(searching), search_s=float(sum(end - start for start, end in searching)),
+                           search_length_m=float(steps[in_spans(run.times_s[1:], searching)].sum()))
 
 
 @dataclass(frozen=True)
@@ -263,22 +317,19 @@ def two_tier_metrics(trajectory: Trajectory, mission_start_s: float, mission_end
         truth = (np.interp(fix.time_s, run.times_s, run.xy[:, 0]), np.interp(fix.time_s, run.times_s, run.xy[:, 1]))
         errors.append(float(np.hypot(fix.estimate[0] - truth[0], fix.estimate[1] - truth[1])))
     steps = np.linalg.norm(np.diff(run.xy, axis=0), axis=1)
-    in_search = np.zeros(len(steps), dtype=bool)
-    for start_s, end_s in searching:
-        in_search |= (run.times_s[1:] > start_s) & (run.times_s[1:] <= end_s)
     return TwoTierMetrics(errors, float(np.median(errors)) if errors else None, max(errors, default=None),
                           float(np.linalg.norm(run.xy[-1] - np.asarray(target))), float(steps.sum()),
-                          len(searching), float(steps[in_search].sum()))
+                          len(searching), float(steps[in_spans(run.times_s[1:], searching)].sum()))
 
 
 # Topological missions (paper 004): the robot has arrived when the executor says so AND it stopped this close to
-# the goal node's position (a junction's centre; a 1.6 m hallway's half width plus a margin).
+# the goal node's position (a junction's centre; a 1.6 m hallway's half width plus a margin): the building
+# scenarios' success_within_m, and the topological reproduction's.
 GOAL_RADIUS_M = 0.5
 
 
 @dataclass(frozen=True)
 class TopologicalMetrics:
-    success: bool                  # the executor's success and stopped within GOAL_RADIUS_M of the goal node
     path_length_m: float           # driven (ground truth), mission start to end
     shortest_path_m: float | None  # see topological_shortest_m
     path_over_shortest: float | None
@@ -315,14 +366,14 @@ def topological_shortest_m(topological_map: TopologicalMap, start_xy: tuple[floa
 
 
 def topological_metrics(trajectory: Trajectory, mission_start_s: float, mission_end_s: float,
-                        topological_map: TopologicalMap, goal_node: str, executor_success: bool,
+                        topological_map: TopologicalMap, goal_node: str,
                         first_arrival: tuple[str, str] | None, tags_missed: int | None,
                         replans: int | None) -> TopologicalMetrics:
     """``first_arrival``: the (node, arrival side) the robot first localized at (None: it never did)."""
     run = trajectory.between(mission_start_s, mission_end_s)
     goal_xy = np.asarray(topological_map.nodes[goal_node].position)
     if len(run.xy) == 0:
-        return TopologicalMetrics(False, 0.0, None, None, math.nan, tags_missed, replans)
+        return TopologicalMetrics(0.0, None, None, math.nan, tags_missed, replans)
     path = float(np.linalg.norm(np.diff(run.xy, axis=0), axis=1).sum())
     final = float(np.linalg.norm(run.xy[-1] - goal_xy))
     try:
@@ -330,5 +381,5 @@ def topological_metrics(trajectory: Trajectory, mission_start_s: float, mission_
                     if first_arrival is not None else None)
     except RouteError:
         shortest = None            # the goal lies beyond "?" hallways of the given map: no shortest route known
-    return TopologicalMetrics(bool(executor_success and final <= GOAL_RADIUS_M), path, shortest,
+    return TopologicalMetrics(path, shortest,
                               path / shortest if shortest else None, final, tags_missed, replans)

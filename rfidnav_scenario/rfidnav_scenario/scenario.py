@@ -53,6 +53,7 @@ ROBOT_DIR = CONFIG_DIR / "robots"
 METRIC_GROUPS = ("tracking", "partition", "two_tier", "topological")
 MAX_MISSION_S = MAX_DURATION_S          # mission.timeout_s: one day of sim time (the orchestrator's wall limit follows)
 MAX_RESPAWNS = 100
+MAX_GOAL_BOUND_M = 1000.0                   # mission.success_within_m: no floor is wider
 SIMULATED_READER = ("rfidnav_sim", "rfid_reader_sim")   # reads the world's tags
 PARTITION_NAVIGATOR = ("rfidnav_planning", "partition_navigator")   # plans on triangular lattices only
 ORCHESTRATOR_NODE = "rfidnav_orchestrator"   # the node that sends the goal (relative action names are its)
@@ -94,6 +95,10 @@ class MissionSpec:
     goal: dict[str, Any]
     timeout_s: float
     server: str | None = None                # role serving the action; None: the first non-simulator role
+    # Success by ground truth: the robot stopped at most this far from where the mission ends (the last route
+    # tag's ground projection, the target point, the goal node's position) [m]; required when metrics are asked
+    # for (rfidnav_scenario.metrics.within_bound).
+    success_within_m: float | None = None
 
 
 @dataclass(frozen=True)
@@ -144,7 +149,8 @@ class Scenario:
                 for role, spec in self.nodes.items()},
             "mission": {key: value for key, value in {
                 "action": self.mission.action, "type": self.mission.action_type, "server": self.mission.server,
-                "goal": self.mission.goal, "timeout_s": self.mission.timeout_s}.items() if value is not None},
+                "goal": self.mission.goal, "timeout_s": self.mission.timeout_s,
+                "success_within_m": self.mission.success_within_m}.items() if value is not None},
             "metrics": list(self.metrics),
         }
 
@@ -235,7 +241,7 @@ def load_scenario(name_or_path: str, swaps: dict[str, str] | None = None,
         if spec.process is not None and spec.process in nodes and nodes[spec.process].process != spec.process:
             raise section.error(f"nodes.{role}.process", f"'{spec.process}' is the name of another role's process")
     mission_file = mission = section.section("mission")
-    mission.reject_unknown(("action", "type", "server", "goal", "timeout_s"))
+    mission.reject_unknown(("action", "type", "server", "goal", "timeout_s", "success_within_m"))
     if goal is None:
         goal = mission.raw("goal")
         if not isinstance(goal, dict):
@@ -247,6 +253,9 @@ def load_scenario(name_or_path: str, swaps: dict[str, str] | None = None,
         if metric not in METRIC_GROUPS:
             raise ConfigError(str(path), f"metrics[{index}]", f"unknown metric group '{metric}' "
                               f"(known: {', '.join(METRIC_GROUPS)})")
+    if metrics and not mission_file.has("success_within_m"):
+        raise mission_file.error("success_within_m", "missing: a scenario scored by ground truth (metrics: "
+                                 f"{', '.join(metrics)}) states how near its goal the robot must stop to succeed [m]")
     scenario = Scenario(
         name=section.string("name"), description=section.string("description", ""), path=path,
         world_file=world_file, map_file=map_file,
@@ -254,7 +263,9 @@ def load_scenario(name_or_path: str, swaps: dict[str, str] | None = None,
         nodes=nodes,
         mission=MissionSpec(mission_file.string("action"), mission_file.string("type"), goal,
                             mission_file.number("timeout_s", 600.0, positive=True, maximum=MAX_MISSION_S),
-                            mission_file.raw("server", None)),
+                            mission_file.raw("server", None),
+                            mission_file.number("success_within_m", positive=True, maximum=MAX_GOAL_BOUND_M)
+                            if mission_file.has("success_within_m") else None),
         metrics=tuple(metrics), world=load_world(world_file),
         **_robot_map(map_file, radio_map_may_be_missing))
     if scenario.mission.server is not None and scenario.mission.server not in nodes:

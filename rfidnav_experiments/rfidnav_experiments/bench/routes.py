@@ -49,7 +49,7 @@ def summary_rows(results: list[tuple[str, RouteRun]], seeds: list[int]) -> list[
                 "tracking_max_abs_m": mean([run.metrics.tracking_max_abs_m for run in ok
                                             if run.metrics.tracking_max_abs_m is not None]),
                 "sim_duration_s": mean([run.sim_duration_s for run in runs]),
-                "search_s": mean([run.search_s for run in runs]),
+                "search_s": mean([run.metrics.search_s for run in runs]),
                 "failures": [f"seed {run.seed}: {run.message}" for run in runs if not run.success]})
     return rows
 

@@ -30,7 +30,7 @@ from rfidnav_control.fuzzy import FuzzyHeadingController
 from rfidnav_control.parameters import HeadingControllerParameters
 from rfidnav_control.tag_route import SEARCH_MODES, TagRouteFollower, observe
 from rfidnav_experiments.runners.shipped import file_parameters
-from rfidnav_scenario.metrics import TrackingMetrics, Trajectory, tracking_metrics
+from rfidnav_scenario.metrics import TrackingMetrics, Trajectory, flagged_spans, tracking_metrics, within_bound
 from rfidnav_scenario.scenario import Scenario, node_parameters
 from rfidnav_sim.parameters import ReaderParameters, RobotSimParameters
 from rfidnav_sim.rfid_model import Read, reach_m
@@ -47,7 +47,6 @@ class RouteRun:
     metrics: TrackingMetrics
     trajectory: Trajectory
     arrival_times_s: tuple[float, ...]
-    search_s: float = 0.0                  # sim time spent searching for an unheard target (tag_route.SEARCH_MODES)
 
 
 @dataclass(frozen=True)
@@ -112,7 +111,9 @@ def run_tag_route(scenario: Scenario, controller: HeadingControllerParameters, s
     limit_s = timeout_s if timeout_s is not None else scenario.mission.timeout_s
     round_period_s = 1.0 / reader.rate_hz
     arrivals: list[float] = []
-    success, message, now, search_s = False, "timeout", 0.0, 0.0
+    round_times: list[float] = []
+    searching: list[bool] = []              # each round's command a search's (the feedback's mode over DDS)
+    success, message, now = False, "timeout", 0.0
     reference: float | None = None          # heading_update "setpoint": theta_ref of eq. 3, unwrapped [rad]
     heading, last_yaw = 0.0, rig.base.odom.yaw  # the odometry's heading, unwrapped [rad]
     while now < limit_s:
@@ -126,8 +127,8 @@ def run_tag_route(scenario: Scenario, controller: HeadingControllerParameters, s
         command = follower.step(now, [o for o in map(observe, reads) if o is not None])
         if command.arrived_index is not None:
             arrivals.append(now)
-        if command.mode in SEARCH_MODES:
-            search_s += round_period_s
+        round_times.append(now)
+        searching.append(command.mode in SEARCH_MODES)
         if heading_update == "setpoint":
             odom_yaw = sample.odom[2]
             heading, last_yaw = heading + wrap_angle(odom_yaw - last_yaw), odom_yaw
@@ -147,5 +148,10 @@ def run_tag_route(scenario: Scenario, controller: HeadingControllerParameters, s
             break
     trajectory = Trajectory(*rig.track())
     metrics = tracking_metrics(trajectory, tag_points(scenario, route), arrivals, 0.0, now,
-                               read_radius_m=floor_read_radius_m(reader, controller))
-    return RouteRun(scenario.name, seed, success, message, now, metrics, trajectory, tuple(arrivals), search_s)
+                               read_radius_m=floor_read_radius_m(reader, controller),
+                               searching=flagged_spans(round_times, searching, now))
+    bound = scenario.mission.success_within_m
+    if success and within_bound(metrics.final_distance_m, bound) is False:
+        success, message = False, (f"{message}, says the follower; but it stopped {metrics.final_distance_m:.2f} m "
+                                   f"from the last tag, more than the scenario's {bound:g} m")
+    return RouteRun(scenario.name, seed, success, message, now, metrics, trajectory, tuple(arrivals))

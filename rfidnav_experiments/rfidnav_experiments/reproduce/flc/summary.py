@@ -62,7 +62,7 @@ def summarise(params: str, scenario: str, runs: list[RouteRun]) -> Summary:
         first_arrival=Interval.of([run.arrival_times_s[0] for run in runs if run.arrival_times_s]),
         wall_crossings=sum(crossings(run) for run in runs),
         approach=Interval.of([run.metrics.approach_s for run in runs if run.metrics.approach_s is not None]),
-        search=Interval.of([run.search_s for run in runs]))
+        search=Interval.of([run.metrics.search_s for run in runs]))
 
 
 def paired_difference(results: dict[tuple[str, str], list[RouteRun]], scenario: str,
