@@ -261,6 +261,23 @@ def test_a_search_is_left_out_of_the_tracking_error_and_reported_apart():
     assert without.path_length_m == pytest.approx(with_search.path_length_m)   # driven either way
 
 
+def test_the_way_back_from_where_a_search_ended_is_left_out_up_to_the_next_read_area_and_the_next_leg_scored():
+    """Route (0,0) -> (0,5) -> (0,10): on the line to y = 2, a search out to (1, 2), up to (1, 5) a metre off the
+    leg, sideways into T2's read area, then the last leg 3 cm to the left of its line."""
+    tags = np.array([[0.0, 0.0], [0.0, 5.0], [0.0, 10.0]])
+    knots_t = [0.0, 4.0, 6.0, 9.0, 10.0, 20.0]
+    knots_xy = [(0.0, 0.0), (0.0, 2.0), (1.0, 2.0), (1.0, 5.0), (-0.03, 5.0), (-0.03, 10.0)]
+    times = np.arange(0.0, 20.0 + 1e-9, 0.01)
+    xy = np.column_stack([np.interp(times, knots_t, [p[axis] for p in knots_xy]) for axis in (0, 1)])
+    trajectory = Trajectory(times, xy)
+    scored = tracking_metrics(trajectory, tags, [], 0.0, 20.0, searching=[(4.0, 6.0)])
+    assert scored.tags_entered == 3 and (scored.searches, scored.search_s) == (1, 2.0)
+    assert scored.search_length_m == pytest.approx(1.0)          # the search proper: out to (1, 2)
+    assert scored.tracking_max_abs_m <= READ_AREA_RADIUS_M + 1e-9  # the metre-off way back is not scored...
+    assert 0.02 < scored.tracking_rmse_m < 0.031      # ...the last leg is (3 cm off), and the first (on the line)
+    assert tracking_metrics(trajectory, tags, [], 0.0, 20.0).tracking_max_abs_m == pytest.approx(1.0, abs=1e-6)
+
+
 def test_the_final_distance_is_from_the_last_route_tag():
     trajectory, _ = detour_run()
     metrics = tracking_metrics(trajectory, LINE_TAGS, [], 0.0, 34.0)       # stopped at y = 4.8

@@ -121,7 +121,9 @@ def test_a_stopped_simulator_is_named_within_seconds_and_the_run_goes_on_when_it
 
 
 # A participant lease of 2 s (Fast DDS's default: 20 s), so that pauses of 1.5, 3 and 15 leases -- the issue's
-# SIGSTOP of 20 (just past a lease that ends on a timer's tick), 60 and 300 s -- take seconds, not minutes.
+# SIGSTOP of 20 (just past a lease that ends on a timer's tick), 60 and 300 s -- take seconds, not minutes; and
+# once the issue's own case at the default lease: 22 s, past 20 s.
+DEFAULT_LEASE_S = 20
 LEASE_S = 2
 SHORT_LEASE_PROFILE = f"""<?xml version="1.0" encoding="UTF-8" ?>
 <dds xmlns="http://www.eprosima.com/XMLSchemas/fastRTPS_Profiles"><profiles>
@@ -140,16 +142,18 @@ def unpaused_commands(tmp_path_factory: pytest.TempPathFactory) -> list[tuple[fl
     return recorded_commands(run)
 
 
-@pytest.mark.parametrize("leases, busy_loops", [(1.5, 0), (3, BUSY_LOOPS), (15, 0)])
+@pytest.mark.parametrize("leases, lease_s, busy_loops", [(1.5, LEASE_S, 0), (3, LEASE_S, BUSY_LOOPS),
+                                                         (15, LEASE_S, 0), (1.1, DEFAULT_LEASE_S, 0)])
 def test_a_participant_paused_past_its_dds_lease_is_sent_what_it_lost_and_the_run_repeats_its_commands(
-        leases: float, busy_loops: int, tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+        leases: float, lease_s: int, busy_loops: int, tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
         unpaused_commands: list[tuple[float, float]]) -> None:
     """Issue 34: a heading_controller SIGSTOPped for 20 s (Fast DDS's lease) lost the round in flight to it, and
     the stepped clock waited for it until the stall ended the run. Now the clock source asks its producer to send
     it again, and the run goes on as if nothing had happened."""
-    profile = tmp_path / "short_lease.xml"
-    profile.write_text(SHORT_LEASE_PROFILE)
-    monkeypatch.setenv("FASTRTPS_DEFAULT_PROFILES_FILE", str(profile))    # every process of the run
+    if lease_s == LEASE_S:
+        profile = tmp_path / "short_lease.xml"
+        profile.write_text(SHORT_LEASE_PROFILE)
+        monkeypatch.setenv("FASTRTPS_DEFAULT_PROFILES_FILE", str(profile))    # every process of the run
     out = tmp_path / "runs"
     with cpu_hogs(max(0, busy_loops - int(os.environ.get("RFIDNAV_TEST_BUSY_LOOPS", "0")))), \
             start_cli("run", "line_follow_90", "--rtf", RTF, "--seed", PAUSE_SEED, "--out", str(out), "--quiet") as cli:
@@ -157,7 +161,7 @@ def test_a_participant_paused_past_its_dds_lease_is_sent_what_it_lost_and_the_ru
                           if any("heading_controller" in part for part in p.cmdline()))
         controller.suspend()
         try:
-            time.sleep(leases * LEASE_S)     # the pause is what is tested: a stretch of wall time, not a wait
+            time.sleep(leases * lease_s)     # the pause is what is tested: a stretch of wall time, not a wait
         finally:
             controller.resume()
         output, _ = cli.communicate(timeout=300)

@@ -10,9 +10,11 @@ figures of the two agree by construction.
   signed, positive to the left of the direction of travel. The stretch and its segments are decided by ground
   truth alone (:func:`area_entries`), not by the controller's declared arrivals, so every controller of a
   comparison is scored over the same stretch by the same rule.
-* RMSE (eq. 4): sqrt(mean e(t)^2) over equally spaced samples; max |e|. The samples of a search for an unheard
-  target (the follower's search modes: a turn on the spot and a spiral, which follow no segment) are left out and
-  reported apart: how many searches, their time and the distance driven in them.
+* RMSE (eq. 4): sqrt(mean e(t)^2) over equally spaced samples; max |e|. A search for an unheard target (the
+  follower's search modes: a turn on the spot and a spiral) follows no segment, and where it found the target the
+  robot is metres off the route: the samples from the search's start until the robot enters the next route tag's
+  read area (ground truth) are left out, and the searches reported apart: how many, their time and the distance
+  driven in them.
 * The approach: when the robot entered the first tag's read area, from the mission start; and the time to come
   within 1 cm of the first tag's projection (paper 001 sec. V-A's "within 1 cm").
 * Path length from the mission start to the end.
@@ -221,17 +223,21 @@ def tracking_metrics(trajectory: Trajectory, tag_points: np.ndarray, arrival_tim
                      searching: Sequence[tuple[float, float]] = ()) -> TrackingMetrics:
     """Metrics of one run; ``arrival_times_s[k]`` is when the controller declared route tag k reached (counted as
     tags_reached; the scored stretch is ground truth's, :func:`tracking_error`); ``searching``: the (start, end)
-    times of each search for an unheard target (:func:`flagged_spans` of the follower's search modes), whose
-    samples e(t) leaves out."""
+    times of each search for an unheard target (:func:`flagged_spans` of the follower's search modes): e(t) leaves
+    out each search and the way back from where it ended, up to the next read-area entry (:func:`area_entries`)."""
     run = trajectory.between(mission_start_s, mission_end_s)
     scored = tracking_error(run, tag_points, read_radius_m=read_radius_m)
-    error = scored.xy[~in_spans(scored.times_s, searching), 0]
+    entries = area_entries(run, tag_points, read_radius_m)
+    left_out = np.zeros(scored.times_s.shape, dtype=bool)
+    for start_s, end_s in searching:
+        back_s = next((entry for entry in entries if entry > end_s), math.inf)     # in the next read area again
+        left_out |= (scored.times_s > start_s) & (scored.times_s < back_s)
+    error = scored.xy[~left_out, 0]
     rmse = float(np.sqrt(np.mean(error ** 2))) if error.size else None
     max_abs = float(np.max(np.abs(error))) if error.size else None
     near_first = np.nonzero(np.linalg.norm(run.xy - tag_points[0], axis=1) <= FIRST_TAG_RADIUS_M)[0]
     time_to_first = float(run.times_s[near_first[0]] - mission_start_s) if near_first.size else None
     steps = np.linalg.norm(np.diff(run.xy, axis=0), axis=1) if len(run.xy) > 1 else np.empty(0)
-    entries = area_entries(run, tag_points, read_radius_m)
     return TrackingMetrics(rmse, max_abs, time_to_first, float(steps.sum()), len(arrival_times_s),
                            approach_s=entries[0] - mission_start_s if entries else None,
                            scored_s=entries[-1] - entries[0] if len(entries) > 1 else None,
