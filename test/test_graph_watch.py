@@ -229,6 +229,15 @@ def test_a_stall_is_said_once_with_the_clock_source_s_last_warning_and_ends_the_
     assert watch.check_stall(stall, 3.5, 161.0, {}) == "" and not stall.reported   # the clock moves again
 
 
+def test_a_stall_of_a_split_run_with_nothing_stopped_here_names_the_other_computers_nodes_and_the_link(
+        graph: Graph) -> None:
+    watched = Watched(graph, replace(EXPECTED, elsewhere=("heading_controller", "recorder")))
+    stall = StallWatch(sim_s=3.0, since_wall_s=100.0)
+    assert watched.watch.check_stall(stall, 3.0, 106.0, {}) == ""
+    assert watched.said == ["\nsim time has not advanced for 6 s (wall) at 3.00 s (nothing stopped here; "
+                            "heading_controller, recorder run on the other computer: is the link to it down?)"]
+
+
 def test_a_run_in_real_time_has_no_clock_to_stall(graph: Graph) -> None:
     watched = Watched(graph, replace(EXPECTED, simulated=False))
     stall = StallWatch(sim_s=0.0, since_wall_s=100.0)

@@ -12,6 +12,7 @@ import argparse
 import atexit
 import json
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -61,6 +62,26 @@ def bag_size_value(text: str) -> int:
     parse = checked_number(int, "a number of bytes", lambda size: size == 0 or size >= MIN_SPLIT_SIZE,
                            lambda text: f"expected 0 (one file) or at least {MIN_SPLIT_SIZE} bytes, got {int(text)}")
     return parse(text)
+
+
+SPLIT_RUN_PARTS = ("robot", "station")   # rfidnav_bringup.run_plan.PARTS (not imported: 0.8 s of the CLI's start)
+PARTITION_NAME = re.compile(r"[A-Za-z0-9_.-]{1,64}")
+
+
+def discovery_server_address(text: str) -> tuple[str, int]:
+    from rfidnav_bringup.discovery_server import server_address
+
+    try:
+        return server_address(text)
+    except ValueError as error:
+        raise argparse.ArgumentTypeError(str(error)) from None
+
+
+def partition_name(text: str) -> str:
+    """--partition: a DDS partition name of letters, digits, '_', '.' and '-' (at most 64)."""
+    if not PARTITION_NAME.fullmatch(text):
+        raise argparse.ArgumentTypeError(f"expected 1-64 letters, digits, '_', '.' or '-', got '{text}'")
+    return text
 
 
 def add_graph_options(parser: argparse.ArgumentParser, what: str, default_domain: str,
@@ -136,6 +157,16 @@ def parser() -> tuple[argparse.ArgumentParser, dict[str, Handler]]:
     run = verbs.add_parser("run", help="one mission through the real node graph")
     run.add_argument("scenario", help="scenario name (config/scenarios/NAME.yaml) or path")
     run.add_argument("--goal", help="mission goal as YAML, replacing the scenario's, e.g. '{tag_ids: [C1]}'")
+    run.add_argument("--part", choices=SPLIT_RUN_PARTS,
+                     help="start only this computer's part of a graph split between two (README, \"One run on two "
+                          "computers\"): robot (simulators and drivers) or station (the rest, the mission and the "
+                          "bag); needs --domain and --partition, the same on both")
+    run.add_argument("--partition", type=partition_name, metavar="NAME",
+                     help="the run's DDS partition, instead of an unguessable one: what both parts of a split run "
+                          "share")
+    run.add_argument("--discovery-server", type=discovery_server_address, metavar="ADDRESS[:PORT]",
+                     help="find the graph through this Fast DDS Discovery Server (./rfidnav discovery-server), not by "
+                          "multicast; implies --discovery subnet")
     add_run_options(run, 1.0)
     replay = verbs.add_parser("replay", help="republish a bag")
     replay.add_argument("bag", type=Path)
@@ -171,6 +202,10 @@ def parser() -> tuple[argparse.ArgumentParser, dict[str, Handler]]:
     echo.add_argument("--timeout", type=option_seconds, default=30.0,
                       help="seconds to wait for the messages (else exit 2)")
     add_graph_options(echo, "graph to listen to", "$ROS_DOMAIN_ID, else 0", default_discovery=None)
+    server = verbs.add_parser("discovery-server", help="a Fast DDS Discovery Server for a graph split between "
+                                                       "computers (run --discovery-server)")
+    server.add_argument("--listen", type=discovery_server_address, required=True, metavar="ADDRESS[:PORT]",
+                        help="this computer's address the parts reach it at (port default 11811)")
     view = verbs.add_parser("view", help="serve a recorded run to Foxglove with its timeline (WebSocket)")
     view.add_argument("bag", type=Path, metavar="RUN_OR_BAG")
     view.add_argument("--port", type=lambda text: port_number(text, lowest=0), default=LIVE_PORT,
@@ -242,8 +277,13 @@ def verb_run(args, scenario_name: str | None = None) -> int:
         print(f"rfidnav {args.verb}: warning: {warning}", file=sys.stderr)
     options = RunOptions(rtf=args.rtf, clock=args.clock, seed=args.seed, out_dir=args.out,
                          record=not args.no_record, live_port=args.live, quiet=args.quiet, domain=args.domain,
-                         discovery=args.discovery, compress=args.compress, max_bag_size=args.max_bag_size,
-                         max_bag_duration_s=args.max_bag_duration)
+                         discovery="subnet" if getattr(args, "discovery_server", None) else args.discovery,
+                         compress=args.compress, max_bag_size=args.max_bag_size,
+                         max_bag_duration_s=args.max_bag_duration, part=getattr(args, "part", None),
+                         partition=getattr(args, "partition", None),
+                         discovery_server=getattr(args, "discovery_server", None))
+    if options.part is not None and options.domain is None:
+        raise ConfigError("--part", "", "a split run's two parts meet in one ROS domain: give it with --domain")
     orchestrator = Orchestrator(scenario, options)
     summary = orchestrator.run()
     if not orchestrator.terminal_lost:
@@ -315,6 +355,16 @@ def verb_replay(args) -> int:
         print(f"replaying {bag} on {reach_text(lease.domain_id, args.discovery)}", file=sys.stderr, flush=True)
         return run_supervised(player_command(bag, args), child_environment(lease.domain_id, args.discovery),
                               lease.handle)
+
+
+def verb_discovery_server(args) -> int:
+    from rfidnav_bringup.discovery_server import server_command
+    from rfidnav_bringup.processes import run_supervised
+
+    command, env = server_command(*args.listen)
+    print(f"discovery server on {args.listen[0]}:{args.listen[1]}: run each part with --discovery-server "
+          f"{args.listen[0]}:{args.listen[1]}", file=sys.stderr, flush=True)
+    return run_supervised(command, env)
 
 
 def player_command(bag: Path, args: argparse.Namespace) -> list[str]:
@@ -430,7 +480,7 @@ def verb_map(args) -> int:
 
 VERBS: dict[str, Handler] = {"setup": verb_setup, "demo": verb_demo, "test": verb_test, "run": verb_run,
                              "replay": verb_replay, "bag": verb_bag, "report": verb_report, "map": verb_map,
-                             "echo": verb_echo, "view": verb_view}
+                             "echo": verb_echo, "view": verb_view, "discovery-server": verb_discovery_server}
 
 
 def exit_without_teardown(code: int) -> typing.NoReturn:

@@ -16,6 +16,11 @@ orchestrator, even a SIGKILLed one (processes.die_with_parent). While the missio
 advancing is reported within seconds, naming the processes that are stopped and what the clock source says it
 waits for; a second graph whose nodes take our nodes' names (two runs on one domain) ends the run before they mix.
 
+A run split between two computers (``RunOptions.part``, docs/running.md "One run on two computers"): the station's
+orchestrator does all of the above for its roles and waits for the robot's; the robot's starts its roles (the
+simulators and drivers, run_plan.part_of) in the same named domain and partition and keeps them running until the
+station's orchestrator has left the graph.
+
 Clocks (``RunOptions.clock``): ``stepped`` (the default for simulated runs) makes robot_sim wait, at every
 publication, for the answers of our nodes of the simulated loop and the recorder (rfidnav_common.stepped_node);
 drivers and nodes given as command lines run free beside them. ``free`` keeps the free-running clock at the
@@ -45,17 +50,37 @@ from rclpy.context import Context
 from rclpy.node import Node
 from rclpy.signals import SignalHandlerOptions
 
+from rfidnav_bringup.discovery_server import client_environment
+from rfidnav_bringup.errors import LaunchError
 from rfidnav_bringup.graph_watch import GraphWatch, StallWatch, Waiter
 from rfidnav_bringup.mission_client import MissionClient
 from rfidnav_bringup.partition import join_process_partition
-from rfidnav_bringup.processes import RUN_DOMAINS, DomainLease, NodeProcess, child_environment, lock_folder, reach_text
-from rfidnav_bringup.run_plan import LIVE_ROLE, RECORDER_ROLE, RunOptions, RunPlan, rtf_text, run_id, unique_dir
+from rfidnav_bringup.processes import (
+    RUN_DOMAINS,
+    DomainLease,
+    NodeProcess,
+    SharedDomain,
+    child_environment,
+    lock_folder,
+    reach_text,
+)
+from rfidnav_bringup.run_plan import (
+    LIVE_ROLE,
+    RECORDER_ROLE,
+    ROBOT_PART,
+    ROBOT_PART_ORCHESTRATOR,
+    RunOptions,
+    RunPlan,
+    rtf_text,
+    run_id,
+    unique_dir,
+)
 from rfidnav_bringup.summary import MissionOutcome, RunFacts, RunSummary, cpu_seconds, write_run_summary
 from rfidnav_bringup.supervisor import Supervisor
 from rfidnav_common.errors import RfidnavError
 from rfidnav_common.progress import StatusLine
 from rfidnav_common.ros import events_executor, interface_class
-from rfidnav_scenario.scenario import Scenario
+from rfidnav_scenario.scenario import ORCHESTRATOR_NODE, Scenario
 
 STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)   # each ends a run as Ctrl-C does
 GRAPH_CHECK_PERIOD_S = 1.0   # how often the mission loop looks for a second graph in the domain
@@ -89,20 +114,31 @@ class Orchestrator:
         # another graph) cannot reach a partition of the run's own, so there is nothing to listen for. A partition
         # the caller chose may be shared (a test session's runs): then nodes already in the domain, in it, are
         # listened for as before.
-        partition = join_process_partition(lock_folder())
+        partition = join_process_partition(lock_folder(), self.options.partition)
+        if self.options.part is not None and not partition.chosen_by_caller:
+            raise LaunchError("--part: a split run's two parts meet in one DDS partition: give it with --partition "
+                              "NAME, the same on both computers")
         candidates = RUN_DOMAINS if self.options.domain is None else range(self.options.domain,
                                                                            self.options.domain + 1)
-        lease = (DomainLease(candidates) if partition.chosen_by_caller
-                 else DomainLease(candidates, occupants=lambda _domain: []))
+        if self.options.part is not None:      # the other part's orchestrator joins the same domain
+            lease: DomainLease | SharedDomain = SharedDomain(candidates.start)
+        elif partition.chosen_by_caller:
+            lease = DomainLease(candidates)
+        else:
+            lease = DomainLease(candidates, occupants=lambda _domain: [])
         self.domain = {"id": lease.domain_id, "partition": partition.name, "discovery": self.options.discovery}
         if lease.skipped:       # only in a caller's partition, whose other users may be in a domain
             self.domain["skipped"] = {str(d): nodes for d, nodes in lease.skipped.items()}
         env = child_environment(lease.domain_id, self.options.discovery)
-        os.environ.update({k: env[k] for k in ("ROS_DOMAIN_ID", "ROS_AUTOMATIC_DISCOVERY_RANGE")})
+        if self.options.discovery_server is not None:
+            env.update(client_environment(*self.options.discovery_server))
+        # This process's own participant, made next, finds the graph as its nodes do.
+        os.environ.update({k: v for k, v in env.items() if k.startswith("ROS_")})
         context = Context()
         # rclpy's own handlers would shut the context down under the executor (SIGTERM): ours only set a flag.
         rclpy.init(context=context, domain_id=lease.domain_id, signal_handler_options=SignalHandlerOptions.NO)
-        node = Node("rfidnav_orchestrator", context=context,
+        node = Node(ROBOT_PART_ORCHESTRATOR if self.options.part == ROBOT_PART else ORCHESTRATOR_NODE,
+                    context=context,
                     parameter_overrides=[rclpy.parameter.Parameter("use_sim_time", value=self.scenario.simulated)])
         executor = events_executor(context)
         executor.add_node(node)
@@ -115,9 +151,12 @@ class Orchestrator:
             self.say(f"run {self.run_dir.name}: seed {self.options.seed}, RTF {rtf_text(self.options.rtf)}, "
                      f"{self.plan.clock} clock{self.plan.clock_note}")
             self.say(f"graph on {reach_text(lease.domain_id, self.options.discovery, partition)}", always=True)
-            mission = self.start_graph(node)
-            if not self.interrupted:
-                self.fly_mission(mission)
+            if self.options.part == ROBOT_PART:
+                self.serve_robot_part()
+            else:
+                mission = self.start_graph(node)
+                if not self.interrupted:
+                    self.fly_mission(mission)
         except RfidnavError as error:
             self.outcome.message = str(error)
             self.say(f"error: {error}", always=True)
@@ -195,6 +234,30 @@ class Orchestrator:
         if self.plan.stepped_with is None:
             watch.start_clock()
         return mission
+
+    def serve_robot_part(self) -> None:
+        """The robot's computer of a split run (--part robot): start its roles, wait until the whole graph is up
+        (the station's roles too), and keep its roles running while the station's orchestrator flies the mission,
+        steps the clock and closes the bag; until that orchestrator has left the graph, or a signal."""
+        watch = self.watch
+        self.supervisor.start(recorder=False)
+        expected = watch.expected.nodes
+        watch.wait_for_nodes({*expected, ORCHESTRATOR_NODE},
+                             f"nodes {', '.join(sorted(expected))} and the station's orchestrator to join the graph")
+        self.say("robot part: its roles run; the station's orchestrator flies the mission", always=True)
+        self.outcome.started_wall = time.monotonic()
+        self.outcome.cpu_at_start = cpu_seconds(self.processes)
+        stall = StallWatch(watch.sim_seconds(), time.monotonic())
+        while not self.interrupted and ORCHESTRATOR_NODE in watch.node.get_node_names():
+            watch.waiter.executor.spin_once(timeout_sec=0.05)
+            self.supervisor.check(starting=False)
+            if watch.sim_seconds() > 0.0:     # once the station has started the clock; a stall is said, not acted on
+                watch.check_stall(stall, watch.sim_seconds(), time.monotonic(), self.processes)
+        self.outcome.ended_wall = time.monotonic()
+        self.outcome.cpu_at_end = cpu_seconds(self.processes)
+        if not self.interrupted:
+            # Its run ended, or its DDS lease did (20 s without a word: the link to it is down for good).
+            self.outcome.success, self.outcome.message = True, "the station's orchestrator left the graph"
 
     def fly_mission(self, mission: MissionClient) -> None:
         spec, watch = self.scenario.mission, self.watch

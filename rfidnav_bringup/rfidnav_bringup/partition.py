@@ -41,7 +41,7 @@ JOIN_ADVICE = (f"an rfidnav run's graph is in a DDS partition of its own: join i
 class RunPartition:
     name: str
     profiles_file: Path     # what a process outside the run sets FASTRTPS_DEFAULT_PROFILES_FILE to, to join it
-    chosen_by_caller: bool  # the variable named a profile with a partition before the run
+    chosen_by_caller: bool  # named by the caller (a profile naming one, or --partition): others may share it
 
 
 def tag(name: str) -> str:
@@ -97,21 +97,25 @@ def with_partition(root: ElementTree.Element, partition: str) -> ElementTree.Ele
 _joined: RunPartition | None = None
 
 
-def join_process_partition(folder: Path) -> RunPartition:
+def join_process_partition(folder: Path, named: str | None = None) -> RunPartition:
     """This process's partition: the caller's (the variable names a profile with one), or a new one whose profile
     is written to ``folder`` (private: the name is what keeps others out) and removed when the process ends. It
     sets the variable in os.environ, which the run's node processes inherit; call it before the process's first
-    DDS participant, which reads the file."""
+    DDS participant, which reads the file. ``named``: the new one's name (a split run's two parts give the same,
+    --partition), else an unguessable one; a caller's profile that names another is refused."""
     global _joined
     if _joined is not None:
         return _joined
     given = os.environ.get(PROFILES_VARIABLE, "").strip()
     root = parse_profiles(Path(given)) if given else ElementTree.Element(tag("dds"))
     chosen = partition_in(root)
+    if chosen is not None and named is not None and chosen != named:
+        raise LaunchError(f"--partition {named}: {PROFILES_VARIABLE}={given} names the partition '{chosen}'; give "
+                          "one of the two")
     if chosen is not None:
         _joined = RunPartition(chosen, Path(given), chosen_by_caller=True)
         return _joined
-    name = f"rfidnav-{secrets.token_hex(8)}"
+    name = named or f"rfidnav-{secrets.token_hex(8)}"
     path = folder / f"dds-{name}.xml"
     ElementTree.register_namespace("", NAMESPACE)
     try:
@@ -120,5 +124,5 @@ def join_process_partition(folder: Path) -> RunPartition:
         raise LaunchError(f"cannot write the run's DDS profile {path}: {error.strerror}") from None
     atexit.register(path.unlink, missing_ok=True)
     os.environ[PROFILES_VARIABLE] = str(path)
-    _joined = RunPartition(name, path, chosen_by_caller=False)
+    _joined = RunPartition(name, path, chosen_by_caller=named is not None)
     return _joined

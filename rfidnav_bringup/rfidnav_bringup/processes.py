@@ -128,6 +128,20 @@ class DomainLease:
         self.close()
 
 
+class SharedDomain:
+    """The ROS domain a split run's two parts name (--part, --domain): not leased, since the other part's
+    orchestrator joins it too, on another computer or on this one; the run's DDS partition keeps others out."""
+
+    handle = None
+
+    def __init__(self, domain_id: int) -> None:
+        self.domain_id = domain_id
+        self.skipped: dict[int, list[str]] = {}
+
+    def close(self) -> None:
+        """Nothing is held."""
+
+
 def lock_folder(root: Path = LOCK_ROOT) -> Path:
     """``/tmp/rfidnav-<uid>``, this user's folder of domain locks: created private (0700); refused when it is a
     symbolic link or another user's (someone could otherwise point our lock files at a file of ours)."""

@@ -23,6 +23,7 @@ from rfidnav_common.errors import ConfigError
 from rfidnav_common.install import resolve_executable
 from rfidnav_common.step_ledger import CLOCKS, STEP_ACK_TOPIC
 from rfidnav_scenario.scenario import (
+    ORCHESTRATOR_NODE,
     NodeSpec,
     Scenario,
     dump_parameters,
@@ -34,6 +35,10 @@ RECORDER_ROLE = "recorder"
 LIVE_ROLE = "live_view"                  # foxglove_bridge with --live: no participant of the stepped clock
 LIVE_NODE = "foxglove_bridge"            # its node's name
 STEPPING_CLOCK_SOURCE = ("rfidnav_sim", "robot_sim")   # the clock source that can step
+ROBOT_PART, STATION_PART = "robot", "station"          # --part: one run's graph split between two computers
+PARTS = (ROBOT_PART, STATION_PART)
+ROBOT_PART_ORCHESTRATOR = f"{ORCHESTRATOR_NODE}_robot"   # the robot part's own node, beside the station's
+DRIVERS_PACKAGE = "rfidnav_drivers"
 
 
 @dataclass(frozen=True)
@@ -51,6 +56,9 @@ class RunOptions:
     compress: bool = False                   # zstd chunk compression of the bag's MCAP files
     max_bag_size: int = 0                    # split the bag into files of this many bytes (0: one file)
     max_bag_duration_s: float = 0.0          # split the bag into files of this many seconds of bag time (0: no)
+    part: str | None = None                  # PARTS: start only this computer's roles (part_of); None: all
+    partition: str | None = None             # the run's DDS partition (both parts of a split run give one name)
+    discovery_server: tuple[str, int] | None = None   # (address, port) of a Fast DDS Discovery Server to find it by
 
 
 @dataclass(frozen=True)
@@ -74,6 +82,14 @@ class ExpectedGraph:
     # line without ``name``): with one, no publisher can be told foreign by its node's name.
     helpers: frozenset[str] = frozenset()
     unnamed_roles: tuple[str, ...] = ()
+    elsewhere: tuple[str, ...] = ()     # a split run: the node names the other part starts, on the other computer
+
+
+def part_of(spec: NodeSpec) -> str:
+    """Which computer of a split run starts a role: the robot's its simulators and drivers (the base, the reader,
+    the sensors: what touches the hardware), the station the rest (localizers, planners, the mission's server)
+    and the recorder."""
+    return ROBOT_PART if spec.sim or spec.clock_source or spec.package == DRIVERS_PACKAGE else STATION_PART
 
 
 class RunPlan:
@@ -81,7 +97,18 @@ class RunPlan:
         self.scenario = scenario
         self.options = options
         self.run_dir = run_dir
+        if options.part is not None and options.part not in PARTS:
+            raise ConfigError("--part", "", f"unknown part '{options.part}' (known: {', '.join(PARTS)})")
+        # The roles this computer starts: all of them, or its part's (the others run on the other computer).
+        self.roles = tuple(role for role, spec in scenario.nodes.items()
+                           if options.part is None or part_of(spec) == options.part)
+        self.starts_recorder = options.record and options.part != ROBOT_PART
         self.process_of = {role: spec.process or role for role, spec in scenario.nodes.items()}
+        for process in {self.process_of[role] for role in self.roles}:
+            split = sorted(role for role, key in self.process_of.items() if key == process and role not in self.roles)
+            if split:
+                raise ConfigError(str(scenario.path), f"nodes.{split[0]}.process",
+                                  f"'{process}' holds roles of both parts of a split run (--part {options.part})")
         self.clock, self.clock_note = choose_clock(scenario, options)
         participants = [f"/{spec.name}" for spec in scenario.step_participants()]
         if options.record:
@@ -101,13 +128,13 @@ class RunPlan:
         (self.run_dir / "scenario.yaml").write_text(yaml.safe_dump(document, sort_keys=False))
         params_dir = self.run_dir / "params"
         params_dir.mkdir()
-        if self.options.record:
+        if self.starts_recorder:
             yield ProcessPlan(RECORDER_ROLE, self.recorder_command())
         if self.options.live_port is not None:
             yield ProcessPlan(LIVE_ROLE, self.live_view_command(self.options.live_port))
         groups: dict[str, list[NodeSpec]] = {}
-        for role, spec in self.scenario.nodes.items():
-            groups.setdefault(self.process_of[role], []).append(spec)
+        for role in self.roles:
+            groups.setdefault(self.process_of[role], []).append(self.scenario.nodes[role])
         for key, specs in groups.items():
             if len(specs) == 1 and specs[0].process is None:
                 spec = specs[0]
@@ -177,8 +204,13 @@ class RunPlan:
             simulators=tuple(sorted(spec.name for spec in nodes if spec.sim and spec.name)),
             clock_source=next((spec.name for spec in nodes if spec.clock_source), None),
             simulated=self.scenario.simulated, record_exclude=self.record_exclude,
-            helpers=frozenset({LIVE_NODE} if self.options.live_port is not None else ()),
-            unnamed_roles=tuple(sorted(spec.role for spec in nodes if not spec.name)))
+            helpers=frozenset({LIVE_NODE} if self.options.live_port is not None else ())
+            | frozenset({ORCHESTRATOR_NODE, ROBOT_PART_ORCHESTRATOR} if self.options.part is not None else ()),
+            unnamed_roles=tuple(sorted(spec.role for spec in nodes if not spec.name)),
+            elsewhere=tuple(sorted({spec.name for role, spec in self.scenario.nodes.items()
+                                    if spec.name and role not in self.roles}
+                                   | ({RECORDER_ROLE} if self.options.record and not self.starts_recorder
+                                      else set()))))
 
     def clock_summary(self) -> dict[str, Any]:
         """Which clock ran, and for the stepped clock who it waited for and which roles ran free beside it."""

@@ -21,11 +21,15 @@ from rfidnav_scenario.metrics import position_errors
 WORKSPACE = Path(__file__).resolve().parents[2]
 
 
-def run_cli(*args: str, timeout: float = 600) -> subprocess.CompletedProcess:
-    env = dict(os.environ)
-    env.pop("ROS_DOMAIN_ID", None)   # the orchestrator leases its own domain
+def cli_environment(without: tuple[str, ...] = ()) -> dict[str, str]:
+    """This process's environment for a CLI, but ROS_DOMAIN_ID (the orchestrator leases its own domain) and the
+    variables ``without`` (the session's partition profile, for a run that names its own)."""
+    return {key: value for key, value in os.environ.items() if key not in ("ROS_DOMAIN_ID", *without)}
+
+
+def run_cli(*args: str, timeout: float = 600, without: tuple[str, ...] = ()) -> subprocess.CompletedProcess:
     return subprocess.run([sys.executable, "-m", "rfidnav_bringup.cli", *args], capture_output=True, text=True,
-                          timeout=timeout, cwd=WORKSPACE, env=env)
+                          timeout=timeout, cwd=WORKSPACE, env=cli_environment(without))
 
 
 def run_scenario(out: Path, scenario: str, *options: str, mission_may_fail: bool = False) -> Path:
@@ -96,12 +100,10 @@ def evidence_used(run: Path, topic: str) -> set[str]:
     return used
 
 
-def start_cli(*args: str) -> subprocess.Popen:
+def start_cli(*args: str, without: tuple[str, ...] = ()) -> subprocess.Popen:
     """``./rfidnav ARGS`` started in the background (its own domain lease), output merged into one text pipe."""
-    env = dict(os.environ)
-    env.pop("ROS_DOMAIN_ID", None)   # the orchestrator leases its own domain
-    return subprocess.Popen([sys.executable, "-m", "rfidnav_bringup.cli", *args], cwd=WORKSPACE, env=env,
-                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    return subprocess.Popen([sys.executable, "-m", "rfidnav_bringup.cli", *args], cwd=WORKSPACE,
+                            env=cli_environment(without), stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
 
 
 def wait_for_log(out: Path, role: str, text: str, cli: subprocess.Popen, timeout: float = 180) -> None:
