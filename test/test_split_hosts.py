@@ -124,6 +124,8 @@ def test_a_run_split_over_a_network_with_a_discovery_server_gives_the_one_host_r
     assert robot.returncode == 0, robot_output
     run = one_run(tmp_path / "station")
     assert recorded_commands(run) == one_host_commands
+    # Each part says how to join its graph, the discovery server included.
+    assert f"ROS_DISCOVERY_SERVER={discovery_server} ROS_SUPER_CLIENT=TRUE" in station_output
     topics = {info.name for info in bag_info(run / "bag").topics}
     # The station's bag has what both computers published: the robot's simulators' and the station's controller's.
     assert {"/clock", "/sim/ground_truth", "/odom", "/rfid/reads", "/cmd_vel", "/tf"} <= topics

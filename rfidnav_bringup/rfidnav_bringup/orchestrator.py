@@ -150,7 +150,8 @@ class Orchestrator:
             self.prepare(env, lease.handle)
             self.say(f"run {self.run_dir.name}: seed {self.options.seed}, RTF {rtf_text(self.options.rtf)}, "
                      f"{self.plan.clock} clock{self.plan.clock_note}")
-            self.say(f"graph on {reach_text(lease.domain_id, self.options.discovery, partition)}", always=True)
+            reach = reach_text(lease.domain_id, self.options.discovery, partition, self.options.discovery_server)
+            self.say(f"graph on {reach}", always=True)
             if self.options.part == ROBOT_PART:
                 self.serve_robot_part()
             else:

@@ -27,6 +27,7 @@ from typing import Any
 
 import psutil
 
+from rfidnav_bringup.discovery_server import client_environment
 from rfidnav_bringup.errors import LaunchError
 from rfidnav_bringup.partition import PROFILES_VARIABLE, RunPartition
 
@@ -196,13 +197,18 @@ def start_child(command: list[str], lease_fd: int | None = None, **popen_options
                             pass_fds=() if lease_fd is None else (lease_fd,), **popen_options)
 
 
-def reach_text(domain_id: int, discovery: str, partition: RunPartition | None = None) -> str:
-    """How another shell (or machine) joins the running graph: its domain, and its DDS partition's profile."""
+def reach_text(domain_id: int, discovery: str, partition: RunPartition | None = None,
+               discovery_server: tuple[str, int] | None = None) -> str:
+    """How another shell (or machine) joins the running graph: its domain, its DDS partition's profile and the
+    discovery server it is found through, if any."""
     where = "this machine only" if discovery == "localhost" else "this subnet"
     variables = f"ROS_DOMAIN_ID={domain_id} ROS_AUTOMATIC_DISCOVERY_RANGE={DISCOVERY_RANGES[discovery]}"
     if partition is not None:
         variables += f" {PROFILES_VARIABLE}={partition.profiles_file}"
         where += f", DDS partition {partition.name}"
+    if discovery_server is not None:
+        variables += " " + " ".join(f"{k}={v}" for k, v in client_environment(*discovery_server).items())
+        where += f", discovery server {discovery_server[0]}:{discovery_server[1]}"
     return f"{variables} ({where}); to join it: {variables} ./rfidnav echo /odom"
 
 
