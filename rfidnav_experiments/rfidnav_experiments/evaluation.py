@@ -80,8 +80,8 @@ LEDGER: tuple[EvaluationSet, ...] = (
                                    "the first rule were seen (paired difference +23.07 +- 23.67 cm; under the second "
                                    "-4.91 +- 3.85)",),
            replaced_by="flc random routes, drawn a third time"),
-    _drawn("flc", "flc random routes, drawn a third time", "seeded random routes of ceiling tags, turns 20-150 degrees, "
-           "legs 2-12 m, neither controller developed on them", count=10, drawn_on=THIRD_DRAWN_ON,
+    _drawn("flc", "flc random routes, drawn a third time", "seeded random routes of ceiling tags, turns 20-150 "
+           "degrees, legs 2-12 m, neither controller developed on them", count=10, drawn_on=THIRD_DRAWN_ON,
            first_reported="issue 34"),
     # paper 000
     EvaluationSet("partitions", "tasks of seed 101", "paper 000's random navigation tasks and streams of seed 101",
