@@ -8,6 +8,7 @@ from __future__ import annotations
 import os
 import secrets
 import shutil
+import signal
 import subprocess
 import sys
 import time
@@ -88,8 +89,12 @@ def discovery_server(hosts: TwoHosts) -> Iterator[str]:
         try:
             yield address
         finally:
-            server.send_signal(2)
-            server.communicate(timeout=30)
+            server.send_signal(signal.SIGINT)     # passed on to the server, which dies with the CLI if it must
+            try:
+                server.communicate(timeout=30)
+            except subprocess.TimeoutExpired:
+                server.kill()
+                server.communicate(timeout=30)
 
 
 def start_part(hosts: TwoHosts, part: str, out: Path, shared: tuple[str, ...]) -> subprocess.Popen:
