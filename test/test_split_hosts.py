@@ -5,6 +5,7 @@ root; where namespaces cannot be made, the tests skip with one line saying why."
 
 from __future__ import annotations
 
+import math
 import os
 import secrets
 import shutil
@@ -18,7 +19,7 @@ from pathlib import Path
 
 import pytest
 
-from rfidnav_bag.bags import bag_info
+from rfidnav_bag.bags import bag_info, read_messages
 from rfidnav_bringup.partition import PROFILES_VARIABLE
 from rfidnav_bringup.processes import DomainLease
 from support.domains import handed_domains
@@ -105,11 +106,29 @@ def start_part(hosts: TwoHosts, part: str, out: Path, shared: tuple[str, ...]) -
                             stderr=subprocess.STDOUT, text=True)
 
 
-def shared_options(server: str, rtf: str) -> tuple[str, ...]:
+def shared_options(server: str, rtf: str, *more: str) -> tuple[str, ...]:
     with DomainLease(handed_domains()) as free:     # a domain of this worker's share, free now
         domain = free.domain_id
     return ("run", "line_follow_90", "--rtf", rtf, "--seed", SEED, "--domain", str(domain),
-            "--partition", f"rfidnav-test-{secrets.token_hex(4)}", "--discovery-server", server)
+            "--partition", f"rfidnav-test-{secrets.token_hex(4)}", "--discovery-server", server, *more)
+
+
+def drop_link_mid_route(hosts: TwoHosts, station: subprocess.Popen, out: Path) -> None:
+    """Once the station's controller follows its route and a couple of seconds on, the link down for LINK_DOWN_S."""
+    log = None
+    deadline = time.monotonic() + 180
+    while time.monotonic() < deadline and station.poll() is None:
+        log = next(iter(out.glob("*/logs/heading_controller.log")), None)
+        if log is not None and "following" in log.read_text():
+            break
+        time.sleep(0.2)
+    assert log is not None and station.poll() is None, "the station's mission never started"
+    time.sleep(2.0)                       # a few sim seconds into the route
+    assert ip("-n", hosts.robot, "link", "set", hosts.robot_link, "down").returncode == 0
+    try:
+        time.sleep(LINK_DOWN_S)           # the fault is a stretch of wall time, not a wait on a condition
+    finally:
+        assert ip("-n", hosts.robot, "link", "set", hosts.robot_link, "up").returncode == 0
 
 
 @pytest.fixture(scope="module")
@@ -141,20 +160,7 @@ def test_a_link_down_for_five_seconds_mid_run_holds_the_clock_and_the_run_resume
     shared = shared_options(discovery_server, "3")
     with start_part(hosts, "robot", tmp_path / "robot", shared) as robot, \
             start_part(hosts, "station", tmp_path / "station", shared) as station:
-        log = None
-        deadline = time.monotonic() + 180
-        while time.monotonic() < deadline and station.poll() is None:
-            log = next(iter((tmp_path / "station").glob("*/logs/heading_controller.log")), None)
-            if log is not None and "following" in log.read_text():
-                break
-            time.sleep(0.2)
-        assert log is not None and station.poll() is None, "the station's mission never started"
-        time.sleep(2.0)                       # a few sim seconds into the route at RTF 3
-        assert ip("-n", hosts.robot, "link", "set", hosts.robot_link, "down").returncode == 0
-        try:
-            time.sleep(LINK_DOWN_S)           # the fault is a stretch of wall time, not a wait on a condition
-        finally:
-            assert ip("-n", hosts.robot, "link", "set", hosts.robot_link, "up").returncode == 0
+        drop_link_mid_route(hosts, station, tmp_path / "station")
         station_output, _ = station.communicate(timeout=300)
         robot_output, _ = robot.communicate(timeout=120)
     assert station.returncode == 0, station_output
@@ -163,3 +169,31 @@ def test_a_link_down_for_five_seconds_mid_run_holds_the_clock_and_the_run_resume
     # commands are the one-host run's. (Whether a side says it stood depends on the stall passing the 5 s report
     # threshold by the retransmission's delay: the line's wording is test_graph_watch's.)
     assert recorded_commands(one_run(tmp_path / "station")) == one_host_commands
+
+
+def test_with_the_free_running_clock_a_dropped_link_stops_the_base_by_its_watchdog_and_the_bag_is_closed(
+        hosts: TwoHosts, discovery_server: str, tmp_path: Path) -> None:
+    """Sim time goes on without the station; robot_sim stops the base command_timeout_s (0.5 s of sim time) after the
+    last /cmd_vel. The station's bag misses most of the robot's ground truth of those seconds (what the link lost,
+    but the last 100 messages, re-sent when it is back), so the samples on either side of that gap, seconds of sim
+    time apart, show the base standing; a robot still driving at 0.2 m/s would have gone a metre and more."""
+    shared = shared_options(discovery_server, "2", "--clock", "free")
+    with start_part(hosts, "robot", tmp_path / "robot", shared) as robot, \
+            start_part(hosts, "station", tmp_path / "station", shared) as station:
+        drop_link_mid_route(hosts, station, tmp_path / "station")
+        station_output, _ = station.communicate(timeout=300)
+        robot_output, _ = robot.communicate(timeout=120)
+    # The free clock does not promise the route's end: the controller, unheard for its unheard_timeout_s (10 s of
+    # sim time), may end the route ("no inventory rounds on /rfid/reads for 10.1 s"), as it did here once.
+    assert station.returncode in (0, 1), station_output
+    assert robot.returncode == 0, robot_output
+    run = one_run(tmp_path / "station")
+    assert bag_info(run / "bag").notes == ()                  # finalised: nothing recorded before the drop is lost
+    truth = [(msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9, msg.pose.pose.position.x,
+              msg.pose.pose.position.y) for _, _, msg in read_messages(run / "bag", ["/sim/ground_truth"])]
+    gaps = [(after[0] - before[0], math.dist(before[1:], after[1:])) for before, after in zip(truth, truth[1:])]
+    gap_s, moved_m = max(gaps)
+    # 10 s of sim time at RTF 2, the last 2 s re-sent: a base still driving at 0.2 m/s would go 0.6 m in 3 s; the
+    # watchdog lets it go 0.1 m (0.5 s at 0.2 m/s) and its braking a few cm more (0.115 m measured here once).
+    assert gap_s > 3.0, gaps[-5:]
+    assert moved_m < 0.2, (gap_s, moved_m)
