@@ -23,7 +23,7 @@ from rfidnav_bag.bags import bag_info, read_messages
 from rfidnav_bringup.partition import PROFILES_VARIABLE
 from rfidnav_bringup.processes import DomainLease
 from support.domains import handed_domains
-from support.runs import WORKSPACE, cli_environment, one_run, recorded_commands, run_scenario
+from support.runs import WORKSPACE, cli_environment, one_run, recorded_commands, run_scenario, wait_for_log
 
 pytestmark = pytest.mark.tier("graph")
 
@@ -115,14 +115,7 @@ def shared_options(server: str, rtf: str, *more: str) -> tuple[str, ...]:
 
 def drop_link_mid_route(hosts: TwoHosts, station: subprocess.Popen, out: Path) -> None:
     """Once the station's controller follows its route and a couple of seconds on, the link down for LINK_DOWN_S."""
-    log = None
-    deadline = time.monotonic() + 180
-    while time.monotonic() < deadline and station.poll() is None:
-        log = next(iter(out.glob("*/logs/heading_controller.log")), None)
-        if log is not None and "following" in log.read_text():
-            break
-        time.sleep(0.2)
-    assert log is not None and station.poll() is None, "the station's mission never started"
+    wait_for_log(out, "heading_controller", "following", station)
     time.sleep(2.0)                       # a few sim seconds into the route
     assert ip("-n", hosts.robot, "link", "set", hosts.robot_link, "down").returncode == 0
     try:

@@ -230,10 +230,13 @@ class GraphWatch:
         if not self.expected.simulated and not stopped:
             watch.since_wall_s = wall_s
             return ""
-        held = f" ({'; '.join(stopped)})" if stopped else ""
-        if self.expected.elsewhere and not stopped:   # a split run: the rest of the graph is out of sight
+        if stopped:
+            held = f" ({'; '.join(stopped)})"
+        elif self.expected.elsewhere:     # a split run: the rest of the graph is out of sight
             held = (f" (nothing stopped here; {', '.join(self.expected.elsewhere)} run on the other computer: is the "
                     "link to it down?)")
+        else:
+            held = ""
         says = f"; {self.clock_source_says}" if self.clock_source_says else ""
         reason = f"sim time has not advanced for {stuck_s:.0f} s (wall) at {sim_s:.2f} s{held}{says}"
         if not watch.reported:
