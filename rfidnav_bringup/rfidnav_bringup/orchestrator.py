@@ -78,11 +78,11 @@ from rfidnav_bringup.run_plan import (
 from rfidnav_bringup.summary import MissionOutcome, RunFacts, RunSummary, cpu_seconds, write_run_summary
 from rfidnav_bringup.supervisor import Supervisor
 from rfidnav_common.errors import RfidnavError
+from rfidnav_common.process_signals import STOP_SIGNALS
 from rfidnav_common.progress import StatusLine
 from rfidnav_common.ros import events_executor, interface_class
 from rfidnav_scenario.scenario import ORCHESTRATOR_NODE, Scenario
 
-STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)   # each ends a run as Ctrl-C does
 GRAPH_CHECK_PERIOD_S = 1.0   # how often the mission loop looks for a second graph in the domain
 
 

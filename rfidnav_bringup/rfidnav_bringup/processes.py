@@ -30,6 +30,7 @@ import psutil
 from rfidnav_bringup.discovery_server import client_environment
 from rfidnav_bringup.errors import LaunchError
 from rfidnav_bringup.partition import PROFILES_VARIABLE, RunPartition
+from rfidnav_common.process_signals import STACK_DUMP_SIGNAL
 
 RUN_DOMAINS = range(51, 102)   # 1-50 are left to test sessions; 0-101 avoid the ephemeral port range
 # The domain locks live in one folder per user under /tmp, not $TMPDIR: two runs with different TMPDIRs must still
@@ -312,19 +313,29 @@ class NodeProcess:
         return "\n".join("    " + line for line in lines[-count:])
 
 
-def stop_together(processes: Iterable[NodeProcess], grace_s: float) -> None:
+STACK_DUMP_WAIT_S = 0.5    # faulthandler writes the stacks from its signal handler, at once
+
+
+def stop_together(processes: Iterable[NodeProcess], grace_s: float) -> list[NodeProcess]:
     """Stop ``processes`` at once: SIGINT (and SIGCONT, so that a stopped process can act on it) to every one, then
-    SIGKILL to those still running when the shared grace period is over. One at a time, a run's Ctrl-C took the sum
+    to those still running when the shared grace period is over, STACK_DUMP_SIGNAL (a node's stacks into its log)
+    and SIGKILL; those killed are returned. One at a time, a run's Ctrl-C took the sum
     of its processes' exits, which a loaded machine stretches past a user's patience."""
     running = [process for process in processes if process.running]
     for process in running:
         process.signal(signal.SIGINT)
         process.signal(signal.SIGCONT)
     deadline = time.monotonic() + grace_s
+    killed = []
     for process in running:
         if not process.wait(max(0.0, deadline - time.monotonic())):
+            # An rfidnav node writes every thread's stack to its log on STACK_DUMP_SIGNAL (run_node): where it hung.
+            process.signal(STACK_DUMP_SIGNAL)
+            process.wait(STACK_DUMP_WAIT_S)
             process.signal(signal.SIGKILL)
             process.wait(5.0)
+            killed.append(process)
+    return killed
 
 
 @contextmanager

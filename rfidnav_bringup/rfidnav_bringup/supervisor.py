@@ -61,7 +61,10 @@ class Supervisor:
         return self.processes[name].restarts
 
     def stop(self) -> None:
-        """Every node process at once, then the recorder, with longer to close the bag."""
-        stop_together([process for role, process in self.processes.items() if role != RECORDER_ROLE], STOP_GRACE_S)
-        stop_together([process for role, process in self.processes.items() if role == RECORDER_ROLE],
-                      3 * STOP_GRACE_S)
+        """Every node process at once, then the recorder, with longer to close the bag; a process killed at the end
+        of its grace period is said, with where its stacks are."""
+        killed = stop_together([p for role, p in self.processes.items() if role != RECORDER_ROLE], STOP_GRACE_S)
+        killed += stop_together([p for role, p in self.processes.items() if role == RECORDER_ROLE], 3 * STOP_GRACE_S)
+        for process in killed:
+            self.say(f"{process.role} did not stop within its grace period and was killed; its threads' stacks "
+                     f"are at the end of {process.log_path}")

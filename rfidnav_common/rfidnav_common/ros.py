@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import faulthandler
 import importlib
 import signal
 import sys
@@ -31,6 +32,7 @@ from rfidnav_common.config import did_you_mean, parameters_from_mapping
 from rfidnav_common.errors import ConfigError, RfidnavError
 from rfidnav_common.geometry import quaternion_to_yaw
 from rfidnav_common.inputs import seconds_of, stamp_near
+from rfidnav_common.process_signals import STACK_DUMP_SIGNAL, STOP_SIGNALS
 
 # Sensor streams: reliable, with room for a burst (a high RTF on a busy machine) so that the recorder
 # and the controller see every message on localhost.
@@ -87,9 +89,6 @@ def events_executor(context: Context | None = None) -> Executor:
     return EventsExecutor(context=context)
 
 
-STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
-
-
 class _StopRequest:
     """The node process's stop: any of STOP_SIGNALS sets a flag that the spin loops check between bounded spins,
     so that the main thread itself ends the spin, destroys the nodes and shuts rclpy down, in that order. (rclpy's
@@ -108,6 +107,7 @@ class _StopRequest:
         if threading.current_thread() is threading.main_thread():   # a node run by a test's thread has none
             for signum in STOP_SIGNALS:
                 signal.signal(signum, self)
+            faulthandler.register(STACK_DUMP_SIGNAL, all_threads=True)
 
 
 _STOP = _StopRequest()
@@ -157,9 +157,11 @@ def run_nodes(make_nodes: Sequence[Callable[[], Node]], args: list[str] | None =
         print(f"[FATAL] {error}", file=sys.stderr, flush=True)
         return 2
     finally:
+        # The executor lets go of the nodes' entities (it holds their handles and their DDS listeners' callbacks)
+        # before the nodes destroy them, as rclpy.spin() removes its node before the caller destroys it.
+        executor.shutdown()
         for node in nodes:
             node.destroy_node()
-        executor.shutdown()
         rclpy.try_shutdown()
     return code
 
