@@ -15,6 +15,7 @@ from rfidnav_scenario.metrics import (
     flagged_spans,
     ground_truth_objection,
     signed_segment_error,
+    success_verdict,
     tracking_error,
     tracking_metrics,
     wall_crossings,
@@ -299,3 +300,10 @@ def test_success_is_stopping_within_the_declared_bound():
     assert ground_truth_objection({"success": False, "final_error_m": 0.318, "success_within_m": 0.17}) == (
         "did not reach the goal (metrics.success false, 0.32 m from it, more than the scenario's 0.17 m)")
     assert ground_truth_objection({"success": None, "final_error_m": 0.318}) is None    # no criterion: no say
+
+
+def test_the_verdict_reads_each_kinds_final_distance_under_its_own_name():
+    assert success_verdict({"final_distance_m": 0.3}, 0.5) == {"success_within_m": 0.5, "success": True}
+    assert success_verdict({"final_error_m": 0.318}, 0.17) == {"success_within_m": 0.17, "success": False}
+    assert success_verdict({"final_distance_m": None, "path_length_m": 3.0}, 0.1)["success"] is None   # no track
+    assert success_verdict({"final_error_m": 0.05}, None)["success"] is None               # no criterion

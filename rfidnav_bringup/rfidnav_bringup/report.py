@@ -36,12 +36,12 @@ from rfidnav_scenario.metrics import (
     Trajectory,
     flagged_spans,
     partition_metrics,
+    success_verdict,
     topological_metrics,
     tracking_error,
     tracking_metrics,
     two_tier_metrics,
     wall_crossings,
-    within_bound,
 )
 from rfidnav_sim.world import World, load_world
 
@@ -188,9 +188,7 @@ def record_metrics(record: RunRecord) -> dict[str, float | int | None]:
                                         (float(target.get("x", 0.0)), float(target.get("y", 0.0))),
                                         two_tier_fixes(record), list(record.searching)).as_dict())
     if record.metric_groups:
-        final = next((metrics[key] for key in ("final_distance_m", "final_error_m") if key in metrics), None)
-        metrics["success_within_m"] = record.success_within_m
-        metrics["success"] = within_bound(final, record.success_within_m)
+        metrics.update(success_verdict(metrics, record.success_within_m))
     return metrics
 
 

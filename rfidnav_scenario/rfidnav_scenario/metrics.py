@@ -104,14 +104,26 @@ def within_bound(final_distance_m: float | None, bound_m: float | None) -> bool 
     return final_distance_m <= bound_m
 
 
+def final_distance(metrics: Mapping[str, object]) -> float | None:
+    """How far from where its mission ends a run stopped, under whichever name its kind's metrics give it
+    (``final_distance_m``: tag routes, topological; ``final_error_m``: partitions, two-tier); None if unknown."""
+    return next((value for key in ("final_distance_m", "final_error_m")
+                 if isinstance(value := metrics.get(key), float)), None)
+
+
+def success_verdict(metrics: Mapping[str, object], bound_m: float | None) -> dict[str, object]:
+    """The keys a run's metrics gain from its scenario's ``success_within_m`` (``bound_m``): the bound and whether
+    the run stopped within it (:func:`within_bound`)."""
+    return {"success_within_m": bound_m, "success": within_bound(final_distance(metrics), bound_m)}
+
+
 def ground_truth_objection(metrics: Mapping[str, object]) -> str | None:
     """Why ground truth says a run its mission's node called a success was none (None: it agrees): the metrics
     say it did not reach the goal (``success`` false: farther than ``success_within_m`` from it), or its track
     crossed a wall (``wall_crossings`` > 0)."""
     objections = []
     if metrics.get("success") is False:
-        distance = next((value for key in ("final_distance_m", "final_error_m")
-                         if isinstance(value := metrics.get(key), float)), None)
+        distance = final_distance(metrics)
         bound = metrics.get("success_within_m")
         objections.append("did not reach the goal (metrics.success false"
                           + (f", {distance:.2f} m from it" if distance is not None else "")
