@@ -368,12 +368,15 @@ def test_only_a_field_declared_unbounded_takes_infinity_and_every_other_stays_fi
 def test_every_shipped_scenario_with_every_robot_profile_and_every_parameter_file_is_within_its_ranges() -> None:
     from rfidnav_common.config import Section, node_parameter_section, parameters_from_mapping
     from rfidnav_common.node_registry import registered_nodes
-    from rfidnav_scenario.scenario import ROBOT_DIR, SCENARIO_DIR
+    from rfidnav_scenario.scenario import ROBOT_DIR, SCENARIO_DIR, robot_profile
 
-    for scenario in sorted(SCENARIO_DIR.glob("*.yaml")):
-        load_scenario(str(scenario))
-    for profile in sorted(ROBOT_DIR.glob("*.yaml")):
-        load_scenario("line_follow_90", robot_profile_name=str(profile))
+    scenarios = {path.stem: load_scenario(str(path)) for path in sorted(SCENARIO_DIR.glob("*.yaml"))}
+    for profile_file in sorted(ROBOT_DIR.glob("*.yaml")):
+        profile = robot_profile(str(profile_file))
+        # Paper 001's robot for a profile of its roles, else paper 003's (the location server).
+        fitting = next(name for name in ("line_follow_90", "two_tier_home")
+                       if set(profile.roles) | set(profile.parts) <= set(scenarios[name].nodes))
+        load_scenario(fitting, robot_profile_name=str(profile_file))
     classes = {registration.node_name: registration.parameters for registration in registered_nodes().values()}
     required = {"world_file": "w.yaml", "map_file": "m.yaml"}
     checked = 0

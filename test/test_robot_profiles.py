@@ -38,7 +38,8 @@ def test_a_profile_leaving_simulators_without_their_base_is_refused() -> None:
 
 
 def test_an_unknown_profile_or_role_is_one_error_naming_it(tmp_path: Path) -> None:
-    with pytest.raises(ConfigError, match="no robot profile 'tank'.*known: create2_llrp, sim_base_llrp"):
+    with pytest.raises(ConfigError,
+                       match="no robot profile 'tank'.*known: create2_llrp, location_server_on_robot, sim_base_llrp"):
         load_scenario("hallway", robot_profile_name="tank")
     profile = tmp_path / "lidar.yaml"
     profile.write_text("name: lidar\nroles:\n  lidar: {package: rfidnav_drivers, executable: llrp_reader}\n")

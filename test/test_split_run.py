@@ -41,6 +41,40 @@ def test_the_robot_part_holds_the_simulators_and_drivers_and_the_station_the_res
 
 
 @pytest.mark.tier("unit")
+def test_a_robot_profile_assigns_a_role_to_the_other_part(tmp_path: Path) -> None:
+    scenario = load_scenario("two_tier_home", robot_profile_name="location_server_on_robot")
+    robot = RunPlan(scenario, RunOptions(part=ROBOT_PART), tmp_path / "robot")
+    station = RunPlan(scenario, RunOptions(part=STATION_PART), tmp_path / "station")
+    assert set(robot.roles) == {"robot_sim", "rfid_reader", "wifi", "compass", "location_server"}, robot.roles
+    assert set(station.roles) == {"two_tier_navigator"}
+    assert {plan.name for plan in station.write()} == {"recorder", "two_tier_navigator"}
+    assert "location_server" in station.expected_graph().elsewhere
+    assert "location_server" not in robot.expected_graph().elsewhere
+
+
+@pytest.mark.tier("unit")
+@pytest.mark.parametrize("parts, field, words", [
+    ("{location_server: laptop}", "parts.location_server", "one of robot, station"),
+    ("{mapper: robot}", "parts.mapper", "no role 'mapper' in two_tier_home.yaml"),
+    ("{}", "roles", "replaces at least one role or assigns one to a part")])
+def test_a_profiles_bad_part_is_one_error_naming_it(tmp_path: Path, parts: str, field: str, words: str) -> None:
+    profile = tmp_path / "robot.yaml"
+    profile.write_text(f"name: robot\nparts: {parts}\n")
+    with pytest.raises(ConfigError) as raised:
+        load_scenario("two_tier_home", robot_profile_name=str(profile))
+    assert raised.value.field == field and words in str(raised.value), str(raised.value)
+
+
+@pytest.mark.tier("unit")
+def test_a_profile_may_not_split_the_roles_of_one_process_between_the_parts(tmp_path: Path) -> None:
+    profile = tmp_path / "robot.yaml"
+    profile.write_text("name: robot\nparts: {compass: station}\n")      # the simulators share one process
+    scenario = load_scenario("two_tier_home", robot_profile_name=str(profile))
+    with pytest.raises(ConfigError, match="'simulator' holds roles of both parts of a split run"):
+        RunPlan(scenario, RunOptions(part=ROBOT_PART), tmp_path / "robot")
+
+
+@pytest.mark.tier("unit")
 def test_an_unknown_part_is_refused(tmp_path: Path) -> None:
     with pytest.raises(ConfigError, match="unknown part 'both'"):
         RunPlan(load_scenario("line_follow_90"), RunOptions(part="both"), tmp_path)

@@ -24,6 +24,7 @@ from rfidnav_common.install import resolve_executable
 from rfidnav_common.step_ledger import CLOCKS, STEP_ACK_TOPIC
 from rfidnav_scenario.scenario import (
     ORCHESTRATOR_NODE,
+    SPLIT_PARTS,
     NodeSpec,
     Scenario,
     dump_parameters,
@@ -35,8 +36,8 @@ RECORDER_ROLE = "recorder"
 LIVE_ROLE = "live_view"                  # foxglove_bridge with --live: no participant of the stepped clock
 LIVE_NODE = "foxglove_bridge"            # its node's name
 STEPPING_CLOCK_SOURCE = ("rfidnav_sim", "robot_sim")   # the clock source that can step
-ROBOT_PART, STATION_PART = "robot", "station"          # --part: one run's graph split between two computers
-PARTS = (ROBOT_PART, STATION_PART)
+PARTS = SPLIT_PARTS                                   # --part: one run's graph split between two computers
+ROBOT_PART, STATION_PART = PARTS
 ROBOT_PART_ORCHESTRATOR = f"{ORCHESTRATOR_NODE}_robot"   # the robot part's own node, beside the station's
 DRIVERS_PACKAGE = "rfidnav_drivers"
 
@@ -86,9 +87,11 @@ class ExpectedGraph:
 
 
 def part_of(spec: NodeSpec) -> str:
-    """Which computer of a split run starts a role: the robot's its simulators and drivers (the base, the reader,
-    the sensors: what touches the hardware), the station the rest (localizers, planners, the mission's server)
-    and the recorder."""
+    """Which computer of a split run starts a role: the one its robot profile assigns (``parts:``), else the
+    robot's its simulators and drivers (the base, the reader, the sensors: what touches the hardware), the
+    station the rest (localizers, planners, the mission's server). The recorder is the station's."""
+    if spec.part is not None:
+        return spec.part
     return ROBOT_PART if spec.sim or spec.clock_source or spec.package == DRIVERS_PACKAGE else STATION_PART
 
 

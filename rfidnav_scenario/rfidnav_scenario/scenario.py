@@ -49,6 +49,7 @@ from rfidnav_sim.world import World, load_world
 CONFIG_DIR = package_share("rfidnav_scenario") / "config"   # installed with the package, or linked by set-up
 SCENARIO_DIR = CONFIG_DIR / "scenarios"
 ROBOT_DIR = CONFIG_DIR / "robots"
+SPLIT_PARTS = ("robot", "station")          # the computers of a split run (--part): rfidnav_bringup.run_plan
 
 METRIC_GROUPS = ("tracking", "partition", "two_tier", "topological")
 MAX_MISSION_S = MAX_DURATION_S          # mission.timeout_s: one day of sim time (the orchestrator's wall limit follows)
@@ -80,6 +81,8 @@ class NodeSpec:
     process: str | None = None               # roles with the same name share one OS process (container.py)
     stepped: bool | None = None              # take part in the stepped clock; None: ours of the loop do
     map_file: Path | None = None             # this role's robot map (``map:``); None: the scenario's
+    part: str | None = None                  # SPLIT_PARTS: the computer of a split run that starts it (a robot
+                                             # profile's ``parts:``); None: rfidnav_bringup.run_plan.part_of's rule
 
     @property
     def registration(self) -> NodeRegistration | None:
@@ -171,36 +174,55 @@ def profile_path(name_or_path: str) -> Path:
     return ROBOT_DIR / f"{name_or_path}.yaml"
 
 
-def robot_profile(name_or_path: str) -> dict[str, Section]:
-    """The roles a robot profile (``config/robots/NAME.yaml``) runs differently: role -> its node entry (the
-    scenario's node schema, paths relative to the profile). A missing file is one error naming it."""
+@dataclass(frozen=True)
+class RobotProfile:
+    """A robot profile (``config/robots/NAME.yaml``): the roles it runs differently (role -> its node entry, the
+    scenario's node schema, paths relative to the profile) and the computer of a split run (``--part``) that
+    starts a role where the default rule does not fit (role -> one of SPLIT_PARTS)."""
+
+    path: Path
+    roles: dict[str, Section]
+    parts: dict[str, str]
+
+
+def robot_profile(name_or_path: str) -> RobotProfile:
+    """The robot profile ``name_or_path``, checked; a missing file is one error naming it."""
     path = profile_path(name_or_path).resolve()
     if not path.is_file():
         known = ", ".join(sorted(p.stem for p in ROBOT_DIR.glob("*.yaml")))
         raise ConfigError("--robot", "", f"no robot profile '{name_or_path}' ({path} does not exist; known: {known})")
     section = Section.from_file(path)
-    section.reject_unknown(("name", "description", "roles"))
-    roles = section.section("roles")
-    if not roles.keys():
-        raise section.error("roles", "a profile replaces at least one role")
-    return {role: roles.section(role) for role in roles.keys()}
+    section.reject_unknown(("name", "description", "roles", "parts"))
+    roles = section.section("roles", {})
+    parts = section.section("parts", {})
+    if not roles.keys() and not parts.keys():
+        raise section.error("roles", "a profile replaces at least one role or assigns one to a part (parts:)")
+    for role in parts.keys():
+        if parts.raw(role, None) not in SPLIT_PARTS:
+            raise parts.error(role, f"expected the part of a split run that starts it: one of {', '.join(SPLIT_PARTS)}")
+    return RobotProfile(path, {role: roles.section(role) for role in roles.keys()},
+                        {role: parts.string(role) for role in parts.keys()})
 
 
-def _with_profile(nodes: dict[str, NodeSpec], profile: str, scenario_file: Path) -> dict[str, NodeSpec]:
-    """The scenario's roles with the profile's drivers in place. Without the simulated base (the clock source)
-    the run is in real time, and no simulator role may remain: nothing would publish its ground truth."""
-    entries = robot_profile(profile)
-    base = profile_path(profile).resolve().parent
+def _with_profile(nodes: dict[str, NodeSpec], profile_name: str, scenario_file: Path) -> dict[str, NodeSpec]:
+    """The scenario's roles with the profile's drivers in place and their parts assigned. Without the simulated
+    base (the clock source) the run is in real time, and no simulator role may remain: nothing would publish its
+    ground truth."""
+    profile = robot_profile(profile_name)
     nodes = dict(nodes)
-    for role, entry in entries.items():
-        if role not in nodes:
-            raise ConfigError(str(profile_path(profile).resolve()), f"roles.{role}",
-                              f"no role '{role}' in {scenario_file.name} (roles: {', '.join(nodes)})")
-        nodes[role] = _node_spec(role, entry, base)
+    for key, named in (("roles", profile.roles), ("parts", profile.parts)):
+        for role in named:
+            if role not in nodes:
+                raise ConfigError(str(profile.path), f"{key}.{role}",
+                                  f"no role '{role}' in {scenario_file.name} (roles: {', '.join(nodes)})")
+    for role, entry in profile.roles.items():
+        nodes[role] = _node_spec(role, entry, profile.path.parent)
+    for role, part in profile.parts.items():
+        nodes[role] = replace(nodes[role], part=part)
     if not any(spec.clock_source for spec in nodes.values()):
         left = [role for role, spec in nodes.items() if spec.sim]
         if left:
-            raise ConfigError(str(profile_path(profile).resolve()), "roles",
+            raise ConfigError(str(profile.path), "roles",
                               f"replaces the simulated base but not the simulator roles {', '.join(left)} of "
                               f"{scenario_file.name}: they need its ground truth (add a driver for each)")
     return nodes
