@@ -31,9 +31,8 @@ from rfidnav_common.errors import ConfigError
 from rfidnav_common.geometry import point_segment_distance
 from rfidnav_common.robot_map import RouteMap, bounding_box
 from rfidnav_common.seeding import derive_seed, rng_for
-from rfidnav_common.tag_groups import HF_READ_RANGE_M
 from rfidnav_experiments.runners.shipped import file_parameters, shipped_parameters
-from rfidnav_localization.dead_reckoning import TIER_TAG, DeadReckoningEstimate, Fix
+from rfidnav_localization.dead_reckoning import DeadReckoningEstimate, Fix
 from rfidnav_localization.errors import LocateError
 from rfidnav_localization.fingerprint import Fingerprint, LocateResult, LocateSettings, RadioMap
 from rfidnav_localization.parameters import LocationServerParameters
@@ -46,6 +45,7 @@ from rfidnav_planning.two_tier_navigation import (
     TwoTierNavigator,
     TwoTierSettings,
 )
+from rfidnav_planning.two_tier_survey import SURVEY_SPACING_M, RobotSurvey, SurveyLeg, SurveyRule
 from rfidnav_planning.wall_paths import WallMap
 from rfidnav_scenario.metrics import ground_truth_objection, wall_crossings
 from rfidnav_scenario.scenario import CONFIG_DIR
@@ -60,7 +60,6 @@ from rfidnav_sim.world import World
 NAVIGATOR = shipped_parameters(TwoTierNavigatorParameters, "two_tier_navigator")    # the node's, as shipped
 SETTINGS = NAVIGATOR.settings()
 STEP_S = 1.0 / NAVIGATOR.control_rate_hz    # control and simulation step
-SURVEY_FRESH_M = 2.0               # survey only within this odometry distance of a tag fix (sd ~ 10 cm)
 ODOMETRY_SCALE_ERROR = 0.05        # odometry distance 5 % long: paper 003 sec. 4.1, 1 m of error per 20 m
 COMPASS = shipped_parameters(CompassParameters, "compass_sim").model()   # the compass_sim node's
 FOOTPRINT_RADIUS_M = shipped_parameters(RobotSimParameters, "robot_sim", world_file="-").footprint_radius_m
@@ -310,11 +309,12 @@ def run_two_tier(site: Site, start: tuple[float, float, float], target: tuple[fl
                  scan_period_s: float | None = None) -> TwoTierRun:
     """One navigation from ``start`` (true pose) to ``target``, the compass and WiFi drawn from ``rng``, the floor
     reader's streams seeded from ``reader_seed`` (as the rfid_reader_sim node seeds them from its seed). With
-    ``survey_spacing_m`` the robot also surveys (paper 003's automatic radio map construction): a scan every that
-    many metres while its position is fresh from a tag fix (within SURVEY_FRESH_M), recorded at the position it
-    believes (never the true one) and added to the site's radio map at once, as the add_fingerprint service
-    does. ``floor``: the walls and extent of the robot's map, which its legs are planned round. ``observe`` is
-    called after every step with what the sensors gave (:class:`StepSeen`); it draws nothing.
+    ``survey_spacing_m`` the robot also surveys (paper 003's automatic radio map construction,
+    rfidnav_planning.two_tier_survey.SurveyRule): a scan every that many metres while its position is fresh from
+    a tag fix, recorded at the position it believes (never the true one) and added to the site's radio map at
+    once, as the add_fingerprint service does. ``floor``: the walls and extent of the robot's map, which its legs
+    are planned round. ``observe`` is called after every step with what the sensors gave (:class:`StepSeen`); it
+    draws nothing.
     ``reader_parameters``: the robot's reader (the navigator reads its floor antenna's port). ``tier_one``: where
     the navigator's locate requests are answered from instead of the location server (two_tier_navigator's
     ``tier_one_from`` naming a localizer's pose; the robot stands still until it answers). ``scan_period_s``: a
@@ -330,7 +330,7 @@ def run_two_tier(site: Site, start: tuple[float, float, float], target: tuple[fl
     floor_port = NAVIGATOR.floor_antenna
     positions = {tag.tag_id: tag.position for tag in site.tag_map}
     survey: list[tuple[tuple[float, float], dict[str, float]]] = []
-    surveyed_at_m = -math.inf
+    survey_rule = None if survey_spacing_m is None else SurveyRule(survey_spacing_m)
     navigator = TwoTierNavigator(settings, floor)
     decision = navigator.start(target, known_start)
     fix_errors: list[float] = []
@@ -372,15 +372,12 @@ def run_two_tier(site: Site, start: tuple[float, float, float], target: tuple[fl
                 read_at = np.mean([positions[tag_id] for tag_id in reads if tag_id in positions], axis=0)
                 tag_position_errors.append(math.dist(read_at, (x, y)))
         fixes_seen = len(fixes)
-        estimate = navigator.estimate()
-        if (survey_spacing_m is not None and estimate.last_fix is not None and estimate.last_fix.tag_id
-                and estimate.distance_since_fix_m <= SURVEY_FRESH_M
-                and navigator.travelled_m - surveyed_at_m >= survey_spacing_m):
-            surveyed_at_m = navigator.travelled_m
+        surveyed_at = None if survey_rule is None else survey_rule.due(navigator.estimate(), navigator.travelled_m)
+        if surveyed_at is not None:
             scan = {r.bssid: r.rssi_dbm for r in site.wifi.scan(x, y, rng)}
             if scan:
-                survey.append((estimate.position, scan))
-                site.radio_map.add(Fingerprint(estimate.position, scan, "survey"))
+                survey.append((surveyed_at, scan))
+                site.radio_map.add(Fingerprint(surveyed_at, scan, "survey"))
     if not decision.finished:
         decision = navigator.finish(False, f"timed out after {max_time_s:g} s")
     progress = navigator.progress
@@ -410,19 +407,21 @@ def answer(site: Site, navigator: TwoTierNavigator, request: Request, true_posit
     return navigator.on_tag_map(site.tags_near(request.centre, request.radius_m))
 
 
-def robot_survey(site: Site, robot_map: RouteMap, seed: int, spacing_m: float = 0.5) -> list[Fingerprint]:
-    """The robot's own survey into ``site``'s (empty) radio map: docked on the map's first landmark (a known
-    start), it visits every landmark in turn and scans every ``spacing_m`` while fresh from a tag fix; its
-    tier-one checks on the way use the map built so far."""
+def robot_survey(site: Site, robot_map: RouteMap, seed: int, spacing_m: float = SURVEY_SPACING_M,
+                 dock: str = "", landmarks: Sequence[str] = ()) -> list[Fingerprint]:
+    """The robot's own survey (rfidnav_planning.two_tier_survey) into ``site``'s (empty) radio map: docked on
+    ``dock`` (the map's first landmark), it visits ``landmarks`` (every other) in turn and scans every
+    ``spacing_m`` while fresh from a tag fix; its tier-one checks on the way use the map built so far."""
     rng = rng_for(seed, "robot survey")
-    first = robot_map.tag_groups[0].centre
-    pose = (first[0], first[1], 0.0)
-    known = Fix(first, HF_READ_RANGE_M, TIER_TAG, f"{robot_map.tag_groups[0].group_id} (dock)")
-    for leg, group in enumerate(robot_map.tag_groups[1:]):
-        run = run_two_tier(site, pose, group.centre, SETTINGS, rng, derive_seed(seed, f"robot survey:{leg}"),
-                           survey_spacing_m=spacing_m, known_start=known, floor=WallMap.of(robot_map))
+    plan = RobotSurvey(robot_map.tag_groups, dock, landmarks)
+    leg: SurveyLeg | None = plan.first_leg()
+    x, y = plan.dock_group.centre
+    pose = (x, y, 0.0)
+    while leg is not None:
+        run = run_two_tier(site, pose, leg.target, SETTINGS, rng, derive_seed(seed, f"robot survey:{leg.index}"),
+                           survey_spacing_m=spacing_m, known_start=leg.known_start, floor=WallMap.of(robot_map))
         pose = (run.final_position[0], run.final_position[1], 0.0)
-        known = None if not run.success else Fix(group.centre, HF_READ_RANGE_M, TIER_TAG, group.group_id)
+        leg = plan.leg_ended(run.success)
     return list(site.radio_map.fingerprints)
 
 

@@ -11,6 +11,7 @@ from rfidnav_common.polling import Polling
 from rfidnav_control.spiral import separation_for_group
 from rfidnav_experiments import evaluation
 from rfidnav_experiments.runners.two_tier import FLOOR_READER, SETTINGS
+from rfidnav_planning.two_tier_survey import SURVEY_SPACING_M
 from rfidnav_scenario.scenario import CONFIG_DIR
 from rfidnav_sim.parameters import ReaderParameters
 
@@ -48,7 +49,7 @@ LONG_ROUTE = ((1.0, 3.6, 0.0), (11.0, 3.6))
 FIG11_SPACINGS_M = {"direct": 0.1, "indirect": 4.0}    # geographic forwarding's reach: no landmark helps at 0.1 m
 GRID_SPACING_M = 1.0
 GRID_SCANS_PER_POINT = 3
-ROBOT_SURVEY_SPACING_M = 0.5            # the robot's own survey: a scan this often while fresh from a tag fix
+ROBOT_SURVEY_SPACING_M = SURVEY_SPACING_M   # the robot's own survey: a scan this often while fresh from a fix
 TEST_POINTS = 300
 TARGET_FIX_ERROR_M = 0.03               # ours: median tag-fix error at the turning points
 HOMES = ("two_tier_home", "two_tier_flat", "two_tier_corridor")    # scenarios: start, goal, world, map, radio map

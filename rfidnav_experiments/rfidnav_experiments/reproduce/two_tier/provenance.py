@@ -42,8 +42,8 @@ from rfidnav_experiments.runners.two_tier import (
     NAVIGATOR,
     ODOMETRY_SCALE_ERROR,
     STEP_S,
-    SURVEY_FRESH_M,
 )
+from rfidnav_planning.two_tier_survey import SURVEY_FRESH_M
 from rfidnav_sim.parameters import CompassParameters, WifiSimParameters
 from rfidnav_sim.world import World, load_world
 
