@@ -1,5 +1,5 @@
 """two_tier_navigator as a node: it waits for a location server that is not up, asks again, and carries on when
-the server comes (as after a restart mid-mission); a bad goal is refused."""
+the server comes (as after a restart mid-mission); a bad goal is refused; its /survey adds scans to the server."""
 
 from __future__ import annotations
 
@@ -19,7 +19,7 @@ from rfidnav_common.ros import COMMAND_QOS, SENSOR_QOS
 from rfidnav_localization.fingerprint import Fingerprint
 from rfidnav_localization.location_server_node import LocationServerNode
 from rfidnav_localization.location_store import LocationStore
-from rfidnav_msgs.action import NavigateToPoint
+from rfidnav_msgs.action import NavigateToPoint, Survey
 from rfidnav_msgs.msg import AccessPointRss, WifiScan
 from rfidnav_planning.two_tier_navigator_node import TwoTierNavigatorNode
 from support.graph import Graph
@@ -143,3 +143,49 @@ def test_given_a_localizers_pose_topic_tier_one_is_that_localizers_pose_and_not_
     fix = navigator.navigator.progress.fixes[0]
     assert fix.position == pytest.approx((3.0, 1.5)) and fix.sd_m == pytest.approx(0.2)   # not the server's (1, 1)
     assert navigator.navigator.waypoint.group_id == "G1"
+
+
+def test_a_survey_and_a_navigation_exclude_each_other_and_the_survey_adds_scans_where_the_robot_believes(
+        graph: Graph, tmp_path: Path) -> None:
+    """Docked on G1 (a known start: a tag fix), the first scan after the survey starts is due at once and goes to
+    the location server at the dock; a navigation goal meanwhile is refused; cancelled, the survey ends."""
+    map_file = tmp_path / "home.yaml"
+    map_file.write_text("name: home\ntag_groups:\n  - {id: G1, shape: cross, centre: [2.0, 1.0]}\n"
+                        "  - {id: G2, shape: cross, centre: [6.0, 1.0]}\n")
+    navigator = graph.add(TwoTierNavigatorNode(context=graph.context, parameter_overrides=[
+        Parameter("map_file", value=str(map_file))]))
+    server = graph.add(LocationServerNode(context=graph.context, parameter_overrides=[
+        Parameter("database_file", value=str(tmp_path / "survey.db")), Parameter("create_database", value=True),
+        Parameter("map_file", value=str(map_file))]))
+    publish = sensors(graph)
+    survey = ActionClient(graph.probe, Survey, "/survey")
+    navigation = ActionClient(graph.probe, NavigateToPoint, "/navigate_to_point")
+    graph.clients += [survey, navigation]
+    graph.spin_until(lambda: survey.server_is_ready() and navigation.server_is_ready(), "both action servers")
+    rejected = survey.send_goal_async(Survey.Goal(dock="G1", landmarks=["G9"]))
+    graph.spin_until(rejected.done, "the bad survey's answer")
+    assert not rejected.result().accepted
+    graph.spin_until(lambda: graph.logged("two_tier_navigator", "no tag group 'G9' in the map"), "the refusal's log")
+    sent = survey.send_goal_async(Survey.Goal(dock="G1", landmarks=[], spacing_m=0.5))
+    graph.spin_until(sent.done, "the survey's acceptance")
+    assert sent.result().accepted
+    goal = NavigateToPoint.Goal()
+    goal.target.x, goal.target.y = 6.0, 1.0
+    refused = navigation.send_goal_async(goal)
+    graph.spin_until(refused.done, "the navigation's answer")
+    assert not refused.result().accepted
+    graph.spin_until(lambda: graph.logged("two_tier_navigator", "a survey is running"), "the refusal's log")
+
+    def added() -> bool:
+        publish()
+        return len(server.radio_map) > 0
+    graph.spin_until(added, "a survey scan in the radio map")
+    (fingerprint,) = server.radio_map.fingerprints
+    assert fingerprint.position == pytest.approx((2.0, 1.0)) and fingerprint.source == "survey"
+    assert dict(fingerprint.rss) == RSS
+    assert navigator.survey_goals.running.leg.landmark == "G2"
+    cancelled = sent.result().cancel_goal_async()
+    graph.spin_until(cancelled.done, "the cancel's answer")
+    result = sent.result().get_result_async()
+    graph.spin_until(result.done, "the survey's result")
+    assert result.result().result.fingerprints_added == 1 and result.result().result.landmarks_reached == 0

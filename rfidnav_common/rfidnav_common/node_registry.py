@@ -28,7 +28,7 @@ class NodeRegistration:
     node_name: str                        # its default ROS node name: the key of its parameter files
     parameters: type                      # its parameters dataclass (rfidnav_common.config's ``param`` fields)
     stepped: bool                         # derives rfidnav_common.stepped_node.SteppedNode: answers the stepped clock
-    serves: tuple[str, str] | None = None  # (action name, action type) of the action server it runs, if any
+    serves: tuple[tuple[str, str], ...] = ()   # (action name, action type) of each action server it runs
 
 
 @functools.cache

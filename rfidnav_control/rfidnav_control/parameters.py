@@ -187,5 +187,5 @@ class WallFollowerParameters(CommandsSpeeds):
 # (rfidnav_common.node_registry), with the actions they serve as (name, type).
 FOLLOW_TAG_ROUTE = ("/follow_tag_route", "rfidnav_msgs/action/FollowTagRoute")
 HEADING_CONTROLLER = NodeRegistration(
-    "heading_controller", HeadingControllerParameters, stepped=True, serves=FOLLOW_TAG_ROUTE)
+    "heading_controller", HeadingControllerParameters, stepped=True, serves=(FOLLOW_TAG_ROUTE,))
 WALL_FOLLOWER = NodeRegistration("wall_follower", WallFollowerParameters, stepped=True)

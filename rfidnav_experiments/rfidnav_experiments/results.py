@@ -85,7 +85,7 @@ def _seeded_runs(scenario: str, *arguments: str, label: str = "", seeds: tuple[i
 
 COMMANDS: dict[str, Command] = {c.key: c for c in (
     _bench("flc"), _bench("reader"), _bench("planner"), _bench("fused"), _bench("location_server"), _bench("llrp"),
-    _bench("routes", "--seeds", "3"), _bench("scaling", "--runs", "3"),
+    _bench("routes", "--seeds", "3"), _bench("scaling", "--runs", "3"), _bench("survey"),
     Command("bench_rtf_hallway", ("bench", "rtf", "--scenario", "hallway", "--clock", "stepped", "--rtfs", "5,max",
                                   "--seeds", "1", "--json"), "json"),
     Command("bench_rtf_hallway_loaded", ("bench", "rtf", "--scenario", "hallway", "--clock", "stepped", "--rtfs",

@@ -197,6 +197,12 @@ def add_bench(verbs: argparse._SubParsersAction) -> Handler:
     names.add_parser("fused", parents=[common], help="the fused localizer's update per round, per kind of evidence, "
                                                      "on one core")
     names.add_parser("location_server", parents=[common], help="paper 003's tier-one locate over DDS")
+    survey = names.add_parser("survey", parents=[common], help="paper 003's robot survey over DDS beside the "
+                                                               "in-process one: both radio maps, and missions on each")
+    survey.add_argument("--seed", type=seed_value, default=1, help="the surveys' seed")
+    survey.add_argument("--missions", type=runs_value, default=3,
+                        help="two_tier_home runs over DDS on each radio map (seeds 1..N)")
+    survey.add_argument("--out", type=output_folder, default=RUNS_DIR / "bench_survey", help="folder for the runs")
     names.add_parser("llrp", parents=[common], help="the llrp_reader driver against llrpkit's LLRP emulator "
                                                     "(latency, lossless rate)")
     return run_bench
@@ -249,6 +255,11 @@ def run_bench(args: argparse.Namespace) -> int:
         rows = scaling_benchmark(args.experiment, args.workers, args.runs)
         print(json.dumps(rows) if args.json else "\n".join(scaling_lines(rows)))
         return 0 if all(row["identical"] for row in rows) else 1
+    if args.name == "survey":
+        from rfidnav_experiments.bench.survey import print_figures, survey_benchmark
+
+        print_figures(survey_benchmark(args.seed, args.missions, args.out), args.json)
+        return 0
     if args.name == "routes":
         from rfidnav_experiments.bench.routes import bench_routes
 

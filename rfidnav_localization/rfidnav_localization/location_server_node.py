@@ -17,7 +17,7 @@ groups, deployment area and fingerprints: a survey grows it a margin at a time).
 
 A missing database (unless ``create_database``), a corrupt one or one of an unknown schema is one error at
 start (exit 2). The tag groups of ``map_file`` are loaded into the tag map at start, once, and its radio map
-file into an empty radio map.
+file into an empty radio map unless ``load_radio_map`` is false (the robot's own survey builds it).
 """
 
 from __future__ import annotations
@@ -65,8 +65,9 @@ class LocationServerNode(SteppedNode):
 
     def load_map(self, robot_map: RouteMap) -> None:
         """The map's tag groups that the database does not hold yet (a restart finds them already there), and its
-        radio map file when the database has no fingerprints."""
-        if robot_map.radio_map_file is not None and self.store.fingerprint_count() == 0:
+        radio map file when the database has no fingerprints (and ``load_radio_map``)."""
+        if (self.params.load_radio_map and robot_map.radio_map_file is not None
+                and self.store.fingerprint_count() == 0):
             self.store.add_fingerprints(load_radio_map(robot_map.radio_map_file))
         known = {group.group_id for group in self.store.tag_groups()}
         for group in robot_map.tag_groups:

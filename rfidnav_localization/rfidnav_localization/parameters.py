@@ -103,6 +103,8 @@ class LocationServerParameters:
                                   False)
     map_file: str = param("robot map: its tag_groups, and its radio_map when the database has no fingerprints, are "
                           "loaded at start ('unused': none)", "unused")
+    load_radio_map: bool = param("load the map's radio_map into a database without fingerprints at start; false: "
+                                 "start without any, for the robot's own survey (/survey) to build them", True)
     k: int = param("neighbours averaged by the fingerprint matcher (k-nearest neighbours, RADAR)", 3,
                    Limits(1, 10_000))
     missing_rss_dbm: float = param(

@@ -216,10 +216,12 @@ class MissionExecutorParameters:
 # (rfidnav_common.node_registry), with the actions they serve as (name, type).
 NAVIGATE_TO_POINT = ("/navigate_to_point", "rfidnav_msgs/action/NavigateToPoint")
 NAVIGATE_TO_NODE = ("/navigate_to_node", "rfidnav_msgs/action/NavigateToNode")
+SURVEY = ("/survey", "rfidnav_msgs/action/Survey")
 PARTITION_NAVIGATOR = NodeRegistration(
-    "partition_navigator", PartitionNavigatorParameters, stepped=True, serves=NAVIGATE_TO_POINT)
+    "partition_navigator", PartitionNavigatorParameters, stepped=True, serves=(NAVIGATE_TO_POINT,))
 TWO_TIER_NAVIGATOR = NodeRegistration(
-    "two_tier_navigator", TwoTierNavigatorParameters, stepped=True, serves=NAVIGATE_TO_POINT)
-POSE_NAVIGATOR = NodeRegistration("pose_navigator", PoseNavigatorParameters, stepped=True, serves=NAVIGATE_TO_POINT)
+    "two_tier_navigator", TwoTierNavigatorParameters, stepped=True, serves=(NAVIGATE_TO_POINT, SURVEY))
+POSE_NAVIGATOR = NodeRegistration("pose_navigator", PoseNavigatorParameters, stepped=True,
+                                  serves=(NAVIGATE_TO_POINT,))
 MISSION_EXECUTOR = NodeRegistration(
-    "mission_executor", MissionExecutorParameters, stepped=True, serves=NAVIGATE_TO_NODE)
+    "mission_executor", MissionExecutorParameters, stepped=True, serves=(NAVIGATE_TO_NODE,))

@@ -11,6 +11,12 @@ topic in ``tier_one_from`` the navigator takes tier one from the localizer the s
 and the pose's sd, e.g. rfid_localizer's fused estimate), waiting standing still for its first.
 One goal at a time and cancel (checked at each control step): rfidnav_common.goal_server.
 
+Action server /survey (rfidnav_msgs/Survey): the robot's own survey (paper 003's automatic radio map
+construction, rfidnav_planning.two_tier_survey): docked on a landmark of ``map_file``, a leg of two-tier navigation
+to each landmark in turn; each /wifi/scan that comes while a scan is due (every ``spacing_m`` driven while the
+position is fresh from a tag fix) goes to /location_server/add_fingerprint at the position the robot believes.
+A navigation goal is refused while a survey runs, and a survey while a navigation runs.
+
 Every input is checked (rfidnav_common.inputs) and what fails is dropped and counted with a throttled warning:
 /odom not a pose in odom, a compass reading not in its frame (compass or base_link) or not a rotation, a round or
 a scan not in base_link, floor reads no reader reports, a scan with an RSS outside the physical range; a goal
@@ -22,7 +28,7 @@ from __future__ import annotations
 
 import functools
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -39,16 +45,27 @@ from rfidnav_common.robot_map import load_route_map
 from rfidnav_common.ros import COMMAND_QOS, SENSOR_QOS, declare_parameters, run_node, twist
 from rfidnav_common.stepped_node import SteppedNode
 from rfidnav_common.transforms import FrameBroadcaster
-from rfidnav_msgs.action import NavigateToPoint
+from rfidnav_msgs.action import NavigateToPoint, Survey
 from rfidnav_msgs.msg import LocalizationStatus, TagReadArray, WifiScan
-from rfidnav_msgs.srv import GetTagMap, Locate
+from rfidnav_msgs.srv import AddFingerprint, GetTagMap, Locate
 from rfidnav_planning.conversions import point_goal_refusal, pose_from_message
 from rfidnav_planning.parameters import TwoTierNavigatorParameters
 from rfidnav_planning.pose_navigation import Pose
 from rfidnav_planning.two_tier_navigation import LOCATE, Decision, MapTag, Request, TwoTierNavigator
+from rfidnav_planning.two_tier_survey import SURVEY_SPACING_M, RobotSurvey, SurveyLeg, SurveyRule
 from rfidnav_planning.wall_paths import WallMap
 
 UNKNOWN_YAW_VARIANCE = 1e6    # [rad^2] on the pose when no heading, or none with a known noise, was read
+
+
+@dataclass
+class SurveyGoal(ActiveGoal):
+    plan: RobotSurvey
+    rule: SurveyRule
+    leg: SurveyLeg
+    started_at_m: float                                     # odometry distance when the survey started
+    fingerprints_added: int = 0
+    failed_legs: list[str] = field(default_factory=list)   # "landmark: why", for the result's message
 
 
 @dataclass
@@ -63,7 +80,8 @@ class TwoTierNavigatorNode(SteppedNode):
         super().__init__("two_tier_navigator", **node_options)
         self.params: TwoTierNavigatorParameters = declare_parameters(self, TwoTierNavigatorParameters)
         map_file = self.params.map_file
-        floor = WallMap() if map_file == "unused" else WallMap.of(load_route_map(Path(map_file)))
+        self.robot_map = None if map_file == "unused" else load_route_map(Path(map_file))
+        floor = WallMap() if self.robot_map is None else WallMap.of(self.robot_map)
         self.navigator = TwoTierNavigator(self.params.settings(), floor)
         self.call: PendingCall | None = None
         self.drops = inputs.Drops(self.get_logger().warning)
@@ -88,16 +106,27 @@ class TwoTierNavigatorNode(SteppedNode):
             self.get_logger().info(f"tier one from the poses of {tier_one_topic}")
         self.locate_client = self.create_client(Locate, "/location_server/locate")
         self.tag_map_client = self.create_client(GetTagMap, "/location_server/tag_map")
+        self.add_fingerprint_client = self.create_client(AddFingerprint, "/location_server/add_fingerprint")
         # Cancel is checked by control_step, before the core steps: no command follows a cancel request.
         self.goals: SingleGoalServer[ActiveGoal] = SingleGoalServer(
             self, NavigateToPoint, "/navigate_to_point", what="navigation", busy="another goal is being navigated to",
             check=self.refusal, new_goal=ActiveGoal, started=self.on_started, result=self.result, stop=self.stop,
             supervise_period_s=None)
+        self.survey_goals: SingleGoalServer[SurveyGoal] = SingleGoalServer(
+            self, Survey, "/survey", what="survey", busy="another survey is running", check=self.survey_refusal,
+            new_goal=self.new_survey, started=self.on_survey_started, result=self.survey_result, stop=self.stop,
+            supervise_period_s=None)
         self.create_timer(1.0 / self.params.control_rate_hz, self.control_step)
 
     def destroy_node(self) -> None:
         self.goals.destroy()
+        self.survey_goals.destroy()
         super().destroy_node()
+
+    @property
+    def serving(self) -> SingleGoalServer[Any] | None:
+        """The goal server whose goal is accepted and not yet reported: the navigation's or the survey's."""
+        return next((server for server in (self.goals, self.survey_goals) if server.active is not None), None)
 
     def now_s(self) -> float:
         return self.get_clock().now().nanoseconds * 1e-9
@@ -136,6 +165,9 @@ class TwoTierNavigatorNode(SteppedNode):
             self.drops.drop("/wifi/scan", error)
             return
         self.scan = msg
+        survey = self.survey_goals.running
+        if survey is not None and self.navigator.outcome is None:
+            self.survey_scan(survey, msg)
 
     def on_tier_one_pose(self, msg: PoseWithCovarianceStamped) -> None:
         try:
@@ -145,6 +177,8 @@ class TwoTierNavigatorNode(SteppedNode):
 
     # -------------------------------------------------------------------------------------- goals
     def refusal(self, goal: NavigateToPoint.Goal) -> str | None:
+        if self.survey_goals.active is not None:
+            return "a survey is running"
         return point_goal_refusal(goal, self.navigator.refusal)
 
     def on_started(self, goal: ActiveGoal) -> None:
@@ -163,9 +197,80 @@ class TwoTierNavigatorNode(SteppedNode):
             searches=progress.searches, search_length_m=float(progress.search_length_m),
             tag_fixes=sum(1 for fix in progress.fixes if fix.tag_id), tier_one_requests=progress.tier_one_requests)
 
+    # ------------------------------------------------------------------------------------- survey
+    def survey_refusal(self, goal: Survey.Goal) -> str | None:
+        if self.goals.active is not None:
+            return "a navigation is running"
+        if self.robot_map is None:
+            return "no robot map (map_file): the survey drives to its landmarks"
+        try:
+            RobotSurvey(self.robot_map.tag_groups, goal.dock, list(goal.landmarks))
+            SurveyRule(goal.spacing_m or SURVEY_SPACING_M)
+        except ValueError as error:
+            return str(error)
+        landmarks = [group.centre for group in self.robot_map.tag_groups]
+        outside = next((centre for centre in landmarks if self.navigator.refusal(centre) is not None), None)
+        return None if outside is None else self.navigator.refusal(outside)
+
+    def new_survey(self, handle: Any) -> SurveyGoal:
+        goal = handle.request
+        plan = RobotSurvey(self.robot_map.tag_groups, goal.dock, list(goal.landmarks))
+        return SurveyGoal(handle, plan, SurveyRule(goal.spacing_m or SURVEY_SPACING_M), plan.first_leg(),
+                          self.navigator.travelled_m)
+
+    def on_survey_started(self, survey: SurveyGoal) -> None:
+        self.get_logger().info(f"surveying: docked on {survey.plan.dock}, {len(survey.plan.route)} landmarks "
+                               f"({', '.join(group.group_id for group in survey.plan.route)}), a scan every "
+                               f"{survey.rule.spacing_m:g} m within {survey.rule.fresh_m:g} m of a tag fix")
+        self.start_leg(survey, survey.leg)
+
+    def start_leg(self, survey: SurveyGoal, leg: SurveyLeg) -> None:
+        survey.leg, survey.rule = leg, SurveyRule(survey.rule.spacing_m, survey.rule.fresh_m)
+        start = "from the dock" if leg.index == 0 else "from there" if leg.known_start else "from tier one"
+        self.get_logger().info(f"survey leg {leg.index + 1}/{len(survey.plan.route)}: to {leg.landmark} {start}")
+        self.apply(self.navigator.start(leg.target, leg.known_start))
+
+    def leg_ended(self, survey: SurveyGoal, decision: Decision) -> None:
+        """The leg's navigation ended: on to the next landmark, or the survey's end."""
+        leg = survey.leg
+        if not decision.success:
+            survey.failed_legs.append(f"{leg.landmark}: {decision.message}")
+            self.get_logger().warning(f"survey leg to {leg.landmark} failed: {decision.message}")
+        following = survey.plan.leg_ended(decision.success)
+        if following is not None:
+            self.start_leg(survey, following)
+            return
+        plan = survey.plan
+        message = (f"{len(plan.reached)} of {len(plan.route)} landmarks reached, {survey.fingerprints_added} "
+                   f"fingerprints added" + "".join(f"; {failure}" for failure in survey.failed_legs))
+        self.survey_goals.conclude(GoalOutcome.of(plan.complete), message)
+
+    def survey_scan(self, survey: SurveyGoal, scan: WifiScan) -> None:
+        """``scan`` joins the radio map at the believed position when one is due."""
+        position = survey.rule.due(self.navigator.estimate(), self.navigator.travelled_m)
+        if position is None or not scan.access_points or not self.add_fingerprint_client.service_is_ready():
+            return
+        request = AddFingerprint.Request(x=float(position[0]), y=float(position[1]), source="survey", scan=scan)
+        self.call_service(self.add_fingerprint_client, request, functools.partial(self.on_added, survey))
+
+    def on_added(self, survey: SurveyGoal, future: Future) -> None:
+        if future.cancelled():
+            return
+        response = future.result()
+        if response.success:
+            survey.fingerprints_added += 1
+        else:
+            self.drops.drop("/location_server/add_fingerprint", response.message)
+
+    def survey_result(self, survey: SurveyGoal, success: bool, message: str) -> Survey.Result:
+        return Survey.Result(success=success, message=message, landmarks_reached=len(survey.plan.reached),
+                             legs=len(survey.plan.legs), fingerprints_added=survey.fingerprints_added,
+                             path_length_m=float(self.navigator.travelled_m - survey.started_at_m))
+
     # ------------------------------------------------------------------------------------ control
     def control_step(self) -> None:
-        if self.goals.supervise() is None:
+        server = self.serving
+        if server is None or server.supervise() is None:
             return
         if self.call is not None:
             self.serve(self.call)
@@ -182,7 +287,11 @@ class TwoTierNavigatorNode(SteppedNode):
 
     def apply(self, decision: Decision) -> None:
         if decision.finished:
-            self.goals.conclude(GoalOutcome.of(decision.success), decision.message)
+            survey = self.survey_goals.running
+            if survey is not None:
+                self.leg_ended(survey, decision)
+            else:
+                self.goals.conclude(GoalOutcome.of(decision.success), decision.message)
             return
         if decision.request is not None:
             self.call = PendingCall(decision.request)
@@ -219,7 +328,7 @@ class TwoTierNavigatorNode(SteppedNode):
         call.future = self.call_service(client, request, functools.partial(self.on_answer, call))
 
     def on_answer(self, call: PendingCall, future: Future) -> None:
-        if self.call is not call or self.goals.running is None or future.cancelled():
+        if self.call is not call or self.serving is None or future.cancelled():
             return                               # a stale answer (re-sent, or the goal ended), or none: sent again
         self.call = None
         response = future.result()
@@ -255,10 +364,19 @@ class TwoTierNavigatorNode(SteppedNode):
 
     def publish_feedback(self, phase: str) -> None:
         estimate = self.navigator.estimate()
+        pose = None if estimate.position is None else Pose2D(
+            x=float(estimate.position[0]), y=float(estimate.position[1]), theta=float(estimate.yaw or 0.0))
+        survey = self.survey_goals.running
+        if survey is not None:
+            feedback = Survey.Feedback(leg=survey.leg.index, landmark=survey.leg.landmark, phase=phase,
+                                       fingerprints_added=survey.fingerprints_added)
+            if pose is not None:
+                feedback.estimated_pose = pose
+            self.survey_goals.publish_feedback(feedback)
+            return
         feedback = NavigateToPoint.Feedback(phase=phase)
-        if estimate.position is not None:
-            feedback.estimated_pose = Pose2D(x=float(estimate.position[0]), y=float(estimate.position[1]),
-                                             theta=float(estimate.yaw or 0.0))
+        if pose is not None and estimate.position is not None:
+            feedback.estimated_pose = pose
             feedback.distance_to_goal_m = float(math.dist(estimate.position, self.navigator.target))
         self.goals.publish_feedback(feedback)
 

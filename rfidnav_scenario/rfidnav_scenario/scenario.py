@@ -616,16 +616,16 @@ def _check_speeds(scenario: Scenario, parameters: dict[str, Any]) -> None:
 
 def _check_server(scenario: Scenario, mission: Section) -> None:
     """The role serving the mission (mission.server, else the first non-simulator role), when it is one of our
-    action servers (its registration's ``serves``), serves the mission's action name and type."""
+    action servers (its registration's ``serves``), serves the mission's action name, with its type."""
     role = scenario.mission.server or next((role for role, spec in scenario.nodes.items() if not spec.sim), None)
     spec = scenario.nodes.get(role or "")
-    served = spec.registration.serves if spec is not None and spec.registration is not None else None
-    if role is None or served is None:
+    served = dict(spec.registration.serves) if spec is not None and spec.registration is not None else {}
+    if role is None or not served:
         return
-    name, action_type = served
     node = scenario.nodes[role].name or role
-    if _expanded(scenario.mission.action) != name:
-        raise mission.error("action", f"{node} (role {role}) serves {name}, not {scenario.mission.action}")
+    action_type = served.get(_expanded(scenario.mission.action))
+    if action_type is None:
+        raise mission.error("action", f"{node} (role {role}) serves {', '.join(served)}, not {scenario.mission.action}")
     if scenario.mission.action_type != action_type:
         raise mission.error("type", f"{node} (role {role}) serves {action_type}, not {scenario.mission.action_type}")
 
