@@ -197,6 +197,7 @@ NOT_READ: dict[str, str] = {
     "location_server.database_file": "in-process the radio map and the tag map are held in memory",
     "location_server.run_dir": "as above",
     "location_server.create_database": "as above",
+    "location_server.load_radio_map": "the experiment builds each radio map itself (the grid survey, the robot's)",
     "location_server.map_file": "the experiment's map",
     **{f"robot_sim.{name}": "in-process the robot is an ideal unicycle (robot.motion) whose odometry is off by "
                             "robot.odometry_scale_error (the scenario's robot_sim: a test checks it)"
