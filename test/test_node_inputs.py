@@ -30,6 +30,7 @@ from sensor_msgs.msg import Imu, Range
 
 from rfidnav_bringup.processes import NodeProcess
 from rfidnav_common.geometry import yaw_to_quaternion
+from rfidnav_common.goal_server import SingleGoalServer
 from rfidnav_common.install import resolve_executable
 from rfidnav_common.ros import COMMAND_QOS, SENSOR_QOS, time_msg
 from rfidnav_common.stepped_node import STEPPED_CLOCK_PARAMETER
@@ -39,7 +40,7 @@ from rfidnav_localization.fingerprint import Fingerprint
 from rfidnav_localization.location_server_node import LocationServerNode
 from rfidnav_localization.location_store import LocationStore
 from rfidnav_localization.partition_localizer_node import PartitionLocalizerNode
-from rfidnav_msgs.action import FollowTagRoute, NavigateToNode, NavigateToPoint
+from rfidnav_msgs.action import FollowTagRoute, NavigateToNode, NavigateToPoint, Survey
 from rfidnav_msgs.msg import (
     AccessPointRss,
     LocalizationStatus,
@@ -324,6 +325,14 @@ def goal_cases(path_values: list[tuple[str, tuple[tuple[str, Any], ...], str]]) 
 
 POINT_GOAL_CASES = goal_cases([("target.x", EXTREMES, REFUSE), ("target.y", EXTREMES, REFUSE)])
 POINT_GOAL_TAKEN = goal_cases([("target.x", (("-0.0", -0.0),), ACCEPT)])     # last: one goal at a time
+# The robot's survey (two_tier_navigator's /survey): a spacing that is no positive distance, a landmark the map
+# does not have; 0 takes the default spacing, 1e308 is a survey that never scans.
+SURVEY_GOAL_CASES = goal_cases([("spacing_m", NON_FINITE + (("-1e308", -1e308), ("-0.5", -0.5)), REFUSE),
+                                ("spacing_m", (("0 (the default)", 0.0), ("1e308", 1e308)), ACCEPT)]) + [
+    Case("dock=ZZ", setting("dock", "ZZ"), REFUSE),
+    Case("landmarks=[ZZ]", setting("landmarks", ["ZZ"]), REFUSE),
+    Case("landmarks=['']", setting("landmarks", [""]), REFUSE),
+    Case("landmarks=[T1] (only the dock)", setting("landmarks", ["T1"]), ACCEPT)]
 
 SPECS = [
     NodeSpec("heading_controller", lambda graph, _tmp: HeadingControllerNode(
@@ -358,7 +367,7 @@ SPECS = [
         [("/cmd_vel", Twist)],
         setup=start_goal("/navigate_to_point", NavigateToPoint, target(2.0, 1.3))),
     NodeSpec("two_tier_navigator", lambda graph, _tmp: TwoTierNavigatorNode(
-        context=graph.context, parameter_overrides=stepped()),
+        context=graph.context, parameter_overrides=stepped(map_file=str(CONFIG / "maps/two_tier_home.yaml"))),
         [TopicInput("/odom", odometry, odometry_cases()),
          TopicInput("/compass", compass,
                     cases("orientation.w", EXTREMES + (("0 (all zero)", 0.0),), DROP)
@@ -370,7 +379,8 @@ SPECS = [
          TopicInput("/wifi/scan", scan, scan_cases(ACCEPT) + [
              Case("access_points=[]", lambda m: setattr(m, "access_points", []), ACCEPT), GOOD]),
          GoalInput("/navigate_to_point", NavigateToPoint, lambda: target(2.0, 1.0),
-                   POINT_GOAL_CASES + POINT_GOAL_TAKEN)],
+                   POINT_GOAL_CASES + POINT_GOAL_TAKEN),
+         GoalInput("/survey", Survey, lambda: Survey.Goal(dock="T1", spacing_m=0.5), SURVEY_GOAL_CASES)],
         [("/cmd_vel", Twist), ("/localization/pose", PoseWithCovarianceStamped),
          ("/localization/status", LocalizationStatus)],
         setup=start_goal("/navigate_to_point", NavigateToPoint, target(2.0, 1.0))),
@@ -564,7 +574,8 @@ class Fuzzer:
         def ended() -> bool:
             self.stamp_s += 0.1
             self.node.advance_time(round(self.stamp_s * 1e9))
-            return cancel.done() and self.node.goals.active is None
+            return cancel.done() and all(server.active is None for server in vars(self.node).values()
+                                         if isinstance(server, SingleGoalServer))
         self.graph.spin_until(ended, f"the cancel of {what}")
 
 
