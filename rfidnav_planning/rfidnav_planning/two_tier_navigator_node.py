@@ -198,25 +198,26 @@ class TwoTierNavigatorNode(SteppedNode):
             tag_fixes=sum(1 for fix in progress.fixes if fix.tag_id), tier_one_requests=progress.tier_one_requests)
 
     # ------------------------------------------------------------------------------------- survey
+    def survey_of(self, goal: Survey.Goal) -> tuple[RobotSurvey, SurveyRule]:
+        """The goal's plan and scan rule (a ValueError saying what is wrong with it); 0 spacing: the default."""
+        tag_groups = () if self.robot_map is None else self.robot_map.tag_groups
+        return (RobotSurvey(tag_groups, goal.dock, list(goal.landmarks)),
+                SurveyRule(goal.spacing_m or SURVEY_SPACING_M))
+
     def survey_refusal(self, goal: Survey.Goal) -> str | None:
         if self.goals.active is not None:
             return "a navigation is running"
         if self.robot_map is None:
             return "no robot map (map_file): the survey drives to its landmarks"
         try:
-            RobotSurvey(self.robot_map.tag_groups, goal.dock, list(goal.landmarks))
-            SurveyRule(goal.spacing_m or SURVEY_SPACING_M)
+            plan, _ = self.survey_of(goal)
         except ValueError as error:
             return str(error)
-        landmarks = [group.centre for group in self.robot_map.tag_groups]
-        outside = next((centre for centre in landmarks if self.navigator.refusal(centre) is not None), None)
-        return None if outside is None else self.navigator.refusal(outside)
+        return next((refusal for group in plan.route if (refusal := self.navigator.refusal(group.centre))), None)
 
     def new_survey(self, handle: Any) -> SurveyGoal:
-        goal = handle.request
-        plan = RobotSurvey(self.robot_map.tag_groups, goal.dock, list(goal.landmarks))
-        return SurveyGoal(handle, plan, SurveyRule(goal.spacing_m or SURVEY_SPACING_M), plan.first_leg(),
-                          self.navigator.travelled_m)
+        plan, rule = self.survey_of(handle.request)
+        return SurveyGoal(handle, plan, rule, plan.first_leg(), self.navigator.travelled_m)
 
     def on_survey_started(self, survey: SurveyGoal) -> None:
         self.get_logger().info(f"surveying: docked on {survey.plan.dock}, {len(survey.plan.route)} landmarks "
@@ -375,7 +376,7 @@ class TwoTierNavigatorNode(SteppedNode):
             self.survey_goals.publish_feedback(feedback)
             return
         feedback = NavigateToPoint.Feedback(phase=phase)
-        if pose is not None and estimate.position is not None:
+        if estimate.position is not None:
             feedback.estimated_pose = pose
             feedback.distance_to_goal_m = float(math.dist(estimate.position, self.navigator.target))
         self.goals.publish_feedback(feedback)

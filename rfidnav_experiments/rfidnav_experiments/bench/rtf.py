@@ -17,16 +17,15 @@ from __future__ import annotations
 import json
 import math
 import statistics
-import sys
-from contextlib import redirect_stdout
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 from rfidnav_bag.bags import bag_info
-from rfidnav_bringup.api import Orchestrator, RunOptions, cpu_hogs
+from rfidnav_bringup.api import RunOptions, cpu_hogs
 from rfidnav_common.errors import ConfigError
 from rfidnav_common.progress import progress
+from rfidnav_experiments.bench.runs import quiet_run
 from rfidnav_scenario.scenario import Scenario
 
 
@@ -95,12 +94,8 @@ def sweep(scenario: Scenario, rtfs: list[float], seeds: list[int], out_dir: Path
         for rtf in sorted(set(rtfs)):
             documents, run_dirs = [], []
             for seed in seeds:
-                orchestrator = Orchestrator(scenario, RunOptions(rtf=rtf, clock=clock, seed=seed, out_dir=out_dir,
-                                                                 quiet=True))
-                with redirect_stdout(sys.stderr):    # the run's own lines; stdout carries the figures
-                    summary = orchestrator.run()
-                if orchestrator.interrupted:   # Ctrl-C stops the sweep, not just the run in progress
-                    raise KeyboardInterrupt
+                summary = quiet_run(scenario, RunOptions(rtf=rtf, clock=clock, seed=seed, out_dir=out_dir,
+                                                         quiet=True))
                 documents.append(summary.document)
                 run_dirs.append(str(summary.run_dir))
                 advance(1)

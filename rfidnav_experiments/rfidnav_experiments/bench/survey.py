@@ -20,15 +20,14 @@ from __future__ import annotations
 import json
 import math
 import statistics
-import sys
-from contextlib import redirect_stdout
 from pathlib import Path
 from typing import Any
 
 import yaml
 
-from rfidnav_bringup.api import Orchestrator, RunOptions
+from rfidnav_bringup.api import RunOptions
 from rfidnav_common.robot_map import load_route_map
+from rfidnav_experiments.bench.runs import quiet_run
 from rfidnav_experiments.reproduce.two_tier.conditions import MAP_FILE, TEST_POINTS, WORLD_FILE
 from rfidnav_experiments.reproduce.two_tier.navigations import tier_one_errors
 from rfidnav_experiments.reproduce.two_tier.summary import Median
@@ -48,12 +47,7 @@ def run(scenario: str, seed: int, out_dir: Path, location_server_params: Path | 
     """One run over DDS at the stepped clock's top speed: its summary document (with the run folder's path)."""
     loaded = load_scenario(scenario, param_files=None if location_server_params is None else
                            {"location_server": location_server_params})
-    orchestrator = Orchestrator(loaded, RunOptions(rtf=math.inf, seed=seed, out_dir=out_dir, quiet=True))
-    with redirect_stdout(sys.stderr):         # the run's own lines; stdout carries the figures
-        summary = orchestrator.run()
-    if orchestrator.interrupted:
-        raise KeyboardInterrupt
-    return {**summary.document, "run_dir": str(summary.run_dir)}
+    return quiet_run(loaded, RunOptions(rtf=math.inf, seed=seed, out_dir=out_dir, quiet=True)).document
 
 
 def surveyed_fingerprints(run_dir: Path) -> list[Fingerprint]:
