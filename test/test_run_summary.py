@@ -21,7 +21,7 @@ def finished_run(tmp_path: Path, monkeypatch: pytest.MonkeyPatch, metrics: dict)
     (orchestrator.run_dir / "bag").mkdir(parents=True)
     (orchestrator.run_dir / "bag" / "metadata.yaml").write_text("{}")
     orchestrator.outcome.success, orchestrator.outcome.message = True, "reached J4"
-    monkeypatch.setattr(rfidnav_bringup.report, "run_metrics", lambda _run: metrics)
+    monkeypatch.setattr(rfidnav_bringup.report, "run_metrics", lambda _run, _robot=None: metrics)
     return orchestrator
 
 

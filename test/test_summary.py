@@ -101,7 +101,7 @@ def test_metrics_that_cannot_be_computed_are_said_and_left_out(tmp_path: Path,
     (tmp_path / "bag").mkdir()
     (tmp_path / "bag" / "metadata.yaml").write_text("{}")
 
-    def damaged(_run: Path) -> dict:
+    def damaged(_run: Path, _robot: str | None = None) -> dict:
         raise RfidnavError("the bag has no /sim/ground_truth")
 
     monkeypatch.setattr(rfidnav_bringup.report, "run_metrics", damaged)
@@ -117,7 +117,8 @@ def test_an_interrupted_run_leaves_its_metrics_to_report_and_says_so(tmp_path: P
     (tmp_path / "bag").mkdir()
     (tmp_path / "bag" / "metadata.yaml").write_text("{}")
     read: list[Path] = []
-    monkeypatch.setattr(rfidnav_bringup.report, "run_metrics", lambda run: read.append(run) or {"rmse_m": 0.1})
+    monkeypatch.setattr(rfidnav_bringup.report, "run_metrics",
+                        lambda run, _robot=None: read.append(run) or {"rmse_m": 0.1})
     said: list[str] = []
     summary = write_run_summary(tmp_path, FACTS, finished(), processes(tmp_path), said.append, interrupted=True)
     assert read == [] and summary.document["metrics"] == {}

@@ -40,7 +40,7 @@ def test_the_sonar_offsets_are_those_of_the_simulated_layout() -> None:
               for r in PAPER_LAYOUT}
     parameters = WallFollowerParameters()
     for topic, offset in zip(parameters.sonar_topics, parameters.sonar_offsets_m):
-        assert offset == pytest.approx(layout[topic.removeprefix("/sonar/")], abs=1e-3), topic
+        assert offset == pytest.approx(layout[topic.removeprefix("sonar/")], abs=1e-3), topic
 
 
 class FollowerProbe:

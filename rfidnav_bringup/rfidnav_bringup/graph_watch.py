@@ -116,7 +116,14 @@ class GraphWatch:
 
     # ----------------------------------------------------------------- readiness
     def wait_for_nodes(self, names: Collection[str], what: str) -> None:
-        self.waiter.spin_until(lambda: set(names) <= set(self.node.get_node_names()), READY_TIMEOUT_S, what)
+        """Until every one of ``names`` (with its namespace, no leading slash: ``r1/wall_follower``) is in the graph."""
+        self.waiter.spin_until(lambda: set(names) <= set(self.node_paths()), READY_TIMEOUT_S, what)
+
+    def node_paths(self) -> list[str]:
+        """The graph's nodes, each with its namespace and without the leading slash (``robot_sim``,
+        ``r1/wall_follower``), once per node found."""
+        return [f"{namespace.rstrip('/')}/{name}".lstrip("/")
+                for name, namespace in self.node.get_node_names_and_namespaces()]
 
     def wait_for_live_view(self, process: NodeProcess, port: int) -> None:
         """Wait until the live view (``process``) listens on ``port``, then say where to connect."""
@@ -205,7 +212,7 @@ class GraphWatch:
         for name, namespace in node.get_node_names_and_namespaces():
             if name == node.get_name():
                 continue
-            graph[name] = {
+            graph[f"{namespace.rstrip('/')}/{name}".lstrip("/")] = {
                 "subscriptions": sorted(t for t, _ in node.get_subscriber_names_and_types_by_node(name, namespace)),
                 "publishers": sorted(t for t, _ in node.get_publisher_names_and_types_by_node(name, namespace))}
         path.write_text(json.dumps({"simulator_nodes": list(self.expected.simulators), "nodes": graph},
@@ -249,9 +256,8 @@ class GraphWatch:
         node of one of our names, a foreign one (a tester's injector, a teleop) as a publisher of a node not ours on
         one of the domain's topics: end the run before the two mix (a ReadinessError naming them). With a role
         whose node name the run does not know (a command line without ``name``), no publisher is called foreign."""
-        node = self.node
         ours = self.our_names()
-        names = [f"{namespace.rstrip('/')}/{name}" for name, namespace in node.get_node_names_and_namespaces()]
+        names = [f"/{path}" for path in self.node_paths()]
         now = time.monotonic()
         twice = {name for name in ours if names.count(name) > 1 and self.respawned_until.get(name, 0.0) < now}
         # Seen twice at two checks in a row: discovery can show one node twice for a moment when a participant's

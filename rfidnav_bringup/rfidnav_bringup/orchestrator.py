@@ -42,6 +42,7 @@ import os
 import signal
 import sys
 import time
+from dataclasses import dataclass
 from typing import Any
 
 import rclpy
@@ -81,9 +82,22 @@ from rfidnav_common.errors import RfidnavError
 from rfidnav_common.process_signals import STOP_SIGNALS
 from rfidnav_common.progress import StatusLine
 from rfidnav_common.ros import events_executor, interface_class
-from rfidnav_scenario.scenario import ORCHESTRATOR_NODE, Scenario
+from rfidnav_scenario.scenario import ORCHESTRATOR_NODE, MissionSpec, Scenario
 
 GRAPH_CHECK_PERIOD_S = 1.0   # how often the mission loop looks for a second graph in the domain
+
+
+@dataclass
+class Flight:
+    """One robot's mission in a run: its client, the process serving it and how it ended."""
+    robot: str | None                # None: the one robot of a run without robots
+    spec: MissionSpec                # its action resolved under the robot's namespace
+    client: MissionClient
+    server: str | None               # the process serving it
+    outcome: MissionOutcome          # the run's, or the robot's in it
+    goal: Any = None
+    restarts: int = 0                # its server's restarts when the goal was last sent
+    cancelled: bool = False          # its own timeout cancelled it
 
 
 class Orchestrator:
@@ -155,9 +169,9 @@ class Orchestrator:
             if self.options.part == ROBOT_PART:
                 self.serve_robot_part()
             else:
-                mission = self.start_graph(node)
+                flights = self.start_graph(node)
                 if not self.interrupted:
-                    self.fly_mission(mission)
+                    self.fly_mission(flights)
         except RfidnavError as error:
             self.outcome.message = str(error)
             self.say(f"error: {error}", always=True)
@@ -212,8 +226,9 @@ class Orchestrator:
         except OSError:   # the output went away (a closed pipe, a terminal gone): the run goes on
             self.terminal_lost = True
 
-    def start_graph(self, node: Node) -> MissionClient:
-        """Start the processes and wait until the graph is ready for the goal; the client that will send it."""
+    def start_graph(self, node: Node) -> list[Flight]:
+        """Start the processes and wait until the graph is ready for the goals; each robot's mission with the
+        client that will send its goal."""
         watch = self.watch
         if RECORDER_ROLE in self.processes:
             self.supervisor.start(recorder=True)
@@ -223,10 +238,14 @@ class Orchestrator:
         watch.wait_for_nodes(expected, f"nodes {', '.join(sorted(expected))} to join the graph")
         if LIVE_ROLE in self.processes and self.options.live_port is not None:
             watch.wait_for_live_view(self.processes[LIVE_ROLE], self.options.live_port)
-        action = self.scenario.mission.action
-        mission = MissionClient(node, interface_class(self.scenario.mission.action_type), action, watch.waiter,
-                                self.progress, self.scenario.name, self.rejection_detail)
-        mission.wait_for_server(f"action server {action}")
+        flights = []
+        for robot, spec in self.scenario.missions():
+            label = f"{self.scenario.name}/{robot}" if robot else self.scenario.name
+            client = MissionClient(node, interface_class(spec.action_type), spec.action, watch.waiter, self.progress,
+                                   label, functools.partial(self.rejection_detail, robot))
+            client.wait_for_server(f"action server {spec.action}")
+            flights.append(Flight(robot, spec, client, self.plan.mission_process(robot),
+                                  self.outcome if robot is None else self.outcome.robot(robot)))
         if RECORDER_ROLE in self.processes:
             watch.wait_for_recording()
         if self.plan.stepped_with is not None:
@@ -234,7 +253,7 @@ class Orchestrator:
         watch.write_graph(self.run_dir / "graph.json")
         if self.plan.stepped_with is None:
             watch.start_clock()
-        return mission
+        return flights
 
     def serve_robot_part(self) -> None:
         """The robot's computer of a split run (--part robot): start its roles, wait until the whole graph is up
@@ -260,61 +279,84 @@ class Orchestrator:
             # Its run ended, or its DDS lease did (20 s without a word: the link to it is down for good).
             self.outcome.success, self.outcome.message = True, "the station's orchestrator left the graph"
 
-    def fly_mission(self, mission: MissionClient) -> None:
-        spec, watch = self.scenario.mission, self.watch
-        goal = mission.goal(spec.goal, f"{self.scenario.path}: mission.goal")
+    def fly_mission(self, flights: list[Flight]) -> None:
+        """Send every robot's goal, start the clock and follow the missions until each has its result (or the run
+        ends: a signal, a stall, the wall limit; a robot's own timeout cancels its goal alone)."""
+        watch = self.watch
+        for flight in flights:
+            where = f"{self.scenario.path}: " + (f"robots[{flight.robot}].mission.goal" if flight.robot
+                                                 else "mission.goal")
+            flight.goal = flight.client.goal(flight.spec.goal, where)
         self.outcome.started_sim_s = watch.sim_seconds()
         self.outcome.started_wall = time.monotonic()
-        server = self.plan.mission_process()
-        # Counted before the goal goes out: a server that dies while the clock starts gets the goal again too.
-        restarts = self.supervisor.restarts(server) if server else 0
-        if not mission.send(goal):
-            return
+        for flight in flights:
+            # Counted before the goal goes out: a server that dies while the clock starts gets the goal again too.
+            flight.restarts = self.supervisor.restarts(flight.server) if flight.server else 0
+            if not flight.client.send(flight.goal):
+                return
         if self.plan.stepped_with is not None:
             watch.start_clock()
         self.outcome.cpu_at_start = cpu_seconds(self.processes)
-        wall_limit = spec.timeout_s / (self.options.rtf if math.isfinite(self.options.rtf) else 1.0) * 3.0 + 60.0
+        timeout_s = max(flight.spec.timeout_s for flight in flights)
+        wall_limit = timeout_s / (self.options.rtf if math.isfinite(self.options.rtf) else 1.0) * 3.0 + 60.0
         stall = StallWatch(watch.sim_seconds(), time.monotonic())
         graph_checked = time.monotonic()
-        while not mission.done:
+        while not all(flight.client.done for flight in flights):
             watch.waiter.executor.spin_once(timeout_sec=0.05)
             now_sim, now = watch.sim_seconds(), time.monotonic()
             elapsed_sim = now_sim - self.outcome.started_sim_s
             self.supervisor.check(starting=False)
             if now - graph_checked > GRAPH_CHECK_PERIOD_S:
                 graph_checked = now
-                mission.ask_result_again()
+                for flight in flights:
+                    flight.client.ask_result_again()
                 watch.check_single_graph()
             stalled = watch.check_stall(stall, now_sim, now, self.processes)
-            if server and self.supervisor.restarts(server) > restarts and not self.interrupted:
-                # The goal died with the server: give the respawned one the mission again.
-                restarts = self.supervisor.restarts(server)
-                self.say(f"\nre-sending the goal to the restarted {server}", always=True)
-                if not mission.resend(goal, server):
-                    return
-            if self.interrupted or stalled or elapsed_sim > spec.timeout_s or \
+            for flight in flights:
+                if flight.client.done:
+                    continue
+                server = flight.server
+                if server and self.supervisor.restarts(server) > flight.restarts and not self.interrupted:
+                    # The goal died with the server: give the respawned one the mission again.
+                    flight.restarts = self.supervisor.restarts(server)
+                    self.say(f"\nre-sending the goal to the restarted {server}", always=True)
+                    if not flight.client.resend(flight.goal, server):
+                        return
+                if flight.robot is not None and elapsed_sim > flight.spec.timeout_s and not flight.cancelled:
+                    flight.outcome.message = f"timeout after {elapsed_sim:.1f} s of sim time"
+                    flight.cancelled = True
+                    flight.client.cancel()
+            if self.interrupted or stalled or elapsed_sim > timeout_s or \
                     time.monotonic() - self.outcome.started_wall > wall_limit:
                 if stalled:
                     self.outcome.message = f"stalled: {stalled}"
                 elif not self.interrupted:
                     self.outcome.message = f"timeout after {elapsed_sim:.1f} s of sim time"
-                mission.cancel(wait=not self.interrupted)
+                for flight in flights:
+                    if not flight.client.done and not flight.cancelled:
+                        if flight.robot is not None:
+                            flight.outcome.message = self.outcome.message
+                        flight.client.cancel(wait=not self.interrupted)
                 break
-        if mission.done and self.plan.stepped_with is not None:
+        done = all(flight.client.done for flight in flights)
+        if done and self.plan.stepped_with is not None:
             watch.settle()    # the observers' last outputs (they may lag the loop) reach the bag
         self.outcome.ended_sim_s = watch.sim_seconds()
         self.outcome.ended_wall = time.monotonic()
         self.outcome.cpu_at_end = cpu_seconds(self.processes)
-        self.outcome.feedback = mission.feedback
-        if mission.done:
-            self.outcome.conclude(mission.result(), self.interrupted)
+        for flight in flights:
+            flight.outcome.feedback = flight.client.feedback
+            if flight.client.done:
+                flight.outcome.conclude(flight.client.result(), self.interrupted)
+        if self.outcome.robots:
+            self.outcome.conclude_robots(self.interrupted)
 
     def respawned(self, process: str) -> None:
         self.watch.respawned(self.plan.node_names_of(process))
 
-    def rejection_detail(self) -> str:
-        """The last lines of the mission's server, for a rejected goal."""
-        server = self.plan.mission_process()
+    def rejection_detail(self, robot: str | None = None) -> str:
+        """The last lines of ``robot``'s mission's server, for a rejected goal."""
+        server = self.plan.mission_process(robot)
         return f"\n{self.processes[server].last_lines(5)}" if server else ""
 
     def write_summary(self) -> RunSummary:

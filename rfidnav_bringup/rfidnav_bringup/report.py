@@ -43,6 +43,7 @@ from rfidnav_scenario.metrics import (
     two_tier_metrics,
     wall_crossings,
 )
+from rfidnav_scenario.scenario import robot_action
 from rfidnav_sim.world import World, load_world
 
 STATUS_ACCEPTED, STATUS_EXECUTING = 1, 2
@@ -67,6 +68,8 @@ class RunRecord:
     trajectory_source: str = "ground_truth"  # or "odom": a run on a real robot (no simulator)
     searching: tuple[tuple[float, float], ...] = ()   # (start, end) of each search its feedback reported
     success_within_m: float | None = None    # the scenario's success criterion (None: a run from before it had one)
+    robot: str | None = None                 # a run of several robots: whose record this is (its namespace)
+    namespace: str = ""                      # its topics' prefix: /r1 (/r1/sim/ground_truth), '' for one robot
 
 
 def locate_run(path: Path) -> tuple[Path, Path]:
@@ -81,7 +84,17 @@ def locate_run(path: Path) -> tuple[Path, Path]:
     raise BagError(f"{path}: not a run folder nor a rosbag2 folder (no metadata.yaml, no .mcap file)")
 
 
-def load_run(path: Path) -> RunRecord:
+def robots_of(path: Path) -> list[str]:
+    """The robots of a run of several (its scenario.yaml's robots), in their order; [] for a run of one."""
+    run_dir, _ = locate_run(path)
+    scenario_file = run_dir / "scenario.yaml"
+    if not scenario_file.exists():
+        return []
+    return [robot["name"] for robot in yaml.safe_load(scenario_file.read_text()).get("robots", [])]
+
+
+def load_run(path: Path, robot: str | None = None) -> RunRecord:
+    """The record of a run (of ``robot``'s part in a run of several: its mission, its topics)."""
     run_dir, bag = locate_run(path)
     # An unreadable bag is named first, before anything that depends on it; one that was not finalised is read
     # as far as it goes, and what was lost said once.
@@ -92,9 +105,16 @@ def load_run(path: Path) -> RunRecord:
         raise BagError(f"{run_dir}: no scenario.yaml beside the bag; report needs the run folder ./rfidnav run wrote")
     scenario = yaml.safe_load(scenario_file.read_text())
     world = load_world(run_dir / "world.yaml")
-    route = list(scenario["mission"]["goal"].get("tag_ids", []))
-    action = scenario["mission"]["action"].rstrip("/")
+    mission, namespace = scenario["mission"], ""
+    if robot is not None:
+        entries = {entry["name"]: entry for entry in scenario.get("robots", [])}
+        if robot not in entries:
+            raise BagError(f"{run_dir}: no robot '{robot}' in its scenario (robots: {', '.join(entries) or 'none'})")
+        mission, namespace = entries[robot]["mission"], f"/{robot}"
+    route = list(mission["goal"].get("tag_ids", []))
+    action = robot_action(robot, mission["action"]).rstrip("/")
     status_topic, feedback_topic = f"{action}/_action/status", f"{action}/_action/feedback"
+    truth_topic, odom_topic = f"{namespace}/sim/ground_truth", f"{namespace}/odom"
     times, xy = [], []
     start_s = end_s = None
     final = None
@@ -104,13 +124,13 @@ def load_run(path: Path) -> RunRecord:
     odom_times, odom_xy = [], []
     feedback_times: list[float] = []
     searching: list[bool] = []
-    for topic, stamp_ns, msg in read_messages(bag, ["/sim/ground_truth", "/odom", status_topic, feedback_topic]):
+    for topic, stamp_ns, msg in read_messages(bag, [truth_topic, odom_topic, status_topic, feedback_topic]):
         now_s = stamp_ns * 1e-9
-        if topic in ("/sim/ground_truth", "/odom"):
+        if topic in (truth_topic, odom_topic):
             stamp_s = msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9
             position = (msg.pose.pose.position.x, msg.pose.pose.position.y)
-            (times if topic == "/sim/ground_truth" else odom_times).append(stamp_s)
-            (xy if topic == "/sim/ground_truth" else odom_xy).append(position)
+            (times if topic == truth_topic else odom_times).append(stamp_s)
+            (xy if topic == truth_topic else odom_xy).append(position)
         elif topic == status_topic:
             for status in msg.status_list:
                 if status.status in (STATUS_ACCEPTED, STATUS_EXECUTING) and start_s is None:
@@ -127,7 +147,7 @@ def load_run(path: Path) -> RunRecord:
     source = "ground_truth"
     if not times:
         if not odom_times:
-            raise BagError(f"{bag}: neither /sim/ground_truth nor /odom messages: nothing to report")
+            raise BagError(f"{bag}: neither {truth_topic} nor {odom_topic} messages: nothing to report")
         times, xy, source = odom_times, odom_xy, "odom"
     if start_s is None:
         raise BagError(f"{bag}: no goal status on {status_topic}; was the mission sent?")
@@ -136,9 +156,9 @@ def load_run(path: Path) -> RunRecord:
     trajectory = Trajectory(np.array(times), np.array(xy))
     end_s = end_s if end_s is not None else float(trajectory.times_s[-1])
     return RunRecord(run_dir, bag, world, route, trajectory, start_s, end_s, final, arrivals,
-                     list(scenario.get("metrics", [])), dict(scenario["mission"]["goal"]), last_feedback, action,
+                     list(scenario.get("metrics", [])), dict(mission["goal"]), last_feedback, action,
                      source, tuple(flagged_spans(feedback_times, searching, end_s)),
-                     scenario["mission"].get("success_within_m"))
+                     mission.get("success_within_m"), robot, namespace)
 
 
 def is_searching(feedback: object) -> bool:
@@ -151,9 +171,9 @@ def route_points(world: World, route: list[str]) -> np.ndarray:
     return np.array([world.tag(tag).position[:2] for tag in route], dtype=float).reshape(-1, 2)
 
 
-def run_metrics(path: Path) -> dict[str, float | int | None]:
-    """The metric groups the run's scenario asks for, from its bag."""
-    return record_metrics(load_run(path))
+def run_metrics(path: Path, robot: str | None = None) -> dict[str, float | int | None]:
+    """The metric groups the run's scenario asks for, from its bag (``robot``'s, in a run of several)."""
+    return record_metrics(load_run(path, robot))
 
 
 def record_metrics(record: RunRecord) -> dict[str, float | int | None]:
@@ -217,8 +237,9 @@ def two_tier_fixes(record: RunRecord) -> list[Fix]:
     mission."""
     fixes: list[Fix] = []
     last_tag = ""
-    for topic, _, msg in mission_feedback(record, ("/localization/status",)):
-        if topic != "/localization/status":
+    status_topic = f"{record.namespace}/localization/status"
+    for topic, _, msg in mission_feedback(record, (status_topic,)):
+        if topic != status_topic:
             continue
         if msg.last_fix_tier == 2 and msg.last_fix_tag_id != last_tag:
             fixes.append(Fix(msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9, msg.last_fix_tag_id,
@@ -266,9 +287,13 @@ def new_figure(width_in: float, height_in: float) -> Any:
     return Figure(figsize=(width_in, height_in))
 
 
-def write_report(path: Path, out_dir: Path | None = None) -> tuple[dict[str, float | int | None], list[Path]]:
+def write_report(path: Path, out_dir: Path | None = None) -> tuple[dict[str, Any], list[Path]]:
     """Recompute the metrics and write trajectory.png (and tracking_error.png for tag routes) into ``out_dir``
-    (created if missing; default: the run folder)."""
+    (created if missing; default: the run folder). A run of several robots: each robot's metrics (by name) and
+    one trajectory.png of all of them in their world."""
+    robots = robots_of(path)
+    if robots:
+        return write_fleet_report(path, robots, out_dir)
     record = load_run(path)
     out_dir = record.run_dir if out_dir is None else out_dir
     out_dir.mkdir(parents=True, exist_ok=True)
@@ -307,6 +332,48 @@ def write_report(path: Path, out_dir: Path | None = None) -> tuple[dict[str, flo
     error_png = out_dir / "tracking_error.png"
     figure.savefig(error_png, dpi=110, bbox_inches="tight")
     return metrics, [trajectory_png, error_png]
+
+
+def write_fleet_report(path: Path, robots: list[str], out_dir: Path | None) -> tuple[dict[str, Any], list[Path]]:
+    """Each robot's metrics and the joint plot: every robot's track, start and goal in the one world."""
+    records = [load_run(path, robot) for robot in robots]
+    out_dir = records[0].run_dir if out_dir is None else out_dir
+    out_dir.mkdir(parents=True, exist_ok=True)
+    metrics: dict[str, Any] = {}
+    figure = new_figure(8.0, 7.0)
+    axes = figure.add_subplot()
+    for x1, y1, x2, y2 in records[0].world.walls:
+        axes.plot([x1, x2], [y1, y2], color="0.6", linewidth=2)
+    for index, record in enumerate(records):
+        metrics[str(record.robot)] = record_metrics(record)
+        colour = f"C{index}"
+        run = record.ground_truth.between(record.mission_start_s, record.mission_end_s)
+        axes.plot(run.xy[:, 0], run.xy[:, 1], color=colour, label=f"{record.robot} (ground truth)")
+        axes.plot(*run.xy[0], "^", color=colour)
+        goal = goal_position(record)
+        if goal is not None:
+            axes.plot(*goal, "*", color=colour, markersize=14, markeredgecolor="k", label=f"{record.robot}'s goal")
+    axes.set_aspect("equal")
+    axes.set_xlabel("x [m]")
+    axes.set_ylabel("y [m]")
+    axes.set_title(f"{records[0].run_dir.name}: trajectories (^ start, * goal)")
+    axes.legend(loc="best")
+    axes.grid(True, alpha=0.3)
+    trajectory_png = out_dir / "trajectory.png"
+    figure.savefig(trajectory_png, dpi=110, bbox_inches="tight")
+    return metrics, [trajectory_png]
+
+
+def goal_position(record: RunRecord) -> tuple[float, float] | None:
+    """Where a record's mission ends in the map: its target point, its goal node's position, its route's last tag."""
+    target = record.goal.get("target")
+    if isinstance(target, dict):
+        return float(target["x"]), float(target["y"])
+    goal_node = record.goal.get("goal_node")
+    if goal_node is not None:
+        return load_topological_map(record.run_dir / "map.yaml").nodes[goal_node].position
+    points = route_points(record.world, record.route)
+    return (float(points[-1, 0]), float(points[-1, 1])) if len(points) else None
 
 
 # ---------------------------------------------------------------- topological maps (./rfidnav map draw)

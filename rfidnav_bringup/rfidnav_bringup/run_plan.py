@@ -102,18 +102,20 @@ class RunPlan:
         self.run_dir = run_dir
         if options.part is not None and options.part not in PARTS:
             raise ConfigError("--part", "", f"unknown part '{options.part}' (known: {', '.join(PARTS)})")
-        # The roles this computer starts: all of them, or its part's (the others run on the other computer).
-        self.roles = tuple(role for role, spec in scenario.nodes.items()
+        # The nodes the run starts (a role once, or once per robot: Scenario.instances), and those this computer
+        # starts: all of them, or its part's (the others run on the other computer).
+        self.nodes = scenario.instances()
+        self.roles = tuple(role for role, spec in self.nodes.items()
                            if options.part is None or part_of(spec) == options.part)
         self.starts_recorder = options.record and options.part != ROBOT_PART
-        self.process_of = {role: spec.process or role for role, spec in scenario.nodes.items()}
+        self.process_of = {role: spec.process or role for role, spec in self.nodes.items()}
         for process in {self.process_of[role] for role in self.roles}:
             split = sorted(role for role, key in self.process_of.items() if key == process and role not in self.roles)
             if split:
                 raise ConfigError(str(scenario.path), f"nodes.{split[0]}.process",
                                   f"'{process}' holds roles of both parts of a split run (--part {options.part})")
         self.clock, self.clock_note = choose_clock(scenario, options)
-        participants = [f"/{spec.name}" for spec in scenario.step_participants()]
+        participants = [spec.fqn for spec in scenario.step_participants() if spec.fqn]
         if options.record:
             participants.append(f"/{RECORDER_ROLE}")
         self.stepped_with: tuple[str, ...] | None = tuple(participants) if self.clock == "stepped" else None
@@ -137,7 +139,7 @@ class RunPlan:
             yield ProcessPlan(LIVE_ROLE, self.live_view_command(self.options.live_port))
         groups: dict[str, list[NodeSpec]] = {}
         for role in self.roles:
-            groups.setdefault(self.process_of[role], []).append(self.scenario.nodes[role])
+            groups.setdefault(self.process_of[role], []).append(self.nodes[role])
         for key, specs in groups.items():
             if len(specs) == 1 and specs[0].process is None:
                 spec = specs[0]
@@ -175,25 +177,35 @@ class RunPlan:
         command = [sys.executable, "-m", "rfidnav_bringup.container"]
         files: list[str] = []
         for spec in specs:
-            command += ["--node", f"{spec.package}:{spec.executable}"]
-            files += self.node_command(spec, params_dir)[len(spec.command) + 1:]
+            command += ["--node", f"{spec.package}:{spec.executable}" + (f"@/{spec.robot}" if spec.robot else "")]
+            files += self.parameter_arguments(spec, params_dir)
         return command + ["--ros-args", *files]
 
     def node_command(self, spec: NodeSpec, params_dir: Path) -> list[str]:
         if spec.package is None and not (spec.stepped or spec.param_files or spec.overrides):
             return list(spec.command)   # a command line as given: it may be no ROS node of ours at all
-        command = [*spec.command, "--ros-args"]
+        namespace = ["-r", f"__ns:=/{spec.robot}"] if spec.robot else []
+        return [*spec.command, "--ros-args", *namespace, *self.parameter_arguments(spec, params_dir)]
+
+    def parameter_arguments(self, spec: NodeSpec, params_dir: Path) -> list[str]:
+        """The ROS arguments that give ``spec``'s node its parameters: its resolved file (written here), or its
+        files and overrides for a node no package registers."""
         parameters = node_parameters(self.scenario, spec, self.options.seed, self.options.rtf, self.run_dir,
                                      self.stepped_with)
         injected = injected_parameters(self.scenario, spec, self.options.seed, self.options.rtf,
                                        stepped_with=self.stepped_with)
         if parameters is not None and spec.registration is not None:
+            # Keyed by the fully qualified name under a robot's namespace: its file must not reach the other robots'
+            # nodes of that name (in one container, or by the rule that a key without a namespace is the root's).
             node_name = spec.registration.node_name
+            if spec.robot:
+                node_name = f"/{spec.robot}/{node_name}"
             values = dict(parameters.__dict__)
             values.update({k: v for k, v in injected.items() if k not in values})
             file = params_dir / f"{spec.role}.yaml"
             file.write_text(dump_parameters(node_name, values))
-            return command + ["--params-file", str(file)]
+            return ["--params-file", str(file)]
+        command: list[str] = []
         for file in spec.param_files:
             command += ["--params-file", str(file)]
         for key, value in {**spec.overrides, **injected}.items():
@@ -201,17 +213,17 @@ class RunPlan:
         return command
 
     def expected_graph(self) -> ExpectedGraph:
-        nodes = self.scenario.nodes.values()
+        nodes = self.nodes.values()
         return ExpectedGraph(
-            nodes=frozenset(spec.name for spec in nodes if spec.name),
-            simulators=tuple(sorted(spec.name for spec in nodes if spec.sim and spec.name)),
+            nodes=frozenset(spec.node_path for spec in nodes if spec.node_path),
+            simulators=tuple(sorted(spec.node_path for spec in nodes if spec.sim and spec.node_path)),
             clock_source=next((spec.name for spec in nodes if spec.clock_source), None),
             simulated=self.scenario.simulated, record_exclude=self.record_exclude,
             helpers=frozenset({LIVE_NODE} if self.options.live_port is not None else ())
             | frozenset({ORCHESTRATOR_NODE, ROBOT_PART_ORCHESTRATOR} if self.options.part is not None else ()),
             unnamed_roles=tuple(sorted(spec.role for spec in nodes if not spec.name)),
-            elsewhere=tuple(sorted({spec.name for role, spec in self.scenario.nodes.items()
-                                    if spec.name and role not in self.roles}
+            elsewhere=tuple(sorted({spec.node_path for role, spec in self.nodes.items()
+                                    if spec.node_path and role not in self.roles}
                                    | ({RECORDER_ROLE} if self.options.record and not self.starts_recorder
                                       else set()))))
 
@@ -221,22 +233,19 @@ class RunPlan:
         if self.stepped_with is not None:
             summary["participants"] = list(self.stepped_with)
             summary["free_running_roles"] = sorted(
-                role for role, spec in self.scenario.nodes.items()
-                if not spec.clock_source and f"/{spec.name}" not in self.stepped_with)
+                role for role, spec in self.nodes.items()
+                if not spec.clock_source and spec.fqn not in self.stepped_with)
         return summary
 
-    def mission_process(self) -> str | None:
-        """The process serving the mission's action: the one of the scenario's mission.server, else of the first
-        non-simulator role."""
-        role = self.scenario.mission.server
-        if role is None:
-            role = next((role for role, spec in self.scenario.nodes.items() if not spec.sim), None)
-        return self.process_of[role] if role else None
+    def mission_process(self, robot: str | None = None) -> str | None:
+        """The process serving ``robot``'s mission (None: the one robot's): the one of the scenario's
+        mission.server, else of the first non-simulator role."""
+        instance = self.scenario.mission_server(robot)
+        return self.process_of[instance] if instance else None
 
     def node_names_of(self, process: str) -> list[str]:
-        """The node names of the roles that ``process`` runs, each with its leading slash."""
-        return [f"/{self.scenario.nodes[role].name}" for role, key in self.process_of.items()
-                if key == process and self.scenario.nodes[role].name]
+        """The fully qualified node names of the roles that ``process`` runs."""
+        return [fqn for role, key in self.process_of.items() if key == process and (fqn := self.nodes[role].fqn)]
 
 
 def choose_clock(scenario: Scenario, options: RunOptions) -> tuple[str, str]:

@@ -32,6 +32,11 @@ class MissionOutcome:
     ended_wall: float | None = None
     cpu_at_start: dict[str, float | None] = field(default_factory=dict)
     cpu_at_end: dict[str, float | None] = field(default_factory=dict)
+    robots: dict[str, MissionOutcome] = field(default_factory=dict)    # a run of several robots: each one's
+
+    def robot(self, name: str) -> MissionOutcome:
+        """Robot ``name``'s outcome in a run of several (made at the first call)."""
+        return self.robots.setdefault(name, MissionOutcome())
 
     def conclude(self, result: Any, interrupted: bool) -> None:
         """The mission's action ``result`` came: a success if it says so and nothing ended the mission before
@@ -40,6 +45,14 @@ class MissionOutcome:
         self.success = bool(getattr(result, "success", False)) and not interrupted and self.message == "not started"
         if self.message == "not started":
             self.message = getattr(result, "message", "")
+
+    def conclude_robots(self, interrupted: bool) -> None:
+        """A run of several robots: a success when every robot's mission is (and nothing ended the run first); the
+        message says each robot's."""
+        self.success = all(robot.success for robot in self.robots.values()) and not interrupted and \
+            self.message == "not started"
+        each = "; ".join(f"{name}: {robot.message}" for name, robot in self.robots.items())
+        self.message = each if self.message == "not started" else f"{self.message} ({each})"
 
 
 @dataclass(frozen=True)
@@ -92,24 +105,21 @@ def write_run_summary(run_dir: Path, facts: RunFacts, outcome: MissionOutcome, p
     ``say`` tells what could not be done (the metrics, the file), which does not end the run. An ``interrupted``
     run (Ctrl-C, SIGTERM) is not scored: its metrics, which read the whole bag (seconds on a loaded machine, where
     the user waits for the prompt), are left to ``./rfidnav report``."""
-    from rfidnav_bringup.report import run_metrics
-
     metrics: dict[str, Any] = {}
+    robots: dict[str, dict[str, Any]] = {}
     bag = run_dir / "bag"
+    scored = not interrupted and (bag / "metadata.yaml").exists()
     if interrupted:
         say(f"metrics not computed for an interrupted run: ./rfidnav report {run_dir} computes them")
-    elif (bag / "metadata.yaml").exists():
-        try:
-            metrics = run_metrics(run_dir)
-        except RfidnavError as error:
-            say(f"metrics not computed: {error}")
-    objection = ground_truth_objection(metrics)
-    if outcome.success and objection is not None:
-        # The mission's node can be fooled (a spoofed tag, a wrong map, a leg through a wall); ground truth,
-        # which it never sees, has the last word on whether the run succeeded.
-        outcome.success = False
-        outcome.message = (f"{outcome.message or 'succeeded'}, says the mission's node; but ground "
-                           f"truth {objection}")
+    if outcome.robots:
+        for name, robot in outcome.robots.items():
+            robot_metrics = scored_metrics(run_dir, name, robot, say) if scored else {}
+            robots[name] = {"success": robot.success, "message": robot.message, "metrics": robot_metrics}
+        if outcome.success and not all(robot.success for robot in outcome.robots.values()):
+            outcome.success = False
+            outcome.message = "; ".join(f"{name}: {robot.message}" for name, robot in outcome.robots.items())
+    elif scored:
+        metrics = scored_metrics(run_dir, None, outcome, say)
     sim_duration = None
     if outcome.started_sim_s is not None and outcome.ended_sim_s is not None:
         sim_duration = round(outcome.ended_sim_s - outcome.started_sim_s, 3)
@@ -125,6 +135,7 @@ def write_run_summary(run_dir: Path, facts: RunFacts, outcome: MissionOutcome, p
         "wall_duration_s": round((outcome.ended_wall or time.monotonic()) - outcome.started_wall, 3)
         if outcome.started_wall else None,
         "metrics": metrics,
+        **({"robots": robots} if robots else {}),
         "cpu": mission_cpu(outcome),
         "nodes": {role: {"restarts": p.restarts, "exit_code": p.exit_code} for role, p in processes.items()},
         "bag": str(bag if bag.exists() else run_dir),
@@ -137,11 +148,35 @@ def write_run_summary(run_dir: Path, facts: RunFacts, outcome: MissionOutcome, p
     return RunSummary(run_dir, document)
 
 
+def scored_metrics(run_dir: Path, robot: str | None, outcome: MissionOutcome,
+                   say: Callable[[str], None]) -> dict[str, Any]:
+    """The run's metrics from its bag (``robot``'s in a run of several), and ground truth's word on ``outcome``:
+    the mission's node can be fooled (a spoofed tag, a wrong map, a leg through a wall); ground truth, which it
+    never sees, has the last word on whether the run succeeded."""
+    from rfidnav_bringup.report import run_metrics
+
+    try:
+        metrics = run_metrics(run_dir, robot)
+    except RfidnavError as error:
+        say(f"metrics{f' of {robot}' if robot else ''} not computed: {error}")
+        return {}
+    objection = ground_truth_objection(metrics)
+    if outcome.success and objection is not None:
+        outcome.success = False
+        outcome.message = (f"{outcome.message or 'succeeded'}, says the mission's node; but ground "
+                           f"truth {objection}")
+    return metrics
+
+
 def print_summary(summary: RunSummary) -> None:
     document = summary.document
     rows = [("scenario", document["scenario"]), ("success", document["success"]), ("message", document["message"]),
             ("sim duration [s]", document["sim_duration_s"]), ("wall duration [s]", document["wall_duration_s"])]
     rows += [(key, f"{value:.4f}" if isinstance(value, float) else value) for key, value in document["metrics"].items()]
+    for name, robot in document.get("robots", {}).items():
+        rows += [(f"{name} success", robot["success"]), (f"{name} message", robot["message"])]
+        rows += [(f"{name} {key}", f"{value:.4f}" if isinstance(value, float) else value)
+                 for key, value in robot["metrics"].items()]
     rows += [(f"node {role}", f"exit {info['exit_code']}, restarts {info['restarts']}")
              for role, info in document["nodes"].items()]
     if cpu := document.get("cpu"):

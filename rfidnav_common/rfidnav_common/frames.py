@@ -25,6 +25,11 @@ WIFI_FRAME = BASE_FRAME
 COMPASS_FRAMES = ("compass", BASE_FRAME)
 SONAR_FRAME_PREFIX = "sonar_"
 
+# Frames every robot of a world shares: one map. A robot's own frames (odom, base_link, its sensors') carry its
+# namespace as a prefix on /tf (Nav2's multi-robot convention: r1/odom -> r1/base_link), so that several robots'
+# trees hang from the one map without clashing.
+SHARED_FRAMES = (MAP_FRAME,)
+
 Quaternion = tuple[float, float, float, float]       # x, y, z, w
 
 
@@ -104,3 +109,18 @@ def map_to_odom(base_in_map: tuple[float, float, float],
     """odom in the map, from where a localizer puts base_link in the map and where odometry puts it in odom at
     the same time (REP 105: the localizer publishes map -> odom, so that odom -> base_link stays continuous)."""
     return compose(base_in_map, inverse(base_in_odom))
+
+
+def frame_prefix(namespace: str) -> str:
+    """The tf prefix of a robot's frames from its ROS namespace: ``/r1`` -> ``r1/``, the root namespace none."""
+    stripped = namespace.strip("/")
+    return f"{stripped}/" if stripped else ""
+
+
+def prefixed(frame: Frame, prefix: str) -> Frame:
+    """``frame`` with ``prefix`` on each of its names but the shared ones (the map)."""
+    if not prefix:
+        return frame
+    parent = frame.parent if frame.parent in SHARED_FRAMES else prefix + frame.parent
+    child = frame.child if frame.child in SHARED_FRAMES else prefix + frame.child
+    return Frame(parent, child, frame.translation, frame.rotation)

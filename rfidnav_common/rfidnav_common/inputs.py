@@ -274,10 +274,13 @@ class Drops:
     at most every ``period_s`` with the count so far. ``warn`` takes the warning line (the node's logger)."""
 
     def __init__(self, warn: Callable[[str], None], period_s: float = WARN_PERIOD_S,
-                 clock: Callable[[], float] = time.monotonic) -> None:
+                 clock: Callable[[], float] = time.monotonic, resolve: Callable[[str], str] = str) -> None:
+        """``resolve``: an input's name as the node resolves it (``odom`` under /r1 is /r1/odom), so that warnings
+        and counts name the topic a user sees (rfidnav_common.ros.input_drops)."""
         self.warn = warn
         self.period_s = period_s
         self.clock = clock
+        self.resolve = resolve
         self.counts: Counter[str] = Counter()
         self.clamps: Counter[str] = Counter()
         self._warned_at: dict[str, float] = {}
@@ -285,19 +288,21 @@ class Drops:
     def drop(self, where: str, problem: object, count: int = 1, unit: str = "message") -> None:
         """``count`` of ``unit`` (a message, a read of a round, a request) of input ``where`` (a topic, a service)
         dropped for ``problem``."""
+        where = self.resolve(where)
         self.counts[where] += count
         self._say(where, f"{where}: dropped {f'a {unit}' if count == 1 else f'{count} {unit}s'}: {problem} "
                          f"({self.counts[where]} dropped so far)")
 
     def clamp(self, where: str, problem: object) -> None:
+        where = self.resolve(where)
         self.clamps[where] += 1
         self._say(f"{where} (clamped)", f"{where}: clamped: {problem} ({self.clamps[where]} clamped so far)")
 
     def dropped(self, where: str | None = None) -> int:
-        return self.counts[where] if where is not None else sum(self.counts.values())
+        return self.counts[self.resolve(where)] if where is not None else sum(self.counts.values())
 
     def clamped(self, where: str | None = None) -> int:
-        return self.clamps[where] if where is not None else sum(self.clamps.values())
+        return self.clamps[self.resolve(where)] if where is not None else sum(self.clamps.values())
 
     def _say(self, key: str, line: str) -> None:
         now = self.clock()

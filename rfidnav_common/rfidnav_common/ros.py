@@ -20,7 +20,7 @@ from geometry_msgs.msg import Twist
 from nav_msgs.msg import Odometry
 from rcl_interfaces.msg import ParameterDescriptor
 from rclpy.context import Context
-from rclpy.exceptions import InvalidParameterTypeException
+from rclpy.exceptions import InvalidParameterTypeException, InvalidTopicNameException
 from rclpy.executors import Executor, ExternalShutdownException, SingleThreadedExecutor
 from rclpy.experimental import EventsExecutor
 from rclpy.node import Node
@@ -31,7 +31,7 @@ from rclpy.signals import SignalHandlerOptions
 from rfidnav_common.config import did_you_mean, parameters_from_mapping
 from rfidnav_common.errors import ConfigError, RfidnavError
 from rfidnav_common.geometry import quaternion_to_yaw
-from rfidnav_common.inputs import seconds_of, stamp_near
+from rfidnav_common.inputs import WARN_PERIOD_S, Drops, seconds_of, stamp_near
 from rfidnav_common.process_signals import STACK_DUMP_SIGNAL, STOP_SIGNALS
 
 # Sensor streams: reliable, with room for a burst (a high RTF on a busy machine) so that the recorder
@@ -296,3 +296,15 @@ def fill_message(message: Any, values: dict[str, Any], where: str) -> Any:
         except (TypeError, ValueError, AssertionError) as error:
             raise ConfigError(where, name, f"cannot hold {value!r}: {error}") from None
     return message
+
+
+def input_drops(node: Node, period_s: float = WARN_PERIOD_S) -> Drops:
+    """The node's drop-and-count of bad inputs, naming each topic or service as the node resolves it (``odom`` in a
+    robot's namespace is /r1/odom; what is no ROS name, a goal, a read of a round, stays as it is)."""
+    def resolve(where: str) -> str:
+        try:
+            return node.resolve_topic_name(where)
+        except InvalidTopicNameException:
+            return where
+
+    return Drops(node.get_logger().warning, period_s, resolve=resolve)

@@ -15,3 +15,9 @@ def derive_seed(run_seed: int, stream: str) -> int:
 
 def rng_for(run_seed: int, stream: str) -> np.random.Generator:
     return np.random.default_rng(derive_seed(run_seed, stream))
+
+
+def robot_seed(run_seed: int, robot: str) -> int:
+    """The seed of robot ``robot``'s nodes in a run of several robots (rfidnav_scenario.scenario's ``robots:``): each
+    robot's streams (its reader's noise, its odometry's slip) independent of the others', all from the run's seed."""
+    return derive_seed(run_seed, f"robot {robot}")

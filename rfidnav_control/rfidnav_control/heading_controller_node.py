@@ -23,6 +23,7 @@ from rfidnav_common.ros import (
     COMMAND_QOS,
     SENSOR_QOS,
     declare_parameters,
+    input_drops,
     run_node,
     seconds_of,
     sim_clock_seconds,
@@ -51,11 +52,11 @@ class HeadingControllerNode(SteppedNode):
         self.follower = TagRouteFollower(self.params.follower_settings(),
                                          FuzzyHeadingController(self.params.fuzzy_spec()), route_map.arrival_tags,
                                          map_source=f"the route map {self.params.map_file}")
-        self.drops = inputs.Drops(self.get_logger().warning)
-        self.cmd_pub = self.create_publisher(Twist, "/cmd_vel", COMMAND_QOS)
-        self.create_subscription(TagReadArray, "/rfid/reads", self.on_reads, SENSOR_QOS)
+        self.drops = input_drops(self)
+        self.cmd_pub = self.create_publisher(Twist, "cmd_vel", COMMAND_QOS)
+        self.create_subscription(TagReadArray, "rfid/reads", self.on_reads, SENSOR_QOS)
         self.goals: SingleGoalServer[RouteGoal] = SingleGoalServer(
-            self, FollowTagRoute, "/follow_tag_route", what="route", busy="another route is being followed",
+            self, FollowTagRoute, "follow_tag_route", what="route", busy="another route is being followed",
             check=lambda goal: self.follower.refusal(list(goal.tag_ids)),
             new_goal=lambda handle: RouteGoal(handle, started_s=self.now_s()),
             started=self.on_started, result=self.result, stop=lambda: self.cmd_pub.publish(Twist()),

@@ -136,8 +136,8 @@ class WallFollowerParameters(CommandsSpeeds):
     control_rate_hz: float = param("control steps per second [Hz, sim time]", 20.0, RATE_HZ)
     sonar_topics: list[str] = param("Range topics feeding the follower's front, front_left, front_right, left and "
                                     "right readings, in that order",
-                                    ["/sonar/front", "/sonar/front_left_45", "/sonar/front_right_45", "/sonar/left",
-                                     "/sonar/right"])
+                                    ["sonar/front", "sonar/front_left_45", "sonar/front_right_45", "sonar/left",
+                                     "sonar/right"])
     sonar_offsets_m: list[float] = param(
         "per sonar topic: its mounting position's component along its bearing, added to each reading so that "
         "ranges are from the robot's centre [m]", [0.175, 0.1945, 0.1945, 0.175, 0.175])

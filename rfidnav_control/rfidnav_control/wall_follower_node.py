@@ -25,7 +25,7 @@ from sensor_msgs.msg import Range
 
 from rfidnav_common import inputs
 from rfidnav_common.frames import ODOM_FRAME, SONAR_FRAME_PREFIX
-from rfidnav_common.ros import COMMAND_QOS, SENSOR_QOS, declare_parameters, run_node, twist
+from rfidnav_common.ros import COMMAND_QOS, SENSOR_QOS, declare_parameters, input_drops, run_node, twist
 from rfidnav_common.stepped_node import SteppedNode
 from rfidnav_control.parameters import SONAR_FIELDS, WallFollowerParameters
 from rfidnav_control.wall_following import ACTIONS, STOPPED, OdomPose, Sonar, WallFollower
@@ -44,14 +44,14 @@ class WallFollowerNode(SteppedNode):
         self.follower: WallFollower | None = None          # None: idle
         self.ranges: dict[str, tuple[float, float]] = {}    # field -> (range from the centre, sim time received)
         self.odom: OdomPose | None = None
-        self.drops = inputs.Drops(self.get_logger().warning)
-        self.cmd_pub = self.create_publisher(Twist, "/cmd_vel", COMMAND_QOS)
-        self.event_pub = self.create_publisher(WallFollowerEvent, "/wall_follower/event", COMMAND_QOS)
-        self.state_pub = self.create_publisher(WallFollowerEvent, "/wall_follower/state", COMMAND_QOS)
+        self.drops = input_drops(self)
+        self.cmd_pub = self.create_publisher(Twist, "cmd_vel", COMMAND_QOS)
+        self.event_pub = self.create_publisher(WallFollowerEvent, "wall_follower/event", COMMAND_QOS)
+        self.state_pub = self.create_publisher(WallFollowerEvent, "wall_follower/state", COMMAND_QOS)
         for field, topic, offset in zip(SONAR_FIELDS, self.params.sonar_topics, self.params.sonar_offsets_m):
             self.create_subscription(Range, topic, self.range_callback(field, topic, offset), SENSOR_QOS)
-        self.create_subscription(Odometry, "/odom", self.on_odom, SENSOR_QOS)
-        self.create_subscription(WallFollowerCommand, "/wall_follower/command", self.on_command, COMMAND_QOS)
+        self.create_subscription(Odometry, "odom", self.on_odom, SENSOR_QOS)
+        self.create_subscription(WallFollowerCommand, "wall_follower/command", self.on_command, COMMAND_QOS)
         self.create_timer(1.0 / self.params.control_rate_hz, self.control_step)
         self.create_timer(STATE_PERIOD_S, self.publish_state)
         self.get_logger().info(f"idle until commanded; set distance {self.settings.wall_distance_m:g} m, "
@@ -79,12 +79,12 @@ class WallFollowerNode(SteppedNode):
         try:
             self.odom = OdomPose(*inputs.odometry_pose(msg))
         except inputs.BadInput as error:
-            self.drops.drop("/odom", error)
+            self.drops.drop("odom", error)
 
     def on_command(self, msg: WallFollowerCommand) -> None:
         action = msg.action
         if action not in (*ACTIONS, WallFollowerCommand.FOLLOW, WallFollowerCommand.STOP):
-            self.drops.drop("/wall_follower/command", f"unknown action '{action}'")
+            self.drops.drop("wall_follower/command", f"unknown action '{action}'")
             return
         if action == WallFollowerCommand.STOP:
             if self.follower is not None:
@@ -94,7 +94,7 @@ class WallFollowerNode(SteppedNode):
                 try:
                     self.follower.command_stop(inputs.length(msg.stop_within_m, "stop_within_m"))
                 except (inputs.BadInput, ValueError) as error:
-                    self.drops.drop("/wall_follower/command", error)
+                    self.drops.drop("wall_follower/command", error)
             return
         if self.follower is None:
             self.follower = WallFollower(self.settings)

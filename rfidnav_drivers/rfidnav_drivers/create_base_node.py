@@ -39,7 +39,7 @@ from rfidnav_common import base_safety as safety
 from rfidnav_common import inputs
 from rfidnav_common.frames import Frame
 from rfidnav_common.geometry import yaw_to_quaternion
-from rfidnav_common.ros import COMMAND_QOS, SENSOR_QOS, declare_parameters, run_node, spin_until_shutdown
+from rfidnav_common.ros import COMMAND_QOS, SENSOR_QOS, declare_parameters, input_drops, run_node, spin_until_shutdown
 from rfidnav_common.transforms import TF_QOS, tf_message
 from rfidnav_drivers import create_oi as oi
 from rfidnav_drivers.errors import DriverError
@@ -96,13 +96,13 @@ class CreateBaseNode(Node):
         self.missed_replies = 0
         self.io_errors = 0
         self.failing_since: float | None = None           # time.monotonic() of the first failure in a row
-        self.drops = inputs.Drops(self.get_logger().warning, WARN_EVERY_S)
+        self.drops = input_drops(self, WARN_EVERY_S)
         self.max_angular_radps = 2.0 * p.max_wheel_speed_mps / p.wheel_base_m   # both wheels at the limit
 
-        self.odom_pub = self.create_publisher(Odometry, "/odom", SENSOR_QOS)
+        self.odom_pub = self.create_publisher(Odometry, "odom", SENSOR_QOS)
         self.tf_pub = self.create_publisher(TFMessage, "/tf", TF_QOS) if self.params.publish_tf else None
-        self.event_pub = self.create_publisher(BaseEvent, "/base/event", COMMAND_QOS)
-        self.create_subscription(Twist, "/cmd_vel", self.on_cmd_vel, COMMAND_QOS)
+        self.event_pub = self.create_publisher(BaseEvent, "base/event", COMMAND_QOS)
+        self.create_subscription(Twist, "cmd_vel", self.on_cmd_vel, COMMAND_QOS)
         self.wake = threading.Event()
         self.stopping = threading.Event()
         self.thread = threading.Thread(target=self.serial_loop, name="create_base_serial", daemon=True)
@@ -119,10 +119,10 @@ class CreateBaseNode(Node):
             command = inputs.velocity(msg.linear.x, msg.angular.z, self.params.max_wheel_speed_mps,
                                       self.max_angular_radps)
         except inputs.BadInput as error:
-            self.drops.drop("/cmd_vel", error)
+            self.drops.drop("cmd_vel", error)
             return
         if command.clamped:
-            self.drops.clamp("/cmd_vel", f"({msg.linear.x:g} m/s, {msg.angular.z:g} rad/s) beyond the base's limits, "
+            self.drops.clamp("cmd_vel", f"({msg.linear.x:g} m/s, {msg.angular.z:g} rad/s) beyond the base's limits, "
                                          f"scaled to ({command.linear_mps:g}, {command.angular_radps:g})")
         with self.lock:
             self.command = (command.linear_mps, command.angular_radps)

@@ -264,7 +264,7 @@ class LlrpReaderNode(Node):
         super().__init__("llrp_reader", **node_options)
         self.params: LlrpReaderParameters = declare_parameters(self, LlrpReaderParameters)
         self.endpoint = f"{self.params.host}:{self.params.port}"
-        self.reads_pub = self.create_publisher(TagReadArray, "/rfid/reads", SENSOR_QOS)
+        self.reads_pub = self.create_publisher(TagReadArray, "rfid/reads", SENSOR_QOS)
         publish_static_frames(self, self.params.antenna_frames())
         undescribed = self.params.undescribed_ports()
         if undescribed:

@@ -48,7 +48,7 @@ class WifiScannerNode(Node):
             raise
         self.failed: IwError | None = None     # the error that stopped scanning
         self.scans_published = 0
-        self.publisher = self.create_publisher(WifiScan, "/wifi/scan", SENSOR_QOS)
+        self.publisher = self.create_publisher(WifiScan, "wifi/scan", SENSOR_QOS)
         # Outcomes of the worker's scans, oldest first: (finish stamp, access points) or the error.
         self._outcomes: list[tuple[Time, list[AccessPoint]] | IwError] = []
         self._lock = threading.Lock()           # guards _outcomes and, with _stopping, the guard condition

@@ -28,7 +28,7 @@ from typing import Any
 from rfidnav_common import inputs
 from rfidnav_common.frames import WIFI_FRAME
 from rfidnav_common.robot_map import RouteMap, load_route_map
-from rfidnav_common.ros import declare_parameters, run_node, seconds_of
+from rfidnav_common.ros import declare_parameters, input_drops, run_node, seconds_of
 from rfidnav_common.stepped_node import SteppedNode
 from rfidnav_localization.conversions import floor_tag_message
 from rfidnav_localization.errors import LocateError, StoreError
@@ -44,7 +44,7 @@ class LocationServerNode(SteppedNode):
         super().__init__("location_server", **node_options)
         self.params: LocationServerParameters = declare_parameters(self, LocationServerParameters)
         self.settings = self.params.locate_settings()
-        self.drops = inputs.Drops(self.get_logger().warning)
+        self.drops = input_drops(self)
         self.store = LocationStore.open(self.params.database_path(), create=self.params.create_database)
         area: list[tuple[float, float]] = []
         if self.params.map_file != "unused":

@@ -143,10 +143,10 @@ class RfidLocalizerParameters(ReadsAntennaPorts):
     map_file: str = param("robot map: extent, tag_groups, deployment_area, ceiling_tags, wall_tags (required)",
                           "unused")
     map_frame: str = param("frame of the published pose and the parent of map -> odom", "map")
-    pose_topic: str = param("where the pose goes (AMCL's is amcl_pose)", "/localization/pose")
-    status_topic: str = param("where LocalizationStatus goes", "/localization/status")
+    pose_topic: str = param("where the pose goes (AMCL's is amcl_pose)", "localization/pose")
+    status_topic: str = param("where LocalizationStatus goes", "localization/status")
     initial_pose_topic: str = param("a PoseWithCovarianceStamped in map_frame restarts the filter about it",
-                                    "/initialpose")
+                                    "initialpose")
     publish_tf: bool = param("publish map -> odom on /tf from each estimate (REP 105)", True)
     seed: int = param("run seed; the node draws its own random stream from it", 0, SEED)
     initial_pose: list[float] = param("x, y, yaw [m, m, rad] of a known start; empty: unknown (global "

@@ -16,7 +16,7 @@ from geometry_msgs.msg import PoseWithCovarianceStamped
 from nav_msgs.msg import Odometry
 
 from rfidnav_common import inputs
-from rfidnav_common.ros import SENSOR_QOS, declare_parameters, run_node, seconds_of, sim_clock_seconds
+from rfidnav_common.ros import SENSOR_QOS, declare_parameters, input_drops, run_node, seconds_of, sim_clock_seconds
 from rfidnav_common.seeding import rng_for
 from rfidnav_common.stepped_node import SteppedNode
 from rfidnav_common.transforms import FrameBroadcaster
@@ -38,13 +38,13 @@ class PartitionLocalizerNode(SteppedNode):
         self.params: PartitionLocalizerParameters = declare_parameters(self, PartitionLocalizerParameters)
         self.localizer = PartitionLocalizer(self.params.settings(), rng_for(self.params.seed, NODE_NAME))
         self.odom: tuple[float, float, float] | None = None
-        self.drops = inputs.Drops(self.get_logger().warning)
+        self.drops = input_drops(self)
         self.rounds = 0
-        self.pose_pub = self.create_publisher(PoseWithCovarianceStamped, "/localization/pose", SENSOR_QOS)
+        self.pose_pub = self.create_publisher(PoseWithCovarianceStamped, "localization/pose", SENSOR_QOS)
         self.frames = FrameBroadcaster(self) if self.params.publish_tf else None   # map -> odom
-        self.status_pub = self.create_publisher(LocalizationStatus, "/localization/status", SENSOR_QOS)
-        self.create_subscription(Odometry, "/odom", self.on_odometry, SENSOR_QOS)
-        self.create_subscription(TagReadArray, "/rfid/reads", self.on_reads, SENSOR_QOS)
+        self.status_pub = self.create_publisher(LocalizationStatus, "localization/status", SENSOR_QOS)
+        self.create_subscription(Odometry, "odom", self.on_odometry, SENSOR_QOS)
+        self.create_subscription(TagReadArray, "rfid/reads", self.on_reads, SENSOR_QOS)
         self.get_logger().info(f"method {self.params.method}, floor antenna port {self.params.antenna}, "
                                f"publishing in frame '{self.params.map_frame}'")
 
@@ -52,7 +52,7 @@ class PartitionLocalizerNode(SteppedNode):
         try:
             self.odom = inputs.odometry_pose(msg)
         except inputs.BadInput as error:
-            self.drops.drop("/odom", error)
+            self.drops.drop("odom", error)
 
     def on_reads(self, msg: TagReadArray) -> None:
         floor_reads = inputs.round_reads(msg, self.drops, sim_clock_seconds(self), ports=(self.params.antenna,))

@@ -32,6 +32,7 @@ from rfidnav_common.ros import (
     COMMAND_QOS,
     SENSOR_QOS,
     declare_parameters,
+    input_drops,
     run_node,
     seconds_of,
     sim_clock_seconds,
@@ -64,7 +65,7 @@ class RfidLocalizerNode(SteppedNode):
         if p.initial_pose:
             x, y, yaw = p.initial_pose
             self.localizer.set_pose(x, y, yaw, np.diag(np.square(p.initial_sd)))
-        self.drops = inputs.Drops(self.get_logger().warning)
+        self.drops = input_drops(self)
         self.compass_yaws: HeldReadings[float] = HeldReadings()
         self.odom_stamp = Time()
         self.wifi_fixes: HeldReadings[WifiFix] = HeldReadings()
@@ -73,16 +74,16 @@ class RfidLocalizerNode(SteppedNode):
         self.pose_pub = self.create_publisher(PoseWithCovarianceStamped, p.pose_topic, SENSOR_QOS)
         self.status_pub = self.create_publisher(LocalizationStatus, p.status_topic, SENSOR_QOS)
         self.frames = FrameBroadcaster(self) if p.publish_tf else None
-        self.create_subscription(Odometry, "/odom", self.on_odometry, SENSOR_QOS)
-        self.create_subscription(TagReadArray, "/rfid/reads", self.on_reads, SENSOR_QOS)
+        self.create_subscription(Odometry, "odom", self.on_odometry, SENSOR_QOS)
+        self.create_subscription(TagReadArray, "rfid/reads", self.on_reads, SENSOR_QOS)
         # /initialpose is a command, sent once: reliable, as RViz publishes it.
         self.create_subscription(PoseWithCovarianceStamped, p.initial_pose_topic, self.on_initial_pose, COMMAND_QOS)
         if p.use_compass:
-            self.create_subscription(Imu, "/compass", self.on_compass, SENSOR_QOS)
+            self.create_subscription(Imu, "compass", self.on_compass, SENSOR_QOS)
         self.locate_client = None
         if p.use_wifi:
             self.locate_client = self.create_client(Locate, p.locate_service)
-            self.create_subscription(WifiScan, "/wifi/scan", self.on_scan, SENSOR_QOS)
+            self.create_subscription(WifiScan, "wifi/scan", self.on_scan, SENSOR_QOS)
         declared = [kind for kind, present in (("floor tags", bool(fused_map.floor_tags) or
                                                  fused_map.deployment_area is not None),
                                                 ("ceiling tags", bool(fused_map.ceiling_tags)),
@@ -96,7 +97,7 @@ class RfidLocalizerNode(SteppedNode):
         try:
             odom = inputs.odometry_pose(msg)
         except inputs.BadInput as error:
-            self.drops.drop("/odom", error)
+            self.drops.drop("odom", error)
             return
         self.localizer.on_odometry(odom)
         self.odom_stamp = msg.header.stamp
@@ -105,7 +106,7 @@ class RfidLocalizerNode(SteppedNode):
         try:
             self.compass_yaws.hold(inputs.compass_heading(msg), stamp_seconds(self, msg.header.stamp))
         except inputs.BadInput as error:
-            self.drops.drop("/compass", error)
+            self.drops.drop("compass", error)
 
     def on_scan(self, msg: WifiScan) -> None:
         """Locate the scan unless a call is out (scans come faster than fixes are weighed, by wifi_min_travel_m)."""
@@ -113,7 +114,7 @@ class RfidLocalizerNode(SteppedNode):
             inputs.scan_rss(msg)
             scan_time_s = stamp_seconds(self, msg.header.stamp)
         except inputs.BadInput as error:
-            self.drops.drop("/wifi/scan", error)
+            self.drops.drop("wifi/scan", error)
             return
         if self.locating is not None or self.locate_client is None or not self.locate_client.service_is_ready():
             return

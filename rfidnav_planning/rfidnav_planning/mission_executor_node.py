@@ -23,7 +23,7 @@ from typing import Any
 from rfidnav_common import inputs
 from rfidnav_common.frames import ODOM_FRAME
 from rfidnav_common.goal_server import ActiveGoal, GoalOutcome, SingleGoalServer
-from rfidnav_common.ros import COMMAND_QOS, SENSOR_QOS, declare_parameters, run_node
+from rfidnav_common.ros import COMMAND_QOS, SENSOR_QOS, declare_parameters, input_drops, run_node
 from rfidnav_common.stepped_node import SteppedNode
 from rfidnav_common.topological_map import load_topological_map
 from rfidnav_msgs.action import NavigateToNode
@@ -47,14 +47,14 @@ class MissionExecutorNode(SteppedNode):
         self.params: MissionExecutorParameters = declare_parameters(self, MissionExecutorParameters)
         self.map = load_topological_map(self.params.map_file)
         self.executor_core = MissionExecutor(self.map, self.params.weight, self.params.recover_missed_tags)
-        self.drops = inputs.Drops(self.get_logger().warning)
-        self.command_pub = self.create_publisher(WallFollowerCommand, "/wall_follower/command", COMMAND_QOS)
-        self.create_subscription(TagReadArray, "/rfid/reads", self.on_reads, SENSOR_QOS)
-        self.create_subscription(WallFollowerEvent, "/wall_follower/event", self.on_event, COMMAND_QOS)
-        self.create_subscription(WallFollowerEvent, "/wall_follower/state", self.on_follower_state, COMMAND_QOS)
+        self.drops = input_drops(self)
+        self.command_pub = self.create_publisher(WallFollowerCommand, "wall_follower/command", COMMAND_QOS)
+        self.create_subscription(TagReadArray, "rfid/reads", self.on_reads, SENSOR_QOS)
+        self.create_subscription(WallFollowerEvent, "wall_follower/event", self.on_event, COMMAND_QOS)
+        self.create_subscription(WallFollowerEvent, "wall_follower/state", self.on_follower_state, COMMAND_QOS)
         # No stop on every end: a mission that succeeds ends with the follower already stopped.
         self.goals: SingleGoalServer[MissionGoal] = SingleGoalServer(
-            self, NavigateToNode, "/navigate_to_node", what="mission", busy="another goal is being navigated to",
+            self, NavigateToNode, "navigate_to_node", what="mission", busy="another goal is being navigated to",
             check=self.refusal, new_goal=MissionGoal, started=self.on_started, result=self.result,
             abandon=lambda _message: self.command(STOP, 0.0))
         self.get_logger().info(f"map '{self.map.name}': {len(self.map.nodes)} nodes; routes by {self.params.weight}")
@@ -107,7 +107,7 @@ class MissionExecutorNode(SteppedNode):
         return True
 
     def on_event(self, msg: WallFollowerEvent) -> None:
-        if not self.follower_report("/wall_follower/event", msg) or self.goals.running is None:
+        if not self.follower_report("wall_follower/event", msg) or self.goals.running is None:
             return
         if msg.event == STOPPED:
             outcome = self.executor_core.state.outcome
@@ -148,7 +148,7 @@ class MissionExecutorNode(SteppedNode):
             learned_hallways=[edge.text() for edge in mission.learned_edges]), always=True)   # one per decision
 
     def on_follower_state(self, msg: WallFollowerEvent) -> None:
-        if not self.follower_report("/wall_follower/state", msg) or self.goals.running is None or msg.state != IDLE:
+        if not self.follower_report("wall_follower/state", msg) or self.goals.running is None or msg.state != IDLE:
             return
         if self.executor_core.state.stop_commanded:
             return                  # idle after the stop: the mission ends with its "stopped" event

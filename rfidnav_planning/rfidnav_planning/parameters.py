@@ -37,7 +37,7 @@ class PartitionNavigatorParameters(CommandsSpeeds):
     map_file: str = param("robot map YAML with the deployment_area (where the floor is tagged)", "")
     status_topic: str = param(
         "the LocalizationStatus it drives on: the partition localizer's, or the status_topic of the localizer the "
-        "scenario names instead (rfid_localizer's, with the lattice tags it read)", "/localization/status")
+        "scenario names instead (rfid_localizer's, with the lattice tags it read)", "localization/status")
     approximation_level: int = param("partitions crossed in the localization phase (paper 000: 1-8)", 4,
                                      Limits(1, 64))
     localized_yaw_sd_rad: float = param(
@@ -168,7 +168,7 @@ class PoseNavigatorParameters(CommandsSpeeds):
 
     map_file: str = param("robot map: its walls and extent, when it has them; 'unused': none", "unused")
     pose_topic: str = param("the localizer's PoseWithCovarianceStamped (map frame) the robot drives on",
-                            "/localization/pose")
+                            "localization/pose")
     map_frame: str = param("frame the poses must be in", "map")
     control_rate_hz: float = param("control steps per second [Hz, sim time]", 20.0, RATE_HZ)
     pose_timeout_s: float = param("a pose older than this is stale: the robot stands still [s]", 1.0, DURATION_S)

@@ -30,6 +30,7 @@ from rfidnav_common.ros import (
     LATCHED_QOS,
     SENSOR_QOS,
     declare_parameters,
+    input_drops,
     run_node,
     stamp_seconds,
     twist,
@@ -70,15 +71,15 @@ class PartitionNavigatorNode(SteppedNode):
             raise ConfigError(self.params.map_file, "deployment_area", "partition navigation needs the tagged area")
         self.navigator = PartitionNavigator(self.params.settings(), robot_map.deployment_area)
         self.odom_pose: tuple[float, float, float] | None = None
-        self.drops = inputs.Drops(self.get_logger().warning)
-        self.cmd_pub = self.create_publisher(Twist, "/cmd_vel", COMMAND_QOS)
-        self.path_pub = self.create_publisher(Path, "/planning/path", LATCHED_QOS)
-        self.partitions_pub = self.create_publisher(PartitionPath, "/planning/partitions", LATCHED_QOS)
+        self.drops = input_drops(self)
+        self.cmd_pub = self.create_publisher(Twist, "cmd_vel", COMMAND_QOS)
+        self.path_pub = self.create_publisher(Path, "planning/path", LATCHED_QOS)
+        self.partitions_pub = self.create_publisher(PartitionPath, "planning/partitions", LATCHED_QOS)
         self.create_subscription(LocalizationStatus, self.params.status_topic, self.on_status, SENSOR_QOS)
-        self.create_subscription(Odometry, "/odom", self.on_odom, SENSOR_QOS)
+        self.create_subscription(Odometry, "odom", self.on_odom, SENSOR_QOS)
         turn_settings = self.params.turn_settings()
         self.goals: SingleGoalServer[NavigationGoal] = SingleGoalServer(
-            self, NavigateToPoint, "/navigate_to_point", what="navigation", busy="another goal is being navigated to",
+            self, NavigateToPoint, "navigate_to_point", what="navigation", busy="another goal is being navigated to",
             check=self.refusal, new_goal=lambda handle: NavigationGoal(handle, TurnOnTheSpot(turn_settings)),
             started=self.on_started, result=self.result,
             stop=lambda: self.drive(0.0, 0.0), abandon=self.navigator.cancel,
@@ -116,7 +117,7 @@ class PartitionNavigatorNode(SteppedNode):
         try:
             pose = inputs.odometry_pose(msg)
         except inputs.BadInput as error:
-            self.drops.drop("/odom", error)
+            self.drops.drop("odom", error)
             return
         previous, self.odom_pose = self.odom_pose, pose
         active = self.goals.running

@@ -22,7 +22,7 @@ from geometry_msgs.msg import Pose2D, PoseWithCovarianceStamped, Twist
 from rfidnav_common import inputs
 from rfidnav_common.goal_server import ActiveGoal, GoalOutcome, SingleGoalServer
 from rfidnav_common.robot_map import load_route_map
-from rfidnav_common.ros import COMMAND_QOS, SENSOR_QOS, declare_parameters, run_node, stamp_seconds, twist
+from rfidnav_common.ros import COMMAND_QOS, SENSOR_QOS, declare_parameters, input_drops, run_node, stamp_seconds, twist
 from rfidnav_common.stepped_node import SteppedNode
 from rfidnav_msgs.action import NavigateToPoint
 from rfidnav_planning.conversions import point_goal_refusal, pose_from_message
@@ -40,14 +40,14 @@ class PoseNavigatorNode(SteppedNode):
         map_file = self.params.map_file
         floor = WallMap() if map_file == "unused" else WallMap.of(load_route_map(Path(map_file)))
         self.navigator = PoseNavigator(self.params.settings(), floor)
-        self.drops = inputs.Drops(self.get_logger().warning)
+        self.drops = input_drops(self)
         self.pose: Pose | None = None
         self.pose_stamp_s = -math.inf
         self.travelled_m = 0.0
-        self.cmd_pub = self.create_publisher(Twist, "/cmd_vel", COMMAND_QOS)
+        self.cmd_pub = self.create_publisher(Twist, "cmd_vel", COMMAND_QOS)
         self.create_subscription(PoseWithCovarianceStamped, self.params.pose_topic, self.on_pose, SENSOR_QOS)
         self.goals: SingleGoalServer[ActiveGoal] = SingleGoalServer(
-            self, NavigateToPoint, "/navigate_to_point", what="navigation", busy="another goal is being navigated to",
+            self, NavigateToPoint, "navigate_to_point", what="navigation", busy="another goal is being navigated to",
             check=self.refusal, new_goal=ActiveGoal, started=self.on_started, result=self.result, stop=self.stop,
             supervise_period_s=None)
         self.create_timer(1.0 / self.params.control_rate_hz, self.control_step)

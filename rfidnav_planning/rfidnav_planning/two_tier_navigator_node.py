@@ -42,7 +42,7 @@ from rfidnav_common import inputs
 from rfidnav_common.geometry import yaw_to_quaternion
 from rfidnav_common.goal_server import ActiveGoal, GoalOutcome, SingleGoalServer
 from rfidnav_common.robot_map import load_route_map
-from rfidnav_common.ros import COMMAND_QOS, SENSOR_QOS, declare_parameters, run_node, twist
+from rfidnav_common.ros import COMMAND_QOS, SENSOR_QOS, declare_parameters, input_drops, run_node, twist
 from rfidnav_common.stepped_node import SteppedNode
 from rfidnav_common.transforms import FrameBroadcaster
 from rfidnav_msgs.action import NavigateToPoint, Survey
@@ -84,7 +84,7 @@ class TwoTierNavigatorNode(SteppedNode):
         floor = WallMap() if self.robot_map is None else WallMap.of(self.robot_map)
         self.navigator = TwoTierNavigator(self.params.settings(), floor)
         self.call: PendingCall | None = None
-        self.drops = inputs.Drops(self.get_logger().warning)
+        self.drops = input_drops(self)
         self.odom: tuple[float, float, float] | None = None
         self.odom_stamp = Time()
         self.compass_yaw: float | None = None
@@ -92,14 +92,14 @@ class TwoTierNavigatorNode(SteppedNode):
         self.scan: WifiScan | None = None
         self.tier_one_pose: Pose | None = None       # the latest from tier_one_from, when it names a topic
         self.reads: list[tuple[tuple[float, float, float], list[str]]] = []   # (odometry then, tag ids)
-        self.cmd_pub = self.create_publisher(Twist, "/cmd_vel", COMMAND_QOS)
-        self.pose_pub = self.create_publisher(PoseWithCovarianceStamped, "/localization/pose", SENSOR_QOS)
+        self.cmd_pub = self.create_publisher(Twist, "cmd_vel", COMMAND_QOS)
+        self.pose_pub = self.create_publisher(PoseWithCovarianceStamped, "localization/pose", SENSOR_QOS)
         self.frames = FrameBroadcaster(self) if self.params.publish_tf else None   # map -> odom
-        self.status_pub = self.create_publisher(LocalizationStatus, "/localization/status", SENSOR_QOS)
-        self.create_subscription(Odometry, "/odom", self.on_odom, SENSOR_QOS)
-        self.create_subscription(Imu, "/compass", self.on_compass, SENSOR_QOS)
-        self.create_subscription(TagReadArray, "/rfid/reads", self.on_reads, SENSOR_QOS)
-        self.create_subscription(WifiScan, "/wifi/scan", self.on_scan, SENSOR_QOS)
+        self.status_pub = self.create_publisher(LocalizationStatus, "localization/status", SENSOR_QOS)
+        self.create_subscription(Odometry, "odom", self.on_odom, SENSOR_QOS)
+        self.create_subscription(Imu, "compass", self.on_compass, SENSOR_QOS)
+        self.create_subscription(TagReadArray, "rfid/reads", self.on_reads, SENSOR_QOS)
+        self.create_subscription(WifiScan, "wifi/scan", self.on_scan, SENSOR_QOS)
         tier_one_topic = self.params.tier_one_pose_topic
         if tier_one_topic is not None:
             self.create_subscription(PoseWithCovarianceStamped, tier_one_topic, self.on_tier_one_pose, SENSOR_QOS)
@@ -109,11 +109,11 @@ class TwoTierNavigatorNode(SteppedNode):
         self.add_fingerprint_client = self.create_client(AddFingerprint, "/location_server/add_fingerprint")
         # Cancel is checked by control_step, before the core steps: no command follows a cancel request.
         self.goals: SingleGoalServer[ActiveGoal] = SingleGoalServer(
-            self, NavigateToPoint, "/navigate_to_point", what="navigation", busy="another goal is being navigated to",
+            self, NavigateToPoint, "navigate_to_point", what="navigation", busy="another goal is being navigated to",
             check=self.refusal, new_goal=ActiveGoal, started=self.on_started, result=self.result, stop=self.stop,
             supervise_period_s=None)
         self.survey_goals: SingleGoalServer[SurveyGoal] = SingleGoalServer(
-            self, Survey, "/survey", what="survey", busy="another survey is running", check=self.survey_refusal,
+            self, Survey, "survey", what="survey", busy="another survey is running", check=self.survey_refusal,
             new_goal=self.new_survey, started=self.on_survey_started, result=self.survey_result, stop=self.stop,
             supervise_period_s=None)
         self.create_timer(1.0 / self.params.control_rate_hz, self.control_step)
@@ -136,13 +136,13 @@ class TwoTierNavigatorNode(SteppedNode):
         try:
             self.odom, self.odom_stamp = inputs.odometry_pose(msg), msg.header.stamp
         except inputs.BadInput as error:
-            self.drops.drop("/odom", error)
+            self.drops.drop("odom", error)
 
     def on_compass(self, msg: Imu) -> None:
         try:
             self.compass_yaw = inputs.compass_heading(msg)
         except inputs.BadInput as error:
-            self.drops.drop("/compass", error)
+            self.drops.drop("compass", error)
             return
         # sensor_msgs/Imu: the heading's variance is orientation_covariance[8]; -1 in [0] or 0 mean unknown.
         variance = msg.orientation_covariance[8]
@@ -162,7 +162,7 @@ class TwoTierNavigatorNode(SteppedNode):
         try:
             inputs.scan_rss(msg)
         except inputs.BadInput as error:
-            self.drops.drop("/wifi/scan", error)
+            self.drops.drop("wifi/scan", error)
             return
         self.scan = msg
         survey = self.survey_goals.running

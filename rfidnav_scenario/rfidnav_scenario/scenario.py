@@ -40,6 +40,7 @@ from rfidnav_common.node_registry import (
     registered_node,
 )
 from rfidnav_common.robot_map import RouteMap, contains, load_route_map, repeated_in_a_row
+from rfidnav_common.seeding import robot_seed
 from rfidnav_common.topological_map import TopologicalMap, load_topological_map
 from rfidnav_localization.radio_map_file import load_radio_map
 from rfidnav_planning.partition_planner import lattice_refusal
@@ -83,6 +84,21 @@ class NodeSpec:
     map_file: Path | None = None             # this role's robot map (``map:``); None: the scenario's
     part: str | None = None                  # SPLIT_PARTS: the computer of a split run that starts it (a robot
                                              # profile's ``parts:``); None: rfidnav_bringup.run_plan.part_of's rule
+    shared: bool = False                     # with robots: one node for all of them, in the root namespace
+    robot: str | None = None                 # with robots: the robot whose node this is (Scenario.instances), its
+                                             # namespace; None: the root namespace
+
+    @property
+    def node_path(self) -> str | None:
+        """The node's name with its namespace, without the leading slash (``r1/wall_follower``); None unnamed."""
+        if self.name is None:
+            return None
+        return f"{self.robot}/{self.name}" if self.robot else self.name
+
+    @property
+    def fqn(self) -> str | None:
+        """The node's fully qualified name (``/r1/wall_follower``, ``/robot_sim``); None unnamed."""
+        return None if self.node_path is None else f"/{self.node_path}"
 
     @property
     def registration(self) -> NodeRegistration | None:
@@ -105,6 +121,21 @@ class MissionSpec:
 
 
 @dataclass(frozen=True)
+class RobotSpec:
+    """One robot of a scenario with ``robots:``: its name (its ROS namespace and tf prefix), start and mission."""
+    name: str
+    start: tuple[float, float, float]        # x [m], y [m], yaw [deg]
+    mission: MissionSpec                     # its action as the scenario names it (robot_action resolves it)
+
+
+def robot_action(robot: str | None, action: str) -> str:
+    """A mission's action name as robot ``robot``'s server offers it: under its namespace (``/r1/navigate_to_node``)."""
+    if robot is None:
+        return action
+    return f"/{robot}/{action.lstrip('/')}"
+
+
+@dataclass(frozen=True)
 class Scenario:
     name: str
     description: str
@@ -119,6 +150,40 @@ class Scenario:
     route_map: RouteMap | None = field(repr=False)          # papers 000, 001, 003
     topological_map: TopologicalMap | None = field(default=None, repr=False)   # paper 004: a map with nodes
     warnings: tuple[str, ...] = ()           # what loading found doubtful but runnable, one line each
+    # Several robots in one world (``robots:``): each runs the non-shared roles under its namespace, with its own
+    # start and mission; ``robot`` and ``mission`` are then the first robot's. Empty: one robot, the root namespace.
+    robots: tuple[RobotSpec, ...] = ()
+
+    def instances(self) -> dict[str, NodeSpec]:
+        """The nodes a run starts, by process-unique key: the roles as they are for one robot; with robots, the
+        clock source and the shared roles once and every other role once per robot (``r1.wall_follower``, its
+        node /r1/wall_follower)."""
+        if not self.robots:
+            return dict(self.nodes)
+        instances: dict[str, NodeSpec] = {}
+        for role, spec in self.nodes.items():
+            if spec.clock_source or spec.shared:
+                instances[role] = spec
+                continue
+            for robot in self.robots:
+                key = f"{robot.name}.{role}"
+                instances[key] = replace(spec, role=key, robot=robot.name)
+        return instances
+
+    def missions(self) -> list[tuple[str | None, MissionSpec]]:
+        """Each robot's name (None: the one robot of the root namespace) and mission, its action resolved."""
+        if not self.robots:
+            return [(None, self.mission)]
+        return [(robot.name, replace(robot.mission, action=robot_action(robot.name, robot.mission.action)))
+                for robot in self.robots]
+
+    def mission_server(self, robot: str | None) -> str | None:
+        """The instance (of :meth:`instances`) serving ``robot``'s mission: mission.server's, else the first
+        non-simulator role's."""
+        role = self.mission.server or next((role for role, spec in self.nodes.items() if not spec.sim), None)
+        if role is None or robot is None or self.nodes[role].shared:
+            return role
+        return f"{robot}.{role}"
 
     def step_participants(self) -> list[NodeSpec]:
         """The roles a stepped clock waits for: the nodes registered as stepped (rfidnav_common.node_registry), not
@@ -129,7 +194,8 @@ class Scenario:
             if spec.stepped is not None:
                 return spec.stepped
             return spec.registration is not None and spec.registration.stepped
-        return [spec for spec in self.nodes.values() if spec.name and not spec.clock_source and takes_part(spec)]
+        return [spec for spec in self.instances().values()
+                if spec.name and not spec.clock_source and takes_part(spec)]
 
     @property
     def simulated(self) -> bool:
@@ -147,15 +213,24 @@ class Scenario:
                 "command": " ".join(shlex.quote(c) for c in spec.command) if spec.package is None else None,
                 "name": spec.name, "params": [str(p) for p in spec.param_files], "overrides": spec.overrides,
                 "sim": spec.sim, "clock_source": spec.clock_source, "respawn": spec.respawn,
-                "max_respawns": spec.max_respawns, "process": spec.process, "stepped": spec.stepped}.items()
+                "max_respawns": spec.max_respawns, "process": spec.process, "stepped": spec.stepped,
+                "shared": spec.shared or None}.items()
                 if value not in (None, {}, [])}
                 for role, spec in self.nodes.items()},
-            "mission": {key: value for key, value in {
-                "action": self.mission.action, "type": self.mission.action_type, "server": self.mission.server,
-                "goal": self.mission.goal, "timeout_s": self.mission.timeout_s,
-                "success_within_m": self.mission.success_within_m}.items() if value is not None},
+            "mission": mission_document(self.mission),
             "metrics": list(self.metrics),
+            **({"robots": [{"name": robot.name,
+                            "robot": {"x": robot.start[0], "y": robot.start[1], "yaw_deg": robot.start[2]},
+                            "mission": mission_document(robot.mission)} for robot in self.robots]}
+               if self.robots else {}),
         }
+
+
+def mission_document(mission: MissionSpec) -> dict[str, Any]:
+    """A mission as a scenario file gives it."""
+    return {key: value for key, value in {
+        "action": mission.action, "type": mission.action_type, "server": mission.server, "goal": mission.goal,
+        "timeout_s": mission.timeout_s, "success_within_m": mission.success_within_m}.items() if value is not None}
 
 
 def scenario_path(name_or_path: str) -> Path:
@@ -235,12 +310,10 @@ def load_scenario(name_or_path: str, swaps: dict[str, str] | None = None,
     use (but a radio map not surveyed yet, with ``radio_map_may_be_missing``: ``./rfidnav survey`` writes it)."""
     path = scenario_path(name_or_path).resolve()
     section = Section.from_file(path)
-    section.reject_unknown(("name", "description", "world", "map", "robot", "nodes", "mission", "metrics"))
+    section.reject_unknown(("name", "description", "world", "map", "robot", "robots", "nodes", "mission", "metrics"))
     base = path.parent
     world_file = _referenced_file(section, "world", section.string("world"), base, "world")
     map_file = _referenced_file(section, "map", section.string("map"), base, "map")
-    robot = section.section("robot")
-    robot.reject_unknown(("x", "y", "yaw_deg"))
     nodes = {role: _node_spec(role, section.section("nodes").section(role), base)
              for role in section.section("nodes").keys()}
     if not nodes:
@@ -262,14 +335,8 @@ def load_scenario(name_or_path: str, swaps: dict[str, str] | None = None,
     for role, spec in nodes.items():
         if spec.process is not None and spec.process in nodes and nodes[spec.process].process != spec.process:
             raise section.error(f"nodes.{role}.process", f"'{spec.process}' is the name of another role's process")
-    mission_file = mission = section.section("mission")
-    mission.reject_unknown(("action", "type", "server", "goal", "timeout_s", "success_within_m"))
-    if goal is None:
-        goal = mission.raw("goal")
-        if not isinstance(goal, dict):
-            raise mission.error("goal", "expected a mapping of goal fields")
-    else:
-        mission = Section({**mission.data, "goal": goal}, "--goal", "mission")
+    mission_file = section.section("mission")
+    mission_file.reject_unknown(MISSION_KEYS)
     metrics = section.strings("metrics", [])
     for index, metric in enumerate(metrics):
         if metric not in METRIC_GROUPS:
@@ -278,33 +345,114 @@ def load_scenario(name_or_path: str, swaps: dict[str, str] | None = None,
     if metrics and not mission_file.has("success_within_m"):
         raise mission_file.error("success_within_m", "missing: a scenario scored by ground truth (metrics: "
                                  f"{', '.join(metrics)}) states how near its goal the robot must stop to succeed [m]")
+    if section.has("robots"):
+        robots = _robots(section, mission_file, nodes, goal)
+        start, mission = robots[0].start, robots[0].mission
+        missions = [(robot.start, robot.mission, own, own)
+                    for robot, own in ((robot, _robot_mission_section(section, index, mission_file))
+                                       for index, robot in enumerate(robots))]
+    else:
+        for role, spec in nodes.items():
+            if spec.shared:
+                raise section.error(f"nodes.{role}.shared", "a role shared by robots needs a scenario of several "
+                                                            "robots (robots:)")
+        robot = section.section("robot")
+        robot.reject_unknown(("x", "y", "yaw_deg"))
+        start = (robot.number("x"), robot.number("y"), robot.number("yaw_deg", 0.0, minimum=-360.0, maximum=360.0))
+        mission_section = mission_file
+        if goal is None:
+            if not isinstance(mission_file.raw("goal"), dict):
+                raise mission_file.error("goal", "expected a mapping of goal fields")
+        else:
+            mission_section = Section({**mission_file.data, "goal": goal}, "--goal", "mission")
+        mission = _mission_spec(mission_section)
+        robots = ()
+        missions = [(start, mission, mission_file, mission_section)]
     scenario = Scenario(
         name=section.string("name"), description=section.string("description", ""), path=path,
-        world_file=world_file, map_file=map_file,
-        robot=(robot.number("x"), robot.number("y"), robot.number("yaw_deg", 0.0, minimum=-360.0, maximum=360.0)),
-        nodes=nodes,
-        mission=MissionSpec(mission_file.string("action"), mission_file.string("type"), goal,
-                            mission_file.number("timeout_s", 600.0, positive=True, maximum=MAX_MISSION_S),
-                            mission_file.raw("server", None),
-                            mission_file.number("success_within_m", positive=True, maximum=MAX_GOAL_BOUND_M)
-                            if mission_file.has("success_within_m") else None),
-        metrics=tuple(metrics), world=load_world(world_file),
+        world_file=world_file, map_file=map_file, robot=start, nodes=nodes, mission=mission,
+        metrics=tuple(metrics), world=load_world(world_file), robots=robots,
         **_robot_map(map_file, radio_map_may_be_missing))
     if scenario.mission.server is not None and scenario.mission.server not in nodes:
         raise mission_file.error("server", f"no role '{scenario.mission.server}' (roles: {', '.join(nodes)})")
-    goal_class = _check_action(scenario, mission_file)
-    _check_server(scenario, mission_file)
-    _check_goal_numbers(scenario.mission.goal, mission, "")
-    _check_route(scenario, mission)
-    _check_goal_area(scenario, mission)
-    _check_goal_node(scenario, mission)
-    _check_goal(scenario, goal_class, mission)
+    for start, mission, declared, goal_section in missions:
+        _check_mission(replace(scenario, robot=start, mission=mission), declared, goal_section)
     _check_map_in_world(scenario)
     _check_partition_lattices(scenario)
     parameters = {role: node_parameters(scenario, spec, seed=0, rtf=1.0) for role, spec in scenario.nodes.items()}
     _check_antenna_ports(scenario, parameters)
     _check_speeds(scenario, parameters)
     return replace(scenario, warnings=route_reach_warnings(scenario, parameters))
+
+
+MISSION_KEYS = ("action", "type", "server", "goal", "timeout_s", "success_within_m")
+
+
+def _mission_spec(mission: Section) -> MissionSpec:
+    """A mission entry (the scenario's, or a robot's over it); its goal is checked by _check_mission."""
+    goal = mission.raw("goal")
+    if not isinstance(goal, dict):
+        raise mission.error("goal", "expected a mapping of goal fields")
+    return MissionSpec(mission.string("action"), mission.string("type"), goal,
+                       mission.number("timeout_s", 600.0, positive=True, maximum=MAX_MISSION_S),
+                       mission.raw("server", None),
+                       mission.number("success_within_m", positive=True, maximum=MAX_GOAL_BOUND_M)
+                       if mission.has("success_within_m") else None)
+
+
+def _robot_mission_section(section: Section, index: int, mission_file: Section) -> Section:
+    """Robot ``index``'s mission: the scenario's mission with the robot's own fields over it, errors named at the
+    robot's entry."""
+    own = section.sections("robots")[index].section("mission")
+    return Section({**mission_file.data, **own.data}, own.source, own.prefix)
+
+
+def _robots(section: Section, mission_file: Section, nodes: dict[str, NodeSpec],
+            goal: dict[str, Any] | None) -> tuple[RobotSpec, ...]:
+    """The robots of a scenario with ``robots:`` (each a name, a start and a mission over the scenario's)."""
+    from rfidnav_sim.parameters import ROBOT_NAME
+
+    if goal is not None:
+        raise ConfigError("--goal", "", f"{section.source} has several robots: each gives its goal in its entry "
+                                        "(robots[i].mission.goal)")
+    if section.has("robot"):
+        raise section.error("robot", "with robots:, each robot gives its start in its entry (robots[i].robot)")
+    if any(spec.sim and spec.shared for spec in nodes.values()):
+        role = next(role for role, spec in nodes.items() if spec.sim and spec.shared)
+        raise section.error(f"nodes.{role}.shared", "a simulator role simulates one robot's sensor: it runs per "
+                                                     "robot (robot_sim, the clock source, simulates them all)")
+    entries = section.sections("robots")
+    if not entries:
+        raise section.error("robots", "expected a list of robots (name, robot, mission)")
+    robots: list[RobotSpec] = []
+    for entry in entries:
+        entry.reject_unknown(("name", "robot", "mission"))
+        name = entry.string("name")
+        if not ROBOT_NAME.fullmatch(name):
+            raise entry.error("name", f"'{name}' is no robot name: its ROS namespace, a letter then letters, digits "
+                                      "or _")
+        if name in {robot.name for robot in robots}:
+            raise entry.error("name", f"robot '{name}' is listed twice")
+        start = entry.section("robot")
+        start.reject_unknown(("x", "y", "yaw_deg"))
+        own = entry.section("mission")
+        own.reject_unknown(MISSION_KEYS)
+        robots.append(RobotSpec(name, (start.number("x"), start.number("y"),
+                                       start.number("yaw_deg", 0.0, minimum=-360.0, maximum=360.0)),
+                                _mission_spec(Section({**mission_file.data, **own.data}, own.source, own.prefix))))
+    return tuple(robots)
+
+
+def _check_mission(scenario: Scenario, declared: Section, mission: Section) -> None:
+    """Everything a mission (the scenario's, or one robot's in ``scenario`` as that robot sees it) must be:
+    ``declared`` names its action and server, ``mission`` its goal (``--goal``'s, when given)."""
+    goal_class = _check_action(scenario, declared)
+    _check_server(scenario, declared)
+    _check_goal_numbers(scenario.mission.goal, mission, "")
+    _check_route(scenario, mission)
+    _check_goal_area(scenario, mission)
+    _check_goal_node(scenario, mission)
+    _check_goal(scenario, goal_class, mission)
 
 
 def _referenced_file(section: Section, key: str, relative: str, base: Path, what: str) -> Path:
@@ -319,7 +467,7 @@ def _referenced_file(section: Section, key: str, relative: str, base: Path, what
 
 def _node_spec(role: str, entry: Section, base: Path) -> NodeSpec:
     entry.reject_unknown(("package", "executable", "command", "name", "params", "overrides", "sim",
-                          "clock_source", "respawn", "max_respawns", "process", "stepped", "map"))
+                          "clock_source", "respawn", "max_respawns", "process", "stepped", "map", "shared"))
     if entry.has("command"):
         package = executable = None
         command = _program(tuple(shlex.split(entry.string("command"))), entry.source, entry.field("command"))
@@ -363,7 +511,8 @@ def _node_spec(role: str, entry: Section, base: Path) -> NodeSpec:
         param_files=files, overrides=dict(overrides), sim=sim,
         clock_source=entry.boolean("clock_source", False), respawn=entry.boolean("respawn", False),
         max_respawns=entry.integer("max_respawns", 3, minimum=0, maximum=MAX_RESPAWNS), process=process,
-        stepped=entry.boolean("stepped", False) if entry.has("stepped") else None, map_file=map_file)
+        stepped=entry.boolean("stepped", False) if entry.has("stepped") else None, map_file=map_file,
+        shared=entry.boolean("shared", False))
 
 
 def _swapped(spec: NodeSpec, replacement: str) -> NodeSpec:
@@ -673,10 +822,10 @@ def injected_parameters(scenario: Scenario, spec: NodeSpec, seed: int, rtf: floa
     ``stepped_with``: the stepped clock's participants (fully qualified node names), None for the free-running
     clock. A participant takes its time from the stamps it handles; every other node runs with use_sim_time.
     ``rtf`` may be ``math.inf`` (as fast as the stepped graph answers): the clock source takes it as it is."""
-    injected: dict[str, Any] = {"seed": seed}
+    injected: dict[str, Any] = {"seed": robot_seed(seed, spec.robot) if spec.robot else seed}
     if run_dir is not None:
         injected["run_dir"] = str(run_dir)
-    participant = stepped_with is not None and spec.name is not None and f"/{spec.name}" in stepped_with
+    participant = stepped_with is not None and spec.fqn is not None and spec.fqn in stepped_with
     if participant:
         injected["stepped_clock"] = True
     elif not spec.clock_source and scenario.simulated:
@@ -689,6 +838,9 @@ def injected_parameters(scenario: Scenario, spec: NodeSpec, seed: int, rtf: floa
         x, y, yaw_deg = scenario.robot
         injected.update(start_x=x, start_y=y, start_yaw_deg=yaw_deg, rtf=float(rtf),
                         start_paused=True)
+        if scenario.robots:
+            injected.update(robots=[robot.name for robot in scenario.robots],
+                            robot_starts=[float(value) for robot in scenario.robots for value in robot.start])
         if stepped_with is not None:
             injected.update(stepped_clock=True, step_participants=list(stepped_with))
     return injected

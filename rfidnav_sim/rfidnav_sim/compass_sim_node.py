@@ -14,10 +14,9 @@ from typing import Any
 from nav_msgs.msg import Odometry
 from sensor_msgs.msg import Imu
 
-from rfidnav_common import inputs
 from rfidnav_common.frames import MAP_FRAME
 from rfidnav_common.geometry import yaw_to_quaternion
-from rfidnav_common.ros import SENSOR_QOS, declare_parameters, run_node, seconds_of
+from rfidnav_common.ros import SENSOR_QOS, declare_parameters, input_drops, run_node, seconds_of
 from rfidnav_common.stepped_node import SteppedNode
 from rfidnav_common.transforms import publish_static_frames
 from rfidnav_sim.conversions import ground_truth_pose
@@ -32,10 +31,10 @@ class CompassSimNode(SteppedNode):
         self.params: CompassParameters = declare_parameters(self, CompassParameters)
         self.noise_sd_rad = self.params.model().noise_sd_rad
         self.compass = self.params.sensor()
-        self.drops = inputs.Drops(self.get_logger().warning)
-        self.publisher = self.create_publisher(Imu, "/compass", SENSOR_QOS)
+        self.drops = input_drops(self)
+        self.publisher = self.create_publisher(Imu, "compass", SENSOR_QOS)
         publish_static_frames(self, self.params.frames())
-        self.create_subscription(Odometry, "/sim/ground_truth", self.on_ground_truth, SENSOR_QOS)
+        self.create_subscription(Odometry, "sim/ground_truth", self.on_ground_truth, SENSOR_QOS)
 
     def on_ground_truth(self, msg: Odometry) -> None:
         pose = ground_truth_pose(msg, MAP_FRAME, self.drops)   # the compass needs no world: the map's frame

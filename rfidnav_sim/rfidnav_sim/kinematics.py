@@ -175,6 +175,8 @@ class DiffDriveBase:
         self.command = (0.0, 0.0)
         self.command_age_s = math.inf
         self.distance_travelled_m = 0.0
+        # The other robots of its world (rfidnav_sim.fleet): round bases it stops at as at a wall.
+        self.others: list[DiffDriveBase] = []
 
     def set_command(self, linear_mps: float, angular_radps: float) -> None:
         """The commanded (v, w); finite, else a ValueError (a NaN would make the pose NaN for good). Beyond the
@@ -214,7 +216,17 @@ class DiffDriveBase:
         truth.advance(left_m, right_m, limits.track_width_m)
         events: list[BaseEventRecord] = []
         moved = math.hypot(truth.x - x, truth.y - y)
-        if len(self.walls) and (self.bumped or moved >= self.clearance_m):
+        if self.others:
+            # Other robots move on their own, so no clearance holds: the nearest obstacle, wall or robot, every step.
+            distance, closest_x, closest_y = self.nearest_obstacle(truth.x, truth.y)
+            if distance < limits.footprint_radius_m:
+                before = self.nearest_obstacle(x, y)
+                if distance < before[0]:
+                    truth.x, truth.y, truth.yaw, self.left_speed, self.right_speed = x, y, yaw, 0.0, 0.0
+                    left_m = right_m = 0.0
+                    distance, closest_x, closest_y = before
+            events = self.update_bumpers(min(distance, NEAR_WALLS_M), (closest_x, closest_y))
+        elif len(self.walls) and (self.bumped or moved >= self.clearance_m):
             # The walls listed near the step's end, in the floor's order: every wall within NEAR_WALLS_M of it, so
             # the nearest one (and its index among equals) when it matters, as among all the walls.
             near = self.near_walls.near(truth.x, truth.y)
@@ -240,6 +252,19 @@ class DiffDriveBase:
                           right_m * (1.0 + drift.right_scale_error + right_slip),
                           limits.track_width_m * (1.0 + drift.track_scale_error))
         return events
+
+    def nearest_obstacle(self, x: float, y: float) -> tuple[float, float, float]:
+        """(distance, closest x, closest y) of the nearest wall near (x, y) or other robot's footprint edge."""
+        best = nearest_wall(x, y, self.near_walls.near(x, y)) if len(self.walls) else (math.inf, math.nan, math.nan)
+        for other in self.others:
+            there = other.truth
+            dx, dy = x - there.x, y - there.y
+            centres = math.hypot(dx, dy)
+            radius = other.limits.footprint_radius_m
+            if centres - radius < best[0]:
+                towards = (dx / centres, dy / centres) if centres > 0.0 else (1.0, 0.0)
+                best = (centres - radius, there.x + radius * towards[0], there.y + radius * towards[1])
+        return best
 
     def slip(self) -> tuple[float, float]:
         """This step's (left, right) slip: the next two of the generator's normal draws, fetched SLIP_BATCH

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import re
 from collections import Counter
 from dataclasses import dataclass
 
@@ -30,11 +31,20 @@ from rfidnav_common.config import (
     param,
 )
 from rfidnav_common.errors import ParameterError
-from rfidnav_common.frames import BASE_FRAME, FACINGS, MAP_FRAME, ODOM_FRAME, Frame, antenna_frames
+from rfidnav_common.frames import (
+    BASE_FRAME,
+    FACINGS,
+    MAP_FRAME,
+    ODOM_FRAME,
+    Frame,
+    antenna_frames,
+    frame_prefix,
+    prefixed,
+)
 from rfidnav_common.inputs import RSS_DBM
 from rfidnav_common.node_registry import LimitsSpeed, NodeRegistration, PublishesAntennaPorts
 from rfidnav_common.polling import PollClock, Polling
-from rfidnav_common.seeding import rng_for
+from rfidnav_common.seeding import rng_for, robot_seed
 from rfidnav_sim.compass_model import CompassModel
 from rfidnav_sim.kinematics import BaseLimits, DiffDriveBase, OdometryDrift, Pose2D
 from rfidnav_sim.rfid_model import Antenna, PolledReader, ReaderModel, ReaderSimulator, budget_range_m
@@ -79,6 +89,12 @@ class RobotSimParameters(LimitsSpeed):
                                       "bumps [m]", 0.17, POSITIVE)
     walls_stop_base: bool = param("false: the walls only echo sonar and the base drives through them (for a "
                                   "navigator that cannot get round a wall, see two_tier_home)", True)
+    robots: list[str] = param(
+        "several robots in one world: their names, each its ROS namespace (r1: /r1/cmd_vel, /r1/odom, "
+        "/r1/sim/ground_truth, r1/odom -> r1/base_link on /tf), each a base of these parameters at its entry of "
+        "robot_starts and an obstacle to the others; empty: one robot at start_x, start_y, start_yaw_deg in the "
+        "root namespace. Set by the orchestrator from a scenario's robots:", [])
+    robot_starts: list[float] = param("x [m], y [m] and yaw [deg] of each of robots, in their order", [])
 
     def base(self, walls: np.ndarray | None = None) -> DiffDriveBase:
         """The base these parameters describe, at the start pose, its odometry slip stream seeded from ``seed``,
@@ -92,6 +108,30 @@ class RobotSimParameters(LimitsSpeed):
                           self.odom_slip_std),
             rng_for(self.seed, "robot_sim.odometry"), walls if self.walls_stop_base else None)
 
+    def fleet(self, walls: np.ndarray | None = None) -> dict[str, DiffDriveBase]:
+        """The bases of the world by robot name ('' for the one robot of the root namespace): each at its start with
+        its own odometry stream (rfidnav_common.seeding.robot_seed), the others its obstacles."""
+        if not self.robots:
+            return {"": self.base(walls)}
+        bases = {name: dataclasses.replace(self, start_x=x, start_y=y, start_yaw_deg=yaw_deg,
+                                           seed=robot_seed(self.seed, name)).base(walls)
+                 for name, (x, y, yaw_deg) in zip(self.robots, self.starts(), strict=True)}
+        for name, base in bases.items():
+            base.others = [other for other_name, other in bases.items() if other_name != name]
+        return bases
+
+    def starts(self) -> list[tuple[float, float, float]]:
+        """Each robot's (x, y, yaw_deg), in the order of robots."""
+        values = self.robot_starts
+        return [(values[i], values[i + 1], values[i + 2]) for i in range(0, len(values), 3)]
+
+    def start_frames(self) -> list[Frame]:
+        """map -> odom at each robot's start, its odom prefixed with its name (r1/odom)."""
+        if not self.robots:
+            return [self.start_frame()]
+        return [prefixed(Frame.planar(MAP_FRAME, ODOM_FRAME, (x, y, math.radians(yaw_deg))), frame_prefix(name))
+                for name, (x, y, yaw_deg) in zip(self.robots, self.starts(), strict=True)]
+
     def speed_limit(self) -> tuple[str, float]:
         """The parameter that bounds the forward speed the base drives, and its value: no node may command more."""
         return "max_wheel_speed_mps", self.max_wheel_speed_mps
@@ -102,9 +142,24 @@ class RobotSimParameters(LimitsSpeed):
     def validate(self) -> None:
         if not self.world_file:
             raise ParameterError("world_file", "required (the world YAML to simulate)")
+        if len(self.robot_starts) != 3 * len(self.robots):
+            raise ParameterError("robot_starts", f"{len(self.robot_starts)} values for {len(self.robots)} robots: "
+                                                 "x, y and yaw_deg of each")
+        for name in self.robots:
+            if not ROBOT_NAME.fullmatch(name):
+                raise ParameterError("robots", f"'{name}' is no robot name (a ROS namespace token: a letter, then "
+                                               "letters, digits or _)")
+        if len(set(self.robots)) != len(self.robots):
+            raise ParameterError("robots", f"a name given twice: {self.robots}")
+        for i, (x, y, _) in enumerate(self.starts()):
+            for name, (x2, y2, _) in zip(self.robots[i + 1:], self.starts()[i + 1:]):
+                if math.hypot(x2 - x, y2 - y) < 2.0 * self.footprint_radius_m:
+                    raise ParameterError("robot_starts", f"{self.robots[i]} and {name} start overlapping "
+                                                         f"({math.hypot(x2 - x, y2 - y):.2f} m apart)")
 
 
 
+ROBOT_NAME = re.compile(r"[A-Za-z][A-Za-z0-9_]*")    # a robot's name is its namespace: one ROS name token
 SIDE_BEARINGS = {"left": math.pi / 2.0, "right": -math.pi / 2.0}
 PER_ANTENNA = ("antenna_max_range_m", "antenna_half_angle_deg", "antenna_phase_offset_rad")
 

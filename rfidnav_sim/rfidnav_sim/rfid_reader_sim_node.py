@@ -13,8 +13,7 @@ from typing import Any
 
 from nav_msgs.msg import Odometry
 
-from rfidnav_common import inputs
-from rfidnav_common.ros import SENSOR_QOS, declare_parameters, run_node, seconds_of
+from rfidnav_common.ros import SENSOR_QOS, declare_parameters, input_drops, run_node, seconds_of
 from rfidnav_common.stepped_node import SteppedNode
 from rfidnav_common.transforms import publish_static_frames
 from rfidnav_msgs.msg import TagReadArray
@@ -30,11 +29,11 @@ class RfidReaderSimNode(SteppedNode):
         self.params: ReaderParameters = declare_parameters(self, ReaderParameters)
         world = load_world(self.params.world_file)
         self.world_frame = world.frame_id
-        self.drops = inputs.Drops(self.get_logger().warning)
+        self.drops = input_drops(self)
         self.reader = self.params.simulated_reader(world, self.params.seed)
-        self.reads_pub = self.create_publisher(TagReadArray, "/rfid/reads", SENSOR_QOS)
+        self.reads_pub = self.create_publisher(TagReadArray, "rfid/reads", SENSOR_QOS)
         publish_static_frames(self, self.params.antenna_frames())
-        self.create_subscription(Odometry, "/sim/ground_truth", self.on_ground_truth, SENSOR_QOS)
+        self.create_subscription(Odometry, "sim/ground_truth", self.on_ground_truth, SENSOR_QOS)
         lattice_tags = sum(deployment.tag_count() for deployment in world.deployments)
         self.get_logger().info(f"{len(world.tags)} listed tags, {lattice_tags} lattice floor tags, "
                                f"{len(self.params.antenna_facing)} antennas, "

@@ -12,8 +12,7 @@ from typing import Any
 from nav_msgs.msg import Odometry
 from sensor_msgs.msg import Range
 
-from rfidnav_common import inputs
-from rfidnav_common.ros import SENSOR_QOS, declare_parameters, run_node, seconds_of
+from rfidnav_common.ros import SENSOR_QOS, declare_parameters, input_drops, run_node, seconds_of
 from rfidnav_common.stepped_node import SteppedNode
 from rfidnav_common.transforms import publish_static_frames
 from rfidnav_sim.conversions import ground_truth_pose
@@ -28,12 +27,12 @@ class SonarSimNode(SteppedNode):
         self.params: SonarParameters = declare_parameters(self, SonarParameters)
         world = load_world(self.params.world_file)
         self.world_frame = world.frame_id
-        self.drops = inputs.Drops(self.get_logger().warning)
+        self.drops = input_drops(self)
         self.sonar = self.params.sensor(world)
         publish_static_frames(self, self.params.frames())
-        self.publishers_by_name = {r.name: self.create_publisher(Range, f"/sonar/{r.name}", SENSOR_QOS)
+        self.publishers_by_name = {r.name: self.create_publisher(Range, f"sonar/{r.name}", SENSOR_QOS)
                                    for r in PAPER_LAYOUT}
-        self.create_subscription(Odometry, "/sim/ground_truth", self.on_ground_truth, SENSOR_QOS)
+        self.create_subscription(Odometry, "sim/ground_truth", self.on_ground_truth, SENSOR_QOS)
         self.get_logger().info(f"{len(PAPER_LAYOUT)} rangefinders, {len(world.walls)} walls, "
                                f"{self.params.rate_hz:g} sweeps/s")
 

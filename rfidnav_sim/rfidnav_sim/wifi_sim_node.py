@@ -12,8 +12,7 @@ from typing import Any
 
 from nav_msgs.msg import Odometry
 
-from rfidnav_common import inputs
-from rfidnav_common.ros import SENSOR_QOS, declare_parameters, run_node, seconds_of
+from rfidnav_common.ros import SENSOR_QOS, declare_parameters, input_drops, run_node, seconds_of
 from rfidnav_common.stepped_node import SteppedNode
 from rfidnav_msgs.msg import WifiScan
 from rfidnav_sim.conversions import ground_truth_pose, wifi_scan_message
@@ -27,10 +26,10 @@ class WifiSimNode(SteppedNode):
         self.params: WifiSimParameters = declare_parameters(self, WifiSimParameters)
         world = load_world(self.params.world_file)
         self.world_frame = world.frame_id
-        self.drops = inputs.Drops(self.get_logger().warning)
+        self.drops = input_drops(self)
         self.receiver = self.params.sensor(world)
-        self.publisher = self.create_publisher(WifiScan, "/wifi/scan", SENSOR_QOS)
-        self.create_subscription(Odometry, "/sim/ground_truth", self.on_ground_truth, SENSOR_QOS)
+        self.publisher = self.create_publisher(WifiScan, "wifi/scan", SENSOR_QOS)
+        self.create_subscription(Odometry, "sim/ground_truth", self.on_ground_truth, SENSOR_QOS)
         self.get_logger().info(f"{len(world.access_points)} access points, {len(world.walls)} walls, "
                                f"a scan every {self.params.scan_period_s:g} s")
 

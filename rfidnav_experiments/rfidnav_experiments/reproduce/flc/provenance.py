@@ -72,6 +72,8 @@ SOURCES: dict[str, tuple[Source, str]] = {
     "robot_sim.rtf": ("ours", "in-process: no pacing; no effect on the figures"),
     "robot_sim.step_participants": ("ours", "the stepped clock over DDS; in-process the loop is lockstep"),
     "robot_sim.start_paused": ("ours", "over DDS only; no effect on the figures"),
+    "robot_sim.robots": ("ours", "one robot; several in one world are scenarios over DDS only"),
+    "robot_sim.robot_starts": ("ours", "as robots"),
     "robot_sim.map_to_odom_at_start": ("ours", "no localizer; the follower keeps no pose"),
     "robot_sim.step_s": ("ours", "10 ms physics step"),
     "robot_sim.odom_rate_hz": ("ours", "the ground truth sampled at 50 Hz for the metrics"),

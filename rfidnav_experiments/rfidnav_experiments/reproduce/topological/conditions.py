@@ -85,6 +85,8 @@ SOURCES: dict[str, tuple[str, str]] = {
     "robot_sim.rtf": ("ours", "DDS only: in-process the base is stepped as fast as it goes"),
     "robot_sim.step_participants": ("ours", "DDS only (the stepped clock)"),
     "robot_sim.start_paused": ("ours", "DDS only"),
+    "robot_sim.robots": ("ours", "one robot; several in one world are scenarios over DDS only"),
+    "robot_sim.robot_starts": ("ours", "as robots"),
     "robot_sim.map_to_odom_at_start": ("ours", "DDS only: the executor reads the odometry's distances, not poses"),
     "robot_sim.step_s": ("ours", "10 ms physics step, as over DDS"),
     "robot_sim.odom_rate_hz": ("ours", "unused in-process (the follower reads the odometry every control step)"),

@@ -205,6 +205,8 @@ NOT_READ: dict[str, str] = {
                     "start_paused", "map_to_odom_at_start", "odom_rate_hz", "seed", "track_width_m",
                     "max_wheel_speed_mps", "max_wheel_accel_mps2", "command_timeout_s", "odom_left_scale_error",
                     "odom_right_scale_error", "odom_track_scale_error", "odom_slip_std", "walls_stop_base")},
+    "robot_sim.robots": "one robot: several in one world are scenarios over DDS only (robots:)",
+    "robot_sim.robot_starts": "as above",
 }
 
 
