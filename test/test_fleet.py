@@ -125,7 +125,7 @@ def test_a_scenario_of_two_robots_runs_every_role_per_robot_but_the_simulator_an
     assert injected_parameters(scenario, instances["location_server"], 7, 1.0)["seed"] == 7
     simulator_values = node_parameters(scenario, instances["robot_sim"], 7, 1.0)
     assert simulator_values.robots == ["r1", "r2"]
-    assert simulator_values.robot_starts == [-6.2, 0.0, 0.0, 5.0, -2.5, 180.0]
+    assert simulator_values.robot_starts == [-6.2, 0.0, 0.0, 3.5, -2.5, 180.0]
     assert robot_action("r1", "navigate_to_point") == robot_action("r1", "/navigate_to_point") == \
         "/r1/navigate_to_point"
 
@@ -147,6 +147,24 @@ def test_the_run_plan_starts_each_robots_nodes_in_its_namespace_with_files_only_
     assert plan.mission_process("r1") == "r1.mission_executor"
     written = yaml.safe_load((tmp_path / "run/scenario.yaml").read_text())
     assert [robot["mission"]["goal"] for robot in written["robots"]] == [{"goal_node": "F"}, {"goal_node": "A"}]
+
+
+def test_either_robots_reader_reads_a_tag_group_under_it_in_the_one_world() -> None:
+    """Each robot's simulated reader reads the world's tags by its own robot's pose: the same tag group under r1 or
+    under r2, and nothing under the one that is elsewhere."""
+    scenario = load_scenario("two_tier_flat_pair")
+    instances = scenario.instances()
+    readers = {robot: node_parameters(scenario, instances[f"{robot}.rfid_reader"], 3, 1.0) for robot in ("r1", "r2")}
+    group = next(g for g in scenario.world.tag_groups if g.group_id == "S2")
+    under, elsewhere = (group.centre[0], group.centre[1], 0.0), (-6.2, 0.0, 0.0)
+
+    def tags_read(robot: str, pose: tuple[float, float, float]) -> set[str]:
+        reader = readers[robot].simulated_reader(scenario.world, readers[robot].seed)
+        rounds = [reader.sample(pose, step * 0.02) for step in range(100)]
+        return {read.tag_id for reads in rounds if reads for read in reads}
+
+    assert tags_read("r1", under) and tags_read("r2", under)
+    assert not tags_read("r1", elsewhere) & tags_read("r2", under)
 
 
 def fleet_file(tmp_path: Path, change) -> str:

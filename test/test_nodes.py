@@ -265,6 +265,39 @@ def test_robot_sim_stops_at_a_wall_and_reports_the_bump_on_base_event(graph: Gra
     assert truth[-1].pose.pose.position.x <= 1.0 - 0.17 + 1e-6      # pressed against the wall, not through it
 
 
+def test_robot_sim_simulates_two_robots_under_their_names_that_stop_at_each_other(graph: Graph,
+                                                                                 tmp_path: Path) -> None:
+    """Two robots 2 m apart driven at each other on their own /rN/cmd_vel: each one's ground truth and bumpers on
+    its own topics, both stopped with their footprints touching, none driven through the other."""
+    world = tmp_path / "open.yaml"
+    world.write_text("name: open\ntags:\n  - {id: C1, position: [0.0, 0.0, 3.0]}\n")
+    graph.add(RobotSimNode(context=graph.context, parameter_overrides=[
+        Parameter("world_file", value=str(world)), Parameter("rtf", value=10.0),
+        Parameter("robots", value=["r1", "r2"]), Parameter("robot_starts", value=[0.0, 0.0, 0.0, 2.0, 0.0, 180.0])]))
+    commands = {name: graph.probe.create_publisher(Twist, f"/{name}/cmd_vel", COMMAND_QOS) for name in ("r1", "r2")}
+    events: dict[str, list[BaseEvent]] = {"r1": [], "r2": []}
+    truth: dict[str, list[Odometry]] = {"r1": [], "r2": []}
+    for name in commands:
+        graph.probe.create_subscription(BaseEvent, f"/{name}/base/event", events[name].append, COMMAND_QOS)
+        graph.probe.create_subscription(Odometry, f"/{name}/sim/ground_truth", truth[name].append, SENSOR_QOS)
+    graph.spin_until(lambda: all(c.get_subscription_count() for c in commands.values()) and all(truth.values()),
+                     "both robots' topics")
+    assert truth["r2"][-1].pose.pose.position.x == pytest.approx(2.0, abs=0.01)
+    forward = Twist()
+    forward.linear.x = 0.3
+
+    def both_pressed() -> bool:
+        for publisher in commands.values():
+            publisher.publish(forward)
+        return all(any(e.active for e in events[name]) for name in events)
+
+    graph.spin_until(both_pressed, "each robot's bumpers pressed on its own /base/event")
+    at_bump = len(truth["r1"])
+    graph.spin_until(lambda: (both_pressed(), len(truth["r1"]) > at_bump + 25)[1], "half a second more")
+    gap = truth["r2"][-1].pose.pose.position.x - truth["r1"][-1].pose.pose.position.x
+    assert 2 * 0.17 - 0.01 < gap < 2 * 0.17 + 0.01      # touching, not through each other
+
+
 # ------------------------------------------------------------------------------------------------- player
 
 def test_player_holds_playback_until_started(graph: Graph, tmp_path: Path) -> None:

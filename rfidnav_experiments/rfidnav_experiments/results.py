@@ -99,6 +99,7 @@ COMMANDS: dict[str, Command] = {c.key: c for c in (
     *_seeded_runs("partition_field"), *_seeded_runs("partition_field", *FILTER_PARAMS, label="filter"),
     *_seeded_runs("partition_corridor"), *_seeded_runs("partition_corridor", *FILTER_PARAMS, label="filter"),
     *_seeded_runs("two_tier_home"), *_seeded_runs("two_tier_flat"), *_seeded_runs("two_tier_corridor"),
+    *_seeded_runs("building_ring_pair"), *_seeded_runs("two_tier_flat_pair"),
 )}
 
 

@@ -44,6 +44,7 @@ from rfidnav_common.seeding import robot_seed
 from rfidnav_common.topological_map import TopologicalMap, load_topological_map
 from rfidnav_localization.radio_map_file import load_radio_map
 from rfidnav_planning.partition_planner import lattice_refusal
+from rfidnav_sim.parameters import ROBOT_NAME
 from rfidnav_sim.rfid_model import reach_m
 from rfidnav_sim.world import World, load_world
 
@@ -346,11 +347,10 @@ def load_scenario(name_or_path: str, swaps: dict[str, str] | None = None,
         raise mission_file.error("success_within_m", "missing: a scenario scored by ground truth (metrics: "
                                  f"{', '.join(metrics)}) states how near its goal the robot must stop to succeed [m]")
     if section.has("robots"):
-        robots = _robots(section, mission_file, nodes, goal)
+        listed = _robots(section, mission_file, nodes, goal)
+        robots = tuple(robot for robot, _ in listed)
         start, mission = robots[0].start, robots[0].mission
-        missions = [(robot.start, robot.mission, own, own)
-                    for robot, own in ((robot, _robot_mission_section(section, index, mission_file))
-                                       for index, robot in enumerate(robots))]
+        missions = [(robot.start, robot.mission, own, own) for robot, own in listed]
     else:
         for role, spec in nodes.items():
             if spec.shared:
@@ -400,18 +400,10 @@ def _mission_spec(mission: Section) -> MissionSpec:
                        if mission.has("success_within_m") else None)
 
 
-def _robot_mission_section(section: Section, index: int, mission_file: Section) -> Section:
-    """Robot ``index``'s mission: the scenario's mission with the robot's own fields over it, errors named at the
-    robot's entry."""
-    own = section.sections("robots")[index].section("mission")
-    return Section({**mission_file.data, **own.data}, own.source, own.prefix)
-
-
 def _robots(section: Section, mission_file: Section, nodes: dict[str, NodeSpec],
-            goal: dict[str, Any] | None) -> tuple[RobotSpec, ...]:
-    """The robots of a scenario with ``robots:`` (each a name, a start and a mission over the scenario's)."""
-    from rfidnav_sim.parameters import ROBOT_NAME
-
+            goal: dict[str, Any] | None) -> list[tuple[RobotSpec, Section]]:
+    """The robots of a scenario with ``robots:`` (each a name, a start and a mission), each with its mission's
+    entry: the scenario's mission with the robot's own fields over it, named at the robot's entry."""
     if goal is not None:
         raise ConfigError("--goal", "", f"{section.source} has several robots: each gives its goal in its entry "
                                         "(robots[i].mission.goal)")
@@ -424,23 +416,24 @@ def _robots(section: Section, mission_file: Section, nodes: dict[str, NodeSpec],
     entries = section.sections("robots")
     if not entries:
         raise section.error("robots", "expected a list of robots (name, robot, mission)")
-    robots: list[RobotSpec] = []
+    robots: list[tuple[RobotSpec, Section]] = []
     for entry in entries:
         entry.reject_unknown(("name", "robot", "mission"))
         name = entry.string("name")
         if not ROBOT_NAME.fullmatch(name):
             raise entry.error("name", f"'{name}' is no robot name: its ROS namespace, a letter then letters, digits "
                                       "or _")
-        if name in {robot.name for robot in robots}:
+        if name in {robot.name for robot, _ in robots}:
             raise entry.error("name", f"robot '{name}' is listed twice")
         start = entry.section("robot")
         start.reject_unknown(("x", "y", "yaw_deg"))
         own = entry.section("mission")
         own.reject_unknown(MISSION_KEYS)
-        robots.append(RobotSpec(name, (start.number("x"), start.number("y"),
-                                       start.number("yaw_deg", 0.0, minimum=-360.0, maximum=360.0)),
-                                _mission_spec(Section({**mission_file.data, **own.data}, own.source, own.prefix))))
-    return tuple(robots)
+        mission = Section({**mission_file.data, **own.data}, own.source, own.prefix)
+        robots.append((RobotSpec(name, (start.number("x"), start.number("y"),
+                                        start.number("yaw_deg", 0.0, minimum=-360.0, maximum=360.0)),
+                                 _mission_spec(mission)), mission))
+    return robots
 
 
 def _check_mission(scenario: Scenario, declared: Section, mission: Section) -> None:

@@ -11,6 +11,7 @@ import math
 import re
 from collections import Counter
 from dataclasses import dataclass
+from itertools import combinations
 
 import numpy as np
 
@@ -55,6 +56,9 @@ from rfidnav_sim.world import World
 
 SCALE_ERROR = Limits(-1.0, 1.0, low_open=True, high_open=True)   # -1: a wheel (or the track) that measures nothing
 HALF_ANGLE_DEG = Limits(0.0, 180.0, low_open=True)                 # 180: all round
+
+
+ROBOT_NAME = re.compile(r"[A-Za-z][A-Za-z0-9_]*")    # a robot's name is its namespace: one ROS name token
 
 
 @dataclass(frozen=True)
@@ -151,15 +155,12 @@ class RobotSimParameters(LimitsSpeed):
                                                "letters, digits or _)")
         if len(set(self.robots)) != len(self.robots):
             raise ParameterError("robots", f"a name given twice: {self.robots}")
-        for i, (x, y, _) in enumerate(self.starts()):
-            for name, (x2, y2, _) in zip(self.robots[i + 1:], self.starts()[i + 1:]):
-                if math.hypot(x2 - x, y2 - y) < 2.0 * self.footprint_radius_m:
-                    raise ParameterError("robot_starts", f"{self.robots[i]} and {name} start overlapping "
-                                                         f"({math.hypot(x2 - x, y2 - y):.2f} m apart)")
+        for (one, (x1, y1, _)), (other, (x2, y2, _)) in combinations(zip(self.robots, self.starts()), 2):
+            if math.hypot(x2 - x1, y2 - y1) < 2.0 * self.footprint_radius_m:
+                raise ParameterError("robot_starts", f"{one} and {other} start overlapping "
+                                                     f"({math.hypot(x2 - x1, y2 - y1):.2f} m apart)")
 
 
-
-ROBOT_NAME = re.compile(r"[A-Za-z][A-Za-z0-9_]*")    # a robot's name is its namespace: one ROS name token
 SIDE_BEARINGS = {"left": math.pi / 2.0, "right": -math.pi / 2.0}
 PER_ANTENNA = ("antenna_max_range_m", "antenna_half_angle_deg", "antenna_phase_offset_rad")
 
