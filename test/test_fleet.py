@@ -199,3 +199,37 @@ def test_a_shared_role_needs_robots_and_a_goal_from_the_command_line_is_refused_
         load_scenario(str(single))
     with pytest.raises(ConfigError, match="each gives its goal in its entry"):
         load_scenario("two_tier_flat_pair", goal={"target": {"x": 1.0, "y": 0.0, "z": 0.0}})
+
+
+def test_a_robot_may_have_a_profile_of_its_own_that_changes_its_roles_only(tmp_path: Path) -> None:
+    def real_reader_on_r2(document: dict) -> None:
+        document["robots"][1]["profile"] = "sim_base_llrp"
+
+    document = scenario_document("building_ring_pair")
+    real_reader_on_r2(document)
+    path = tmp_path / "ring.yaml"
+    path.write_text(yaml.safe_dump(document))
+    scenario = load_scenario(str(path))
+    instances = scenario.instances()
+    assert (instances["r1.rfid_reader"].package, instances["r2.rfid_reader"].package) == ("rfidnav_sim",
+                                                                                          "rfidnav_drivers")
+    assert instances["r2.rfid_reader"].robot == "r2" and instances["r2.rfid_reader"].fqn == "/r2/llrp_reader"
+    assert instances["robot_sim"] == scenario.nodes["robot_sim"]
+    # The driver runs free beside the stepped clock; r1's simulated reader still takes part.
+    participants = {spec.fqn for spec in scenario.step_participants()}
+    assert "/r1/rfid_reader_sim" in participants and "/r2/llrp_reader" not in participants
+    plan = RunPlan(scenario, RunOptions(), tmp_path / "run")
+    commands = {process.name: process.command for process in plan.write()}
+    assert "r2.rfid_reader" in commands and "__ns:=/r2" in commands["r2.rfid_reader"]
+    assert list(yaml.safe_load((tmp_path / "run/params/r2.rfid_reader.yaml").read_text())) == ["/r2/llrp_reader"]
+
+
+@pytest.mark.parametrize(("profile", "words"), [
+    ("create2_llrp", "replaces the simulated base"),
+    ("no_such_profile", "no robot profile 'no_such_profile'"),
+])
+def test_a_robots_profile_that_would_change_the_world_or_does_not_exist_is_refused_at_its_entry(
+        tmp_path: Path, profile: str, words: str) -> None:
+    with pytest.raises(ConfigError) as caught:
+        load_scenario(fleet_file(tmp_path, lambda d: d["robots"][0].update(profile=profile)))
+    assert "robots[0].profile" in str(caught.value) and words in str(caught.value)

@@ -123,10 +123,13 @@ class MissionSpec:
 
 @dataclass(frozen=True)
 class RobotSpec:
-    """One robot of a scenario with ``robots:``: its name (its ROS namespace and tf prefix), start and mission."""
+    """One robot of a scenario with ``robots:``: its name (its ROS namespace and tf prefix), start, mission and, with
+    a robot profile of its own, its roles as that profile has them."""
     name: str
     start: tuple[float, float, float]        # x [m], y [m], yaw [deg]
     mission: MissionSpec                     # its action as the scenario names it (robot_action resolves it)
+    profile: Path | None = None              # its robot profile (``profile:``), over the scenario's roles
+    nodes: dict[str, NodeSpec] | None = field(default=None, repr=False)   # its roles with it; None: the scenario's
 
 
 def robot_action(robot: str | None, action: str) -> str:
@@ -168,7 +171,7 @@ class Scenario:
                 continue
             for robot in self.robots:
                 key = f"{robot.name}.{role}"
-                instances[key] = replace(spec, role=key, robot=robot.name)
+                instances[key] = replace((robot.nodes or self.nodes)[role], role=key, robot=robot.name)
         return instances
 
     def missions(self) -> list[tuple[str | None, MissionSpec]]:
@@ -222,7 +225,8 @@ class Scenario:
             "metrics": list(self.metrics),
             **({"robots": [{"name": robot.name,
                             "robot": {"x": robot.start[0], "y": robot.start[1], "yaw_deg": robot.start[2]},
-                            "mission": mission_document(robot.mission)} for robot in self.robots]}
+                            "mission": mission_document(robot.mission),
+                            **({"profile": str(robot.profile)} if robot.profile else {})} for robot in self.robots]}
                if self.robots else {}),
         }
 
@@ -380,6 +384,10 @@ def load_scenario(name_or_path: str, swaps: dict[str, str] | None = None,
     _check_map_in_world(scenario)
     _check_partition_lattices(scenario)
     parameters = {role: node_parameters(scenario, spec, seed=0, rtf=1.0) for role, spec in scenario.nodes.items()}
+    for robot in scenario.robots:     # a robot's own profile's roles, checked as the scenario's are
+        for role, spec in (robot.nodes or {}).items():
+            if spec != scenario.nodes[role]:
+                node_parameters(scenario, spec, seed=0, rtf=1.0)
     _check_antenna_ports(scenario, parameters)
     _check_speeds(scenario, parameters)
     return replace(scenario, warnings=route_reach_warnings(scenario, parameters))
@@ -418,7 +426,7 @@ def _robots(section: Section, mission_file: Section, nodes: dict[str, NodeSpec],
         raise section.error("robots", "expected a list of robots (name, robot, mission)")
     robots: list[tuple[RobotSpec, Section]] = []
     for entry in entries:
-        entry.reject_unknown(("name", "robot", "mission"))
+        entry.reject_unknown(("name", "robot", "mission", "profile"))
         name = entry.string("name")
         if not ROBOT_NAME.fullmatch(name):
             raise entry.error("name", f"'{name}' is no robot name: its ROS namespace, a letter then letters, digits "
@@ -430,10 +438,29 @@ def _robots(section: Section, mission_file: Section, nodes: dict[str, NodeSpec],
         own = entry.section("mission")
         own.reject_unknown(MISSION_KEYS)
         mission = Section({**mission_file.data, **own.data}, own.source, own.prefix)
+        profile, robot_nodes = _robot_profile(entry, nodes, Path(section.source)) if entry.has("profile") else \
+            (None, None)
         robots.append((RobotSpec(name, (start.number("x"), start.number("y"),
                                         start.number("yaw_deg", 0.0, minimum=-360.0, maximum=360.0)),
-                                 _mission_spec(mission)), mission))
+                                 _mission_spec(mission), profile, robot_nodes), mission))
     return robots
+
+
+def _robot_profile(entry: Section, nodes: dict[str, NodeSpec],
+                   scenario_file: Path) -> tuple[Path, dict[str, NodeSpec]]:
+    """A robot's own profile (``robots[i].profile``) over the scenario's roles: it may replace that robot's roles
+    (a real reader on one robot of a simulated pair) and assign them to a part of a split run, but not the world's
+    simulated base nor a role the robots share."""
+    try:
+        robot_nodes = _with_profile(nodes, entry.string("profile"), scenario_file)
+    except ConfigError as error:     # named at the robot's entry; a problem inside the profile names its file too
+        raise entry.error("profile", error.problem if error.source == "--robot" else str(error)) from None
+    for role, spec in nodes.items():
+        if (spec.clock_source or spec.shared) and robot_nodes[role] != spec:
+            what = "simulates every robot of the world" if spec.clock_source else "is shared by the robots"
+            raise entry.error("profile", f"replaces {role}, which {what}: a robot's profile changes its own roles "
+                                         "only")
+    return robot_profile(entry.string("profile")).path, robot_nodes
 
 
 def _check_mission(scenario: Scenario, declared: Section, mission: Section) -> None:
