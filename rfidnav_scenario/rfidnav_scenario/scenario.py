@@ -384,8 +384,8 @@ def load_scenario(name_or_path: str, swaps: dict[str, str] | None = None,
     _check_map_in_world(scenario)
     _check_partition_lattices(scenario)
     parameters = {role: node_parameters(scenario, spec, seed=0, rtf=1.0) for role, spec in scenario.nodes.items()}
-    for listed in scenario.robots:     # a robot's own profile's roles, checked as the scenario's are
-        for role, spec in (listed.nodes or {}).items():
+    for member in scenario.robots:     # a robot's own profile's roles, checked as the scenario's are
+        for role, spec in (member.nodes or {}).items():
             if spec != scenario.nodes[role]:
                 node_parameters(scenario, spec, seed=0, rtf=1.0)
     _check_antenna_ports(scenario, parameters)
