@@ -239,6 +239,7 @@ def scan_cases(taken: str) -> list[Case]:
     service) where the node does not use the field."""
     return (cases("access_points[0].rssi_dbm", EXTREMES + (("+200", 200.0),), DROP)
             + cases("access_points[0].bssid", (("''", ""),), DROP)
+            + cases("access_points[1].bssid", (("the first's", "02:00:00:00:00:01"),), DROP)   # one AP listed twice
             + cases("access_points[0].channel", (("65535", UINT16_MAX),), taken)
             + cases("access_points[0].frequency_hz", HUGE + NON_FINITE, taken)
             + cases("header.frame_id", (("''", ""), ("'map'", "map")), DROP))
