@@ -11,10 +11,12 @@ import numpy as np
 import pytest
 import yaml
 
+from rfidnav_bringup.report import RunRecord, closest_approach
 from rfidnav_bringup.run_plan import RunOptions, RunPlan
 from rfidnav_common.errors import ConfigError, ParameterError
 from rfidnav_common.frames import Frame, frame_prefix, prefixed
 from rfidnav_common.seeding import robot_seed
+from rfidnav_scenario.metrics import Trajectory
 from rfidnav_scenario.scenario import injected_parameters, load_scenario, node_parameters, robot_action
 from rfidnav_sim.kinematics import BaseLimits, DiffDriveBase, OdometryDrift, Pose2D
 from rfidnav_sim.parameters import RobotSimParameters
@@ -233,3 +235,23 @@ def test_a_robots_profile_that_would_change_the_world_or_does_not_exist_is_refus
     with pytest.raises(ConfigError) as caught:
         load_scenario(fleet_file(tmp_path, lambda d: d["robots"][0].update(profile=profile)))
     assert "robots[0].profile" in str(caught.value) and words in str(caught.value)
+
+
+def track(robot: str, times: np.ndarray, xy: np.ndarray) -> RunRecord:
+    return RunRecord(Path("run"), Path("run/bag"), None, [], Trajectory(times, xy), 0.0, float(times[-1]),  # type: ignore[arg-type]
+                     "succeeded", [], [], {}, None, "/navigate_to_node", robot=robot)
+
+
+def test_the_closest_approach_is_the_nearest_two_robots_came_at_one_time_not_along_their_paths() -> None:
+    times = np.arange(0.0, 10.02, 0.02)
+    east = track("r1", times, np.column_stack([times, np.zeros_like(times)]))            # (t, 0)
+    # r2 crosses r1's path at x = 5 at t = 0 (r1 is 5 m away then); r3 runs beside r1, 1 m off, but only from t = 4.
+    north = track("r2", times, np.column_stack([np.full_like(times, 5.0), times - 0.0]))
+    beside = track("r3", times[200:], np.column_stack([times[200:], np.full(len(times) - 200, 1.0)]))
+    approach = closest_approach([east, north])
+    # |(t, 0) - (5, t)| is least at t = 2.5: 3.54 m, though the paths cross.
+    assert approach["closest_approach_m"] == pytest.approx(math.hypot(2.5, 2.5), abs=1e-6)
+    assert approach["closest_approach_at_s"] == pytest.approx(2.5) and approach["closest_pair"] == "r1, r2"
+    everyone = closest_approach([east, north, beside])
+    assert everyone["closest_approach_m"] == pytest.approx(1.0) and everyone["closest_pair"] == "r1, r3"
+    assert closest_approach([east]) == {}

@@ -52,6 +52,8 @@ def test_both_robots_reach_their_nodes_on_the_ring_each_scored_on_its_own_track(
         assert metrics["shortest_path_m"] == pytest.approx(shortest)
         assert run_metrics(ring_run, robot) == pytest.approx(metrics)      # from the bag alone
     assert all(node["exit_code"] == 0 and node["restarts"] == 0 for node in document["nodes"].values())
+    # The run's own metrics: how near the two came (r2 is through D long before r1 gets there).
+    assert document["metrics"]["closest_pair"] == "r1, r2" and document["metrics"]["closest_approach_m"] > 2.0
     assert sorted(document["clock"]["participants"]) == sorted(
         [f"/{robot}/{node}" for robot in ROBOTS
          for node in ("sonar_sim", "rfid_reader_sim", "wall_follower", "mission_executor")] + ["/recorder"])
@@ -95,7 +97,8 @@ def test_the_report_of_a_run_of_two_gives_each_robots_metrics_and_one_joint_plot
     result = run_cli("report", str(ring_run), "--out", str(tmp_path), "--json")
     assert result.returncode == 0, result.stderr
     report = json.loads(result.stdout)
-    assert set(report["metrics"]) == set(ROBOTS)
+    assert set(report["metrics"]) == {*ROBOTS, "closest_approach_m", "closest_approach_at_s", "closest_pair"}
+    assert report["metrics"]["closest_approach_m"] == pytest.approx(summary(ring_run)["metrics"]["closest_approach_m"])
     assert report["metrics"]["r1"]["final_distance_m"] == pytest.approx(
         summary(ring_run)["robots"]["r1"]["metrics"]["final_distance_m"])
     assert [Path(p).name for p in report["plots"]] == ["trajectory.png"]

@@ -451,9 +451,10 @@ def verb_report(args) -> int:
     if args.json:
         print(json.dumps({"metrics": metrics, "plots": [str(p) for p in plots]}))
     else:
-        # A run of several robots: each robot's metrics under its name.
+        # A run of several robots: each robot's metrics under its name, then what they did together.
         rows = [(f"{name} {key}", value) for name, values in metrics.items() if isinstance(values, dict)
-                for key, value in values.items()] or list(metrics.items())
+                for key, value in values.items()]
+        rows += [(key, value) for key, value in metrics.items() if not isinstance(value, dict)]
         for key, value in rows:
             print(f"  {key:22s} {value:.4f}" if isinstance(value, float) else f"  {key:22s} {value}")
         print("plots:", *plots, sep="\n  ")

@@ -15,6 +15,7 @@ from __future__ import annotations
 import math
 import sys
 from dataclasses import dataclass
+from itertools import combinations
 from pathlib import Path
 from typing import Any
 
@@ -334,18 +335,43 @@ def write_report(path: Path, out_dir: Path | None = None) -> tuple[dict[str, Any
     return metrics, [trajectory_png, error_png]
 
 
+def fleet_metrics(records: list[RunRecord]) -> tuple[dict[str, dict[str, Any]], dict[str, Any]]:
+    """A run of several robots: each robot's metrics by name, and what the robots did together."""
+    return {str(record.robot): record_metrics(record) for record in records}, closest_approach(records)
+
+
+def closest_approach(records: list[RunRecord]) -> dict[str, Any]:
+    """How near two robots came (ground truth, centre to centre, over the samples both have: robot_sim stamps every
+    robot's alike): the distance [m], when [s of sim time] and which two. Two round bases touch at the sum of their
+    footprints' radii (0.34 m for two of robot_sim's defaults)."""
+    best: tuple[float, float, str, str] | None = None
+    for first, second in combinations(records, 2):
+        a, b = first.ground_truth, second.ground_truth
+        _, ia, ib = np.intersect1d(np.round(a.times_s, 6), np.round(b.times_s, 6), return_indices=True)
+        if not len(ia):
+            continue
+        gaps = np.linalg.norm(a.xy[ia] - b.xy[ib], axis=1)
+        nearest = int(np.argmin(gaps))
+        if best is None or gaps[nearest] < best[0]:
+            best = (float(gaps[nearest]), float(a.times_s[ia[nearest]]), str(first.robot), str(second.robot))
+    if best is None:
+        return {}
+    return {"closest_approach_m": best[0], "closest_approach_at_s": best[1], "closest_pair": f"{best[2]}, {best[3]}"}
+
+
 def write_fleet_report(path: Path, robots: list[str], out_dir: Path | None) -> tuple[dict[str, Any], list[Path]]:
-    """Each robot's metrics and the joint plot: every robot's track, start and goal in the one world."""
+    """Each robot's metrics, what they did together, and the joint plot: every robot's track, start and goal in the
+    one world."""
     records = [load_run(path, robot) for robot in robots]
     out_dir = records[0].run_dir if out_dir is None else out_dir
     out_dir.mkdir(parents=True, exist_ok=True)
-    metrics: dict[str, Any] = {}
+    per_robot, joint = fleet_metrics(records)
+    metrics: dict[str, Any] = {**per_robot, **joint}
     figure = new_figure(8.0, 7.0)
     axes = figure.add_subplot()
     for x1, y1, x2, y2 in records[0].world.walls:
         axes.plot([x1, x2], [y1, y2], color="0.6", linewidth=2)
     for index, record in enumerate(records):
-        metrics[str(record.robot)] = record_metrics(record)
         colour = f"C{index}"
         run = record.ground_truth.between(record.mission_start_s, record.mission_end_s)
         axes.plot(run.xy[:, 0], run.xy[:, 1], color=colour, label=f"{record.robot} (ground truth)")

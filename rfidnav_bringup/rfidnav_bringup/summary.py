@@ -112,9 +112,11 @@ def write_run_summary(run_dir: Path, facts: RunFacts, outcome: MissionOutcome, p
     if interrupted:
         say(f"metrics not computed for an interrupted run: ./rfidnav report {run_dir} computes them")
     if outcome.robots:
+        per_robot: dict[str, dict[str, Any]] = {}
+        if scored:
+            per_robot, metrics = scored_fleet_metrics(run_dir, outcome, say)
         for name, robot in outcome.robots.items():
-            robot_metrics = scored_metrics(run_dir, name, robot, say) if scored else {}
-            robots[name] = {"success": robot.success, "message": robot.message, "metrics": robot_metrics}
+            robots[name] = {"success": robot.success, "message": robot.message, "metrics": per_robot.get(name, {})}
         if outcome.success and not all(robot.success for robot in outcome.robots.values()):
             outcome.success = False
             outcome.message = "; ".join(f"{name}: {robot.message}" for name, robot in outcome.robots.items())
@@ -150,22 +152,42 @@ def write_run_summary(run_dir: Path, facts: RunFacts, outcome: MissionOutcome, p
 
 def scored_metrics(run_dir: Path, robot: str | None, outcome: MissionOutcome,
                    say: Callable[[str], None]) -> dict[str, Any]:
-    """The run's metrics from its bag (``robot``'s in a run of several), and ground truth's word on ``outcome``:
-    the mission's node can be fooled (a spoofed tag, a wrong map, a leg through a wall); ground truth, which it
-    never sees, has the last word on whether the run succeeded."""
+    """The run's metrics from its bag, and ground truth's word on ``outcome`` (judge)."""
     from rfidnav_bringup.report import run_metrics
 
     try:
         metrics = run_metrics(run_dir, robot)
     except RfidnavError as error:
-        say(f"metrics{f' of {robot}' if robot else ''} not computed: {error}")
+        say(f"metrics not computed: {error}")
         return {}
+    judge(outcome, metrics)
+    return metrics
+
+
+def scored_fleet_metrics(run_dir: Path, outcome: MissionOutcome,
+                         say: Callable[[str], None]) -> tuple[dict[str, dict[str, Any]], dict[str, Any]]:
+    """A run of several robots: each robot's metrics from its topics, ground truth's word on each robot's outcome,
+    and what the robots did together (the run's own metrics: how near they came)."""
+    from rfidnav_bringup.report import fleet_metrics, load_run
+
+    try:
+        per_robot, joint = fleet_metrics([load_run(run_dir, name) for name in outcome.robots])
+    except RfidnavError as error:
+        say(f"metrics not computed: {error}")
+        return {}, {}
+    for name, robot in outcome.robots.items():
+        judge(robot, per_robot[name])
+    return per_robot, joint
+
+
+def judge(outcome: MissionOutcome, metrics: dict[str, Any]) -> None:
+    """Ground truth's word on an outcome its mission's node reported: the node can be fooled (a spoofed tag, a wrong
+    map, a leg through a wall); ground truth, which it never sees, has the last word on whether the run succeeded."""
     objection = ground_truth_objection(metrics)
     if outcome.success and objection is not None:
         outcome.success = False
         outcome.message = (f"{outcome.message or 'succeeded'}, says the mission's node; but ground "
                            f"truth {objection}")
-    return metrics
 
 
 def print_summary(summary: RunSummary) -> None:
