@@ -10,15 +10,11 @@ from pathlib import Path
 import pytest
 
 from rfidnav_bag.bags import read_messages
-from support.runs import run_scenario
+from support.runs import run_scenario, run_summary
 
 pytestmark = pytest.mark.tier("graph")
 
 ROBOTS = ("r1", "r2")
-
-
-def summary(run: Path) -> dict:
-    return json.loads((run / "summary.json").read_text())
 
 
 @pytest.fixture(scope="module")
@@ -29,7 +25,7 @@ def flat_run(tmp_path_factory) -> Path:
 
 
 def test_two_robots_in_the_flat_share_one_location_server_and_both_arrive(flat_run: Path) -> None:
-    document = summary(flat_run)
+    document = run_summary(flat_run)
     assert document["success"] is True, document["message"]
     assert "location_server" in document["nodes"] and "r1.location_server" not in document["nodes"]
     graph = json.loads((flat_run / "graph.json").read_text())["nodes"]

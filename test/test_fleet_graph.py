@@ -14,19 +14,11 @@ import yaml
 from rfidnav_bag.bags import read_messages
 from rfidnav_bringup.report import run_metrics
 from support.frames import frame_tree
-from support.runs import run_cli, run_scenario, scenario_document
+from support.runs import recorded_commands, run_cli, run_scenario, run_summary, scenario_document
 
 pytestmark = pytest.mark.tier("graph")
 
 ROBOTS = ("r1", "r2")
-
-
-def summary(run: Path) -> dict:
-    return json.loads((run / "summary.json").read_text())
-
-
-def commands(run: Path, robot: str) -> list[tuple[float, float]]:
-    return [(msg.linear.x, msg.angular.z) for _, _, msg in read_messages(run / "bag", [f"/{robot}/cmd_vel"])]
 
 
 @pytest.fixture(scope="module")
@@ -35,7 +27,7 @@ def ring_run(tmp_path_factory) -> Path:
 
 
 def test_both_robots_reach_their_nodes_on_the_ring_each_scored_on_its_own_track(ring_run: Path) -> None:
-    document = summary(ring_run)
+    document = run_summary(ring_run)
     assert document["success"] is True, document["message"]
     assert set(document["robots"]) == set(ROBOTS)
     for robot, goal, shortest in (("r1", "F", 40.0), ("r2", "A", 15.0)):
@@ -87,12 +79,12 @@ def test_the_same_seed_gives_both_robots_the_same_commands(tmp_path: Path) -> No
     scenario.write_text(yaml.safe_dump(document))
     first = run_scenario(tmp_path / "first", str(scenario), "--rtf", "max", "--seed", "1")
     again = run_scenario(tmp_path / "again", str(scenario), "--rtf", "max", "--seed", "1")
-    assert summary(first)["success"] is True, summary(first)["message"]
+    assert run_summary(first)["success"] is True, run_summary(first)["message"]
     for robot in ROBOTS:
-        commands_first = commands(first, robot)
+        commands_first = recorded_commands(first, f"/{robot}/cmd_vel")
         assert len(commands_first) > 100, robot
-        assert commands(again, robot) == commands_first, robot
-    assert summary(again)["robots"] == summary(first)["robots"]
+        assert recorded_commands(again, f"/{robot}/cmd_vel") == commands_first, robot
+    assert run_summary(again)["robots"] == run_summary(first)["robots"]
 
 
 def test_the_report_of_a_run_of_two_gives_each_robots_metrics_and_one_joint_plot(ring_run: Path,
@@ -101,8 +93,9 @@ def test_the_report_of_a_run_of_two_gives_each_robots_metrics_and_one_joint_plot
     assert result.returncode == 0, result.stderr
     report = json.loads(result.stdout)
     assert set(report["metrics"]) == {*ROBOTS, "closest_approach_m", "closest_approach_at_s", "closest_pair"}
-    assert report["metrics"]["closest_approach_m"] == pytest.approx(summary(ring_run)["metrics"]["closest_approach_m"])
+    assert report["metrics"]["closest_approach_m"] == pytest.approx(
+        run_summary(ring_run)["metrics"]["closest_approach_m"])
     assert report["metrics"]["r1"]["final_distance_m"] == pytest.approx(
-        summary(ring_run)["robots"]["r1"]["metrics"]["final_distance_m"])
+        run_summary(ring_run)["robots"]["r1"]["metrics"]["final_distance_m"])
     assert [Path(p).name for p in report["plots"]] == ["trajectory.png"]
     assert (tmp_path / "trajectory.png").stat().st_size > 10_000

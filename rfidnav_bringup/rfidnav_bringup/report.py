@@ -251,8 +251,7 @@ def two_tier_fixes(record: RunRecord) -> list[Fix]:
 
 def draw_world(axes, record: RunRecord, run: Trajectory) -> None:
     """The world's walls, tag deployments and tags, and the mission's desired path or goal, in the map frame."""
-    for x1, y1, x2, y2 in record.world.walls:
-        axes.plot([x1, x2], [y1, y2], color="0.6", linewidth=2)
+    draw_walls(axes, record.world)
     for deployment in record.world.deployments:
         x_min, y_min, x_max, y_max = deployment.area
         axes.plot([x_min, x_max, x_max, x_min, x_min], [y_min, y_min, y_max, y_max, y_min], color="tab:purple",
@@ -277,6 +276,23 @@ def draw_world(axes, record: RunRecord, run: Trajectory) -> None:
         axes.plot(tag.position[0], tag.position[1], marker, color=colour, markersize=5)
         if tag.kind == "ceiling":
             axes.annotate(tag.tag_id, tag.position[:2], textcoords="offset points", xytext=(4, 4))
+
+
+def draw_walls(axes, world: World) -> None:
+    for x1, y1, x2, y2 in world.walls:
+        axes.plot([x1, x2], [y1, y2], color="0.6", linewidth=2)
+
+
+def save_map_plot(figure: Any, axes: Any, title: str, path: Path) -> Path:
+    """A plot in the map frame finished as every trajectory plot is (equal axes in metres, legend, grid), saved."""
+    axes.set_aspect("equal")
+    axes.set_xlabel("x [m]")
+    axes.set_ylabel("y [m]")
+    axes.set_title(title)
+    axes.legend(loc="best")
+    axes.grid(True, alpha=0.3)
+    figure.savefig(path, dpi=110, bbox_inches="tight")
+    return path
 
 
 def new_figure(width_in: float, height_in: float) -> Any:
@@ -308,14 +324,7 @@ def write_report(path: Path, out_dir: Path | None = None) -> tuple[dict[str, Any
     else:       # a real robot: its odometry, in the odom frame, which the world's map frame is not
         axes.plot(run.xy[:, 0], run.xy[:, 1], color="tab:blue", label="robot (odometry, odom frame)")
     axes.plot(*run.xy[0], "k^", label="start")
-    axes.set_aspect("equal")
-    axes.set_xlabel("x [m]")
-    axes.set_ylabel("y [m]")
-    axes.set_title(f"{record.run_dir.name}: trajectory")
-    axes.legend(loc="best")
-    axes.grid(True, alpha=0.3)
-    trajectory_png = out_dir / "trajectory.png"
-    figure.savefig(trajectory_png, dpi=110, bbox_inches="tight")
+    trajectory_png = save_map_plot(figure, axes, f"{record.run_dir.name}: trajectory", out_dir / "trajectory.png")
     if "tracking" not in record.metric_groups or record.trajectory_source != "ground_truth":
         return metrics, [trajectory_png]
     points = route_points(record.world, record.route)
@@ -369,8 +378,7 @@ def write_fleet_report(path: Path, robots: list[str], out_dir: Path | None) -> t
     metrics: dict[str, Any] = {**per_robot, **joint}
     figure = new_figure(8.0, 7.0)
     axes = figure.add_subplot()
-    for x1, y1, x2, y2 in records[0].world.walls:
-        axes.plot([x1, x2], [y1, y2], color="0.6", linewidth=2)
+    draw_walls(axes, records[0].world)
     for index, record in enumerate(records):
         colour = f"C{index}"
         run = record.ground_truth.between(record.mission_start_s, record.mission_end_s)
@@ -379,15 +387,8 @@ def write_fleet_report(path: Path, robots: list[str], out_dir: Path | None) -> t
         goal = goal_position(record)
         if goal is not None:
             axes.plot(*goal, "*", color=colour, markersize=14, markeredgecolor="k", label=f"{record.robot}'s goal")
-    axes.set_aspect("equal")
-    axes.set_xlabel("x [m]")
-    axes.set_ylabel("y [m]")
-    axes.set_title(f"{records[0].run_dir.name}: trajectories (^ start, * goal)")
-    axes.legend(loc="best")
-    axes.grid(True, alpha=0.3)
-    trajectory_png = out_dir / "trajectory.png"
-    figure.savefig(trajectory_png, dpi=110, bbox_inches="tight")
-    return metrics, [trajectory_png]
+    return metrics, [save_map_plot(figure, axes, f"{records[0].run_dir.name}: trajectories (^ start, * goal)",
+                                   out_dir / "trajectory.png")]
 
 
 def goal_position(record: RunRecord) -> tuple[float, float] | None:

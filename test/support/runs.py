@@ -50,9 +50,15 @@ def one_run(out: Path, output: str = "") -> Path:
     return runs[0]
 
 
-def recorded_commands(run: Path) -> list[tuple[float, float]]:
-    """The run's /cmd_vel as the bag recorded it: (linear.x [m/s], angular.z [rad/s]) per command, in order."""
-    return [(msg.linear.x, msg.angular.z) for _, _, msg in read_messages(run / "bag", ["/cmd_vel"])]
+def recorded_commands(run: Path, topic: str = "/cmd_vel") -> list[tuple[float, float]]:
+    """The run's /cmd_vel (a robot's: /r1/cmd_vel) as the bag recorded it: (linear.x [m/s], angular.z [rad/s]) per
+    command, in order."""
+    return [(msg.linear.x, msg.angular.z) for _, _, msg in read_messages(run / "bag", [topic])]
+
+
+def run_summary(run: Path) -> dict:
+    """The run's summary.json."""
+    return json.loads((run / "summary.json").read_text())
 
 
 def scenario_document(name: str) -> dict:
