@@ -292,9 +292,19 @@ def test_robot_sim_simulates_two_robots_under_their_names_that_stop_at_each_othe
         return all(any(e.active for e in events[name]) for name in events)
 
     graph.spin_until(both_pressed, "each robot's bumpers pressed on its own /base/event")
-    at_bump = len(truth["r1"])
-    graph.spin_until(lambda: (both_pressed(), len(truth["r1"]) > at_bump + 25)[1], "half a second more")
-    gap = truth["r2"][-1].pose.pose.position.x - truth["r1"][-1].pose.pose.position.x
+
+    def seconds(message: Odometry) -> float:
+        return message.header.stamp.sec + message.header.stamp.nanosec * 1e-9
+
+    # Half a second of sim time more for both, then both robots' positions at one stamp: the two topics' latest
+    # messages may be of different steps on a loaded machine.
+    pressed_s = max(seconds(truth[name][-1]) for name in truth)
+    graph.spin_until(lambda: (both_pressed(), all(seconds(truth[name][-1]) > pressed_s + 0.5 for name in truth))[1],
+                     "half a second of sim time more for both")
+    at = {name: {round(seconds(m), 6): m.pose.pose.position.x for m in truth[name]} for name in truth}
+    stamp = max(set(at["r1"]) & set(at["r2"]))
+    assert stamp > pressed_s + 0.5
+    gap = at["r2"][stamp] - at["r1"][stamp]
     assert 2 * 0.17 - 0.01 < gap < 2 * 0.17 + 0.01      # touching, not through each other
 
 
